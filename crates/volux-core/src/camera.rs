@@ -1,0 +1,273 @@
+//! Perspective and orthographic cameras, look-at or orbit, with a JSON form.
+//!
+//! World z is "up" by default (the slice axis of medical volumes). Orbit angles: azimuth turns
+//! around the up axis, elevation raises the eye; azimuth 0, elevation 0 looks along +y.
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::Aabb;
+
+/// The projection of a camera.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Projection {
+    /// Pinhole perspective with a vertical field of view in degrees.
+    Perspective {
+        /// Vertical field of view, degrees.
+        fov_y_deg: f64,
+    },
+    /// Parallel projection showing `height` world units vertically.
+    Orthographic {
+        /// Visible world height.
+        height: f64,
+    },
+}
+
+/// A resolved camera: eye, target, up and projection.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: DVec3,
+    /// Point looked at.
+    pub target: DVec3,
+    /// Approximate up direction.
+    pub up: DVec3,
+    /// Projection.
+    pub projection: Projection,
+}
+
+/// A ray in world space with unit direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Origin.
+    pub origin: DVec3,
+    /// Unit direction.
+    pub dir: DVec3,
+}
+
+/// The JSON form of a camera: either `eye`/`target` (look-at) or orbit angles around the
+/// data's centre. Missing fields take defaults that fit the data's bounding box.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// `"perspective"` (default) or `"orthographic"`.
+    pub projection: Option<String>,
+    /// Vertical field of view for perspective, degrees (default 30).
+    pub fov_y_deg: Option<f64>,
+    /// Eye position (look-at form).
+    pub eye: Option<[f64; 3]>,
+    /// Target (default: centre of the data).
+    pub target: Option<[f64; 3]>,
+    /// Up vector (default +z).
+    pub up: Option<[f64; 3]>,
+    /// Orbit azimuth in degrees (default 0).
+    pub azimuth: Option<f64>,
+    /// Orbit elevation in degrees (default 0).
+    pub elevation: Option<f64>,
+    /// Orbit distance (default: fits the bounding box).
+    pub distance: Option<f64>,
+    /// Zoom factor (default 1; 2 shows the data twice as large).
+    pub zoom: Option<f64>,
+}
+
+impl CameraSpec {
+    /// Parses the JSON form.
+    pub fn from_json(text: &str) -> Result<Self> {
+        Ok(serde_json::from_str(text)?)
+    }
+
+    /// Resolves the spec against the data's bounding box.
+    pub fn resolve(&self, bounds: &Aabb) -> Result<Camera> {
+        let zoom = self.zoom.unwrap_or(1.0);
+        let fov = self.fov_y_deg.unwrap_or(30.0);
+        if !(zoom.is_finite() && zoom > 0.0) {
+            return Err(Error::InvalidCamera(format!("zoom {zoom} must be > 0")));
+        }
+        if !(fov > 0.0 && fov < 179.0) {
+            return Err(Error::InvalidCamera(format!(
+                "fov_y_deg {fov} must be in (0, 179)"
+            )));
+        }
+        let radius = (bounds.diagonal() * 0.5).max(1e-9);
+        let target = self.target.map(DVec3::from).unwrap_or(bounds.center());
+        let up = self.up.map(DVec3::from).unwrap_or(DVec3::Z);
+        let eye = match self.eye {
+            Some(e) => DVec3::from(e),
+            None => {
+                let az = self.azimuth.unwrap_or(0.0).to_radians();
+                let el = self.elevation.unwrap_or(0.0).to_radians();
+                let fit = radius / (fov.to_radians() * 0.5).sin() / zoom;
+                let dist = self.distance.unwrap_or(fit);
+                let (right, fwd) = orbit_basis(up);
+                let dir =
+                    (right * az.sin() - fwd * az.cos()) * el.cos() + up.normalize() * el.sin();
+                target + dir * dist
+            }
+        };
+        let projection = match self.projection.as_deref().unwrap_or("perspective") {
+            "perspective" => Projection::Perspective { fov_y_deg: fov },
+            "orthographic" => Projection::Orthographic {
+                height: 2.0 * radius / zoom,
+            },
+            other => {
+                return Err(Error::InvalidCamera(format!(
+                    "unknown projection '{other}' (perspective, orthographic)"
+                )))
+            }
+        };
+        let cam = Camera {
+            eye,
+            target,
+            up,
+            projection,
+        };
+        cam.validate()?;
+        Ok(cam)
+    }
+}
+
+/// A right/forward pair perpendicular to `up` (forward is +y for up = +z).
+fn orbit_basis(up: DVec3) -> (DVec3, DVec3) {
+    let up = up.normalize();
+    let guess = if up.y.abs() < 0.9 { DVec3::Y } else { DVec3::X };
+    let fwd = (guess - up * guess.dot(up)).normalize();
+    let right = fwd.cross(up);
+    (right, fwd)
+}
+
+impl Camera {
+    /// The default camera fitting `bounds`, perspective, looking along +y with z up.
+    pub fn fit(bounds: &Aabb) -> Self {
+        CameraSpec::default()
+            .resolve(bounds)
+            .expect("default spec is valid")
+    }
+
+    /// Checks the camera is usable: finite, eye != target, up not parallel to the view.
+    pub fn validate(&self) -> Result<()> {
+        let v = self.target - self.eye;
+        if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
+            return Err(Error::InvalidCamera("non-finite eye, target or up".into()));
+        }
+        if v.length() < 1e-12 {
+            return Err(Error::InvalidCamera("eye and target coincide".into()));
+        }
+        if v.normalize().cross(self.up.normalize_or_zero()).length() < 1e-9 {
+            return Err(Error::InvalidCamera(
+                "up is parallel to the view direction".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Orthonormal camera basis (right, true up, forward).
+    pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
+        let f = (self.target - self.eye).normalize();
+        let r = f.cross(self.up).normalize();
+        let u = r.cross(f);
+        (r, u, f)
+    }
+
+    /// The ray through continuous pixel coordinates (`px`, `py`) of a `w` x `h` image
+    /// (pixel centres at +0.5, row 0 at the top).
+    pub fn ray(&self, px: f64, py: f64, w: usize, h: usize) -> Ray {
+        let (r, u, f) = self.basis();
+        let aspect = w as f64 / h as f64;
+        let nx = (2.0 * px / w as f64 - 1.0) * aspect;
+        let ny = 1.0 - 2.0 * py / h as f64;
+        match self.projection {
+            Projection::Perspective { fov_y_deg } => {
+                let t = (fov_y_deg.to_radians() * 0.5).tan();
+                Ray {
+                    origin: self.eye,
+                    dir: (f + r * (nx * t) + u * (ny * t)).normalize(),
+                }
+            }
+            Projection::Orthographic { height } => Ray {
+                origin: self.eye + (r * nx + u * ny) * (height * 0.5),
+                dir: f,
+            },
+        }
+    }
+
+    /// Projects a world point to continuous pixel coordinates and view depth (distance along
+    /// the forward axis). Inverse of [`Camera::ray`].
+    pub fn project(&self, p: DVec3, w: usize, h: usize) -> (f64, f64, f64) {
+        let (r, u, f) = self.basis();
+        let d = p - self.eye;
+        let depth = d.dot(f);
+        let (x, y) = match self.projection {
+            Projection::Perspective { fov_y_deg } => {
+                let t = (fov_y_deg.to_radians() * 0.5).tan();
+                (d.dot(r) / (depth * t), d.dot(u) / (depth * t))
+            }
+            Projection::Orthographic { height } => {
+                (d.dot(r) / (height * 0.5), d.dot(u) / (height * 0.5))
+            }
+        };
+        let aspect = w as f64 / h as f64;
+        let px = (x / aspect + 1.0) * 0.5 * w as f64;
+        let py = (1.0 - y) * 0.5 * h as f64;
+        (px, py, depth)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box() -> Aabb {
+        Aabb {
+            min: DVec3::ZERO,
+            max: DVec3::ONE,
+        }
+    }
+
+    #[test]
+    fn default_looks_along_plus_y() {
+        let c = Camera::fit(&unit_box());
+        let (_, _, f) = c.basis();
+        assert!((f - DVec3::Y).length() < 1e-9);
+        let ray = c.ray(50.0, 50.0, 100, 100);
+        assert!((ray.dir - DVec3::Y).length() < 1e-9);
+    }
+
+    #[test]
+    fn project_inverts_ray() {
+        for proj in ["perspective", "orthographic"] {
+            let spec = CameraSpec {
+                projection: Some(proj.into()),
+                azimuth: Some(30.0),
+                elevation: Some(20.0),
+                ..Default::default()
+            };
+            let c = spec.resolve(&unit_box()).unwrap();
+            let ray = c.ray(13.0, 77.0, 160, 100);
+            let p = ray.origin + ray.dir * 2.5;
+            let (x, y, _) = c.project(p, 160, 100);
+            assert!(
+                (x - 13.0).abs() < 1e-6 && (y - 77.0).abs() < 1e-6,
+                "{proj}: {x} {y}"
+            );
+        }
+    }
+
+    #[test]
+    fn json_and_errors() {
+        let s = CameraSpec::from_json(r#"{"azimuth": 90, "zoom": 2}"#).unwrap();
+        assert!(s.resolve(&unit_box()).is_ok());
+        assert!(CameraSpec::from_json(r#"{"bogus": 1}"#).is_err());
+        let bad = CameraSpec {
+            zoom: Some(0.0),
+            ..Default::default()
+        };
+        assert!(bad.resolve(&unit_box()).is_err());
+        let bad = CameraSpec {
+            eye: Some([0.0, 0.0, 5.0]),
+            target: Some([0.0, 0.0, 0.0]),
+            ..Default::default()
+        };
+        assert!(bad.resolve(&unit_box()).is_err());
+    }
+}

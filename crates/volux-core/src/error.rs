@@ -1,0 +1,68 @@
+//! Typed errors of the data model.
+use thiserror::Error;
+
+/// Errors raised when building or validating data-model objects.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// Grid dimensions that are zero, negative or whose product overflows.
+    #[error("invalid dimensions {dims:?}: {reason}")]
+    InvalidDims {
+        /// The offending dimensions (as given).
+        dims: [i64; 3],
+        /// Why they are invalid.
+        reason: String,
+    },
+    /// Spacing that is not finite and positive.
+    #[error("invalid spacing {0:?}: must be finite and > 0")]
+    InvalidSpacing([f64; 3]),
+    /// The number of values does not match the dimensions.
+    #[error("size mismatch: expected {expected} values, found {actual}")]
+    SizeMismatch {
+        /// Values the dimensions ask for.
+        expected: u64,
+        /// Values present.
+        actual: u64,
+    },
+    /// A request for more memory than this machine can hold.
+    #[error("{what} needs {bytes} bytes, more than the {limit} bytes this machine can hold")]
+    TooLarge {
+        /// What would be allocated.
+        what: String,
+        /// Bytes requested.
+        bytes: u64,
+        /// The limit.
+        limit: u64,
+    },
+    /// A tetrahedral mesh that cannot be used.
+    #[error("invalid mesh: {0}")]
+    InvalidMesh(String),
+    /// A transfer function that cannot be used.
+    #[error("invalid transfer function: {0}")]
+    InvalidTransferFunction(String),
+    /// A camera that cannot be used.
+    #[error("invalid camera: {0}")]
+    InvalidCamera(String),
+    /// An unknown preset or generator name.
+    #[error("unknown {kind} '{name}' (known: {known})")]
+    UnknownName {
+        /// What kind of name.
+        kind: &'static str,
+        /// The name given.
+        name: String,
+        /// The accepted names.
+        known: String,
+    },
+    /// JSON that does not parse or does not match the schema.
+    #[error("JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// An operating-system I/O error.
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+    /// PNG encoding failed.
+    #[error("PNG encoding: {0}")]
+    Png(String),
+}
+
+/// Result alias of the data model.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,524 @@
+//! Regular grids of scalars kept in their native type.
+//!
+//! Samples are stored as `u8`, `u16`, `i16` or `f32` (other types are converted by the readers,
+//! with a note), either owned or memory-mapped straight from an uncompressed little-endian file.
+//! Index order is x fastest, then y, then z (C array `[z][y][x]`).
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use crate::error::{Error, Result};
+use crate::limits::{check_alloc, checked_dims};
+use crate::Aabb;
+
+/// The native scalar type of a grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[non_exhaustive]
+pub enum ScalarType {
+    /// Unsigned 8-bit.
+    U8,
+    /// Unsigned 16-bit.
+    U16,
+    /// Signed 16-bit (CT Hounsfield units).
+    I16,
+    /// 32-bit float.
+    F32,
+}
+
+impl ScalarType {
+    /// Bytes per value.
+    pub fn size(self) -> usize {
+        match self {
+            ScalarType::U8 => 1,
+            ScalarType::U16 | ScalarType::I16 => 2,
+            ScalarType::F32 => 4,
+        }
+    }
+    /// The sidecar name (`uint8`, `uint16`, `int16`, `float32`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ScalarType::U8 => "uint8",
+            ScalarType::U16 => "uint16",
+            ScalarType::I16 => "int16",
+            ScalarType::F32 => "float32",
+        }
+    }
+    /// Parses a sidecar / NRRD / numpy-style type name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Some(match name.to_ascii_lowercase().as_str() {
+            "uint8" | "u8" | "uchar" | "unsigned char" | "uint8_t" | "met_uchar" => ScalarType::U8,
+            "uint16" | "u16" | "ushort" | "unsigned short" | "uint16_t" | "met_ushort" => {
+                ScalarType::U16
+            }
+            "int16" | "i16" | "short" | "signed short" | "int16_t" | "met_short" => ScalarType::I16,
+            "float32" | "f32" | "float" | "met_float" => ScalarType::F32,
+            _ => return None,
+        })
+    }
+}
+
+/// A plain-old-data scalar that a [`Buffer`] can hold.
+pub trait Scalar: bytemuck::Pod + Send + Sync + 'static {
+    /// The value as `f32`.
+    fn to_f32(self) -> f32;
+}
+impl Scalar for u8 {
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+}
+impl Scalar for u16 {
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+}
+impl Scalar for i16 {
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+}
+impl Scalar for f32 {
+    fn to_f32(self) -> f32 {
+        self
+    }
+}
+
+#[derive(Clone, Debug)]
+enum Storage<T> {
+    Owned(Arc<Vec<T>>),
+    Mapped {
+        map: Arc<memmap2::Mmap>,
+        offset: usize,
+        len: usize,
+    },
+}
+
+/// A read-only slice of scalars, owned or memory-mapped; cheap to clone.
+#[derive(Clone, Debug)]
+pub struct Buffer<T> {
+    storage: Storage<T>,
+}
+
+impl<T: Scalar> Buffer<T> {
+    /// Wraps owned values.
+    pub fn owned(values: Vec<T>) -> Self {
+        Self {
+            storage: Storage::Owned(Arc::new(values)),
+        }
+    }
+
+    /// Memory-maps `count` little-endian values of `T` starting at byte `offset` of `path`.
+    ///
+    /// Returns `Ok(None)` when mapping is not possible (big-endian host, misaligned offset), in
+    /// which case the caller reads the file instead. Errors when the file is too short.
+    pub fn map_file(path: &Path, offset: u64, count: usize) -> Result<Option<Self>> {
+        let size = std::mem::size_of::<T>();
+        if cfg!(target_endian = "big")
+            || !(offset as usize).is_multiple_of(std::mem::align_of::<T>())
+        {
+            return Ok(None);
+        }
+        let file = std::fs::File::open(path)?;
+        let file_len = file.metadata()?.len();
+        let need = (count as u64)
+            .checked_mul(size as u64)
+            .and_then(|b| b.checked_add(offset))
+            .ok_or(Error::SizeMismatch {
+                expected: u64::MAX,
+                actual: file_len,
+            })?;
+        if file_len < need {
+            return Err(Error::SizeMismatch {
+                expected: count as u64,
+                actual: file_len.saturating_sub(offset) / size as u64,
+            });
+        }
+        if count == 0 {
+            return Ok(Some(Self::owned(Vec::new())));
+        }
+        let map = map_read_only(&file)?;
+        Ok(Some(Self {
+            storage: Storage::Mapped {
+                map: Arc::new(map),
+                offset: offset as usize,
+                len: count,
+            },
+        }))
+    }
+
+    /// The values.
+    pub fn as_slice(&self) -> &[T] {
+        match &self.storage {
+            Storage::Owned(v) => v,
+            Storage::Mapped { map, offset, len } => {
+                let bytes = &map[*offset..*offset + *len * std::mem::size_of::<T>()];
+                bytemuck::cast_slice(bytes)
+            }
+        }
+    }
+
+    /// Whether the values are memory-mapped from a file.
+    pub fn is_mapped(&self) -> bool {
+        matches!(self.storage, Storage::Mapped { .. })
+    }
+}
+
+/// Maps a file read-only.
+///
+/// `unsafe` is needed because the OS may change a mapped file under us. This is sound for our
+/// use: the map is read-only, and volume files are inputs that Volux never writes while mapped;
+/// a file truncated by another process could raise SIGBUS, the same trade-off every mmap-based
+/// viewer accepts to avoid copying multi-gigabyte volumes (DEVELOPERS.md: "large files are
+/// memory-mapped, not copied").
+#[allow(unsafe_code)]
+fn map_read_only(file: &std::fs::File) -> Result<memmap2::Mmap> {
+    // SAFETY: see the function's documentation.
+    Ok(unsafe { memmap2::Mmap::map(file)? })
+}
+
+impl<T: Scalar> std::ops::Deref for Buffer<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        self.as_slice()
+    }
+}
+
+/// Grid samples in their native type.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub enum Samples {
+    /// Unsigned 8-bit values.
+    U8(Buffer<u8>),
+    /// Unsigned 16-bit values.
+    U16(Buffer<u16>),
+    /// Signed 16-bit values.
+    I16(Buffer<i16>),
+    /// 32-bit float values.
+    F32(Buffer<f32>),
+}
+
+/// Applies `$body` to the typed slice inside a [`Samples`].
+#[macro_export]
+macro_rules! with_samples {
+    ($samples:expr, |$s:ident| $body:expr) => {
+        match $samples {
+            $crate::grid::Samples::U8(b) => {
+                let $s: &[u8] = b.as_slice();
+                $body
+            }
+            $crate::grid::Samples::U16(b) => {
+                let $s: &[u16] = b.as_slice();
+                $body
+            }
+            $crate::grid::Samples::I16(b) => {
+                let $s: &[i16] = b.as_slice();
+                $body
+            }
+            $crate::grid::Samples::F32(b) => {
+                let $s: &[f32] = b.as_slice();
+                $body
+            }
+        }
+    };
+}
+
+impl Samples {
+    /// The scalar type.
+    pub fn scalar_type(&self) -> ScalarType {
+        match self {
+            Samples::U8(_) => ScalarType::U8,
+            Samples::U16(_) => ScalarType::U16,
+            Samples::I16(_) => ScalarType::I16,
+            Samples::F32(_) => ScalarType::F32,
+        }
+    }
+    /// Number of values.
+    pub fn len(&self) -> usize {
+        with_samples!(self, |s| s.len())
+    }
+    /// Whether there are no values.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Value `i` as `f32`.
+    #[inline]
+    pub fn get_f32(&self, i: usize) -> f32 {
+        with_samples!(self, |s| s[i].to_f32())
+    }
+    /// Whether the values are memory-mapped.
+    pub fn is_mapped(&self) -> bool {
+        match self {
+            Samples::U8(b) => b.is_mapped(),
+            Samples::U16(b) => b.is_mapped(),
+            Samples::I16(b) => b.is_mapped(),
+            Samples::F32(b) => b.is_mapped(),
+        }
+    }
+    /// Decodes `bytes` of type `ty` with the given endianness into owned samples.
+    pub fn from_bytes(ty: ScalarType, bytes: &[u8], little_endian: bool) -> Result<Self> {
+        if !bytes.len().is_multiple_of(ty.size()) {
+            return Err(Error::SizeMismatch {
+                expected: (bytes.len() / ty.size() + 1) as u64,
+                actual: (bytes.len() / ty.size()) as u64,
+            });
+        }
+        fn conv<T: Scalar, const N: usize>(
+            bytes: &[u8],
+            f: impl Fn([u8; N]) -> T + Sync,
+        ) -> Vec<T> {
+            bytes
+                .chunks_exact(N)
+                .map(|c| f(c.try_into().expect("chunk of N bytes")))
+                .collect()
+        }
+        let le = little_endian;
+        Ok(match ty {
+            ScalarType::U8 => Samples::U8(Buffer::owned(bytes.to_vec())),
+            ScalarType::U16 => Samples::U16(Buffer::owned(conv(bytes, |b| {
+                if le {
+                    u16::from_le_bytes(b)
+                } else {
+                    u16::from_be_bytes(b)
+                }
+            }))),
+            ScalarType::I16 => Samples::I16(Buffer::owned(conv(bytes, |b| {
+                if le {
+                    i16::from_le_bytes(b)
+                } else {
+                    i16::from_be_bytes(b)
+                }
+            }))),
+            ScalarType::F32 => Samples::F32(Buffer::owned(conv(bytes, |b| {
+                if le {
+                    f32::from_le_bytes(b)
+                } else {
+                    f32::from_be_bytes(b)
+                }
+            }))),
+        })
+    }
+}
+
+/// A regular grid: dims, anisotropic spacing, origin and native-type samples.
+///
+/// Built only through [`Grid::new`], which validates sizes, computes the value range, and
+/// replaces non-finite values (reported in [`Grid::notes`]) so renderers never see NaN.
+#[derive(Clone, Debug)]
+pub struct Grid {
+    dims: [usize; 3],
+    spacing: DVec3,
+    origin: DVec3,
+    samples: Samples,
+    range: [f64; 2],
+    notes: Vec<String>,
+}
+
+impl Grid {
+    /// Builds and validates a grid. Non-finite `f32` values are counted, noted, and replaced by
+    /// the finite minimum (NaN, -Inf) or maximum (+Inf).
+    pub fn new(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        origin: [f64; 3],
+        samples: Samples,
+    ) -> Result<Self> {
+        let (dims, count) = checked_dims(dims.map(|d| d as i64))?;
+        if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
+            return Err(Error::InvalidSpacing(spacing));
+        }
+        if origin.iter().any(|o| !o.is_finite()) {
+            return Err(Error::InvalidDims {
+                dims: dims.map(|d| d as i64),
+                reason: format!("origin {origin:?} is not finite"),
+            });
+        }
+        if samples.len() as u64 != count {
+            return Err(Error::SizeMismatch {
+                expected: count,
+                actual: samples.len() as u64,
+            });
+        }
+        let mut grid = Self {
+            dims,
+            spacing: DVec3::from(spacing),
+            origin: DVec3::from(origin),
+            samples,
+            range: [0.0, 0.0],
+            notes: Vec::new(),
+        };
+        grid.sanitize_and_range();
+        Ok(grid)
+    }
+
+    fn sanitize_and_range(&mut self) {
+        use rayon::prelude::*;
+        let (lo, hi, bad) = with_samples!(&self.samples, |s| s
+            .par_chunks(1 << 16)
+            .map(|c| {
+                c.iter().fold(
+                    (f64::INFINITY, f64::NEG_INFINITY, 0usize),
+                    |(lo, hi, bad), v| {
+                        let v = v.to_f32() as f64;
+                        if v.is_finite() {
+                            (lo.min(v), hi.max(v), bad)
+                        } else {
+                            (lo, hi, bad + 1)
+                        }
+                    },
+                )
+            })
+            .reduce(
+                || (f64::INFINITY, f64::NEG_INFINITY, 0),
+                |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 + b.2),
+            ));
+        let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.0) };
+        self.range = [lo, hi];
+        if bad > 0 {
+            if let Samples::F32(b) = &self.samples {
+                let fixed: Vec<f32> = b
+                    .iter()
+                    .map(|&v| match v {
+                        v if v.is_finite() => v,
+                        v if v == f32::INFINITY => hi as f32,
+                        _ => lo as f32,
+                    })
+                    .collect();
+                self.samples = Samples::F32(Buffer::owned(fixed));
+            }
+            self.notes.push(format!(
+                "{bad} non-finite values (NaN/Inf) replaced: NaN and -Inf by the minimum {lo}, +Inf by the maximum {hi}"
+            ));
+        }
+    }
+
+    /// Adds a note (e.g. "converted from float64 to float32") reported by `volux info`.
+    pub fn with_note(mut self, note: impl Into<String>) -> Self {
+        self.notes.push(note.into());
+        self
+    }
+    /// Notes on conversions and repairs made while loading.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+    /// Number of samples along x, y, z.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+    /// Distance between samples along x, y, z (world units, mm for medical data).
+    pub fn spacing(&self) -> DVec3 {
+        self.spacing
+    }
+    /// World position of sample (0, 0, 0).
+    pub fn origin(&self) -> DVec3 {
+        self.origin
+    }
+    /// The samples.
+    pub fn samples(&self) -> &Samples {
+        &self.samples
+    }
+    /// Native scalar type.
+    pub fn scalar_type(&self) -> ScalarType {
+        self.samples.scalar_type()
+    }
+    /// `[min, max]` of the (finite) values.
+    pub fn range(&self) -> [f64; 2] {
+        self.range
+    }
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+    /// Always false: a valid grid has at least one sample.
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+    /// Linear index of sample (i, j, k).
+    #[inline]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        i + self.dims[0] * (j + self.dims[1] * k)
+    }
+    /// Value of sample (i, j, k) as f32.
+    #[inline]
+    pub fn value(&self, i: usize, j: usize, k: usize) -> f32 {
+        self.samples.get_f32(self.index(i, j, k))
+    }
+    /// World position of sample (i, j, k).
+    pub fn position(&self, i: usize, j: usize, k: usize) -> DVec3 {
+        self.origin + self.spacing * DVec3::new(i as f64, j as f64, k as f64)
+    }
+    /// World bounding box of the sample positions.
+    pub fn bounds(&self) -> Aabb {
+        let d = DVec3::new(
+            (self.dims[0] - 1) as f64,
+            (self.dims[1] - 1) as f64,
+            (self.dims[2] - 1) as f64,
+        );
+        Aabb {
+            min: self.origin,
+            max: self.origin + d * self.spacing,
+        }
+    }
+    /// Bytes held by the samples.
+    pub fn memory_bytes(&self) -> usize {
+        self.len() * self.scalar_type().size()
+    }
+    /// All values converted to f32 (a copy; used by writers and tests, not by renderers).
+    pub fn to_f32_vec(&self) -> Result<Vec<f32>> {
+        check_alloc("f32 copy of the grid", self.len() as u64, 4)?;
+        Ok(with_samples!(&self.samples, |s| s
+            .iter()
+            .map(|v| v.to_f32())
+            .collect()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nan_replaced_and_noted() {
+        let s = Samples::F32(Buffer::owned(vec![1.0, f32::NAN, 3.0, f32::INFINITY]));
+        let g = Grid::new([2, 2, 1], [1.0; 3], [0.0; 3], s).unwrap();
+        assert_eq!(g.range(), [1.0, 3.0]);
+        assert_eq!(g.notes().len(), 1);
+        assert_eq!(g.value(1, 0, 0), 1.0);
+        assert_eq!(g.value(1, 1, 0), 3.0);
+    }
+
+    #[test]
+    fn size_mismatch_is_error() {
+        let s = Samples::U8(Buffer::owned(vec![0; 7]));
+        assert!(matches!(
+            Grid::new([2, 2, 2], [1.0; 3], [0.0; 3], s),
+            Err(Error::SizeMismatch { .. })
+        ));
+    }
+
+    #[test]
+    fn bad_spacing_is_error() {
+        let s = Samples::U8(Buffer::owned(vec![0; 8]));
+        assert!(Grid::new([2, 2, 2], [1.0, 0.0, 1.0], [0.0; 3], s).is_err());
+    }
+
+    #[test]
+    fn mapped_file_reads_values() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.raw");
+        let vals: Vec<u16> = (0..24).collect();
+        std::fs::write(&p, bytemuck::cast_slice::<u16, u8>(&vals)).unwrap();
+        let b = Buffer::<u16>::map_file(&p, 0, 24).unwrap().unwrap();
+        assert!(b.is_mapped());
+        assert_eq!(&b[..], &vals[..]);
+        assert!(Buffer::<u16>::map_file(&p, 0, 25).is_err());
+    }
+
+    #[test]
+    fn from_bytes_big_endian() {
+        let s = Samples::from_bytes(ScalarType::I16, &[0xFF, 0xFE, 0x00, 0x01], false).unwrap();
+        assert_eq!(s.get_f32(0), -2.0);
+        assert_eq!(s.get_f32(1), 1.0);
+    }
+}

@@ -1,0 +1,432 @@
+//! Transfer functions: piecewise-linear colour (RGB) and extinction coefficient.
+//!
+//! The optical model is emission-absorption (`001_...txt` ch. 2): a sample of value `s` emits
+//! colour `c(s)` and absorbs with extinction `tau(s)` per unit length. `tau` is given per
+//! [`TransferFunction::unit_length`] world units (presets use the voxel size, so a preset looks
+//! alike on data of any physical size); renderers call [`TransferFunction::tau_per_world`].
+//! Opacity per reference step is accepted too and converted: `tau = -ln(1 - a) / step`.
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::histogram::Histogram;
+
+/// Whether control-point positions are data values or fractions of the data range.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Space {
+    /// Positions are data values (e.g. Hounsfield units).
+    #[default]
+    Value,
+    /// Positions are in [0, 1] over the data's value range.
+    Normalized,
+}
+
+/// A piecewise-linear transfer function (see the module documentation).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransferFunction {
+    /// Whether positions are values or normalized.
+    #[serde(default)]
+    pub space: Space,
+    /// Colour control points `[s, r, g, b]` (linear RGB in 0..1), sorted by `s`.
+    pub color: Vec<[f64; 4]>,
+    /// Extinction control points `[s, tau]`, sorted by `s`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub extinction: Vec<[f64; 2]>,
+    /// Alternative to `extinction`: opacity per `opacity_step` as `[s, alpha]`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub opacity: Vec<[f64; 2]>,
+    /// Length (in units of `unit_length`) that `opacity` refers to; default 1.
+    #[serde(default = "one")]
+    pub opacity_step: f64,
+    /// Global multiplier of the extinction; default 1.
+    #[serde(default = "one")]
+    pub opacity_scale: f64,
+    /// World length that `tau` refers to; default 1.
+    #[serde(default = "one")]
+    pub unit_length: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The preset names accepted by [`TransferFunction::preset`].
+pub const PRESETS: [&str; 9] = [
+    "auto",
+    "grayscale",
+    "ct-bone",
+    "ct-skin",
+    "ct-soft-tissue",
+    "mr-default",
+    "viridis",
+    "inferno",
+    "cool-warm",
+];
+
+const VIRIDIS: [[f64; 3]; 5] = [
+    [0.267, 0.005, 0.329],
+    [0.229, 0.322, 0.546],
+    [0.128, 0.567, 0.551],
+    [0.369, 0.789, 0.383],
+    [0.993, 0.906, 0.144],
+];
+const INFERNO: [[f64; 3]; 5] = [
+    [0.001, 0.000, 0.014],
+    [0.341, 0.062, 0.429],
+    [0.735, 0.216, 0.330],
+    [0.978, 0.557, 0.035],
+    [0.988, 0.998, 0.645],
+];
+const COOL_WARM: [[f64; 3]; 3] = [
+    [0.230, 0.299, 0.754],
+    [0.865, 0.865, 0.865],
+    [0.706, 0.016, 0.150],
+];
+
+fn lerp_points(points: &[[f64; 2]], s: f64) -> f64 {
+    match points.iter().position(|p| p[0] > s) {
+        None => points.last().map_or(0.0, |p| p[1]),
+        Some(0) => points[0][1],
+        Some(i) => {
+            let (a, b) = (points[i - 1], points[i]);
+            let t = (s - a[0]) / (b[0] - a[0]);
+            a[1] + (b[1] - a[1]) * t
+        }
+    }
+}
+
+fn colormap(stops: &[[f64; 3]]) -> Vec<[f64; 4]> {
+    let n = (stops.len() - 1) as f64;
+    stops
+        .iter()
+        .enumerate()
+        .map(|(i, c)| [i as f64 / n, srgb(c[0]), srgb(c[1]), srgb(c[2])])
+        .collect()
+}
+
+/// sRGB-encoded colormap entries to linear.
+fn srgb(x: f64) -> f64 {
+    crate::image::srgb_to_linear(x as f32) as f64
+}
+
+impl TransferFunction {
+    /// Parses the JSON form and validates it.
+    pub fn from_json(text: &str) -> Result<Self> {
+        let tf: Self = serde_json::from_str(text)?;
+        tf.validate()?;
+        Ok(tf)
+    }
+
+    /// The JSON form.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a transfer function always serializes")
+    }
+
+    /// Checks control points: present, finite, sorted, colours in 0..1, tau >= 0, alpha in 0..1.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::InvalidTransferFunction(m));
+        if self.color.is_empty() {
+            return bad("no colour control points".into());
+        }
+        if self.extinction.is_empty() == self.opacity.is_empty() {
+            return bad("give exactly one of 'extinction' or 'opacity'".into());
+        }
+        let sorted = |v: &[f64]| v.windows(2).all(|w| w[0] <= w[1]);
+        if !sorted(&self.color.iter().map(|p| p[0]).collect::<Vec<_>>())
+            || !sorted(
+                &self
+                    .extinction
+                    .iter()
+                    .chain(&self.opacity)
+                    .map(|p| p[0])
+                    .collect::<Vec<_>>(),
+            )
+        {
+            return bad("control points must be sorted by value".into());
+        }
+        let all = self
+            .color
+            .iter()
+            .flatten()
+            .chain(self.extinction.iter().chain(&self.opacity).flatten());
+        if all.clone().any(|v| !v.is_finite()) {
+            return bad("non-finite control point".into());
+        }
+        if self
+            .color
+            .iter()
+            .any(|p| p[1..].iter().any(|c| !(0.0..=1.0).contains(c)))
+        {
+            return bad("colour components must be in 0..1".into());
+        }
+        if self.extinction.iter().any(|p| p[1] < 0.0) {
+            return bad("extinction must be >= 0".into());
+        }
+        if self.opacity.iter().any(|p| !(0.0..=1.0).contains(&p[1])) {
+            return bad("opacity must be in 0..1".into());
+        }
+        for (name, v) in [
+            ("opacity_step", self.opacity_step),
+            ("unit_length", self.unit_length),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(format!("{name} must be > 0"));
+            }
+        }
+        if !(self.opacity_scale.is_finite() && self.opacity_scale >= 0.0) {
+            return bad("opacity_scale must be >= 0".into());
+        }
+        Ok(())
+    }
+
+    /// A TF in value space, extinction given, with `opacity` converted to extinction and
+    /// normalized positions mapped onto `range`.
+    pub fn resolved(&self, range: [f64; 2]) -> Self {
+        let map = |s: f64| match self.space {
+            Space::Value => s,
+            Space::Normalized => range[0] + s * (range[1] - range[0]),
+        };
+        let extinction = if self.opacity.is_empty() {
+            self.extinction.iter().map(|p| [map(p[0]), p[1]]).collect()
+        } else {
+            self.opacity
+                .iter()
+                .map(|p| {
+                    [
+                        map(p[0]),
+                        -(1.0 - p[1].min(0.999_999)).ln() / self.opacity_step,
+                    ]
+                })
+                .collect()
+        };
+        Self {
+            space: Space::Value,
+            color: self
+                .color
+                .iter()
+                .map(|p| [map(p[0]), p[1], p[2], p[3]])
+                .collect(),
+            extinction,
+            opacity: Vec::new(),
+            opacity_step: 1.0,
+            opacity_scale: self.opacity_scale,
+            unit_length: self.unit_length,
+        }
+    }
+
+    /// Linear RGB at value `s` (a resolved TF is expected).
+    pub fn color_at(&self, s: f64) -> [f64; 3] {
+        let pts = &self.color;
+        let ch = |c: usize| lerp_points(&pts.iter().map(|p| [p[0], p[c]]).collect::<Vec<_>>(), s);
+        [ch(1), ch(2), ch(3)]
+    }
+
+    /// Extinction per world unit at value `s`, opacity scale applied (a resolved TF is expected).
+    pub fn tau_per_world(&self, s: f64) -> f64 {
+        lerp_points(&self.extinction, s) * self.opacity_scale / self.unit_length
+    }
+
+    /// All control-point positions (colour and extinction), sorted and deduplicated: the TF is
+    /// linear between consecutive ones.
+    pub fn breakpoints(&self) -> Vec<f64> {
+        let mut v: Vec<f64> = self
+            .color
+            .iter()
+            .map(|p| p[0])
+            .chain(self.extinction.iter().map(|p| p[0]))
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        v
+    }
+
+    /// Sets the world length that `tau` refers to (presets use the voxel size).
+    pub fn with_unit_length(mut self, unit_length: f64) -> Self {
+        self.unit_length = unit_length;
+        self
+    }
+
+    /// Multiplies the extinction by `scale`.
+    pub fn with_opacity_scale(mut self, scale: f64) -> Self {
+        self.opacity_scale = scale;
+        self
+    }
+
+    fn normalized(color: Vec<[f64; 4]>, extinction: Vec<[f64; 2]>) -> Self {
+        Self {
+            space: Space::Normalized,
+            color,
+            extinction,
+            opacity: Vec::new(),
+            opacity_step: 1.0,
+            opacity_scale: 1.0,
+            unit_length: 1.0,
+        }
+    }
+
+    fn values(color: Vec<[f64; 4]>, extinction: Vec<[f64; 2]>) -> Self {
+        Self {
+            space: Space::Value,
+            ..Self::normalized(color, extinction)
+        }
+    }
+
+    /// A named preset, resolved on a histogram of the data (`auto` needs it; the others use
+    /// only its range). CT presets are in Hounsfield units.
+    pub fn preset(name: &str, hist: &Histogram) -> Result<Self> {
+        let ramp = vec![[0.0, 0.0], [0.1, 0.0], [1.0, 0.25]];
+        let tf = match name {
+            "auto" => Self::automatic(hist),
+            "grayscale" => Self::normalized(vec![[0.0, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0]], ramp),
+            "viridis" => Self::normalized(colormap(&VIRIDIS), ramp),
+            "inferno" => Self::normalized(colormap(&INFERNO), ramp),
+            "cool-warm" => Self::normalized(colormap(&COOL_WARM), ramp),
+            "ct-bone" => Self::values(
+                vec![
+                    [150.0, 0.55, 0.25, 0.15],
+                    [400.0, 0.9, 0.8, 0.65],
+                    [1500.0, 1.0, 1.0, 0.95],
+                ],
+                vec![[150.0, 0.0], [300.0, 0.05], [700.0, 0.6], [3000.0, 1.0]],
+            ),
+            "ct-skin" => Self::values(
+                vec![
+                    [-600.0, 0.6, 0.35, 0.25],
+                    [-100.0, 0.9, 0.65, 0.5],
+                    [300.0, 1.0, 0.9, 0.8],
+                    [1500.0, 1.0, 1.0, 1.0],
+                ],
+                vec![
+                    [-600.0, 0.0],
+                    [-300.0, 0.15],
+                    [100.0, 0.15],
+                    [300.0, 0.3],
+                    [1500.0, 1.0],
+                ],
+            ),
+            "ct-soft-tissue" => Self::values(
+                vec![
+                    [-200.0, 0.5, 0.1, 0.05],
+                    [40.0, 0.85, 0.35, 0.25],
+                    [300.0, 1.0, 0.85, 0.7],
+                    [1500.0, 1.0, 1.0, 1.0],
+                ],
+                vec![
+                    [-200.0, 0.0],
+                    [-50.0, 0.02],
+                    [80.0, 0.06],
+                    [300.0, 0.3],
+                    [1500.0, 0.8],
+                ],
+            ),
+            "mr-default" => Self::normalized(
+                vec![
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.3, 0.55, 0.35, 0.3],
+                    [0.7, 0.95, 0.85, 0.75],
+                    [1.0, 1.0, 1.0, 1.0],
+                ],
+                vec![[0.0, 0.0], [0.12, 0.0], [0.35, 0.08], [1.0, 0.3]],
+            ),
+            _ => {
+                return Err(Error::UnknownName {
+                    kind: "transfer-function preset",
+                    name: name.into(),
+                    known: PRESETS.join(", "),
+                })
+            }
+        };
+        Ok(tf.resolved([hist.min, hist.max]))
+    }
+
+    /// The automatic default: transparent up to the end of the dominant (background) peak of
+    /// the histogram, then an extinction ramp to the 99.9th percentile, grey-warm colours, so a
+    /// first render of unknown data shows its structure.
+    pub fn automatic(hist: &Histogram) -> Self {
+        let (lo, hi) = (hist.min, hist.max);
+        let span = (hi - lo).max(f64::MIN_POSITIVE);
+        let bins = hist.counts.len();
+        let mode_bin = ((hist.mode() - lo) / span * bins as f64) as usize;
+        // End of the background peak: first bin after the mode that falls below 1/8 of it.
+        let peak = hist.counts[mode_bin.min(bins - 1)];
+        let end_bin = (mode_bin..bins)
+            .find(|&b| hist.counts[b] * 8 < peak)
+            .unwrap_or(mode_bin);
+        let mut start = lo + span * (end_bin as f64 / bins as f64);
+        let top = hist.quantile(0.999).max(start + span * 0.05);
+        if start >= top - span * 0.02 || mode_bin > bins / 2 {
+            // No clear low background peak (e.g. dense data): ramp over the upper half.
+            start = hist.quantile(0.5).min(lo + 0.5 * span);
+        }
+        let top = top
+            .max(start + span * 0.05)
+            .min(hi.max(start + span * 0.05));
+        let mid = start + 0.35 * (top - start);
+        let color = vec![
+            [start, 0.35, 0.2, 0.15],
+            [mid, 0.8, 0.6, 0.45],
+            [top, 1.0, 0.97, 0.92],
+        ];
+        let extinction = vec![[start, 0.0], [mid, 0.04], [top, 0.35]];
+        Self::values(color, extinction)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hist() -> Histogram {
+        let v: Vec<u8> = (0..=255).collect();
+        Histogram::from_values(&v, [0.0, 255.0], 256)
+    }
+
+    #[test]
+    fn all_presets_resolve_and_validate() {
+        for p in PRESETS {
+            let tf = TransferFunction::preset(p, &hist()).unwrap();
+            tf.validate().unwrap();
+            assert!(tf.breakpoints().len() >= 2, "{p}");
+        }
+        assert!(TransferFunction::preset("nope", &hist()).is_err());
+    }
+
+    #[test]
+    fn opacity_converts_to_extinction() {
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[0, 1, 1, 1]], "opacity": [[0, 0.5], [10, 0.5]], "opacity_step": 2.0}"#,
+        )
+        .unwrap()
+        .resolved([0.0, 10.0]);
+        let tau = tf.tau_per_world(5.0);
+        assert!((1.0 - (-tau * 2.0).exp() - 0.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn json_round_trip_and_errors() {
+        let tf = TransferFunction::preset("viridis", &hist()).unwrap();
+        assert_eq!(TransferFunction::from_json(&tf.to_json()).unwrap(), tf);
+        for bad in [
+            r#"{"color": []}"#,
+            r#"{"color": [[0,1,1,1]], "extinction": [[1, 1], [0, 1]]}"#,
+            r#"{"color": [[0,2,1,1]], "extinction": [[0, 1]]}"#,
+            r#"{"color": [[0,1,1,1]], "extinction": [[0, -1]]}"#,
+            r#"{"color": [[0,1,1,1]]}"#,
+        ] {
+            assert!(TransferFunction::from_json(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn interpolates_linearly() {
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[0,0,0,0],[10,1,0.5,0]], "extinction": [[0,0],[10,2]]}"#,
+        )
+        .unwrap();
+        assert!((tf.tau_per_world(2.5) - 0.5).abs() < 1e-12);
+        assert!((tf.color_at(5.0)[1] - 0.25).abs() < 1e-12);
+        assert_eq!(tf.tau_per_world(-5.0), 0.0);
+        assert_eq!(tf.tau_per_world(50.0), 2.0);
+    }
+}

@@ -1,0 +1,149 @@
+//! Format detection: magic bytes first, extension second.
+use std::io::Read;
+use std::path::Path;
+
+use crate::{ErrorKind, ReadError, Result};
+
+/// The formats Volux reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
+pub enum Format {
+    /// Headerless raw data with a JSON sidecar (`F.json`).
+    RawJson,
+    /// NRRD.
+    Nrrd,
+    /// MetaImage `.mhd` / `.mha`.
+    MetaImage,
+    /// NIfTI-1.
+    Nifti,
+    /// DICOM (a folder of slices or one multi-frame file).
+    Dicom,
+    /// VTK legacy.
+    VtkLegacy,
+    /// VTK XML image data.
+    Vti,
+    /// VTK XML unstructured grid.
+    Vtu,
+    /// PLOT3D whole-grid xyz (+ q).
+    Plot3d,
+    /// OFF tetrahedral mesh.
+    Off,
+    /// Volux binary tet mesh.
+    Vtet,
+}
+
+impl Format {
+    /// Human-readable name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::RawJson => "raw + JSON sidecar",
+            Format::Nrrd => "NRRD",
+            Format::MetaImage => "MetaImage",
+            Format::Nifti => "NIfTI-1",
+            Format::Dicom => "DICOM",
+            Format::VtkLegacy => "VTK legacy",
+            Format::Vti => "VTK XML image data (.vti)",
+            Format::Vtu => "VTK XML unstructured grid (.vtu)",
+            Format::Plot3d => "PLOT3D",
+            Format::Off => "OFF tetrahedral mesh",
+            Format::Vtet => "Volux binary tet mesh (.vtet)",
+        }
+    }
+}
+
+/// The file name lowercased with a trailing `.gz` removed, and whether it was there.
+fn stem_without_gz(path: &Path) -> (String, bool) {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    match name.strip_suffix(".gz") {
+        Some(s) => (s.to_string(), true),
+        None => (name, false),
+    }
+}
+
+/// Detects the format of `path` (a file, or a folder of DICOM slices).
+pub fn detect(path: &Path) -> Result<Format> {
+    let meta = std::fs::metadata(path).map_err(|e| ReadError::new(path, e))?;
+    if meta.is_dir() {
+        return Ok(Format::Dicom);
+    }
+    let mut head = [0u8; 512];
+    let n = {
+        let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+        let mut n = 0;
+        while n < head.len() {
+            match f
+                .read(&mut head[n..])
+                .map_err(|e| ReadError::new(path, e))?
+            {
+                0 => break,
+                k => n += k,
+            }
+        }
+        n
+    };
+    let head = &head[..n];
+    let (name, _gz) = stem_without_gz(path);
+    let ext = |e: &str| name.ends_with(e);
+    // Magic bytes.
+    if head.starts_with(b"NRRD") {
+        return Ok(Format::Nrrd);
+    }
+    if head.starts_with(crate::vtet::MAGIC) {
+        return Ok(Format::Vtet);
+    }
+    if head.len() >= 132 && &head[128..132] == b"DICM" {
+        return Ok(Format::Dicom);
+    }
+    if head.starts_with(b"# vtk DataFile") {
+        return Ok(Format::VtkLegacy);
+    }
+    if head.len() >= 348 && (&head[344..348] == b"n+1\0" || &head[344..348] == b"ni1\0") {
+        return Ok(Format::Nifti);
+    }
+    let text = String::from_utf8_lossy(head);
+    if text.contains("<VTKFile") {
+        if text.contains("UnstructuredGrid") {
+            return Ok(Format::Vtu);
+        }
+        if text.contains("ImageData") {
+            return Ok(Format::Vti);
+        }
+    }
+    // Extensions (gzip-compressed files cannot be sniffed cheaply).
+    let sidecar = path.with_file_name(format!(
+        "{}.json",
+        path.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    ));
+    let by_ext = if ext(".nrrd") || ext(".nhdr") {
+        Format::Nrrd
+    } else if ext(".mhd") || ext(".mha") {
+        Format::MetaImage
+    } else if ext(".nii") {
+        Format::Nifti
+    } else if ext(".dcm") {
+        Format::Dicom
+    } else if ext(".vtk") {
+        Format::VtkLegacy
+    } else if ext(".vti") {
+        Format::Vti
+    } else if ext(".vtu") {
+        Format::Vtu
+    } else if ext(".off") {
+        Format::Off
+    } else if ext(".vtet") {
+        Format::Vtet
+    } else if name.contains("xyz") && (ext(".bin") || ext(".x") || ext(".xyz")) {
+        Format::Plot3d
+    } else if ext(".raw") || sidecar.exists() {
+        Format::RawJson
+    } else {
+        return Err(ReadError::new(path, ErrorKind::UnknownFormat));
+    };
+    Ok(by_ext)
+}
