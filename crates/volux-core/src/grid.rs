@@ -185,9 +185,8 @@ impl<T: Scalar> std::ops::Deref for Buffer<T> {
     }
 }
 
-/// Grid samples in their native type.
+/// Grid samples in their native type (exhaustive: [`with_samples!`] matches every variant).
 #[derive(Clone, Debug)]
-#[non_exhaustive]
 pub enum Samples {
     /// Unsigned 8-bit values.
     U8(Buffer<u8>),

@@ -1,1 +1,38 @@
-//! placeholder
+//! # volux-render
+//!
+//! The rendering stages of the Volux pipeline, one module each, shared by every traversal:
+//!
+//! - [`sampling`]: field reconstruction (trilinear sampling of native-type grids);
+//! - [`classify`]: classification, a lookup table built from a [`TransferFunction`];
+//! - [`integrate`]: the optical model and its integrators (Riemann sum with step-corrected
+//!   opacity, `001_...txt` eq. 2.14);
+//! - [`raycast`]: image-order traversal of regular grids, front-to-back compositing;
+//! - [`resample`]: tetrahedral meshes resampled onto a grid (the simple correct path for
+//!   meshes until cell projection lands).
+//!
+//! [`TransferFunction`]: volux_core::TransferFunction
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod classify;
+pub mod integrate;
+pub mod raycast;
+pub mod resample;
+pub mod sampling;
+
+pub use raycast::{render_grid, RenderOptions, RenderStats};
+
+/// Errors of the renderers.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RenderError {
+    /// The render was cancelled through its cancellation flag.
+    #[error("render cancelled")]
+    Cancelled,
+    /// Options that cannot be used (zero image size, non-positive step...).
+    #[error("invalid render options: {0}")]
+    InvalidOptions(String),
+    /// An error of the data model.
+    #[error("{0}")]
+    Data(#[from] volux_core::Error),
+}

@@ -1,0 +1,92 @@
+//! Classification: a transfer function tabulated for fast lookup.
+//!
+//! The table samples the resolved [`TransferFunction`] at `N` evenly spaced values over a
+//! domain covering the data range and every control point; lookups interpolate linearly
+//! between entries, so a piecewise-linear TF whose breakpoints fall on entries is reproduced
+//! exactly and others within `O((domain / N)^2)`.
+use volux_core::TransferFunction;
+
+/// A classified sample: linear RGB colour and extinction per world unit.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Classified {
+    /// Linear RGB emission colour.
+    pub rgb: [f32; 3],
+    /// Extinction coefficient per world unit.
+    pub tau: f32,
+}
+
+/// A transfer function tabulated over a value domain.
+#[derive(Clone, Debug)]
+pub struct ClassifyTable {
+    entries: Vec<Classified>,
+    lo: f32,
+    scale: f32,
+}
+
+impl ClassifyTable {
+    /// Default number of entries.
+    pub const DEFAULT_SIZE: usize = 4096;
+
+    /// Tabulates `tf` (resolved on `range`) with `size` entries.
+    pub fn new(tf: &TransferFunction, range: [f64; 2], size: usize) -> Self {
+        let tf = tf.resolved(range);
+        let bp = tf.breakpoints();
+        let lo = range[0].min(bp.first().copied().unwrap_or(range[0]));
+        let hi = range[1].max(bp.last().copied().unwrap_or(range[1]));
+        let hi = if hi > lo { hi } else { lo + 1.0 };
+        let size = size.max(2);
+        let entries = (0..size)
+            .map(|i| {
+                let s = lo + (hi - lo) * i as f64 / (size - 1) as f64;
+                let c = tf.color_at(s);
+                Classified {
+                    rgb: [c[0] as f32, c[1] as f32, c[2] as f32],
+                    tau: tf.tau_per_world(s) as f32,
+                }
+            })
+            .collect();
+        Self {
+            entries,
+            lo: lo as f32,
+            scale: ((size - 1) as f64 / (hi - lo)) as f32,
+        }
+    }
+
+    /// Colour and extinction at value `s` (clamped to the table's domain).
+    #[inline]
+    pub fn lookup(&self, s: f32) -> Classified {
+        let x = ((s - self.lo) * self.scale).clamp(0.0, (self.entries.len() - 1) as f32);
+        let i = (x as usize).min(self.entries.len() - 2);
+        let f = x - i as f32;
+        let (a, b) = (self.entries[i], self.entries[i + 1]);
+        let l = |u: f32, v: f32| u + (v - u) * f;
+        Classified {
+            rgb: [
+                l(a.rgb[0], b.rgb[0]),
+                l(a.rgb[1], b.rgb[1]),
+                l(a.rgb[2], b.rgb[2]),
+            ],
+            tau: l(a.tau, b.tau),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_matches_tf() {
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[0,0,0,0],[100,1,0.5,0.25]], "extinction": [[0,0],[40,0.2],[100,1]]}"#,
+        )
+        .unwrap();
+        let t = ClassifyTable::new(&tf, [0.0, 100.0], 1001);
+        for s in [0.0f32, 13.7, 40.0, 77.3, 100.0, 150.0, -3.0] {
+            let c = t.lookup(s);
+            let d = s.clamp(0.0, 100.0) as f64;
+            assert!((c.tau as f64 - tf.tau_per_world(d)).abs() < 1e-4, "{s}");
+            assert!((c.rgb[1] as f64 - tf.color_at(d)[1]).abs() < 1e-4, "{s}");
+        }
+    }
+}
