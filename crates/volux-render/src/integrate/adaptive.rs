@@ -1,0 +1,316 @@
+//! Iterative adaptive Simpson integration of the volume rendering integral
+//! (`001_...txt` ch. 4, Algorithms 3 and 4).
+//!
+//! Each step `[t, t + h]` is sampled at five points; Simpson's rule on the whole step (`S1`)
+//! and on its two halves (`S2`) give the error estimate `E = (S2 - S1) / 15`, and the accepted
+//! value is `S2 + E` (Algorithm 3, line 7). The tolerance is scaled with the step,
+//! `eps h / L` for a ray of length `L`, so the errors of all steps add up to at most `eps`.
+//! A failed step is halved, reusing the samples of its first half; after two consecutive
+//! successes the step doubles; steps are clamped to `[hmin, hmax]` and a step of `hmin` is
+//! accepted whatever its error (and reported in [`RayIntegral::tolerance_missed`]).
+//!
+//! The inner integral (optical depth) is controlled through the error it causes in the alpha
+//! channel, `T(t) |E_inner|`, rather than on the depth itself: beyond the point where a ray is
+//! opaque, depth errors cannot change the image, and the seed's own per-channel R, G, B, A
+//! criterion is what a pixel's accuracy means. The outer integral is checked per channel
+//! R, G, B and A.
+//!
+//! - **Coupled** control: the inner and outer integrals share one step, accepted when both
+//!   meet the tolerance.
+//! - **Decoupled** control: the inner step is found first (Algorithm 4, line 6); the outer
+//!   integral then crosses that interval with its own step, which persists from interval to
+//!   interval, evaluating the inner integral inside by plain Simpson (any step shorter than
+//!   an accepted one is accepted too, as the seed argues).
+use super::fixed::integrand;
+use super::{Medium, RayIntegral, RayMedium};
+
+/// How the steps of the inner and outer integrals are controlled (`001_...txt` sec. 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum StepControl {
+    /// One step for both integrals.
+    Coupled,
+    /// The outer step is controlled on its own within each inner step.
+    Decoupled,
+}
+
+/// Parameters of [`adaptive_simpson`]; lengths in world units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveParams {
+    /// Absolute error tolerance per channel for the whole ray.
+    pub tol: f64,
+    /// Initial step.
+    pub h0: f64,
+    /// Smallest step; accepted whatever its error.
+    pub hmin: f64,
+    /// Largest step.
+    pub hmax: f64,
+    /// Coupled or decoupled control.
+    pub control: StepControl,
+    /// Stop once opacity reaches this value (`None`: integrate to the end).
+    pub early_termination: Option<f64>,
+}
+
+/// Five samples over a candidate step `[t, t + h]` at `t + k h / 4`.
+struct Probe {
+    t: f64,
+    h: f64,
+    s: [Option<Medium>; 5],
+}
+
+impl Probe {
+    fn new(t: f64, h: f64, first: Medium) -> Self {
+        Self {
+            t,
+            h,
+            s: [Some(first), None, None, None, None],
+        }
+    }
+
+    /// Samples the missing points; returns all five and counts new samples into `n`.
+    fn fill(&mut self, m: &mut impl RayMedium, n: &mut u64) -> [Medium; 5] {
+        for k in 1..5 {
+            if self.s[k].is_none() {
+                self.s[k] = Some(m.at(self.t + self.h * k as f64 / 4.0));
+                *n += 1;
+            }
+        }
+        self.s.map(|s| s.unwrap_or_default())
+    }
+
+    /// Halves the step, keeping the samples of the first half.
+    fn halve(&mut self) {
+        self.h *= 0.5;
+        self.s = [self.s[0], None, self.s[1], None, self.s[2]];
+    }
+}
+
+/// The rules evaluated over one five-point step.
+struct StepEval {
+    /// Optical depth at the end (with the error estimate added).
+    depth_end: f64,
+    /// Error estimate of the optical depth over the step.
+    err_depth: f64,
+    /// Colour over the step (with the error estimate added).
+    color: [f64; 3],
+    /// Error estimate of each colour channel.
+    err_color: [f64; 3],
+}
+
+fn eval_step(depth0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
+    let tau = s.map(|s| s.tau);
+    let s1 = h / 6.0 * (tau[0] + 4.0 * tau[2] + tau[4]);
+    let s2 = h / 12.0 * (tau[0] + 4.0 * tau[1] + 2.0 * tau[2] + 4.0 * tau[3] + tau[4]);
+    let err_depth = (s2 - s1) / 15.0;
+    let d2 = depth0 + h / 12.0 * (tau[0] + 4.0 * tau[1] + tau[2]);
+    let depths = [
+        depth0,
+        depth0 + h / 48.0 * (5.0 * tau[0] + 8.0 * tau[1] - tau[2]),
+        d2,
+        d2 + h / 48.0 * (5.0 * tau[2] + 8.0 * tau[3] - tau[4]),
+        depth0 + s2 + err_depth,
+    ];
+    let g: [[f64; 3]; 5] = std::array::from_fn(|k| integrand(&s[k], depths[k]));
+    let mut color = [0.0; 3];
+    let mut err_color = [0.0; 3];
+    for c in 0..3 {
+        let c1 = h / 6.0 * (g[0][c] + 4.0 * g[2][c] + g[4][c]);
+        let c2 = h / 12.0 * (g[0][c] + 4.0 * g[1][c] + 2.0 * g[2][c] + 4.0 * g[3][c] + g[4][c]);
+        err_color[c] = (c2 - c1) / 15.0;
+        color[c] = c2 + err_color[c];
+    }
+    StepEval {
+        depth_end: depths[4],
+        err_depth,
+        color,
+        err_color,
+    }
+}
+
+/// Largest estimated error of R, G, B and A over a step starting at optical depth `depth0`.
+fn outer_error(ev: &StepEval, depth0: f64) -> f64 {
+    let alpha = (-depth0).exp() * ev.err_depth.abs();
+    ev.err_color.iter().fold(alpha, |m, e| m.max(e.abs()))
+}
+
+/// Step-size bookkeeping shared by both controls: doubling after two consecutive successes.
+struct StepSize {
+    h: f64,
+    successes: u32,
+}
+
+impl StepSize {
+    fn success(&mut self, taken: f64, hmax: f64) {
+        self.successes += 1;
+        if taken >= self.h && self.successes >= 2 {
+            self.h = (2.0 * self.h).min(hmax);
+        }
+    }
+    fn failure(&mut self, taken: f64) {
+        self.h = taken * 0.5;
+        self.successes = 0;
+    }
+}
+
+/// Running state of one ray.
+struct Ray {
+    color: [f64; 3],
+    depth: f64,
+    samples: u64,
+    error: f64,
+    missed: bool,
+}
+
+impl Ray {
+    fn accept(&mut self, ev: &StepEval, err: f64, tol_h: f64) {
+        for c in 0..3 {
+            self.color[c] += ev.color[c];
+        }
+        self.depth = ev.depth_end;
+        self.error += err;
+        self.missed |= err > tol_h;
+    }
+    fn done(&self, p: &AdaptiveParams) -> bool {
+        p.early_termination
+            .is_some_and(|a| 1.0 - (-self.depth).exp() >= a)
+    }
+}
+
+/// Integrates `[t0, t1]` with the iterative adaptive Simpson method.
+pub fn adaptive_simpson(
+    m: &mut impl RayMedium,
+    t0: f64,
+    t1: f64,
+    p: &AdaptiveParams,
+) -> RayIntegral {
+    let len = t1 - t0;
+    let mut ray = Ray {
+        color: [0.0; 3],
+        depth: 0.0,
+        samples: 1,
+        error: 0.0,
+        missed: false,
+    };
+    if len > 0.0 {
+        let first = m.at(t0);
+        match p.control {
+            StepControl::Coupled => coupled(m, t0, t1, first, p, &mut ray),
+            StepControl::Decoupled => decoupled(m, t0, t1, first, p, &mut ray),
+        }
+    }
+    let mut out = RayIntegral::from_parts(ray.color, ray.depth, ray.samples);
+    out.error = ray.error;
+    out.tolerance_missed = ray.missed;
+    out
+}
+
+fn clamp_step(h: f64, p: &AdaptiveParams, room: f64) -> f64 {
+    h.clamp(p.hmin, p.hmax).min(room)
+}
+
+fn coupled(
+    m: &mut impl RayMedium,
+    t0: f64,
+    t1: f64,
+    first: Medium,
+    p: &AdaptiveParams,
+    ray: &mut Ray,
+) {
+    let len = t1 - t0;
+    let mut step = StepSize {
+        h: p.h0,
+        successes: 0,
+    };
+    let mut t = t0;
+    let mut probe = Probe::new(t, clamp_step(step.h, p, t1 - t), first);
+    while t1 - t > 1e-12 * len && !ray.done(p) {
+        let s = probe.fill(m, &mut ray.samples);
+        let ev = eval_step(ray.depth, probe.h, &s);
+        let err = outer_error(&ev, ray.depth);
+        let tol_h = p.tol * probe.h / len;
+        if err <= tol_h || probe.h <= p.hmin * (1.0 + 1e-9) {
+            ray.accept(&ev, err, tol_h);
+            t += probe.h;
+            step.success(probe.h, p.hmax);
+            probe = Probe::new(t, clamp_step(step.h, p, t1 - t), s[4]);
+        } else {
+            step.failure(probe.h);
+            probe.halve();
+        }
+    }
+}
+
+fn decoupled(
+    m: &mut impl RayMedium,
+    t0: f64,
+    t1: f64,
+    first: Medium,
+    p: &AdaptiveParams,
+    ray: &mut Ray,
+) {
+    let len = t1 - t0;
+    let mut inner = StepSize {
+        h: p.h0,
+        successes: 0,
+    };
+    let mut outer = StepSize {
+        h: p.h0,
+        successes: 0,
+    };
+    let mut t = t0;
+    let mut probe = Probe::new(t, clamp_step(inner.h, p, t1 - t), first);
+    while t1 - t > 1e-12 * len && !ray.done(p) {
+        let s = probe.fill(m, &mut ray.samples);
+        let ev = eval_step(ray.depth, probe.h, &s);
+        let err = (-ray.depth).exp() * ev.err_depth.abs();
+        if err > p.tol * probe.h / len && probe.h > p.hmin * (1.0 + 1e-9) {
+            inner.failure(probe.h);
+            probe.halve();
+            continue;
+        }
+        let h_int = probe.h;
+        if s.iter().any(|x| x.tau > 0.0) {
+            outer_interval(m, t, h_int, s, p, len, &mut outer, ray);
+        }
+        t += h_int;
+        inner.success(h_int, p.hmax);
+        probe = Probe::new(t, clamp_step(inner.h, p, t1 - t), s[4]);
+    }
+}
+
+/// The outer integral over one accepted inner interval `[t, t + h_int]` whose five samples
+/// are `s`, with its own persisting step `outer`.
+#[allow(clippy::too_many_arguments)]
+fn outer_interval(
+    m: &mut impl RayMedium,
+    t: f64,
+    h_int: f64,
+    s: [Medium; 5],
+    p: &AdaptiveParams,
+    len: f64,
+    outer: &mut StepSize,
+    ray: &mut Ray,
+) {
+    let end = t + h_int;
+    let mut u = t;
+    let start_h = outer.h.clamp(p.hmin, p.hmax).min(h_int);
+    let mut probe = Probe::new(u, start_h, s[0]);
+    if start_h == h_int {
+        probe.s = s.map(Some);
+    }
+    while end - u > 1e-12 * len {
+        let q = probe.fill(m, &mut ray.samples);
+        let ev = eval_step(ray.depth, probe.h, &q);
+        let err = outer_error(&ev, ray.depth);
+        let tol_h = p.tol * probe.h / len;
+        if err <= tol_h || probe.h <= p.hmin * (1.0 + 1e-9) {
+            ray.accept(&ev, err, tol_h);
+            u += probe.h;
+            outer.success(probe.h, p.hmax);
+            probe = Probe::new(u, outer.h.clamp(p.hmin, p.hmax).min(end - u), q[4]);
+        } else {
+            outer.failure(probe.h);
+            probe.halve();
+        }
+    }
+}

@@ -1,0 +1,160 @@
+//! One harness for every integrator: a medium with closed-form integrals (the field is linear
+//! along the ray, s = t, with linear extinction tau = a s), the fitted order of convergence of
+//! each fixed-step rule, and the error control of the adaptive one.
+use super::*;
+
+const L: f64 = 2.0;
+const A: f64 = 1.5;
+
+/// R = 1, G = s^2 / L^2, B = 0.5; tau = A s.
+fn medium(t: f64) -> Medium {
+    Medium {
+        rgb: [1.0, t * t / (L * L), 0.5],
+        tau: A * t,
+    }
+}
+
+/// Closed form: with U = A L^2 / 2, alpha = 1 - e^-U, R = alpha, B = alpha / 2,
+/// G = 2 / (A L^2) (1 - (1 + U) e^-U).
+fn exact() -> [f64; 4] {
+    let u = A * L * L / 2.0;
+    let alpha = 1.0 - (-u).exp();
+    let g = 2.0 / (A * L * L) * (1.0 - (1.0 + u) * (-u).exp());
+    [alpha, g, 0.5 * alpha, alpha]
+}
+
+fn max_err(r: &RayIntegral) -> f64 {
+    let e = exact();
+    (0..4).map(|c| (r.rgba[c] - e[c]).abs()).fold(0.0, f64::max)
+}
+
+/// Least-squares slope of log(error) against log(h).
+fn fitted_order(rule: impl Fn(f64) -> RayIntegral) -> f64 {
+    let pts: Vec<(f64, f64)> = [8.0, 16.0, 32.0, 64.0, 128.0]
+        .iter()
+        .map(|n| {
+            let h = L / n;
+            (h.ln(), max_err(&rule(h)).ln())
+        })
+        .collect();
+    let n = pts.len() as f64;
+    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mx, my) = (sx / n, sy / n);
+    let num: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let den: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    num / den
+}
+
+#[test]
+fn riemann_converges_with_order_one() {
+    let k = fitted_order(|h| riemann(&mut medium, 0.0, L, h));
+    assert!((0.8..1.3).contains(&k), "Riemann order {k}");
+}
+
+#[test]
+fn trapezoid_converges_with_order_two() {
+    let k = fitted_order(|h| trapezoid(&mut medium, 0.0, L, h));
+    assert!((1.8..2.3).contains(&k), "trapezoid order {k}");
+}
+
+#[test]
+fn simpson_converges_with_order_four() {
+    let k = fitted_order(|h| simpson(&mut medium, 0.0, L, h));
+    assert!((3.6..4.5).contains(&k), "Simpson order {k}");
+}
+
+fn params(tol: f64, control: StepControl) -> AdaptiveParams {
+    AdaptiveParams {
+        tol,
+        h0: 0.5,
+        hmin: 1e-4,
+        hmax: 1.0,
+        control,
+        early_termination: None,
+    }
+}
+
+#[test]
+fn adaptive_simpson_meets_its_tolerance() {
+    for control in [StepControl::Coupled, StepControl::Decoupled] {
+        let mut last_samples = u64::MAX;
+        for tol in [1e-2, 1e-3, 1e-4, 1e-6] {
+            let r = adaptive_simpson(&mut medium, 0.0, L, &params(tol, control));
+            let err = max_err(&r);
+            assert!(err <= tol, "{control:?} tol {tol}: error {err}");
+            assert!(!r.tolerance_missed);
+            assert!(r.error <= tol * 1.0001, "estimate {} over tol", r.error);
+            assert!(r.samples >= 5);
+            // Tighter tolerances cost more samples.
+            assert!(last_samples == u64::MAX || r.samples >= last_samples);
+            last_samples = r.samples;
+        }
+    }
+}
+
+/// A sharp feature (a narrow extinction spike) that a coarse fixed step misses: the adaptive
+/// method still meets its tolerance against a very fine Simpson reference.
+#[test]
+fn adaptive_simpson_resolves_a_spike() {
+    let spike = |t: f64| Medium {
+        rgb: [1.0, t / L, 0.2],
+        tau: 20.0 * (-((t - 1.3) / 0.02).powi(2)).exp() + 0.1,
+    };
+    let reference = simpson(&mut { spike }, 0.0, L, 1e-5);
+    for control in [StepControl::Coupled, StepControl::Decoupled] {
+        let r = adaptive_simpson(&mut { spike }, 0.0, L, &params(1e-3, control));
+        let err = (0..4)
+            .map(|c| (r.rgba[c] - reference.rgba[c]).abs())
+            .fold(0.0, f64::max);
+        assert!(err <= 1e-3, "{control:?}: {err}");
+        assert!(r.samples < 2000, "{control:?}: {} samples", r.samples);
+    }
+}
+
+#[test]
+fn hmin_accepts_and_reports() {
+    let mut p = params(1e-12, StepControl::Coupled);
+    p.hmin = 0.25;
+    let r = adaptive_simpson(&mut medium, 0.0, L, &p);
+    assert!(r.tolerance_missed);
+    assert!(r.samples <= 4 * 8 + 1 + 8, "{} samples", r.samples);
+}
+
+#[test]
+fn empty_ray_is_transparent() {
+    for control in [StepControl::Coupled, StepControl::Decoupled] {
+        let r = adaptive_simpson(
+            &mut |_t: f64| Medium::default(),
+            0.0,
+            5.0,
+            &params(1e-3, control),
+        );
+        assert_eq!(r.rgba, [0.0; 4]);
+        let r = adaptive_simpson(&mut medium, 1.0, 1.0, &params(1e-3, control));
+        assert_eq!(r.rgba, [0.0; 4]);
+    }
+}
+
+/// Constant colour and extinction: the integral is exactly `c (1 - exp(-tau L))` and the
+/// step-corrected Riemann sum reproduces it for any step.
+#[test]
+fn constant_medium_is_exact_for_any_step() {
+    let (tau, len) = (0.7f32, 3.0f32);
+    for n in [1, 3, 10, 100] {
+        let h = len / n as f32;
+        let mut acc = RayAccumulator::default();
+        for _ in 0..n {
+            riemann_step(
+                &mut acc,
+                Classified {
+                    rgb: [1.0, 0.5, 0.0],
+                    tau,
+                },
+                h,
+            );
+        }
+        let exact = 1.0 - (-tau * len).exp();
+        assert!((acc.alpha() - exact).abs() < 1e-5, "n={n}");
+        assert!((acc.rgba[1] - 0.5 * exact).abs() < 1e-5);
+    }
+}
