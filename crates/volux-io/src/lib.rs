@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 
 use volux_core::{Grid, TetMesh};
 
+pub mod cells;
 pub mod detect;
 pub mod dicom;
 pub mod metaimage;
