@@ -1,13 +1,328 @@
-//! MetaImage (being written).
-use std::path::Path;
+//! MetaImage (ITK / VTK), `.mhd` with a separate data file or `.mha` with the data after the
+//! header, following the MetaIO documentation (<https://itk.org/Wiki/ITK/MetaIO/Documentation>).
+//!
+//! Read: `ObjectType = Image`, `NDims` (3; 2 is one slice with z = 1), `DimSize`,
+//! `ElementType` (`MET_UCHAR`, `MET_CHAR`, `MET_USHORT`, `MET_SHORT`, `MET_UINT`, `MET_INT`,
+//! `MET_FLOAT`, `MET_DOUBLE`; the types a [`volux_core::Grid`] does not hold are converted to
+//! `f32` with a note), `ElementSpacing` (or `ElementSize`), `Offset` / `Origin` / `Position`,
+//! `BinaryDataByteOrderMSB` / `ElementByteOrderMSB`, `BinaryData = False` (ASCII values),
+//! `CompressedData = True` (a zlib stream, decoded with `flate2`), `CompressedDataSize`,
+//! `HeaderSize` (bytes skipped in the data file; -1 = the data ends the file),
+//! `ElementNumberOfChannels` (must be 1) and `ElementDataFile` (`LOCAL` or a file name relative
+//! to the header's folder; it must be the last header line). A rotated `TransformMatrix` is
+//! reduced to an axis-aligned grid, with a note. The data section must match the header.
+//!
+//! No MetaImage crate is used: none on crates.io is maintained, and the header is a few
+//! `Key = Value` lines; compression goes through `flate2`.
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
 
+use volux_core::Grid;
+
+use crate::nrrd::header_lines;
+use crate::raw::{self, Decoded, ElemType};
+use crate::util::{header_err, read_exact_checked};
 use crate::{ErrorKind, ReadError, Result};
 
-/// Reads MetaImage.
-pub fn read(path: &Path) -> Result<volux_core::Grid> {
-    let _ = (path);
-    Err(ReadError::new(
-        path,
-        ErrorKind::Unsupported("MetaImage reader not yet written".into()),
-    ))
+/// The header fields Volux uses (keys lowercased).
+struct Header {
+    fields: Vec<(String, String)>,
+}
+
+impl Header {
+    /// The value of the first of `keys` present.
+    fn get(&self, keys: &[&str]) -> Option<&str> {
+        keys.iter().find_map(|k| {
+            self.fields
+                .iter()
+                .find(|(f, _)| f == k)
+                .map(|(_, v)| v.as_str())
+        })
+    }
+
+    fn bool(&self, path: &Path, keys: &[&str], default: bool) -> Result<bool> {
+        match self.get(keys).map(str::to_ascii_lowercase).as_deref() {
+            None => Ok(default),
+            Some("true" | "1" | "yes") => Ok(true),
+            Some("false" | "0" | "no") => Ok(false),
+            Some(v) => Err(header_err(
+                path,
+                format!("{}: '{v}' is not True or False", keys[0]),
+            )),
+        }
+    }
+
+    fn numbers<T: std::str::FromStr>(&self, path: &Path, keys: &[&str]) -> Result<Option<Vec<T>>> {
+        let Some(v) = self.get(keys) else {
+            return Ok(None);
+        };
+        v.split_whitespace()
+            .map(|x| x.parse())
+            .collect::<std::result::Result<Vec<T>, _>>()
+            .map(Some)
+            .map_err(|_| header_err(path, format!("{}: '{v}' is not a list of numbers", keys[0])))
+    }
+}
+
+/// Reads the header; returns it and the offset just after the `ElementDataFile` line.
+fn read_header(path: &Path) -> Result<(Header, u64)> {
+    let is_data_file_line = |l: &str| {
+        l.split('=')
+            .next()
+            .is_some_and(|k| k.trim().eq_ignore_ascii_case("ElementDataFile"))
+    };
+    let (lines, offset, found) = header_lines(path, is_data_file_line, true)?;
+    if !found {
+        return Err(header_err(path, "no ElementDataFile line ends the header"));
+    }
+    let mut fields = Vec::new();
+    for line in lines.iter().filter(|l| !l.trim().is_empty()) {
+        let (k, v) = line.split_once('=').ok_or_else(|| {
+            let shown: String = line.chars().take(60).collect();
+            header_err(path, format!("line '{shown}' is not 'Key = Value'"))
+        })?;
+        fields.push((k.trim().to_ascii_lowercase(), v.trim().to_string()));
+    }
+    Ok((Header { fields }, offset))
+}
+
+fn element_type(path: &Path, h: &Header) -> Result<ElemType> {
+    let t = h
+        .get(&["elementtype"])
+        .ok_or_else(|| header_err(path, "no ElementType"))?;
+    Ok(match t.to_ascii_uppercase().as_str() {
+        "MET_CHAR" => ElemType::I8,
+        "MET_UCHAR" => ElemType::U8,
+        "MET_SHORT" => ElemType::I16,
+        "MET_USHORT" => ElemType::U16,
+        "MET_INT" => ElemType::I32,
+        "MET_UINT" => ElemType::U32,
+        "MET_FLOAT" => ElemType::F32,
+        "MET_DOUBLE" => ElemType::F64,
+        _ => {
+            return Err(ReadError::new(
+                path,
+                ErrorKind::Unsupported(format!("ElementType '{t}'")),
+            ))
+        }
+    })
+}
+
+/// Checks ObjectType, channels and NDims; returns NDims.
+fn check_kind(path: &Path, h: &Header) -> Result<usize> {
+    if let Some(o) = h.get(&["objecttype"]) {
+        if !o.eq_ignore_ascii_case("image") {
+            return Err(ReadError::new(
+                path,
+                ErrorKind::Unsupported(format!("ObjectType '{o}' (only Image)")),
+            ));
+        }
+    }
+    let channels: i64 = h
+        .numbers(path, &["elementnumberofchannels"])?
+        .and_then(|v| v.first().copied())
+        .unwrap_or(1);
+    if channels != 1 {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Unsupported(format!("{channels} channels per voxel (only 1)")),
+        ));
+    }
+    let ndims = h
+        .numbers::<usize>(path, &["ndims"])?
+        .and_then(|v| v.first().copied())
+        .ok_or_else(|| header_err(path, "no NDims"))?;
+    if !(1..=3).contains(&ndims) {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Unsupported(format!("NDims = {ndims} (1 to 3)")),
+        ));
+    }
+    Ok(ndims)
+}
+
+/// Pads or checks a per-axis list to 3 values.
+fn per_axis(path: &Path, key: &str, v: Option<Vec<f64>>, n: usize, pad: f64) -> Result<[f64; 3]> {
+    let mut out = [pad; 3];
+    if let Some(v) = v {
+        if v.len() < n {
+            return Err(header_err(
+                path,
+                format!("{key} has {} values for NDims = {n}", v.len()),
+            ));
+        }
+        for (o, x) in out.iter_mut().zip(v.iter().take(n)) {
+            *o = *x;
+        }
+    }
+    Ok(out)
+}
+
+/// Geometry: dims, voxel count, spacing, origin, notes.
+struct Geometry {
+    dims: [usize; 3],
+    count: u64,
+    spacing: [f64; 3],
+    origin: [f64; 3],
+    notes: Vec<String>,
+}
+
+fn geometry(path: &Path, h: &Header, n: usize) -> Result<Geometry> {
+    let sizes: Vec<i64> = h
+        .numbers(path, &["dimsize"])?
+        .ok_or_else(|| header_err(path, "no DimSize"))?;
+    if sizes.len() != n {
+        return Err(header_err(
+            path,
+            format!("DimSize has {} values for NDims = {n}", sizes.len()),
+        ));
+    }
+    let mut dims = [1i64; 3];
+    dims[..n].copy_from_slice(&sizes);
+    let (dims, count) =
+        volux_core::limits::checked_dims(dims).map_err(|e| ReadError::new(path, e))?;
+    let sp = h.numbers(path, &["elementspacing", "elementsize"])?;
+    let spacing = per_axis(path, "ElementSpacing", sp, n, 1.0)?.map(f64::abs);
+    let or = h.numbers(path, &["offset", "origin", "position"])?;
+    let origin = per_axis(path, "Offset", or, n, 0.0)?;
+    let mut notes = Vec::new();
+    let m: Option<Vec<f64>> = h.numbers(path, &["transformmatrix", "rotation", "orientation"])?;
+    let identity = |v: &Vec<f64>| {
+        v.iter().enumerate().all(|(i, &x)| {
+            let diag = i % (n + 1) == 0;
+            x == if diag { 1.0 } else { 0.0 }
+        })
+    };
+    if m.as_ref().is_some_and(|v| !identity(v)) {
+        notes.push(
+            "TransformMatrix is not the identity: read as an axis-aligned grid with the same spacing"
+                .into(),
+        );
+    }
+    Ok(Geometry {
+        dims,
+        count,
+        spacing,
+        origin,
+        notes,
+    })
+}
+
+/// The data file and where its data starts.
+fn data_location(path: &Path, h: &Header, header_end: u64) -> Result<(PathBuf, u64)> {
+    let name = h.get(&["elementdatafile"]).unwrap_or("");
+    if name.eq_ignore_ascii_case("local") {
+        return Ok((path.to_path_buf(), header_end));
+    }
+    if name.is_empty() || name.starts_with("LIST") || name.contains('%') || name.contains(' ') {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Unsupported(format!(
+                "ElementDataFile = '{name}' (only LOCAL or one file name)"
+            )),
+        ));
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    Ok((dir.join(name), 0))
+}
+
+/// How the data is stored.
+struct Storage {
+    ty: ElemType,
+    little_endian: bool,
+    binary: bool,
+    compressed: bool,
+    compressed_size: Option<u64>,
+    header_size: i64,
+}
+
+fn storage(path: &Path, h: &Header) -> Result<Storage> {
+    let first = |v: Option<Vec<i64>>| v.and_then(|v| v.first().copied());
+    let header_size = first(h.numbers(path, &["headersize"])?).unwrap_or(0);
+    let compressed_size = match first(h.numbers(path, &["compresseddatasize"])?) {
+        Some(s) if s < 0 => return Err(header_err(path, format!("CompressedDataSize = {s}"))),
+        s => s.map(|s| s as u64),
+    };
+    let s = Storage {
+        ty: element_type(path, h)?,
+        little_endian: !h.bool(
+            path,
+            &["binarydatabyteordermsb", "elementbyteordermsb"],
+            false,
+        )?,
+        binary: h.bool(path, &["binarydata"], true)?,
+        compressed: h.bool(path, &["compresseddata"], false)?,
+        compressed_size,
+        header_size,
+    };
+    if s.header_size < -1 || (s.header_size == -1 && (s.compressed || !s.binary)) {
+        return Err(header_err(
+            path,
+            format!(
+                "HeaderSize = {} (>= 0, or -1 for uncompressed binary data)",
+                s.header_size
+            ),
+        ));
+    }
+    Ok(s)
+}
+
+/// Reads the data section that starts at `start` of `file` (before `HeaderSize`).
+fn read_data(file: &Path, s: &Storage, start: u64, count: u64) -> Result<Decoded> {
+    let len = std::fs::metadata(file)
+        .map_err(|e| ReadError::new(file, e))?
+        .len();
+    let need = raw::data_bytes(file, s.ty, count)?;
+    let pos = if s.header_size == -1 {
+        len.checked_sub(need)
+            .filter(|&o| o >= start)
+            .ok_or_else(|| {
+                ReadError::new(
+                    file,
+                    ErrorKind::Truncated {
+                        expected: need,
+                        found: len.saturating_sub(start),
+                    },
+                )
+            })?
+    } else {
+        start.saturating_add(s.header_size as u64)
+    };
+    if s.binary && !s.compressed {
+        return raw::read_plain(file, pos, s.ty, s.little_endian, count);
+    }
+    let mut f = std::fs::File::open(file).map_err(|e| ReadError::new(file, e))?;
+    f.seek(SeekFrom::Start(pos))
+        .map_err(|e| ReadError::new(file, e))?;
+    let rest = len.saturating_sub(pos);
+    if !s.binary {
+        let bytes = read_exact_checked(file, f, rest)?;
+        let text = std::str::from_utf8(&bytes).map_err(|_| {
+            ReadError::new(file, ErrorKind::Invalid("ASCII data is not text".into()))
+        })?;
+        return raw::parse_ascii(file, text, s.ty, count);
+    }
+    let size = s.compressed_size.unwrap_or(rest);
+    if size > rest {
+        return Err(ReadError::new(
+            file,
+            ErrorKind::Truncated {
+                expected: size,
+                found: rest,
+            },
+        ));
+    }
+    let z = flate2::read::ZlibDecoder::new(BufReader::new(f.take(size)));
+    raw::read_stream(file, z, s.ty, s.little_endian, count)
+}
+
+/// Reads a MetaImage file (`.mhd` header with a data file, or `.mha` with local data).
+pub fn read(path: &Path) -> Result<Grid> {
+    let (h, header_end) = read_header(path)?;
+    let n = check_kind(path, &h)?;
+    let g = geometry(path, &h, n)?;
+    let s = storage(path, &h)?;
+    let (file, start) = data_location(path, &h, header_end)?;
+    let data = read_data(&file, &s, start, g.count)?;
+    raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)
 }

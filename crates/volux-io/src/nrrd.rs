@@ -1,13 +1,527 @@
-//! NRRD (being written).
-use std::path::Path;
+//! NRRD, following the teem specification (<http://teem.sourceforge.net/nrrd/format.html>).
+//!
+//! Read: magic `NRRD000X`; fields `type` (every NRRD name of int8, uint8, int16, uint16,
+//! int32, uint32, float, double; the types a [`volux_core::Grid`] does not hold are converted
+//! to `f32` with a note), `dimension` (3; 2 is a single slice with z = 1; 4 when one axis has
+//! size 1), `sizes`, `spacings` or `space directions` (spacing = length of each direction;
+//! a rotated or flipped frame is reduced to an axis-aligned grid, with a note), `space origin`,
+//! `endian`, `encoding` (`raw`, `gzip`/`gz`, `ascii`/`text`/`txt`), `data file` (detached
+//! `.nhdr` header, path relative to the header's folder), `line skip` and `byte skip` (-1 = the
+//! data ends the file). Comments (`#`) and key/value lines (`:=`) are ignored. Attached data
+//! follows the blank line after the header. The data section must match the header exactly.
+//!
+//! No NRRD crate is used: the crates.io `nrrd` crates are unmaintained and do not share our
+//! size checks or memory-mapping; the header is a few lines of text and gzip goes through
+//! `flate2`. [`write()`] writes attached, raw, little-endian files.
+use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
 
-use crate::{ErrorKind, ReadError, Result};
+use volux_core::{Grid, ScalarType};
 
-/// Reads NRRD.
-pub fn read(path: &Path) -> Result<volux_core::Grid> {
-    let _ = (path);
-    Err(ReadError::new(
-        path,
-        ErrorKind::Unsupported("NRRD reader not yet written".into()),
-    ))
+use crate::raw::{self, Decoded, ElemType};
+use crate::util::{header_err, read_exact_checked};
+use crate::{ErrorKind, ReadError, Result, WriteError};
+
+/// Largest header read, in bytes.
+pub(crate) const MAX_HEADER_BYTES: u64 = 1 << 20;
+
+/// Reads header lines of `path` up to and excluding the line for which `stop` is true (or to
+/// the end of the file), returning the lines and the byte offset just after the stop line.
+pub(crate) fn header_lines(
+    path: &Path,
+    stop: impl Fn(&str) -> bool,
+    include_stop: bool,
+) -> Result<(Vec<String>, u64, bool)> {
+    let file = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    let mut reader = BufReader::new(file.take(MAX_HEADER_BYTES));
+    let (mut lines, mut offset, mut buf) = (Vec::new(), 0u64, Vec::new());
+    loop {
+        buf.clear();
+        let n = reader
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| ReadError::new(path, e))?;
+        if n == 0 {
+            if offset >= MAX_HEADER_BYTES {
+                return Err(header_err(
+                    path,
+                    format!("no end of header within {MAX_HEADER_BYTES} bytes"),
+                ));
+            }
+            return Ok((lines, offset, false));
+        }
+        offset += n as u64;
+        let line = std::str::from_utf8(&buf)
+            .map_err(|_| header_err(path, format!("header line {} is not text", lines.len() + 1)))?
+            .trim_end_matches(['\n', '\r']);
+        if stop(line) {
+            if include_stop {
+                lines.push(line.to_string());
+            }
+            return Ok((lines, offset, true));
+        }
+        lines.push(line.to_string());
+    }
+}
+
+/// How the data is encoded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Encoding {
+    Raw,
+    Gzip,
+    Ascii,
+}
+
+/// The header fields Volux uses.
+#[derive(Debug, Default)]
+struct Header {
+    ty: Option<ElemType>,
+    dimension: Option<usize>,
+    sizes: Vec<i64>,
+    spacings: Vec<f64>,
+    directions: Vec<Option<Vec<f64>>>,
+    origin: Option<Vec<f64>>,
+    little_endian: Option<bool>,
+    encoding: Option<Encoding>,
+    data_file: Option<String>,
+    byte_skip: i64,
+    line_skip: u64,
+}
+
+/// Parses an NRRD type name.
+fn parse_type(path: &Path, name: &str) -> Result<ElemType> {
+    let n = name.trim().to_ascii_lowercase();
+    Ok(match n.as_str() {
+        "signed char" | "int8" | "int8_t" => ElemType::I8,
+        "uchar" | "unsigned char" | "uint8" | "uint8_t" => ElemType::U8,
+        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => {
+            ElemType::I16
+        }
+        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => ElemType::U16,
+        "int" | "signed int" | "int32" | "int32_t" => ElemType::I32,
+        "uint" | "unsigned int" | "uint32" | "uint32_t" => ElemType::U32,
+        "float" => ElemType::F32,
+        "double" => ElemType::F64,
+        _ => {
+            return Err(ReadError::new(
+                path,
+                ErrorKind::Unsupported(format!("NRRD type '{n}'")),
+            ))
+        }
+    })
+}
+
+/// Splits `(a,b,c) none (d, e, f)` into tokens, keeping parenthesised groups whole.
+fn vector_tokens(value: &str) -> Vec<String> {
+    let (mut out, mut cur, mut depth) = (Vec::new(), String::new(), 0);
+    for c in value.chars() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            c if c.is_whitespace() && depth <= 0 => {
+                if !cur.is_empty() {
+                    out.push(std::mem::take(&mut cur));
+                }
+                continue;
+            }
+            _ => {}
+        }
+        cur.push(c);
+    }
+    if !cur.is_empty() {
+        out.push(cur);
+    }
+    out
+}
+
+/// Parses `(a,b,c)`; `None` for `none`.
+fn parse_vector(path: &Path, tok: &str) -> Result<Option<Vec<f64>>> {
+    if tok.eq_ignore_ascii_case("none") {
+        return Ok(None);
+    }
+    let inner = tok
+        .strip_prefix('(')
+        .and_then(|t| t.strip_suffix(')'))
+        .ok_or_else(|| header_err(path, format!("'{tok}' is not a vector (a,b,c)")))?;
+    inner
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map(Some)
+        .map_err(|_| header_err(path, format!("'{tok}' is not a vector of numbers")))
+}
+
+fn parse_num<T: std::str::FromStr>(path: &Path, field: &str, value: &str) -> Result<T> {
+    value
+        .trim()
+        .parse()
+        .map_err(|_| header_err(path, format!("{field}: '{value}' is not a valid number")))
+}
+
+fn parse_list<T: std::str::FromStr>(path: &Path, field: &str, value: &str) -> Result<Vec<T>> {
+    value
+        .split_whitespace()
+        .map(|v| parse_num(path, field, v))
+        .collect()
+}
+
+/// Applies one `field: value` line.
+fn apply_field(path: &Path, h: &mut Header, field: &str, value: &str) -> Result<()> {
+    let value = value.trim();
+    match field.trim().to_ascii_lowercase().as_str() {
+        "type" => h.ty = Some(parse_type(path, value)?),
+        "dimension" => h.dimension = Some(parse_num(path, field, value)?),
+        "sizes" => h.sizes = parse_list(path, field, value)?,
+        "spacings" => h.spacings = parse_list(path, field, value)?,
+        "space directions" => {
+            h.directions = vector_tokens(value)
+                .iter()
+                .map(|t| parse_vector(path, t))
+                .collect::<Result<_>>()?
+        }
+        "space origin" => h.origin = parse_vector(path, value)?,
+        "endian" => {
+            h.little_endian = Some(match value.to_ascii_lowercase().as_str() {
+                "little" => true,
+                "big" => false,
+                _ => {
+                    return Err(header_err(
+                        path,
+                        format!("endian '{value}' (little or big)"),
+                    ))
+                }
+            })
+        }
+        "encoding" => h.encoding = Some(parse_encoding(path, value)?),
+        "data file" | "datafile" => h.data_file = Some(value.to_string()),
+        "byte skip" | "byteskip" => h.byte_skip = parse_num(path, field, value)?,
+        "line skip" | "lineskip" => h.line_skip = parse_num(path, field, value)?,
+        _ => {}
+    }
+    Ok(())
+}
+
+fn parse_encoding(path: &Path, value: &str) -> Result<Encoding> {
+    Ok(match value.to_ascii_lowercase().as_str() {
+        "raw" => Encoding::Raw,
+        "gzip" | "gz" => Encoding::Gzip,
+        "ascii" | "text" | "txt" => Encoding::Ascii,
+        other => {
+            return Err(ReadError::new(
+                path,
+                ErrorKind::Unsupported(format!("NRRD encoding '{other}' (raw, gzip, ascii)")),
+            ))
+        }
+    })
+}
+
+/// Reads and parses the header; returns it with the offset where attached data starts.
+fn read_header(path: &Path) -> Result<(Header, u64)> {
+    let (lines, offset, _) = header_lines(path, |l| l.is_empty(), false)?;
+    let magic = lines.first().map(String::as_str).unwrap_or("");
+    let version = magic.strip_prefix("NRRD000").unwrap_or("");
+    if version.len() != 1 || !version.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(header_err(
+            path,
+            format!(
+                "not an NRRD file: first line '{}' is not NRRD000X",
+                truncate(magic)
+            ),
+        ));
+    }
+    let mut h = Header::default();
+    for line in lines.iter().skip(1) {
+        if line.starts_with('#') || line.trim().is_empty() {
+            continue;
+        }
+        let kv = line.find(":=");
+        match line.find(':') {
+            Some(i) if kv != Some(i) => {
+                let (field, value) = line.split_at(i);
+                let value = value.strip_prefix(':').unwrap_or(value);
+                apply_field(path, &mut h, field, value)?;
+            }
+            Some(_) => {} // key/value pair
+            None => {
+                return Err(header_err(
+                    path,
+                    format!("line '{}' is not a field", truncate(line)),
+                ))
+            }
+        }
+    }
+    Ok((h, offset))
+}
+
+fn truncate(s: &str) -> String {
+    s.chars().take(60).collect()
+}
+
+/// The three spatial axes: indices into the header axes.
+fn spatial_axes(path: &Path, h: &Header) -> Result<Vec<usize>> {
+    let dim = h
+        .dimension
+        .ok_or_else(|| header_err(path, "no 'dimension' field"))?;
+    if h.sizes.len() != dim {
+        return Err(header_err(
+            path,
+            format!("'sizes' has {} values for dimension {dim}", h.sizes.len()),
+        ));
+    }
+    match dim {
+        1..=3 => Ok((0..dim).collect()),
+        4 if h.sizes.first() == Some(&1) => Ok(vec![1, 2, 3]),
+        4 if h.sizes.last() == Some(&1) => Ok(vec![0, 1, 2]),
+        4 => Err(ReadError::new(
+            path,
+            ErrorKind::Unsupported(format!(
+                "4-D NRRD with sizes {:?}: only one value per voxel is read",
+                h.sizes
+            )),
+        )),
+        _ => Err(ReadError::new(
+            path,
+            ErrorKind::Unsupported(format!("NRRD dimension {dim} (1 to 4)")),
+        )),
+    }
+}
+
+/// Geometry of the grid: dims, spacing, origin and notes.
+struct Geometry {
+    dims: [usize; 3],
+    count: u64,
+    spacing: [f64; 3],
+    origin: [f64; 3],
+    notes: Vec<String>,
+}
+
+fn geometry(path: &Path, h: &Header) -> Result<Geometry> {
+    let axes = spatial_axes(path, h)?;
+    let mut dims = [1i64; 3];
+    let mut spacing = [1.0f64; 3];
+    let mut notes = Vec::new();
+    let mut rotated = false;
+    for (k, &a) in axes.iter().enumerate() {
+        dims[k] = h.sizes.get(a).copied().unwrap_or(1);
+        if let Some(Some(d)) = h.directions.get(a) {
+            spacing[k] = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+            rotated |= d
+                .iter()
+                .enumerate()
+                .any(|(j, &x)| (j != k && x != 0.0) || (j == k && x < 0.0));
+        } else if let Some(s) = h.spacings.get(a).filter(|s| s.is_finite()) {
+            spacing[k] = s.abs();
+        }
+    }
+    if rotated {
+        notes.push(
+            "space directions are rotated or flipped: read as an axis-aligned grid with the same spacing"
+                .to_string(),
+        );
+    }
+    let (dims, count) =
+        volux_core::limits::checked_dims(dims).map_err(|e| ReadError::new(path, e))?;
+    let mut origin = [0.0; 3];
+    for (o, v) in origin.iter_mut().zip(h.origin.iter().flatten()) {
+        *o = *v;
+    }
+    Ok(Geometry {
+        dims,
+        count,
+        spacing,
+        origin,
+        notes,
+    })
+}
+
+/// Skips `n` lines of `reader`, returning the bytes skipped.
+fn skip_lines(path: &Path, reader: &mut impl BufRead, n: u64) -> Result<u64> {
+    let mut skipped = 0u64;
+    for _ in 0..n {
+        loop {
+            let buf = reader.fill_buf().map_err(|e| ReadError::new(path, e))?;
+            if buf.is_empty() {
+                return Err(header_err(
+                    path,
+                    format!("line skip {n} passes the end of the file"),
+                ));
+            }
+            let (used, done) = match buf.iter().position(|&b| b == b'\n') {
+                Some(i) => (i + 1, true),
+                None => (buf.len(), false),
+            };
+            reader.consume(used);
+            skipped += used as u64;
+            if done {
+                break;
+            }
+        }
+    }
+    Ok(skipped)
+}
+
+/// Opens `file` positioned at `offset` plus `line_skip` lines; returns the reader and position.
+fn open_at(path: &Path, offset: u64, line_skip: u64) -> Result<(BufReader<std::fs::File>, u64)> {
+    let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    f.seek(SeekFrom::Start(offset))
+        .map_err(|e| ReadError::new(path, e))?;
+    let mut reader = BufReader::new(f);
+    let skipped = skip_lines(path, &mut reader, line_skip)?;
+    Ok((reader, offset + skipped))
+}
+
+/// Where the data is: its file and the offset where it starts there.
+fn data_location(path: &Path, h: &Header, attached_at: u64) -> Result<(PathBuf, u64)> {
+    match &h.data_file {
+        None => Ok((path.to_path_buf(), attached_at)),
+        Some(name) if name == "LIST" || name.split_whitespace().count() > 1 => Err(ReadError::new(
+            path,
+            ErrorKind::Unsupported(format!("multiple data files ('data file: {name}')")),
+        )),
+        Some(name) => {
+            let dir = path.parent().unwrap_or(Path::new("."));
+            Ok((dir.join(name), 0))
+        }
+    }
+}
+
+/// Reads the data section that starts at `start` of `file`.
+fn read_data(
+    file: &Path,
+    h: &Header,
+    start: u64,
+    count: u64,
+    notes: &mut Vec<String>,
+) -> Result<Decoded> {
+    let ty = h.ty.ok_or_else(|| header_err(file, "no 'type' field"))?;
+    let encoding = h
+        .encoding
+        .ok_or_else(|| header_err(file, "no 'encoding' field"))?;
+    let le = h.little_endian.unwrap_or_else(|| {
+        if ty.size() > 1 && encoding != Encoding::Ascii {
+            notes.push("no 'endian' field: little-endian assumed".into());
+        }
+        true
+    });
+    if h.byte_skip < -1 || (h.byte_skip == -1 && encoding != Encoding::Raw) {
+        return Err(header_err(
+            file,
+            format!("byte skip {} (>= 0, or -1 with raw encoding)", h.byte_skip),
+        ));
+    }
+    let (reader, pos) = open_at(file, start, h.line_skip)?;
+    match encoding {
+        Encoding::Raw => read_raw(file, h.byte_skip, pos, ty, le, count),
+        Encoding::Gzip => read_gzip(file, reader, h.byte_skip as u64, ty, le, count),
+        Encoding::Ascii => read_ascii(file, reader, pos, ty, count),
+    }
+}
+
+/// Raw data at `pos` plus `byte_skip` (-1: the data ends the file).
+fn read_raw(
+    file: &Path,
+    byte_skip: i64,
+    pos: u64,
+    ty: ElemType,
+    le: bool,
+    count: u64,
+) -> Result<Decoded> {
+    let len = std::fs::metadata(file)
+        .map_err(|e| ReadError::new(file, e))?
+        .len();
+    let need = raw::data_bytes(file, ty, count)?;
+    let offset = if byte_skip == -1 {
+        len.checked_sub(need).filter(|&o| o >= pos).ok_or_else(|| {
+            ReadError::new(
+                file,
+                ErrorKind::Truncated {
+                    expected: need,
+                    found: len.saturating_sub(pos),
+                },
+            )
+        })?
+    } else {
+        pos.saturating_add(byte_skip as u64)
+    };
+    raw::read_plain(file, offset, ty, le, count)
+}
+
+/// Gzip data; `skip` bytes of the decompressed stream are skipped first.
+fn read_gzip(
+    file: &Path,
+    reader: impl Read,
+    skip: u64,
+    ty: ElemType,
+    le: bool,
+    count: u64,
+) -> Result<Decoded> {
+    let mut gz = flate2::read::MultiGzDecoder::new(reader);
+    let skipped = std::io::copy(&mut (&mut gz).take(skip), &mut std::io::sink())
+        .map_err(|e| ReadError::new(file, e))?;
+    if skipped < skip {
+        return Err(ReadError::new(
+            file,
+            ErrorKind::Truncated {
+                expected: skip,
+                found: skipped,
+            },
+        ));
+    }
+    raw::read_stream(file, gz, ty, le, count)
+}
+
+/// ASCII data: the rest of the file from `pos`.
+fn read_ascii(
+    file: &Path,
+    reader: impl Read,
+    pos: u64,
+    ty: ElemType,
+    count: u64,
+) -> Result<Decoded> {
+    let len = std::fs::metadata(file)
+        .map_err(|e| ReadError::new(file, e))?
+        .len();
+    let bytes = read_exact_checked(file, reader, len.saturating_sub(pos))?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|_| ReadError::new(file, ErrorKind::Invalid("ASCII data is not text".into())))?;
+    raw::parse_ascii(file, text, ty, count)
+}
+
+/// Reads an NRRD file (`.nrrd` with attached data, or a `.nhdr` detached header).
+pub fn read(path: &Path) -> Result<Grid> {
+    let (h, attached_at) = read_header(path)?;
+    let mut g = geometry(path, &h)?;
+    let (file, start) = data_location(path, &h, attached_at)?;
+    let data = read_data(&file, &h, start, g.count, &mut g.notes)?;
+    raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)
+}
+
+/// The NRRD type name of a grid type.
+fn type_name(t: ScalarType) -> &'static str {
+    match t {
+        ScalarType::U8 => "uint8",
+        ScalarType::U16 => "uint16",
+        ScalarType::I16 => "int16",
+        _ => "float",
+    }
+}
+
+/// Writes `grid` as an NRRD file with attached, raw, little-endian data (written atomically).
+pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
+    let werr = |source| WriteError {
+        path: path.to_path_buf(),
+        source,
+    };
+    volux_core::limits::check_alloc("NRRD output", grid.len() as u64, 4).map_err(werr)?;
+    let [x, y, z] = grid.dims();
+    let [sx, sy, sz] = grid.spacing().to_array();
+    let [ox, oy, oz] = grid.origin().to_array();
+    let header = format!(
+        "NRRD0004\n# written by Volux\ntype: {}\ndimension: 3\nspace dimension: 3\n\
+         sizes: {x} {y} {z}\nspace directions: ({sx},0,0) (0,{sy},0) (0,0,{sz})\n\
+         space origin: ({ox},{oy},{oz})\nendian: little\nencoding: raw\n\n",
+        type_name(grid.scalar_type())
+    );
+    let mut bytes = header.into_bytes();
+    bytes.extend_from_slice(&raw::samples_le_bytes(grid.samples()));
+    volux_core::image::write_atomically(path, &bytes).map_err(werr)
 }

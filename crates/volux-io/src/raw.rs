@@ -1,13 +1,560 @@
-//! raw + JSON sidecar (being written).
-use std::path::Path;
+//! Headerless raw grids described by a JSON sidecar (`F.json` beside data file `F`).
+//!
+//! The convention is the one of `shared/data/README.md`: the sidecar holds `dims_xyz`
+//! `[x, y, z]`, `dtype` (`uint8`, `uint16`, `int16`, `float32`; `int8`, `uint32`, `int32` and
+//! `float64` are accepted and converted to `float32` with a note), `endianness` (`little` or
+//! `big`, default little), `compression` (`gzip`, `none`, or absent: gzip when the name ends in `.gz`), `spacing`, optional
+//! `origin` and `value_range`. Data is x fastest, then y, then z. The sidecar is parsed with
+//! `serde_json`; gzip data goes through `flate2` ([`crate::util::open_maybe_gz`]).
+//!
+//! Uncompressed little-endian data of a native type is memory-mapped
+//! ([`volux_core::Buffer::map_file`]), not copied. The file length must match the sidecar
+//! exactly: shorter is [`ErrorKind::Truncated`], longer is a header/data mismatch.
+//!
+//! This module also holds the data-section helpers shared with [`crate::nrrd`] and
+//! [`crate::metaimage`]: element types, decoding, mapping and ASCII parsing.
+use std::io::{Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
 
-use crate::{ErrorKind, ReadError, Result};
+use volux_core::{Buffer, Grid, Samples, ScalarType};
 
-/// Reads a raw grid through its sidecar.
-pub fn read(path: &Path) -> Result<volux_core::Grid> {
-    let _ = (path);
-    Err(ReadError::new(
+use crate::util::{header_err, open_maybe_gz, read_exact_checked};
+use crate::{ErrorKind, ReadError, Result, WriteError};
+
+/// Largest sidecar read (a sidecar is a few hundred bytes; anything huge is not one).
+const MAX_SIDECAR_BYTES: u64 = 1 << 20;
+
+/// The element type of a data section, including types converted to `f32` on load.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ElemType {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl ElemType {
+    /// Bytes per value.
+    pub(crate) fn size(self) -> usize {
+        match self {
+            ElemType::I8 | ElemType::U8 => 1,
+            ElemType::I16 | ElemType::U16 => 2,
+            ElemType::I32 | ElemType::U32 | ElemType::F32 => 4,
+            ElemType::F64 => 8,
+        }
+    }
+
+    /// The grid type kept in memory when no conversion is needed.
+    pub(crate) fn native(self) -> Option<ScalarType> {
+        match self {
+            ElemType::U8 => Some(ScalarType::U8),
+            ElemType::U16 => Some(ScalarType::U16),
+            ElemType::I16 => Some(ScalarType::I16),
+            ElemType::F32 => Some(ScalarType::F32),
+            _ => None,
+        }
+    }
+
+    /// The sidecar name.
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            ElemType::I8 => "int8",
+            ElemType::U8 => "uint8",
+            ElemType::I16 => "int16",
+            ElemType::U16 => "uint16",
+            ElemType::I32 => "int32",
+            ElemType::U32 => "uint32",
+            ElemType::F32 => "float32",
+            ElemType::F64 => "float64",
+        }
+    }
+
+    /// Parses a sidecar / numpy-style name (`uint8`, `int32`, `float64`, ...).
+    fn from_sidecar(name: &str) -> Option<Self> {
+        Some(match name.to_ascii_lowercase().as_str() {
+            "int8" | "i8" => ElemType::I8,
+            "uint8" | "u8" => ElemType::U8,
+            "int16" | "i16" => ElemType::I16,
+            "uint16" | "u16" => ElemType::U16,
+            "int32" | "i32" => ElemType::I32,
+            "uint32" | "u32" => ElemType::U32,
+            "float32" | "f32" | "float" => ElemType::F32,
+            "float64" | "f64" | "double" => ElemType::F64,
+            _ => return None,
+        })
+    }
+
+    /// The note added when values are converted to `f32`.
+    fn conversion_note(self) -> Option<String> {
+        let why = match self {
+            ElemType::I8 => "exact",
+            ElemType::I32 | ElemType::U32 => "integers above 2^24 lose precision",
+            ElemType::F64 => "precision reduced",
+            _ => return None,
+        };
+        Some(format!("converted from {} to float32 ({why})", self.name()))
+    }
+}
+
+/// Decoded samples and the conversion note, if any.
+pub(crate) struct Decoded {
+    pub(crate) samples: Samples,
+    pub(crate) note: Option<String>,
+}
+
+/// Decodes `bytes` holding values of `ty`; non-native types become `f32`.
+pub(crate) fn decode(path: &Path, ty: ElemType, bytes: &[u8], le: bool) -> Result<Decoded> {
+    let samples = match ty.native() {
+        Some(st) => Samples::from_bytes(st, bytes, le).map_err(|e| ReadError::new(path, e))?,
+        None => Samples::F32(Buffer::owned(convert_to_f32(ty, bytes, le))),
+    };
+    Ok(Decoded {
+        samples,
+        note: ty.conversion_note(),
+    })
+}
+
+/// Converts values of a non-native type to `f32`.
+fn convert_to_f32(ty: ElemType, bytes: &[u8], le: bool) -> Vec<f32> {
+    let n = ty.size();
+    bytes
+        .chunks_exact(n)
+        .map(|c| {
+            let mut b = [0u8; 8];
+            b[..n].copy_from_slice(c);
+            if !le {
+                b[..n].reverse();
+            }
+            let [b0, b1, b2, b3, ..] = b;
+            let w = [b0, b1, b2, b3];
+            match ty {
+                ElemType::I8 => b0 as i8 as f32,
+                ElemType::I32 => i32::from_le_bytes(w) as f32,
+                ElemType::U32 => u32::from_le_bytes(w) as f32,
+                ElemType::F64 => f64::from_le_bytes(b) as f32,
+                _ => f32::from_le_bytes(w),
+            }
+        })
+        .collect()
+}
+
+/// Bytes `count` values of `ty` take, checked against the memory limit.
+pub(crate) fn data_bytes(path: &Path, ty: ElemType, count: u64) -> Result<u64> {
+    volux_core::limits::check_alloc("data", count, ty.size() as u64)
+        .map_err(|e| ReadError::new(path, e))
+}
+
+/// Reads `count` uncompressed values of `ty` that start at byte `offset` of `path` and end
+/// the file exactly. Native little-endian data is memory-mapped when aligned.
+pub(crate) fn read_plain(
+    path: &Path,
+    offset: u64,
+    ty: ElemType,
+    le: bool,
+    count: u64,
+) -> Result<Decoded> {
+    let need = data_bytes(path, ty, count)?;
+    let file_len = std::fs::metadata(path)
+        .map_err(|e| ReadError::new(path, e))?
+        .len();
+    check_section_len(path, file_len, offset, need)?;
+    if le {
+        if let Some(samples) = try_map(path, offset, ty, count)? {
+            return Ok(Decoded {
+                samples,
+                note: None,
+            });
+        }
+    }
+    let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    f.seek(SeekFrom::Start(offset))
+        .map_err(|e| ReadError::new(path, e))?;
+    let bytes = read_exact_checked(path, f, need)?;
+    decode(path, ty, &bytes, le)
+}
+
+/// Checks that the section `[offset, offset + need)` ends the file exactly.
+pub(crate) fn check_section_len(path: &Path, file_len: u64, offset: u64, need: u64) -> Result<()> {
+    let found = file_len.saturating_sub(offset);
+    if found < need {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Truncated {
+                expected: need,
+                found,
+            },
+        ));
+    }
+    if found > need {
+        return Err(header_err(
+            path,
+            format!(
+                "header/data size mismatch: the file has {} bytes after the {need} bytes of data the header describes",
+                found - need
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Memory-maps native little-endian data; `None` when the type or alignment does not allow it.
+fn try_map(path: &Path, offset: u64, ty: ElemType, count: u64) -> Result<Option<Samples>> {
+    let n = usize::try_from(count).map_err(|_| header_err(path, "value count too large"))?;
+    let err = |e| ReadError::new(path, e);
+    Ok(match ty {
+        ElemType::U8 => Buffer::map_file(path, offset, n)
+            .map_err(err)?
+            .map(Samples::U8),
+        ElemType::U16 => Buffer::map_file(path, offset, n)
+            .map_err(err)?
+            .map(Samples::U16),
+        ElemType::I16 => Buffer::map_file(path, offset, n)
+            .map_err(err)?
+            .map(Samples::I16),
+        ElemType::F32 => Buffer::map_file(path, offset, n)
+            .map_err(err)?
+            .map(Samples::F32),
+        _ => None,
+    })
+}
+
+/// Reads `count` values of `ty` from a (decompressing) stream, which must then be at its end.
+pub(crate) fn read_stream(
+    path: &Path,
+    mut reader: impl Read,
+    ty: ElemType,
+    le: bool,
+    count: u64,
+) -> Result<Decoded> {
+    let need = data_bytes(path, ty, count)?;
+    let bytes = read_exact_checked(path, &mut reader, need)?;
+    let mut extra = [0u8; 1];
+    let more = reader
+        .read(&mut extra)
+        .map_err(|e| ReadError::new(path, e))?;
+    if more > 0 {
+        return Err(header_err(
+            path,
+            format!("header/data size mismatch: the data holds more than the {need} bytes the header describes"),
+        ));
+    }
+    decode(path, ty, &bytes, le)
+}
+
+/// Parses `count` whitespace-separated ASCII values of `ty` (exactly that many).
+pub(crate) fn parse_ascii(path: &Path, text: &str, ty: ElemType, count: u64) -> Result<Decoded> {
+    // Every value takes at least one byte, so a header asking for more cannot be satisfied.
+    if count > text.len() as u64 {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Truncated {
+                expected: count,
+                found: text.split_ascii_whitespace().count() as u64,
+            },
+        ));
+    }
+    let n = count as usize;
+    let mut tokens = text.split_ascii_whitespace();
+    let samples = match ty {
+        ElemType::U8 => Samples::U8(Buffer::owned(parse_tokens(path, &mut tokens, n)?)),
+        ElemType::U16 => Samples::U16(Buffer::owned(parse_tokens(path, &mut tokens, n)?)),
+        ElemType::I16 => Samples::I16(Buffer::owned(parse_tokens(path, &mut tokens, n)?)),
+        _ => Samples::F32(Buffer::owned(parse_float_tokens(path, &mut tokens, ty, n)?)),
+    };
+    if tokens.next().is_some() {
+        return Err(header_err(
+            path,
+            format!("header/data size mismatch: more than the {count} values the header describes"),
+        ));
+    }
+    Ok(Decoded {
+        samples,
+        note: ty.conversion_note(),
+    })
+}
+
+/// Parses `n` integer tokens of a native type.
+fn parse_tokens<'a, T: std::str::FromStr>(
+    path: &Path,
+    tokens: &mut impl Iterator<Item = &'a str>,
+    n: usize,
+) -> Result<Vec<T>> {
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let tok = tokens.next().ok_or_else(|| ascii_short(path, n, i))?;
+        let v = tok.parse().map_err(|_| {
+            ReadError::new(
+                path,
+                ErrorKind::Invalid(format!(
+                    "value {i} '{tok}' is not a valid {}",
+                    type_name::<T>()
+                )),
+            )
+        })?;
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// Parses `n` tokens as `f32` (floats, and integer types converted to float).
+fn parse_float_tokens<'a>(
+    path: &Path,
+    tokens: &mut impl Iterator<Item = &'a str>,
+    ty: ElemType,
+    n: usize,
+) -> Result<Vec<f32>> {
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let tok = tokens.next().ok_or_else(|| ascii_short(path, n, i))?;
+        let v: f64 = tok.parse().map_err(|_| {
+            ReadError::new(
+                path,
+                ErrorKind::Invalid(format!("value {i} '{tok}' is not a number")),
+            )
+        })?;
+        let integral = !matches!(ty, ElemType::F32 | ElemType::F64);
+        if integral && v.fract() != 0.0 {
+            return Err(ReadError::new(
+                path,
+                ErrorKind::Invalid(format!("value {i} '{tok}' is not a valid {}", ty.name())),
+            ));
+        }
+        out.push(v as f32);
+    }
+    Ok(out)
+}
+
+fn type_name<T>() -> &'static str {
+    let full = std::any::type_name::<T>();
+    full.rsplit("::").next().unwrap_or(full)
+}
+
+fn ascii_short(path: &Path, expected: usize, found: usize) -> ReadError {
+    ReadError::new(
         path,
-        ErrorKind::Unsupported("raw + JSON sidecar reader not yet written".into()),
-    ))
+        ErrorKind::Truncated {
+            expected: expected as u64,
+            found: found as u64,
+        },
+    )
+}
+
+/// Builds the grid from decoded data, adding the conversion note and `notes`.
+pub(crate) fn make_grid(
+    path: &Path,
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    origin: [f64; 3],
+    data: Decoded,
+    notes: Vec<String>,
+) -> Result<Grid> {
+    let mut grid =
+        Grid::new(dims, spacing, origin, data.samples).map_err(|e| ReadError::new(path, e))?;
+    for note in data.note.into_iter().chain(notes) {
+        grid = grid.with_note(note);
+    }
+    Ok(grid)
+}
+
+/// The keys of a raw sidecar that the reader uses.
+#[derive(serde::Deserialize)]
+struct Sidecar {
+    #[serde(default)]
+    kind: Option<String>,
+    #[serde(default)]
+    dims_xyz: Option<[i64; 3]>,
+    #[serde(default)]
+    dtype: Option<String>,
+    #[serde(default)]
+    endianness: Option<String>,
+    #[serde(default)]
+    compression: Option<String>,
+    #[serde(default)]
+    spacing: Option<[f64; 3]>,
+    #[serde(default)]
+    origin: Option<[f64; 3]>,
+    #[serde(default)]
+    value_range: Option<[f64; 2]>,
+}
+
+/// The data file and its sidecar for `path` (either of the two).
+fn data_and_sidecar(path: &Path) -> (PathBuf, PathBuf) {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    match name.strip_suffix(".json") {
+        Some(data) if !data.is_empty() => (path.with_file_name(data), path.to_path_buf()),
+        _ => (
+            path.to_path_buf(),
+            path.with_file_name(format!("{name}.json")),
+        ),
+    }
+}
+
+/// Reads and parses the sidecar.
+fn read_sidecar(sidecar: &Path) -> Result<Sidecar> {
+    let len = std::fs::metadata(sidecar)
+        .map_err(|e| ReadError::new(sidecar, e))?
+        .len();
+    if len > MAX_SIDECAR_BYTES {
+        return Err(header_err(
+            sidecar,
+            format!("sidecar is {len} bytes, more than a sidecar can be ({MAX_SIDECAR_BYTES})"),
+        ));
+    }
+    let text = std::fs::read(sidecar).map_err(|e| ReadError::new(sidecar, e))?;
+    let car: Sidecar = serde_json::from_slice(&text)
+        .map_err(|e| header_err(sidecar, format!("sidecar JSON: {e}")))?;
+    match car.kind.as_deref() {
+        None | Some("grid") => Ok(car),
+        Some(kind) => Err(ReadError::new(
+            sidecar,
+            ErrorKind::Unsupported(format!(
+                "the sidecar describes a '{kind}' dataset, not a raw grid"
+            )),
+        )),
+    }
+}
+
+/// What the sidecar says about the data, validated.
+struct Layout {
+    dims: [usize; 3],
+    count: u64,
+    ty: ElemType,
+    little_endian: bool,
+    gzip: bool,
+}
+
+fn layout(sidecar: &Path, car: &Sidecar) -> Result<Layout> {
+    let dims = car
+        .dims_xyz
+        .ok_or_else(|| header_err(sidecar, "sidecar has no 'dims_xyz'"))?;
+    let (dims, count) =
+        volux_core::limits::checked_dims(dims).map_err(|e| ReadError::new(sidecar, e))?;
+    let dtype = car
+        .dtype
+        .as_deref()
+        .ok_or_else(|| header_err(sidecar, "sidecar has no 'dtype'"))?;
+    let ty = ElemType::from_sidecar(dtype).ok_or_else(|| {
+        ReadError::new(
+            sidecar,
+            ErrorKind::Unsupported(format!(
+                "dtype '{dtype}' (known: uint8, uint16, int16, float32, int8, uint32, int32, float64)"
+            )),
+        )
+    })?;
+    let little_endian = match car.endianness.as_deref().map(str::to_ascii_lowercase) {
+        None => true,
+        Some(e) if e == "little" || e == "le" => true,
+        Some(e) if e == "big" || e == "be" => false,
+        Some(e) => {
+            return Err(header_err(
+                sidecar,
+                format!("endianness '{e}' (little or big)"),
+            ))
+        }
+    };
+    let gzip = match car.compression.as_deref().map(str::to_ascii_lowercase) {
+        None => sidecar.to_string_lossy().ends_with(".gz.json"),
+        Some(c) if c == "none" || c.is_empty() => false,
+        Some(c) if c == "gzip" || c == "gz" => true,
+        Some(c) => {
+            return Err(ReadError::new(
+                sidecar,
+                ErrorKind::Unsupported(format!("compression '{c}' (gzip or none)")),
+            ))
+        }
+    };
+    Ok(Layout {
+        dims,
+        count,
+        ty,
+        little_endian,
+        gzip,
+    })
+}
+
+/// Reads a raw grid through its sidecar; `path` is the data file or the sidecar itself.
+pub fn read(path: &Path) -> Result<Grid> {
+    let (data_path, sidecar) = data_and_sidecar(path);
+    let car = read_sidecar(&sidecar)?;
+    let l = layout(&sidecar, &car)?;
+    let data = if l.gzip {
+        let reader = open_maybe_gz(&data_path)?;
+        read_stream(&data_path, reader, l.ty, l.little_endian, l.count)?
+    } else {
+        read_plain(&data_path, 0, l.ty, l.little_endian, l.count)?
+    };
+    let mut notes = Vec::new();
+    let spacing = car.spacing.unwrap_or_else(|| {
+        notes.push("sidecar has no spacing: 1 assumed".to_string());
+        [1.0; 3]
+    });
+    let grid = make_grid(
+        &data_path,
+        l.dims,
+        spacing,
+        car.origin.unwrap_or([0.0; 3]),
+        data,
+        notes,
+    )?;
+    let differs = |a: f64, b: f64| (a - b).abs() > 1e-6 * a.abs().max(b.abs()).max(1.0);
+    Ok(match car.value_range {
+        Some(r) if differs(r[0], grid.range()[0]) || differs(r[1], grid.range()[1]) => {
+            let note = format!(
+                "sidecar value_range {r:?} differs from the data's range {:?}",
+                grid.range()
+            );
+            grid.with_note(note)
+        }
+        _ => grid,
+    })
+}
+
+/// The samples as little-endian bytes of their native type.
+pub(crate) fn samples_le_bytes(samples: &Samples) -> Vec<u8> {
+    fn le<T: Copy, const N: usize>(s: &[T], f: impl Fn(T) -> [u8; N]) -> Vec<u8> {
+        s.iter().flat_map(|&v| f(v)).collect()
+    }
+    match samples {
+        Samples::U8(b) => b.to_vec(),
+        Samples::U16(b) => le(b, u16::to_le_bytes),
+        Samples::I16(b) => le(b, i16::to_le_bytes),
+        Samples::F32(b) => le(b, f32::to_le_bytes),
+    }
+}
+
+/// Writes `grid` as raw little-endian data in its native type at `path`, plus the sidecar
+/// `path.json` (`dims_xyz`, `dtype`, `endianness`, `compression`, `spacing`, `origin`,
+/// `value_range`). Both files are written atomically (temporary name, then rename).
+pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
+    let (data_path, sidecar) = data_and_sidecar(path);
+    let werr = |p: &Path| {
+        let p = p.to_path_buf();
+        move |source: volux_core::Error| WriteError { path: p, source }
+    };
+    volux_core::limits::check_alloc("raw output", grid.len() as u64, 4)
+        .map_err(werr(&data_path))?;
+    let bytes = samples_le_bytes(grid.samples());
+    let car = serde_json::json!({
+        "kind": "grid",
+        "format": "raw",
+        "dims_xyz": grid.dims(),
+        "layout": "x fastest, then y, then z (C-order array [z][y][x])",
+        "dtype": grid.scalar_type().name(),
+        "endianness": "little",
+        "compression": "none",
+        "spacing": grid.spacing().to_array(),
+        "origin": grid.origin().to_array(),
+        "value_range": grid.range(),
+    });
+    let text =
+        serde_json::to_vec_pretty(&car).map_err(|e| werr(&sidecar)(volux_core::Error::Json(e)))?;
+    volux_core::image::write_atomically(&data_path, &bytes).map_err(werr(&data_path))?;
+    volux_core::image::write_atomically(&sidecar, &text).map_err(werr(&sidecar))
 }

@@ -1,0 +1,840 @@
+//! Raw + sidecar, NRRD, MetaImage and .vtet: round trips, format variants and malformed input.
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use proptest::prelude::*;
+use volux_core::{Buffer, Grid, Samples, ScalarType, TetMesh};
+use volux_io::{load, metaimage, nrrd, raw, vtet, Dataset, ErrorKind, LoadOptions, ReadError};
+
+// ---------- helpers ----------
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+fn zlib(bytes: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+fn values(g: &Grid) -> Vec<f32> {
+    g.to_f32_vec().unwrap()
+}
+
+fn assert_kind(r: Result<impl std::fmt::Debug, ReadError>, ok: impl Fn(&ErrorKind) -> bool) {
+    match r {
+        Ok(v) => panic!("expected an error, got {v:?}"),
+        Err(e) => {
+            assert!(ok(&e.kind), "unexpected error kind: {e}");
+            // One readable line naming the file.
+            assert!(!e.to_string().contains('\n'), "{e}");
+        }
+    }
+}
+
+fn is_truncated(k: &ErrorKind) -> bool {
+    matches!(k, ErrorKind::Truncated { .. })
+}
+fn is_mismatch(k: &ErrorKind) -> bool {
+    matches!(k, ErrorKind::Header(m) if m.contains("mismatch"))
+}
+fn is_dims(k: &ErrorKind) -> bool {
+    matches!(k, ErrorKind::Data(volux_core::Error::InvalidDims { .. }))
+}
+fn is_unsupported(k: &ErrorKind) -> bool {
+    matches!(k, ErrorKind::Unsupported(_))
+}
+fn is_header(k: &ErrorKind) -> bool {
+    matches!(k, ErrorKind::Header(_))
+}
+
+fn le_i16(v: &[i16]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+fn be_i16(v: &[i16]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_be_bytes()).collect()
+}
+fn le_f32(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// Equal within one unit in the last place.
+fn ulp_close(a: [f64; 3], b: [f64; 3]) -> bool {
+    a.iter()
+        .zip(b)
+        .all(|(x, y)| (x - y).abs() <= x.abs().max(y.abs()) * f64::EPSILON)
+}
+
+const I16_VALS: [i16; 12] = [-1024, -1, 0, 1, 2, 3, 300, 3071, -32768, 32767, 7, 8];
+
+// ---------- raw + sidecar ----------
+
+fn samples_strategy() -> impl Strategy<Value = ([usize; 3], Samples)> {
+    ([1usize..5, 1usize..5, 1usize..5], 0..4u8).prop_flat_map(|(d, t)| {
+        let n = d[0] * d[1] * d[2];
+        let s: BoxedStrategy<Samples> = match t {
+            0 => prop::collection::vec(any::<u8>(), n)
+                .prop_map(|v| Samples::U8(Buffer::owned(v)))
+                .boxed(),
+            1 => prop::collection::vec(any::<u16>(), n)
+                .prop_map(|v| Samples::U16(Buffer::owned(v)))
+                .boxed(),
+            2 => prop::collection::vec(any::<i16>(), n)
+                .prop_map(|v| Samples::I16(Buffer::owned(v)))
+                .boxed(),
+            _ => prop::collection::vec(-1e6f32..1e6, n)
+                .prop_map(|v| Samples::F32(Buffer::owned(v)))
+                .boxed(),
+        };
+        (Just(d), s)
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    #[test]
+    fn raw_round_trip(
+        (dims, samples) in samples_strategy(),
+        spacing in [0.01f64..100.0, 0.01f64..100.0, 0.01f64..100.0],
+        origin in [-1e3f64..1e3, -1e3f64..1e3, -1e3f64..1e3],
+    ) {
+        let g = Grid::new(dims, spacing, origin, samples).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.raw");
+        raw::write(&g, &p).unwrap();
+        let r = raw::read(&p).unwrap();
+        prop_assert_eq!(r.dims(), g.dims());
+        // serde_json (without its `float_roundtrip` feature) may parse a 17-digit number 1 ulp
+        // off; the data itself must be bit-identical.
+        prop_assert!(ulp_close(r.spacing().to_array(), g.spacing().to_array()));
+        prop_assert!(ulp_close(r.origin().to_array(), g.origin().to_array()));
+        prop_assert_eq!(r.scalar_type(), g.scalar_type());
+        prop_assert_eq!(r.range(), g.range());
+        prop_assert_eq!(values(&r), values(&g));
+        prop_assert!(r.samples().is_mapped());
+        prop_assert!(r.notes().is_empty(), "{:?}", r.notes());
+        // The sidecar path works too.
+        let r2 = raw::read(&dir.path().join("v.raw.json")).unwrap();
+        prop_assert_eq!(values(&r2), values(&g));
+    }
+
+    #[test]
+    fn nrrd_round_trip(
+        (dims, samples) in samples_strategy(),
+        spacing in [0.01f64..100.0, 0.01f64..100.0, 0.01f64..100.0],
+        origin in [-1e3f64..1e3, -1e3f64..1e3, -1e3f64..1e3],
+    ) {
+        let g = Grid::new(dims, spacing, origin, samples).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v.nrrd");
+        nrrd::write(&g, &p).unwrap();
+        let r = nrrd::read(&p).unwrap();
+        prop_assert_eq!(r.dims(), g.dims());
+        prop_assert_eq!(r.spacing(), g.spacing());
+        prop_assert_eq!(r.origin(), g.origin());
+        prop_assert_eq!(r.scalar_type(), g.scalar_type());
+        prop_assert_eq!(values(&r), values(&g));
+    }
+}
+
+/// Writes `data` and a sidecar with the given JSON fields; returns the data path.
+fn raw_with_sidecar(dir: &Path, name: &str, data: &[u8], car: serde_json::Value) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, data).unwrap();
+    std::fs::write(dir.join(format!("{name}.json")), car.to_string()).unwrap();
+    p
+}
+
+#[test]
+fn raw_gzip_big_endian_and_origin() {
+    let dir = tempfile::tempdir().unwrap();
+    let car = serde_json::json!({"dims_xyz": [3, 2, 2], "dtype": "int16", "endianness": "big",
+        "compression": "gzip", "spacing": [0.5, 1.0, 2.0], "origin": [1.0, 2.0, 3.0]});
+    let p = raw_with_sidecar(dir.path(), "v.raw.gz", &gzip(&be_i16(&I16_VALS)), car);
+    let g = raw::read(&p).unwrap();
+    assert_eq!(g.dims(), [3, 2, 2]);
+    assert_eq!(g.scalar_type(), ScalarType::I16);
+    assert_eq!(g.spacing().to_array(), [0.5, 1.0, 2.0]);
+    assert_eq!(g.origin().to_array(), [1.0, 2.0, 3.0]);
+    let want: Vec<f32> = I16_VALS.iter().map(|&v| v as f32).collect();
+    assert_eq!(values(&g), want);
+    assert!(!g.samples().is_mapped());
+    // load() picks the raw reader for .raw.gz.
+    let (d, f) = load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(f, volux_io::Format::RawJson);
+    assert!(matches!(d, Dataset::Grid(g) if g.dims() == [3, 2, 2]));
+}
+
+#[test]
+fn raw_gzip_only_when_the_sidecar_or_name_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Uncompressed data that happens to start with the gzip magic bytes.
+    let data = [0x1f, 0x8b, 3, 4];
+    let car = serde_json::json!({"dims_xyz": [4, 1, 1], "dtype": "uint8", "spacing": [1, 1, 1]});
+    let g = raw::read(&raw_with_sidecar(d, "m.raw", &data, car.clone())).unwrap();
+    assert_eq!(values(&g), [31.0, 139.0, 3.0, 4.0]);
+    assert!(g.samples().is_mapped());
+    // No `compression` key, but a .gz name.
+    let g = raw::read(&raw_with_sidecar(d, "m.raw.gz", &gzip(&data), car)).unwrap();
+    assert_eq!(values(&g), [31.0, 139.0, 3.0, 4.0]);
+}
+
+#[test]
+fn raw_wide_types_are_converted_with_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, Vec<u8>, Vec<f32>); 4] = [
+        (
+            "int8",
+            vec![0x80, 0xff, 0, 127],
+            vec![-128.0, -1.0, 0.0, 127.0],
+        ),
+        (
+            "uint32",
+            [0u32, 1, 70000, 16_777_216]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+            vec![0.0, 1.0, 70000.0, 16_777_216.0],
+        ),
+        (
+            "int32",
+            [-5i32, 1, -70000, 9]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+            vec![-5.0, 1.0, -70000.0, 9.0],
+        ),
+        (
+            "float64",
+            [0.5f64, -2.25, 1e10, 3.0]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+            vec![0.5, -2.25, 1e10, 3.0],
+        ),
+    ];
+    for (dtype, bytes, want) in cases {
+        let car = serde_json::json!({"dims_xyz": [2, 2, 1], "dtype": dtype, "spacing": [1, 1, 1]});
+        let p = raw_with_sidecar(dir.path(), &format!("{dtype}.raw"), &bytes, car);
+        let g = raw::read(&p).unwrap();
+        assert_eq!(g.scalar_type(), ScalarType::F32, "{dtype}");
+        assert_eq!(values(&g), want, "{dtype}");
+        assert!(
+            g.notes().iter().any(|n| n.contains(dtype)),
+            "{:?}",
+            g.notes()
+        );
+    }
+}
+
+#[test]
+fn raw_malformed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let car = |dims: serde_json::Value, dtype: &str| serde_json::json!({"dims_xyz": dims, "dtype": dtype, "spacing": [1, 1, 1]});
+    let dims = serde_json::json!([2, 2, 3]);
+    let data = le_i16(&I16_VALS);
+    // Truncated, longer, and the same for gzip.
+    let p = raw_with_sidecar(d, "short.raw", &data[..20], car(dims.clone(), "int16"));
+    assert_kind(raw::read(&p), is_truncated);
+    let mut long = data.clone();
+    long.extend_from_slice(&[0, 0]);
+    let p = raw_with_sidecar(d, "long.raw", &long, car(dims.clone(), "int16"));
+    assert_kind(raw::read(&p), is_mismatch);
+    let p = raw_with_sidecar(
+        d,
+        "short.raw.gz",
+        &gzip(&data[..20]),
+        car(dims.clone(), "int16"),
+    );
+    assert_kind(raw::read(&p), is_truncated);
+    let p = raw_with_sidecar(d, "long.raw.gz", &gzip(&long), car(dims.clone(), "int16"));
+    assert_kind(raw::read(&p), is_mismatch);
+    let gz = gzip(&data);
+    let p = raw_with_sidecar(
+        d,
+        "cut.raw.gz",
+        &gz[..gz.len() / 2],
+        car(dims.clone(), "int16"),
+    );
+    assert_kind(raw::read(&p), |k| {
+        is_truncated(k) || matches!(k, ErrorKind::Io(_))
+    });
+    // Bad dims.
+    for bad in [
+        serde_json::json!([i64::MAX, i64::MAX, 4]),
+        serde_json::json!([0, 2, 2]),
+        serde_json::json!([2, -2, 3]),
+    ] {
+        let p = raw_with_sidecar(d, "dims.raw", &data, car(bad, "int16"));
+        assert_kind(raw::read(&p), is_dims);
+    }
+    // Unknown dtype, garbage sidecar, missing sidecar, a sidecar for something else.
+    let p = raw_with_sidecar(d, "t.raw", &data, car(dims.clone(), "complex128"));
+    assert_kind(raw::read(&p), is_unsupported);
+    std::fs::write(d.join("t.raw.json"), b"\x00\xffnot json").unwrap();
+    assert_kind(raw::read(&p), is_header);
+    std::fs::write(d.join("alone.raw"), &data).unwrap();
+    assert_kind(raw::read(&d.join("alone.raw")), |k| {
+        matches!(k, ErrorKind::Io(_))
+    });
+    let other = serde_json::json!({"kind": "curvilinear (PLOT3D)", "dims_ijk": [2, 2, 3]});
+    let p = raw_with_sidecar(d, "q.bin", &data, other);
+    assert_kind(raw::read(&p), is_unsupported);
+    // Garbage bytes with a plausible sidecar: the size does not match.
+    let p = raw_with_sidecar(d, "g.raw", b"garbage garbage!", car(dims, "float32"));
+    assert_kind(raw::read(&p), is_truncated);
+}
+
+#[test]
+fn raw_nan_values_are_noted_and_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let vals = [1.0f32, f32::NAN, 3.0, f32::INFINITY];
+    let car = serde_json::json!({"dims_xyz": [4, 1, 1], "dtype": "float32", "spacing": [1, 1, 1]});
+    let p = raw_with_sidecar(dir.path(), "nan.raw", &le_f32(&vals), car);
+    let g = raw::read(&p).unwrap();
+    assert_eq!(g.range(), [1.0, 3.0]);
+    assert!(g.notes().iter().any(|n| n.contains("non-finite")));
+    assert!(values(&g).iter().all(|v| v.is_finite()));
+}
+
+// ---------- NRRD ----------
+
+fn nrrd_file(dir: &Path, name: &str, header: &str, data: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    let mut bytes = header.as_bytes().to_vec();
+    bytes.extend_from_slice(data);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+const NRRD_I16_HEAD: &str = "NRRD0004\n# a comment\ntype: short\ndimension: 3\nsizes: 3 2 2\n\
+     spacings: 0.5 0.25 2\nmodality:=CT\n";
+
+#[test]
+fn nrrd_encodings_and_endianness() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let want: Vec<f32> = I16_VALS.iter().map(|&v| v as f32).collect();
+    let cases = [
+        ("be.nrrd", "endian: big\nencoding: raw\n", be_i16(&I16_VALS)),
+        (
+            "le.nrrd",
+            "endian: little\nencoding: raw\n",
+            le_i16(&I16_VALS),
+        ),
+        (
+            "gz.nrrd",
+            "endian: big\nencoding: gzip\n",
+            gzip(&be_i16(&I16_VALS)),
+        ),
+        (
+            "gz2.nrrd",
+            "endian: little\nencoding: gz\n",
+            gzip(&le_i16(&I16_VALS)),
+        ),
+        (
+            "txt.nrrd",
+            "encoding: ascii\n",
+            I16_VALS
+                .iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
+                .into_bytes(),
+        ),
+    ];
+    for (name, fields, data) in cases {
+        let p = nrrd_file(d, name, &format!("{NRRD_I16_HEAD}{fields}\n"), &data);
+        let g = nrrd::read(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(g.dims(), [3, 2, 2], "{name}");
+        assert_eq!(g.spacing().to_array(), [0.5, 0.25, 2.0], "{name}");
+        assert_eq!(g.scalar_type(), ScalarType::I16, "{name}");
+        assert_eq!(values(&g), want, "{name}");
+        let (ds, _) = load(&p, &LoadOptions::default()).unwrap();
+        assert!(matches!(ds, Dataset::Grid(_)));
+    }
+}
+
+#[test]
+fn nrrd_detached_with_skips_and_directions() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("data")).unwrap();
+    let mut bytes = b"first junk line\nsecond\nXXXX".to_vec();
+    bytes.extend_from_slice(&le_i16(&I16_VALS));
+    std::fs::write(d.join("data/v.bin"), bytes).unwrap();
+    let head = "NRRD0005\ntype: int16\ndimension: 3\nsizes: 3 2 2\n\
+        space: left-posterior-superior\n\
+        space directions: (0,2,0) (-1.5, 0, 0) (0,0,3)\nspace origin: (10,-20,30.5)\n\
+        endian: little\nencoding: raw\ndata file: data/v.bin\nline skip: 2\nbyte skip: 4\n";
+    let p = nrrd_file(d, "v.nhdr", head, b"");
+    let g = nrrd::read(&p).unwrap();
+    assert_eq!(g.spacing().to_array(), [2.0, 1.5, 3.0]);
+    assert_eq!(g.origin().to_array(), [10.0, -20.0, 30.5]);
+    assert!(g.notes().iter().any(|n| n.contains("rotated")));
+    assert_eq!(values(&g)[0], -1024.0);
+    // byte skip -1: the data ends the file.
+    let head2 = head.replace("line skip: 2\nbyte skip: 4", "byte skip: -1");
+    let p = nrrd_file(d, "v2.nhdr", &head2, b"");
+    assert_eq!(values(&nrrd::read(&p).unwrap())[11], 8.0);
+}
+
+#[test]
+fn nrrd_2d_4d_and_wide_types() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h2 = "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 2 3\nencoding: raw\n\n";
+    let g = nrrd::read(&nrrd_file(d, "a.nrrd", h2, &[1, 2, 3, 4, 5, 6])).unwrap();
+    assert_eq!(g.dims(), [2, 3, 1]);
+    let h4 = "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 1 2 3 1\n\
+        space directions: none (1,0,0) (0,1,0) (0,0,1)\nencoding: raw\n\n";
+    let g = nrrd::read(&nrrd_file(d, "b.nrrd", h4, &[1, 2, 3, 4, 5, 6])).unwrap();
+    assert_eq!(g.dims(), [2, 3, 1]);
+    let h4bad = h4
+        .replace("sizes: 1 2 3 1", "sizes: 2 2 3 1")
+        .replace("none ", "");
+    let r = nrrd::read(&nrrd_file(d, "c.nrrd", &h4bad, &[0; 12]));
+    assert!(r.is_ok(), "a trailing size-1 axis is fine too: {r:?}");
+    let h4multi = "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 3 2 3 2\nencoding: raw\n\n";
+    assert_kind(
+        nrrd::read(&nrrd_file(d, "m.nrrd", h4multi, &[0; 36])),
+        is_unsupported,
+    );
+    let wide: [(&str, Vec<u8>); 4] = [
+        ("signed char", vec![0xfe, 1]),
+        (
+            "uint",
+            [7u32, 3].iter().flat_map(|v| v.to_be_bytes()).collect(),
+        ),
+        (
+            "int32_t",
+            [-7i32, 3].iter().flat_map(|v| v.to_be_bytes()).collect(),
+        ),
+        (
+            "double",
+            [-7.5f64, 3.0]
+                .iter()
+                .flat_map(|v| v.to_be_bytes())
+                .collect(),
+        ),
+    ];
+    for (ty, bytes) in wide {
+        let h =
+            format!("NRRD0004\ntype: {ty}\ndimension: 1\nsizes: 2\nendian: big\nencoding: raw\n\n");
+        let g = nrrd::read(&nrrd_file(d, "w.nrrd", &h, &bytes)).unwrap();
+        assert_eq!(g.scalar_type(), ScalarType::F32);
+        assert!(!g.notes().is_empty(), "{ty}");
+        let v = values(&g);
+        assert!(
+            v == [-2.0, 1.0] || v == [7.0, 3.0] || v == [-7.0, 3.0] || v == [-7.5, 3.0],
+            "{ty}: {v:?}"
+        );
+    }
+}
+
+#[test]
+fn nrrd_malformed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let head = |sizes: &str, ty: &str| {
+        format!(
+            "NRRD0004\ntype: {ty}\ndimension: 3\nsizes: {sizes}\nendian: little\nencoding: raw\n\n"
+        )
+    };
+    let data = le_i16(&I16_VALS);
+    let f = |name: &str, h: &str, data: &[u8]| nrrd::read(&nrrd_file(d, name, h, data));
+    assert_kind(
+        f("t.nrrd", &head("3 2 2", "short"), &data[..23]),
+        is_truncated,
+    );
+    assert_kind(
+        f(
+            "l.nrrd",
+            &head("3 2 2", "short"),
+            &[&data[..], &[1]].concat(),
+        ),
+        is_mismatch,
+    );
+    let gz = head("3 2 2", "short").replace("raw", "gzip");
+    assert_kind(f("g.nrrd", &gz, &gzip(&data[..20])), is_truncated);
+    assert_kind(
+        f("g2.nrrd", &gz, &gzip(&[&data[..], &[0, 0]].concat())),
+        is_mismatch,
+    );
+    let huge = "9223372036854775807 9223372036854775807 2";
+    assert_kind(f("o.nrrd", &head(huge, "short"), &data), is_dims);
+    assert_kind(f("z.nrrd", &head("3 0 2", "short"), &data), is_dims);
+    assert_kind(f("n.nrrd", &head("3 -2 2", "short"), &data), is_dims);
+    assert_kind(
+        f("u.nrrd", &head("3 2 2", "quaternion"), &data),
+        is_unsupported,
+    );
+    assert_kind(f("s.nrrd", &head("3 2", "short"), &data), is_header);
+    assert_kind(f("x.nrrd", "garbage\x00\x01\x02\n\nmore", &data), is_header);
+    assert_kind(
+        f("b.nrrd", "\u{0}\u{1}NRRD0004\ntype: short\n\n", &data),
+        is_header,
+    );
+    let bz = head("3 2 2", "short").replace("raw", "bzip2");
+    assert_kind(f("bz.nrrd", &bz, &data), is_unsupported);
+    let ascii = head("3 2 2", "short").replace("raw", "ascii");
+    assert_kind(f("a.nrrd", &ascii, b"1 2 3"), is_truncated);
+    assert_kind(f("a2.nrrd", &ascii, b"1 2 3 4 5 6 7 8 9 10 11 x"), |k| {
+        matches!(k, ErrorKind::Invalid(_))
+    });
+    // Binary garbage (not UTF-8) in the header.
+    let mut bin = b"NRRD0004\ntype: short\n".to_vec();
+    bin.extend_from_slice(&[0xff, 0xfe, b'\n', b'\n']);
+    std::fs::write(d.join("bin.nrrd"), bin).unwrap();
+    assert_kind(nrrd::read(&d.join("bin.nrrd")), is_header);
+    // NaN floats are noted and replaced by volux-core.
+    let nan = le_f32(&[1.0, f32::NAN, 2.0, 5.0]);
+    let g = f("nan.nrrd", &head("2 2 1", "float"), &nan).unwrap();
+    assert_eq!(g.range(), [1.0, 5.0]);
+    assert!(g.notes().iter().any(|n| n.contains("non-finite")));
+}
+
+// ---------- MetaImage ----------
+
+fn mha(dir: &Path, name: &str, fields: &str, data_file: &str, data: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    let mut bytes = format!("{fields}ElementDataFile = {data_file}\n").into_bytes();
+    bytes.extend_from_slice(data);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+const MHA_I16: &str = "ObjectType = Image\nNDims = 3\nDimSize = 3 2 2\nElementType = MET_SHORT\n\
+    ElementSpacing = 0.5 0.25 2\nOffset = 1 2 3\n";
+
+#[test]
+fn metaimage_variants() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let want: Vec<f32> = I16_VALS.iter().map(|&v| v as f32).collect();
+    let le = le_i16(&I16_VALS);
+    let be = be_i16(&I16_VALS);
+    let z = zlib(&le);
+    let cases: Vec<(&str, String, Vec<u8>)> = vec![
+        (
+            "le.mha",
+            "BinaryDataByteOrderMSB = False\n".into(),
+            le.clone(),
+        ),
+        ("be.mha", "ElementByteOrderMSB = True\n".into(), be.clone()),
+        ("z.mha", "CompressedData = True\n".into(), z.clone()),
+        (
+            "zs.mha",
+            format!("CompressedData = True\nCompressedDataSize = {}\n", z.len()),
+            z,
+        ),
+        (
+            "txt.mha",
+            "BinaryData = False\n".into(),
+            want.iter()
+                .map(|v| format!("{v}\n"))
+                .collect::<String>()
+                .into_bytes(),
+        ),
+        (
+            "hs.mha",
+            "HeaderSize = 5\n".into(),
+            [&b"12345"[..], &le].concat(),
+        ),
+        ("hsm.mha", "HeaderSize = -1\n".into(), le.clone()),
+    ];
+    for (name, extra, data) in cases {
+        let p = mha(d, name, &format!("{MHA_I16}{extra}"), "LOCAL", &data);
+        let g = metaimage::read(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(g.dims(), [3, 2, 2], "{name}");
+        assert_eq!(g.spacing().to_array(), [0.5, 0.25, 2.0], "{name}");
+        assert_eq!(g.origin().to_array(), [1.0, 2.0, 3.0], "{name}");
+        assert_eq!(values(&g), want, "{name}");
+        let (ds, _) = load(&p, &LoadOptions::default()).unwrap();
+        assert!(matches!(ds, Dataset::Grid(_)));
+    }
+    // .mhd with a separate file, HeaderSize -1 skipping a preamble in the data file.
+    std::fs::write(d.join("v.raw"), [&b"preamble"[..], &be].concat()).unwrap();
+    let p = mha(
+        d,
+        "v.mhd",
+        &format!("{MHA_I16}ElementByteOrderMSB = True\nHeaderSize = -1\n"),
+        "v.raw",
+        b"",
+    );
+    assert_eq!(values(&metaimage::read(&p).unwrap()), want);
+}
+
+#[test]
+fn metaimage_2d_wide_types_and_aliases() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h =
+        "NDims = 2\nDimSize = 2 2\nElementType = MET_UCHAR\nElementSize = 3 4\nPosition = 5 6\n";
+    let g = metaimage::read(&mha(d, "a.mha", h, "LOCAL", &[1, 2, 3, 4])).unwrap();
+    assert_eq!(g.dims(), [2, 2, 1]);
+    assert_eq!(g.spacing().to_array(), [3.0, 4.0, 1.0]);
+    assert_eq!(g.origin().to_array(), [5.0, 6.0, 0.0]);
+    let wide: [(&str, Vec<u8>, [f32; 2]); 4] = [
+        ("MET_CHAR", vec![0xfe, 1], [-2.0, 1.0]),
+        (
+            "MET_UINT",
+            [7u32, 3].iter().flat_map(|v| v.to_le_bytes()).collect(),
+            [7.0, 3.0],
+        ),
+        (
+            "MET_INT",
+            [-7i32, 3].iter().flat_map(|v| v.to_le_bytes()).collect(),
+            [-7.0, 3.0],
+        ),
+        (
+            "MET_DOUBLE",
+            [-7.5f64, 3.0]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+            [-7.5, 3.0],
+        ),
+    ];
+    for (ty, bytes, want) in wide {
+        let h = format!("NDims = 1\nDimSize = 2\nElementType = {ty}\n");
+        let g = metaimage::read(&mha(d, "w.mha", &h, "LOCAL", &bytes)).unwrap();
+        assert_eq!(values(&g), want, "{ty}");
+        assert!(g.notes().iter().any(|n| n.contains("converted")), "{ty}");
+    }
+    let rot = format!("{MHA_I16}TransformMatrix = 0 1 0 1 0 0 0 0 1\n");
+    let g = metaimage::read(&mha(d, "r.mha", &rot, "LOCAL", &le_i16(&I16_VALS))).unwrap();
+    assert!(g.notes().iter().any(|n| n.contains("TransformMatrix")));
+    let id = format!("{MHA_I16}TransformMatrix = 1 0 0 0 1 0 0 0 1\n");
+    let g = metaimage::read(&mha(d, "i.mha", &id, "LOCAL", &le_i16(&I16_VALS))).unwrap();
+    assert!(g.notes().is_empty());
+}
+
+#[test]
+fn metaimage_malformed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let data = le_i16(&I16_VALS);
+    let f = |name: &str, fields: &str, data: &[u8]| {
+        metaimage::read(&mha(d, name, fields, "LOCAL", data))
+    };
+    let head = |dims: &str, ty: &str| format!("NDims = 3\nDimSize = {dims}\nElementType = {ty}\n");
+    assert_kind(
+        f("t.mha", &head("3 2 2", "MET_SHORT"), &data[..22]),
+        is_truncated,
+    );
+    assert_kind(
+        f(
+            "l.mha",
+            &head("3 2 2", "MET_SHORT"),
+            &[&data[..], &[0]].concat(),
+        ),
+        is_mismatch,
+    );
+    let zh = format!("{}CompressedData = True\n", head("3 2 2", "MET_SHORT"));
+    assert_kind(f("z.mha", &zh, &zlib(&data[..20])), is_truncated);
+    assert_kind(
+        f("z2.mha", &zh, &zlib(&[&data[..], &[0, 0]].concat())),
+        is_mismatch,
+    );
+    let zs = format!("{zh}CompressedDataSize = 100000\n");
+    assert_kind(f("z3.mha", &zs, &zlib(&data)), is_truncated);
+    let huge = "9223372036854775807 9223372036854775807 2";
+    assert_kind(f("o.mha", &head(huge, "MET_SHORT"), &data), is_dims);
+    assert_kind(f("0.mha", &head("3 0 2", "MET_SHORT"), &data), is_dims);
+    assert_kind(f("n.mha", &head("3 2 -2", "MET_SHORT"), &data), is_dims);
+    assert_kind(
+        f("u.mha", &head("3 2 2", "MET_FANCY"), &data),
+        is_unsupported,
+    );
+    assert_kind(f("d.mha", &head("3 2", "MET_SHORT"), &data), is_header);
+    let ch = format!(
+        "{}ElementNumberOfChannels = 3\n",
+        head("3 2 2", "MET_SHORT")
+    );
+    assert_kind(f("c.mha", &ch, &data), is_unsupported);
+    let ob = format!("ObjectType = Mesh\n{}", head("3 2 2", "MET_SHORT"));
+    assert_kind(f("ob.mha", &ob, &data), is_unsupported);
+    let list = metaimage::read(&mha(
+        d,
+        "list.mhd",
+        &head("3 2 2", "MET_SHORT"),
+        "LIST",
+        b"",
+    ));
+    assert_kind(list, is_unsupported);
+    let missing = metaimage::read(&mha(
+        d,
+        "m.mhd",
+        &head("3 2 2", "MET_SHORT"),
+        "nope.raw",
+        b"",
+    ));
+    assert_kind(missing, |k| matches!(k, ErrorKind::Io(_)));
+    std::fs::write(d.join("garbage.mha"), b"\x00\x01\xff\xfe garbage \n\x00").unwrap();
+    assert_kind(metaimage::read(&d.join("garbage.mha")), is_header);
+    std::fs::write(d.join("noend.mha"), b"NDims = 3\nDimSize = 1 1 1\n").unwrap();
+    assert_kind(metaimage::read(&d.join("noend.mha")), is_header);
+    let g = f(
+        "nan.mha",
+        &head("2 2 1", "MET_FLOAT"),
+        &le_f32(&[f32::NAN, 1.0, 2.0, 3.0]),
+    )
+    .unwrap();
+    assert_eq!(g.range(), [1.0, 3.0]);
+    assert!(g.notes().iter().any(|n| n.contains("non-finite")));
+}
+
+// ---------- .vtet ----------
+
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// A .vtet file written by hand (with a correct checksum unless `bad_sum`).
+fn vtet_bytes(pos: &[[f32; 3]], sca: &[f32], tets: &[[u32; 4]], counts: (u64, u64)) -> Vec<u8> {
+    let mut out = b"VOLUXTET".to_vec();
+    out.extend_from_slice(&1u32.to_le_bytes());
+    out.extend_from_slice(&counts.0.to_le_bytes());
+    out.extend_from_slice(&counts.1.to_le_bytes());
+    let mut payload: Vec<u8> = pos.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    payload.extend(sca.iter().flat_map(|v| v.to_le_bytes()));
+    payload.extend(tets.iter().flatten().flat_map(|v| v.to_le_bytes()));
+    out.extend_from_slice(&payload);
+    out.extend_from_slice(&fnv1a(&payload).to_le_bytes());
+    out
+}
+
+fn mesh_strategy() -> impl Strategy<Value = TetMesh> {
+    (4usize..24).prop_flat_map(|nv| {
+        let pos = prop::collection::vec([-10f32..10.0, -10f32..10.0, -10f32..10.0], nv);
+        let sca = prop::collection::vec(-1e3f32..1e3, nv);
+        let tet = prop::sample::subsequence((0..nv as u32).collect::<Vec<_>>(), 4)
+            .prop_shuffle()
+            .prop_map(|v| [v[0], v[1], v[2], v[3]]);
+        let tets = prop::collection::vec(tet, 1..32);
+        (pos, sca, tets).prop_map(|(p, s, t)| {
+            let p = p.into_iter().map(Vec3::from_array).collect();
+            TetMesh::new(p, s, t).unwrap()
+        })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    #[test]
+    fn vtet_round_trip(mesh in mesh_strategy()) {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.vtet");
+        vtet::write(&mesh, &p).unwrap();
+        let r = vtet::read(&p).unwrap();
+        prop_assert_eq!(r.positions(), mesh.positions());
+        prop_assert_eq!(r.scalars(), mesh.scalars());
+        prop_assert_eq!(r.tets(), mesh.tets());
+        prop_assert_eq!(r.report().inverted_reoriented, 0);
+        prop_assert_eq!(r.report().degenerate, mesh.report().degenerate);
+        prop_assert_eq!(r.range(), mesh.range());
+    }
+}
+
+#[test]
+fn vtet_load_and_nan_scalars() {
+    let dir = tempfile::tempdir().unwrap();
+    let pos = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let p = dir.path().join("nan.vtet");
+    // Inverted tet (swapped last two) and a NaN scalar: both repaired and reported.
+    std::fs::write(
+        &p,
+        vtet_bytes(&pos, &[1.0, f32::NAN, 2.0, 3.0], &[[0, 1, 3, 2]], (4, 1)),
+    )
+    .unwrap();
+    let (ds, f) = load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(f, volux_io::Format::Vtet);
+    let Dataset::Mesh(m) = ds else {
+        panic!("not a mesh")
+    };
+    assert_eq!(m.report().nonfinite_scalars, 1);
+    assert_eq!(m.report().inverted_reoriented, 1);
+    assert_eq!(m.range(), [1.0, 3.0]);
+}
+
+#[test]
+fn vtet_malformed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let pos = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let sca = [0.0, 1.0, 2.0, 3.0];
+    let good = vtet_bytes(&pos, &sca, &[[0, 1, 2, 3]], (4, 1));
+    let f = |name: &str, bytes: &[u8]| {
+        let p = d.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        vtet::read(&p)
+    };
+    assert!(f("good.vtet", &good).is_ok());
+    assert_kind(f("t.vtet", &good[..good.len() - 9]), is_truncated);
+    assert_kind(f("h.vtet", &good[..20]), is_truncated);
+    assert_kind(f("l.vtet", &[&good[..], &[0]].concat()), is_mismatch);
+    // Counts that overflow, or ask for far more than the file holds (no allocation happens).
+    assert_kind(
+        f(
+            "o.vtet",
+            &vtet_bytes(&pos, &sca, &[[0, 1, 2, 3]], (u64::MAX / 8, 1)),
+        ),
+        is_header,
+    );
+    assert_kind(
+        f(
+            "big.vtet",
+            &vtet_bytes(&pos, &sca, &[[0, 1, 2, 3]], (1 << 40, 1 << 40)),
+        ),
+        is_truncated,
+    );
+    // Out-of-range index, empty mesh: rejected by TetMesh::new.
+    let is_mesh = |k: &ErrorKind| matches!(k, ErrorKind::Data(volux_core::Error::InvalidMesh(_)));
+    assert_kind(
+        f("r.vtet", &vtet_bytes(&pos, &sca, &[[0, 1, 2, 4]], (4, 1))),
+        is_mesh,
+    );
+    assert_kind(f("e.vtet", &vtet_bytes(&[], &[], &[], (0, 0))), is_mesh);
+    let nanpos = [[f32::NAN, 0.0, 0.0], pos[1], pos[2], pos[3]];
+    assert_kind(
+        f(
+            "np.vtet",
+            &vtet_bytes(&nanpos, &sca, &[[0, 1, 2, 3]], (4, 1)),
+        ),
+        is_mesh,
+    );
+    // Corruption, wrong version, garbage.
+    let mut bad = good.clone();
+    bad[40] ^= 0x55;
+    assert_kind(
+        f("c.vtet", &bad),
+        |k| matches!(k, ErrorKind::Invalid(m) if m.contains("checksum")),
+    );
+    let mut v2 = good.clone();
+    v2[8] = 2;
+    assert_kind(f("v.vtet", &v2), is_unsupported);
+    assert_kind(
+        f("g.vtet", b"this is not a tet mesh at all, just garbage"),
+        is_header,
+    );
+    assert_kind(f("s.vtet", b"VOLU"), is_header);
+}
