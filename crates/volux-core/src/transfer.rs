@@ -218,8 +218,14 @@ impl TransferFunction {
     /// Linear RGB at value `s` (a resolved TF is expected).
     pub fn color_at(&self, s: f64) -> [f64; 3] {
         let pts = &self.color;
-        let ch = |c: usize| lerp_points(&pts.iter().map(|p| [p[0], p[c]]).collect::<Vec<_>>(), s);
-        [ch(1), ch(2), ch(3)]
+        let i = pts.partition_point(|p| p[0] <= s);
+        let (a, b) = match i {
+            0 => (pts[0], pts[0]),
+            i if i == pts.len() => (pts[i - 1], pts[i - 1]),
+            i => (pts[i - 1], pts[i]),
+        };
+        let t = if b[0] > a[0] { (s - a[0]) / (b[0] - a[0]) } else { 0.0 };
+        [1, 2, 3].map(|c| a[c] + (b[c] - a[c]) * t)
     }
 
     /// Extinction per world unit at value `s`, opacity scale applied (a resolved TF is expected).

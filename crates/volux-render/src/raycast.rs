@@ -1,9 +1,10 @@
 //! Image-order traversal of regular grids: one ray per pixel, exact ray/box entry and exit,
 //! front-to-back compositing with early ray termination, parallel over image rows.
 //!
-//! Integration here is the Riemann sum of [`crate::integrate`] with trilinear reconstruction
-//! ([`crate::sampling`]); the step is given in voxel units (the smallest spacing), as in the
-//! seed `001_...txt`. Output does not depend on the number of threads: every pixel is computed
+//! Each ray is handed to one of the [`Integrator`]s of [`crate::integrate`] as a
+//! [`RayMedium`] (trilinear reconstruction of [`crate::sampling`], classification of
+//! [`crate::classify`]); steps are given in voxel units (the smallest spacing), as in the seed
+//! `001_...txt`. Output does not depend on the number of threads: every pixel is computed
 //! independently.
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
@@ -13,8 +14,11 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
-use crate::classify::ClassifyTable;
-use crate::integrate::{riemann_step, RayAccumulator};
+use crate::classify::{Classified, ClassifyTable};
+use crate::integrate::{
+    adaptive_simpson, adaptive_simpson_pieces, hides_breakpoints, riemann_step, simpson, trapezoid,
+    AdaptiveParams, Integrator, Medium, RayAccumulator, RayIntegral, RayMedium,
+};
 use crate::sampling::{Field, Trilinear};
 use crate::RenderError;
 
@@ -32,8 +36,8 @@ pub struct RenderOptions {
     pub camera: Camera,
     /// The transfer function (resolved against the data range by the renderer).
     pub tf: TransferFunction,
-    /// Sampling step in voxel units (of the smallest spacing).
-    pub step: f64,
+    /// How rays are integrated (steps in voxel units of the smallest spacing).
+    pub integrator: Integrator,
     /// Stop a ray once its opacity reaches this value; `None` integrates to the end
     /// (reference mode).
     pub early_termination: Option<f32>,
@@ -44,14 +48,14 @@ pub struct RenderOptions {
 }
 
 impl RenderOptions {
-    /// Defaults: 512 x 512, step 0.5 voxel, early termination at 0.99.
+    /// Defaults: 512 x 512, Riemann with step 0.5 voxel, early termination at 0.99.
     pub fn new(camera: Camera, tf: TransferFunction) -> Self {
         Self {
             width: 512,
             height: 512,
             camera,
             tf,
-            step: 0.5,
+            integrator: Integrator::Riemann { step: 0.5 },
             early_termination: Some(0.99),
             cancel: None,
             progress: None,
@@ -65,12 +69,9 @@ impl RenderOptions {
                 self.width, self.height
             )));
         }
-        if !(self.step.is_finite() && self.step > 1e-4) {
-            return Err(RenderError::InvalidOptions(format!(
-                "step {} must be > 1e-4",
-                self.step
-            )));
-        }
+        self.integrator
+            .validate()
+            .map_err(RenderError::InvalidOptions)?;
         self.tf.validate()?;
         self.camera.validate()?;
         Ok(())
@@ -86,6 +87,20 @@ pub struct RenderStats {
     pub samples: u64,
     /// Wall time in seconds.
     pub seconds: f64,
+    /// Rays whose adaptive integration accepted a step at `hmin` above its tolerance.
+    pub rays_over_tolerance: u64,
+}
+
+/// A rendered image with its figures and per-pixel estimated integration error.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image.
+    pub image: Image,
+    /// Figures of the render.
+    pub stats: RenderStats,
+    /// Estimated absolute error per pixel (largest channel; 0 where the integrator does not
+    /// estimate it), row-major.
+    pub error_map: Vec<f32>,
 }
 
 /// Placement of a field in the world: sample (i, j, k) at `origin + spacing * (i, j, k)`.
@@ -117,8 +132,8 @@ impl Placement {
     }
 }
 
-/// Renders a grid with the Riemann ray caster.
-pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<(Image, RenderStats), RenderError> {
+/// Renders a grid with the integrator of `opts`.
+pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<Rendered, RenderError> {
     let place = Placement::of(grid);
     volux_core::with_samples!(grid.samples(), |s| render_field(
         &Trilinear::new(s, grid.dims()),
@@ -128,56 +143,68 @@ pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<(Image, RenderSt
     ))
 }
 
+/// One pixel's result.
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelOut {
+    rgba: [f32; 4],
+    samples: u64,
+    error: f32,
+    missed: bool,
+    hit: bool,
+}
+
 /// Renders any [`Field`] placed in the world, classifying with `opts.tf` over `range`.
 pub fn render_field<F: Field>(
     field: &F,
     place: Placement,
     range: [f64; 2],
     opts: &RenderOptions,
-) -> Result<(Image, RenderStats), RenderError> {
+) -> Result<Rendered, RenderError> {
     opts.validate()?;
     let start = Instant::now();
-    let table = ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE);
+    let ctx = RayContext {
+        field,
+        place,
+        table: ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE),
+        tf: opts.tf.resolved(range),
+        breakpoints: opts.tf.resolved(range).breakpoints(),
+        opts,
+    };
     let (w, h) = (opts.width, opts.height);
-    let mut pixels = vec![[0.0f32; 4]; w * h];
-    let (rays, samples) = (AtomicU64::new(0), AtomicU64::new(0));
+    let mut out = vec![PixelOut::default(); w * h];
     let rows_done = AtomicU64::new(0);
     let cancelled = || {
         opts.cancel
             .as_ref()
             .is_some_and(|c| c.load(Ordering::Relaxed))
     };
-    pixels
-        .par_chunks_mut(w)
-        .enumerate()
-        .try_for_each(|(y, row)| {
-            if cancelled() {
-                return Err(RenderError::Cancelled);
-            }
-            let (mut r, mut s) = (0, 0);
-            for (x, px) in row.iter_mut().enumerate() {
-                let ray = opts.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                if let Some(out) = cast_ray(field, &place, &table, ray.origin, ray.dir, opts) {
-                    *px = out.0.rgba;
-                    r += 1;
-                    s += out.1;
-                }
-            }
-            rays.fetch_add(r, Ordering::Relaxed);
-            samples.fetch_add(s, Ordering::Relaxed);
-            let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
-            if let Some(p) = &opts.progress {
-                p(done as usize, h);
-            }
-            Ok(())
-        })?;
-    let image = Image::from_pixels(w, h, pixels)?;
+    out.par_chunks_mut(w).enumerate().try_for_each(|(y, row)| {
+        if cancelled() {
+            return Err(RenderError::Cancelled);
+        }
+        for (x, px) in row.iter_mut().enumerate() {
+            let ray = opts.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+            *px = ctx.cast(ray.origin, ray.dir);
+        }
+        let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(p) = &opts.progress {
+            p(done as usize, h);
+        }
+        Ok(())
+    })?;
     let stats = RenderStats {
-        rays: rays.into_inner(),
-        samples: samples.into_inner(),
+        rays: out.iter().filter(|p| p.hit).count() as u64,
+        samples: out.iter().map(|p| p.samples).sum(),
         seconds: start.elapsed().as_secs_f64(),
+        rays_over_tolerance: out.iter().filter(|p| p.missed).count() as u64,
     };
-    Ok((image, stats))
+    let error_map = out.iter().map(|p| p.error).collect();
+    let image = Image::from_pixels(w, h, out.iter().map(|p| p.rgba).collect())?;
+    Ok(Rendered {
+        image,
+        stats,
+        error_map,
+    })
 }
 
 /// Entry and exit distances of a ray through the box [lo, hi] (slab test), if it hits.
@@ -193,37 +220,178 @@ pub fn ray_box(origin: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> Option<(f64, 
     (tf > tn).then_some((tn, tf))
 }
 
-/// Integrates one ray; returns the accumulated colour and the number of samples.
-fn cast_ray<F: Field>(
-    field: &F,
-    place: &Placement,
-    table: &ClassifyTable,
-    origin: DVec3,
-    dir: DVec3,
-    opts: &RenderOptions,
-) -> Option<(RayAccumulator, u64)> {
-    let (t0, t1) = ray_box(origin, dir, place.origin, place.origin + place.extent())?;
-    let h_world = opts.step * place.spacing.min_element();
-    // Voxel-space ray: p_vox(t) = o_v + t * d_v.
-    let o_v = ((origin - place.origin) / place.spacing).as_vec3();
-    let d_v = (dir / place.spacing).as_vec3();
-    let stop = opts.early_termination.unwrap_or(2.0);
-    let mut acc = RayAccumulator::default();
-    let mut n = 0u64;
-    let mut t = t0;
-    while t < t1 {
-        let len = h_world.min(t1 - t);
-        let tm = (t + 0.5 * len) as f32;
-        if let Some(v) = field.sample(o_v + d_v * tm) {
-            riemann_step(&mut acc, table.lookup(v), len as f32);
+/// Everything a ray needs, shared by all rays of a render.
+struct RayContext<'a, F> {
+    field: &'a F,
+    place: Placement,
+    table: ClassifyTable,
+    tf: TransferFunction,
+    breakpoints: Vec<f64>,
+    opts: &'a RenderOptions,
+}
+
+/// The classified medium along one ray through a grid, in voxel space.
+struct GridRay<'a, F> {
+    field: &'a F,
+    o_v: DVec3,
+    d_v: DVec3,
+    table: &'a ClassifyTable,
+    /// Classify exactly with this TF instead of the table (the reference path).
+    exact: Option<&'a TransferFunction>,
+    breakpoints: &'a [f64],
+}
+
+impl<F: Field> RayMedium for GridRay<'_, F> {
+    fn at(&mut self, t: f64) -> Medium {
+        let Some(v) = self.field.sample64(self.o_v + self.d_v * t) else {
+            return Medium::default();
+        };
+        match self.exact {
+            Some(tf) => Medium {
+                rgb: tf.color_at(v),
+                tau: tf.tau_per_world(v),
+                value: v,
+            },
+            None => {
+                let c = self.table.lookup(v as f32);
+                Medium {
+                    rgb: c.rgb.map(f64::from),
+                    tau: c.tau as f64,
+                    value: v,
+                }
+            }
         }
-        n += 1;
-        if acc.alpha() >= stop {
-            break;
-        }
-        t += h_world;
     }
-    Some((acc, n))
+
+    fn hides_features(&self, a: f64, b: f64) -> bool {
+        hides_breakpoints(self.breakpoints, a, b)
+    }
+}
+
+impl<F: Field> RayContext<'_, F> {
+    fn cast(&self, origin: DVec3, dir: DVec3) -> PixelOut {
+        let place = &self.place;
+        let Some((t0, t1)) = ray_box(origin, dir, place.origin, place.origin + place.extent())
+        else {
+            return PixelOut::default();
+        };
+        let unit = place.spacing.min_element();
+        let o_v = (origin - place.origin) / place.spacing;
+        let d_v = dir / place.spacing;
+        let integral = match self.opts.integrator {
+            Integrator::Riemann { step } => return self.riemann(o_v, d_v, t0, t1, step * unit),
+            Integrator::Trapezoid { step } => {
+                trapezoid(&mut self.medium(o_v, d_v), t0, t1, step * unit)
+            }
+            Integrator::Simpson { step } => {
+                simpson(&mut self.medium(o_v, d_v), t0, t1, step * unit)
+            }
+            Integrator::AdaptiveSimpson(p) => {
+                let p = AdaptiveParams {
+                    h0: p.h0 * unit,
+                    hmin: p.hmin * unit,
+                    hmax: p.hmax * unit,
+                    early_termination: self.opts.early_termination.map(f64::from),
+                    ..p
+                };
+                adaptive_simpson(&mut self.medium(o_v, d_v), t0, t1, &p)
+            }
+            Integrator::Reference => self.reference(o_v, d_v, t0, t1, unit),
+        };
+        pixel(&integral)
+    }
+
+    /// The table-classified medium along a ray (voxel-space origin and direction).
+    fn medium(&self, o_v: DVec3, d_v: DVec3) -> GridRay<'_, F> {
+        GridRay {
+            field: self.field,
+            o_v,
+            d_v,
+            table: &self.table,
+            exact: None,
+            breakpoints: &self.breakpoints,
+        }
+    }
+
+    /// The f64 ground truth: exact classification, pieces split at voxel boundaries.
+    fn reference(&self, o_v: DVec3, d_v: DVec3, t0: f64, t1: f64, unit: f64) -> RayIntegral {
+        let breaks = voxel_crossings(o_v, d_v, t0, t1);
+        let p = Integrator::REFERENCE;
+        let p = AdaptiveParams {
+            h0: p.h0 * unit,
+            hmin: p.hmin * unit,
+            hmax: p.hmax * unit,
+            ..p
+        };
+        let mut medium = GridRay {
+            exact: Some(&self.tf),
+            ..self.medium(o_v, d_v)
+        };
+        adaptive_simpson_pieces(&mut medium, &breaks, &p)
+    }
+
+    /// The fast f32 path: left Riemann sum (eq. 2.14) with early ray termination.
+    fn riemann(&self, o_v: DVec3, d_v: DVec3, t0: f64, t1: f64, h_world: f64) -> PixelOut {
+        let (o_v, d_v) = (o_v.as_vec3(), d_v.as_vec3());
+        let stop = self.opts.early_termination.unwrap_or(2.0);
+        let mut acc = RayAccumulator::default();
+        let mut n = 0u64;
+        let mut i = 0u32;
+        loop {
+            let t = t0 + h_world * i as f64;
+            if t >= t1 {
+                break;
+            }
+            let len = h_world.min(t1 - t);
+            if let Some(v) = self.field.sample(o_v + d_v * t as f32) {
+                let c: Classified = self.table.lookup(v);
+                riemann_step(&mut acc, c, len as f32);
+            }
+            n += 1;
+            i += 1;
+            if acc.alpha() >= stop {
+                break;
+            }
+        }
+        PixelOut {
+            rgba: acc.rgba,
+            samples: n,
+            error: 0.0,
+            missed: false,
+            hit: true,
+        }
+    }
+}
+
+fn pixel(r: &RayIntegral) -> PixelOut {
+    PixelOut {
+        rgba: r.rgba.map(|v| v as f32),
+        samples: r.samples,
+        error: r.error as f32,
+        missed: r.tolerance_missed,
+        hit: true,
+    }
+}
+
+/// Distances in `[t0, t1]` where the voxel-space ray `o_v + t d_v` crosses an integer plane
+/// (a voxel boundary), with `t0` and `t1`, sorted.
+pub fn voxel_crossings(o_v: DVec3, d_v: DVec3, t0: f64, t1: f64) -> Vec<f64> {
+    let mut ts = vec![t0, t1];
+    for a in 0..3 {
+        if d_v[a].abs() < 1e-300 {
+            continue;
+        }
+        let (x0, x1) = (o_v[a] + d_v[a] * t0, o_v[a] + d_v[a] * t1);
+        let (lo, hi) = (x0.min(x1).ceil() as i64, x0.max(x1).floor() as i64);
+        ts.extend(
+            (lo..=hi)
+                .map(|k| (k as f64 - o_v[a]) / d_v[a])
+                .filter(|t| *t > t0 && *t < t1),
+        );
+    }
+    ts.sort_by(f64::total_cmp);
+    ts.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    ts
 }
 
 /// The voxel-space position of a world point (for tests and tools).
@@ -263,8 +431,11 @@ mod tests {
         let cam = spec.resolve(&g.bounds()).unwrap();
         for step in [0.1, 0.5, 1.3] {
             let mut o = RenderOptions::new(cam, tf.clone());
-            (o.width, o.height, o.step, o.early_termination) = (16, 16, step, None);
-            let (img, stats) = render_grid(&g, &o).unwrap();
+            (o.width, o.height, o.early_termination) = (16, 16, None);
+            o.integrator = Integrator::Riemann { step };
+            let Rendered {
+                image: img, stats, ..
+            } = render_grid(&g, &o).unwrap();
             let exact = 1.0 - (-0.2f32 * 7.0).exp();
             let p = img.get(8, 8);
             assert!(
@@ -291,8 +462,8 @@ mod tests {
             .num_threads(1)
             .build()
             .unwrap();
-        let a = one.install(|| render_grid(&g, &o)).unwrap().0;
-        let b = render_grid(&g, &o).unwrap().0;
+        let a = one.install(|| render_grid(&g, &o)).unwrap().image;
+        let b = render_grid(&g, &o).unwrap().image;
         assert_eq!(a, b);
         assert!(a.coverage(0.01) > 0.2);
     }
@@ -313,5 +484,101 @@ mod tests {
         let (a, b) = ray_box(DVec3::new(0.5, 0.5, -1.0), DVec3::Z, lo, hi).unwrap();
         assert!((a - 1.0).abs() < 1e-12 && (b - 2.0).abs() < 1e-12);
         assert!(ray_box(DVec3::new(2.0, 0.5, -1.0), DVec3::Z, lo, hi).is_none());
+    }
+}
+
+/// Verification of the integrators on whole images against the f64 reference
+/// (`001_...txt` sec. 5): adaptive Simpson meets its tolerance on (almost) every ray.
+#[cfg(test)]
+mod accuracy_tests {
+    use super::*;
+    use crate::integrate::StepControl;
+    use volux_core::{synth, CameraSpec};
+
+    fn tf() -> TransferFunction {
+        TransferFunction::from_json(
+            r#"{"space": "normalized",
+                "color": [[0, 0.1, 0.2, 0.9], [0.5, 0.9, 0.5, 0.1], [1, 1, 1, 1]],
+                "extinction": [[0, 0], [0.2, 0], [0.3, 0.08], [0.45, 0.0], [0.5, 0.3], [0.55, 0.0], [1, 0.1]]}"#,
+        )
+        .unwrap()
+    }
+
+    fn render(g: &Grid, integrator: Integrator) -> Rendered {
+        let spec = CameraSpec {
+            azimuth: Some(25.0),
+            elevation: Some(20.0),
+            ..Default::default()
+        };
+        let mut o = RenderOptions::new(spec.resolve(&g.bounds()).unwrap(), tf());
+        (o.width, o.height, o.early_termination, o.integrator) = (40, 40, None, integrator);
+        render_grid(g, &o).unwrap()
+    }
+
+    fn fraction_over(a: &Image, b: &Image, eps: f32) -> f64 {
+        let over = a
+            .pixels()
+            .iter()
+            .zip(b.pixels())
+            .filter(|(p, q)| (0..4).any(|c| (p[c] - q[c]).abs() > eps))
+            .count();
+        over as f64 / a.pixels().len() as f64
+    }
+
+    #[test]
+    fn adaptive_meets_tolerance_against_reference() {
+        for g in [
+            synth::marschner_lobb(33).unwrap(),
+            synth::shepp_logan(33).unwrap(),
+        ] {
+            let reference = render(&g, Integrator::Reference);
+            let cover = reference.image.coverage(0.02);
+            assert!(
+                cover > 0.1,
+                "the test image shows the data: coverage {cover}"
+            );
+            for eps in [0.01, 0.001] {
+                for control in [StepControl::Coupled, StepControl::Decoupled] {
+                    let p = AdaptiveParams {
+                        tol: eps,
+                        h0: 0.5,
+                        hmin: 0.01,
+                        hmax: 0.5,
+                        control,
+                        early_termination: None,
+                    };
+                    let r = render(&g, Integrator::AdaptiveSimpson(p));
+                    let over = fraction_over(&r.image, &reference.image, eps as f32);
+                    assert!(
+                        over <= 0.001,
+                        "{control:?} eps {eps}: {:.3} % of rays over",
+                        over * 100.0
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fixed_rules_converge_to_the_reference() {
+        let g = synth::marschner_lobb(33).unwrap();
+        let reference = render(&g, Integrator::Reference).image;
+        let err = |i: Integrator| {
+            let img = render(&g, i).image;
+            img.pixels()
+                .iter()
+                .zip(reference.pixels())
+                .map(|(p, q)| (0..4).map(|c| (p[c] - q[c]).abs()).fold(0.0f32, f32::max))
+                .fold(0.0, f32::max)
+        };
+        for rule in [
+            |s| Integrator::Riemann { step: s },
+            |s| Integrator::Trapezoid { step: s },
+            |s| Integrator::Simpson { step: s },
+        ] {
+            let (coarse, fine) = (err(rule(0.8)), err(rule(0.1)));
+            assert!(fine < coarse * 0.5, "{:?}: {coarse} -> {fine}", rule(0.1));
+        }
+        assert!(err(Integrator::Simpson { step: 0.1 }) < err(Integrator::Riemann { step: 0.1 }));
     }
 }

@@ -2,7 +2,7 @@
 //!
 //! The sampler reads `u8`/`u16`/`i16`/`f32` samples directly (no f32 copy of the volume) and
 //! works in voxel coordinates, where sample (i, j, k) sits at (i, j, k).
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use volux_core::grid::Scalar;
 
 /// A regular scalar field that can be sampled in voxel coordinates.
@@ -12,6 +12,10 @@ pub trait Field: Sync {
     /// Trilinear value at voxel coordinates `p` (each in `[0, dims - 1]`), or `None` where the
     /// field is undefined (e.g. outside a resampled mesh).
     fn sample(&self, p: Vec3) -> Option<f32>;
+    /// The same in f64 (the reference path); defaults to the f32 sample.
+    fn sample64(&self, p: DVec3) -> Option<f64> {
+        self.sample(p.as_vec3()).map(f64::from)
+    }
 }
 
 /// Trilinear sampling of a native-type slice of samples.
@@ -63,6 +67,35 @@ impl<T: Scalar> Field for Trilinear<'_, T> {
         let c0 = c00 + (c10 - c00) * fy;
         let c1 = c01 + (c11 - c01) * fy;
         let r = c0 + (c1 - c0) * fz;
+        r.is_finite().then_some(r)
+    }
+
+    fn sample64(&self, p: DVec3) -> Option<f64> {
+        let [nx, ny, nz] = self.dims;
+        let axis64 = |x: f64, n: usize| -> (usize, f64) {
+            if n < 2 {
+                return (0, 0.0);
+            }
+            let x = x.clamp(0.0, (n - 1) as f64);
+            let i = (x as usize).min(n - 2);
+            (i, x - i as f64)
+        };
+        let (i, fx) = axis64(p.x, nx);
+        let (j, fy) = axis64(p.y, ny);
+        let (k, fz) = axis64(p.z, nz);
+        let dx = usize::from(nx > 1);
+        let sy = if ny > 1 { nx } else { 0 };
+        let sz = if nz > 1 { nx * ny } else { 0 };
+        let b = i + nx * (j + ny * k);
+        let v = |o: usize| self.values[b + o].to_f32() as f64;
+        let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
+        let c0 = lerp(lerp(v(0), v(dx), fx), lerp(v(sy), v(sy + dx), fx), fy);
+        let c1 = lerp(
+            lerp(v(sz), v(sz + dx), fx),
+            lerp(v(sz + sy), v(sz + sy + dx), fx),
+            fy,
+        );
+        let r = lerp(c0, c1, fz);
         r.is_finite().then_some(r)
     }
 }

@@ -18,8 +18,91 @@ use crate::classify::Classified;
 pub mod adaptive;
 pub mod fixed;
 
-pub use adaptive::{adaptive_simpson, AdaptiveParams, StepControl};
+pub use adaptive::{adaptive_simpson, adaptive_simpson_pieces, AdaptiveParams, StepControl};
 pub use fixed::{simpson, trapezoid};
+
+/// How rays are integrated; lengths are in voxel units (of the smallest grid spacing), as in
+/// the seed, and converted to world units by the traversal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Integrator {
+    /// Left Riemann sum with step-corrected opacity.
+    Riemann {
+        /// Step.
+        step: f64,
+    },
+    /// Fixed-step trapezoid rule.
+    Trapezoid {
+        /// Step.
+        step: f64,
+    },
+    /// Fixed-step Simpson rule.
+    Simpson {
+        /// Step.
+        step: f64,
+    },
+    /// Iterative adaptive Simpson with error control.
+    AdaptiveSimpson(AdaptiveParams),
+    /// The f64 ground truth: adaptive Simpson at a tolerance of 1e-7, exact classification,
+    /// f64 reconstruction, and steps that never straddle a voxel boundary (where the
+    /// trilinear field has a kink), so the result is accurate to about 1e-6.
+    Reference,
+}
+
+impl Integrator {
+    /// The adaptive parameters of the reference integrator (voxel units).
+    pub const REFERENCE: AdaptiveParams = AdaptiveParams {
+        tol: 1e-7,
+        h0: 0.25,
+        hmin: 1e-5,
+        hmax: 0.5,
+        control: StepControl::Coupled,
+        early_termination: None,
+    };
+
+    /// The CLI name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Integrator::Riemann { .. } => "riemann",
+            Integrator::Trapezoid { .. } => "trapezoid",
+            Integrator::Simpson { .. } => "simpson",
+            Integrator::AdaptiveSimpson(p) if p.control == StepControl::Coupled => {
+                "adaptive-coupled"
+            }
+            Integrator::AdaptiveSimpson(_) => "adaptive-decoupled",
+            Integrator::Reference => "reference",
+        }
+    }
+
+    /// Checks steps and tolerances.
+    pub fn validate(&self) -> Result<(), String> {
+        let pos = |name: &str, v: f64| {
+            if v.is_finite() && v >= 1e-6 {
+                Ok(())
+            } else {
+                Err(format!("{name} {v} must be >= 1e-6"))
+            }
+        };
+        match self {
+            Integrator::Riemann { step }
+            | Integrator::Trapezoid { step }
+            | Integrator::Simpson { step } => pos("step", *step),
+            Integrator::AdaptiveSimpson(p) => {
+                pos("h0", p.h0)?;
+                pos("hmin", p.hmin)?;
+                pos("hmax", p.hmax)?;
+                if !(p.tol.is_finite() && p.tol > 0.0) {
+                    return Err(format!("tolerance {} must be > 0", p.tol));
+                }
+                if p.hmin > p.hmax {
+                    return Err(format!("hmin {} must not exceed hmax {}", p.hmin, p.hmax));
+                }
+                Ok(())
+            }
+            Integrator::Reference => Ok(()),
+        }
+    }
+}
 
 /// Premultiplied RGBA accumulated front to back along a ray.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -62,6 +145,22 @@ pub fn riemann_step(acc: &mut RayAccumulator, c: Classified, h: f32) {
 pub trait RayMedium {
     /// Colour (linear RGB) and extinction per world unit at distance `t` along the ray.
     fn at(&mut self, t: f64) -> Medium;
+
+    /// Whether the classification may vary in a way samples at scalar values `a` and `b`
+    /// cannot see (e.g. a transfer-function peak lies strictly between them). Adaptive
+    /// integration refines such steps down to `hmin` instead of trusting its error estimate.
+    fn hides_features(&self, _a: f64, _b: f64) -> bool {
+        false
+    }
+}
+
+/// Whether two or more of the sorted `breakpoints` lie strictly between `a` and `b`: the
+/// piecewise-linear classification then has a peak or valley no sample shows.
+pub fn hides_breakpoints(breakpoints: &[f64], a: f64, b: f64) -> bool {
+    let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+    let first = breakpoints.partition_point(|&x| x <= lo);
+    let last = breakpoints.partition_point(|&x| x < hi);
+    last >= first + 2
 }
 
 /// Colour and extinction at one point of a ray, in f64 for the accurate integrators.
@@ -71,6 +170,8 @@ pub struct Medium {
     pub rgb: [f64; 3],
     /// Extinction per world unit.
     pub tau: f64,
+    /// The scalar value classified (for [`RayMedium::hides_features`]); 0 when unknown.
+    pub value: f64,
 }
 
 impl<F: FnMut(f64) -> Medium> RayMedium for F {

@@ -11,6 +11,7 @@ fn medium(t: f64) -> Medium {
     Medium {
         rgb: [1.0, t * t / (L * L), 0.5],
         tau: A * t,
+        value: t,
     }
 }
 
@@ -99,6 +100,7 @@ fn adaptive_simpson_resolves_a_spike() {
     let spike = |t: f64| Medium {
         rgb: [1.0, t / L, 0.2],
         tau: 20.0 * (-((t - 1.3) / 0.02).powi(2)).exp() + 0.1,
+        value: t,
     };
     let reference = simpson(&mut { spike }, 0.0, L, 1e-5);
     for control in [StepControl::Coupled, StepControl::Decoupled] {
@@ -157,4 +159,44 @@ fn constant_medium_is_exact_for_any_step() {
         assert!((acc.alpha() - exact).abs() < 1e-5, "n={n}");
         assert!((acc.rgba[1] - 0.5 * exact).abs() < 1e-5);
     }
+}
+
+#[test]
+fn hidden_breakpoints_are_detected() {
+    let bp = [0.45, 0.5, 0.55];
+    assert!(hides_breakpoints(&bp, 0.4, 0.6));
+    assert!(hides_breakpoints(&bp, 0.6, 0.4));
+    assert!(!hides_breakpoints(&bp, 0.4, 0.47));
+    assert!(!hides_breakpoints(&bp, 0.45, 0.5));
+    assert!(hides_breakpoints(&bp, 0.449, 0.501));
+}
+
+/// A medium whose extinction is a narrow TF peak that five samples can straddle: without the
+/// breakpoint check the estimate is blind to it; with it, the step refines and the peak counts.
+#[test]
+fn adaptive_refines_across_hidden_tf_peaks() {
+    struct Peak;
+    impl RayMedium for Peak {
+        fn at(&mut self, t: f64) -> Medium {
+            // value = t; extinction peaks (tent) between 0.49 and 0.51.
+            let tau = (1.0 - ((t - 0.5) / 0.01).abs()).max(0.0) * 50.0;
+            Medium {
+                rgb: [1.0; 3],
+                tau,
+                value: t,
+            }
+        }
+        fn hides_features(&self, a: f64, b: f64) -> bool {
+            hides_breakpoints(&[0.49, 0.5, 0.51], a, b)
+        }
+    }
+    let exact = 1.0 - (-0.5f64).exp(); // depth = 50 * 0.01 = 0.5
+    let mut p = params(1e-3, StepControl::Coupled);
+    (p.h0, p.hmax, p.hmin) = (0.25, 0.25, 1e-4);
+    let r = adaptive_simpson(&mut Peak, 0.0, 1.0, &p);
+    assert!(
+        (r.rgba[3] - exact).abs() < 1e-3,
+        "alpha {} vs {exact}",
+        r.rgba[3]
+    );
 }
