@@ -12,8 +12,10 @@
 //!   1999): every quadrilateral face is cut along the diagonal through its lowest global index,
 //!   so two cells sharing a face cut it the same way and the tet mesh conforms;
 //! * quadratic cells (24 tetra, 25 hexahedron, 26 wedge, 27 pyramid, 29 triquadratic
-//!   hexahedron) keep their corner nodes (noted); the mid-edge nodes stay in the position list
-//!   and are reported by [`TetMesh`] as unused vertices;
+//!   hexahedron) keep their corner nodes (noted);
+//! * vertices that no tet uses (the mid-edge nodes of quadratic cells, nodes of 2D cells) are
+//!   removed and the tets renumbered (noted), so they neither cost memory nor widen the scalar
+//!   range with the 0 that cell-to-point averaging leaves on them;
 //! * 0D, 1D and 2D cells (and unknown types) are skipped and counted in a note.
 //!
 //! No crate is used: VTK cell handling is small and specific to this project.
@@ -512,7 +514,7 @@ pub fn to_tets(cells: &CellSet, n_points: usize) -> std::result::Result<Split, S
     }
     if quadratic > 0 {
         out.notes.push(format!(
-            "{quadratic} quadratic cells: only their corner nodes are used (mid-edge nodes kept in the vertex list, unused)"
+            "{quadratic} quadratic cells: only their corner nodes are used (mid-edge nodes unused)"
         ));
     }
     if split_cells > 0 {
@@ -600,12 +602,46 @@ pub fn assemble(
         )));
     }
     let (scalars, note) = scalars_for(cells, n, attrs, want).map_err(invalid)?;
-    let mut mesh =
-        TetMesh::new(positions, scalars, split.tets).map_err(|e| ReadError::new(path, e))?;
-    for s in split.notes.into_iter().chain(note) {
+    let mut tets = split.tets;
+    let (positions, scalars, removed) = compact(positions, scalars, &mut tets);
+    let mut mesh = TetMesh::new(positions, scalars, tets).map_err(|e| ReadError::new(path, e))?;
+    let removed = (removed > 0).then(|| format!("{removed} vertices used by no tet removed"));
+    for s in split.notes.into_iter().chain(note).chain(removed) {
         mesh = mesh.with_note(s);
     }
     Ok(mesh)
+}
+
+/// Drops the vertices no tet uses and renumbers the tets; returns how many were dropped.
+fn compact(
+    positions: Vec<Vec3>,
+    scalars: Vec<f32>,
+    tets: &mut [[u32; 4]],
+) -> (Vec<Vec3>, Vec<f32>, usize) {
+    let mut used = vec![false; positions.len()];
+    for t in tets.iter() {
+        for &v in t {
+            if let Some(u) = used.get_mut(v as usize) {
+                *u = true;
+            }
+        }
+    }
+    let kept = used.iter().filter(|&&u| u).count();
+    if kept == positions.len() {
+        return (positions, scalars, 0);
+    }
+    let mut new_id = vec![u32::MAX; positions.len()];
+    let (mut p, mut s) = (Vec::with_capacity(kept), Vec::with_capacity(kept));
+    for (i, _) in used.iter().enumerate().filter(|(_, &u)| u) {
+        new_id[i] = p.len() as u32;
+        p.push(positions[i]);
+        s.push(scalars.get(i).copied().unwrap_or(0.0));
+    }
+    for t in tets.iter_mut() {
+        *t = t.map(|v| new_id.get(v as usize).copied().unwrap_or(v));
+    }
+    let removed = positions.len() - kept;
+    (p, s, removed)
 }
 
 /// One scalar per point from the chosen array, and a note on how it was obtained.

@@ -1,0 +1,246 @@
+//! `<DataArray>` payloads: `ascii`, `binary` (base64 inline) and `appended` (raw or base64),
+//! each optionally split into zlib blocks by `vtkZLibDataCompressor`.
+//!
+//! Binary payloads start with a size header of `header_type` words (UInt32 or UInt64, in the
+//! file's byte order): uncompressed, one word giving the byte count; compressed, the block
+//! count, the block size, the size of the last block (0 = full) and each block's compressed
+//! size. Base64 writers encode that header either together with the data or as its own base64
+//! stream; both are accepted inline, and appended base64 is read as two streams.
+use std::io::Read;
+
+use base64::engine::general_purpose::{GeneralPurpose, GeneralPurposeConfig};
+use base64::engine::DecodePaddingMode;
+use base64::Engine;
+use flate2::read::ZlibDecoder;
+
+use super::tree::Elem;
+use crate::cells::{NumType, Values};
+
+/// Lenient base64 (padding optional, trailing bits allowed).
+const B64: GeneralPurpose = GeneralPurpose::new(
+    &base64::alphabet::STANDARD,
+    GeneralPurposeConfig::new()
+        .with_decode_padding_mode(DecodePaddingMode::Indifferent)
+        .with_decode_allow_trailing_bits(true),
+);
+
+type R<T> = Result<T, String>;
+
+/// How the file encodes binary payloads.
+#[derive(Clone, Copy, Debug)]
+pub struct Encoding<'a> {
+    /// Byte order of values and header words.
+    pub little: bool,
+    /// Size of the header words (4 or 8).
+    pub word: usize,
+    /// Whether payloads are zlib-compressed.
+    pub compressed: bool,
+    /// The bytes after `_` in `<AppendedData>`, and whether they are raw (else base64).
+    pub appended: Option<(&'a [u8], bool)>,
+}
+
+impl Encoding<'_> {
+    fn word_at(&self, b: &[u8], i: usize) -> R<u64> {
+        let s = i
+            .checked_mul(self.word)
+            .and_then(|a| b.get(a..a + self.word))
+            .ok_or("the binary size header is cut short")?;
+        let mut w = [0u8; 8];
+        if self.little {
+            w[..self.word].copy_from_slice(s);
+            Ok(u64::from_le_bytes(w))
+        } else {
+            w[8 - self.word..].copy_from_slice(s);
+            Ok(u64::from_be_bytes(w))
+        }
+    }
+
+    /// Header length in bytes for the payload starting at `b` (needs the block count).
+    fn header_len(&self, b: &[u8]) -> R<usize> {
+        if !self.compressed {
+            return Ok(self.word);
+        }
+        let nb = self.word_at(b, 0)?;
+        (nb as usize)
+            .checked_add(3)
+            .and_then(|n| n.checked_mul(self.word))
+            .filter(|_| nb < u32::MAX as u64)
+            .ok_or_else(|| format!("absurd block count {nb}"))
+    }
+
+    /// Bytes of data that follow a header of `header_len(b)` bytes at `b`.
+    fn data_len(&self, b: &[u8]) -> R<u64> {
+        if !self.compressed {
+            return self.word_at(b, 0);
+        }
+        let nb = self.word_at(b, 0)? as usize;
+        (0..nb).try_fold(0u64, |acc, i| {
+            Ok(acc.saturating_add(self.word_at(b, 3 + i)?))
+        })
+    }
+
+    /// The payload of a raw byte stream that starts with the size header.
+    fn payload(&self, b: &[u8]) -> R<Vec<u8>> {
+        let h = self.header_len(b)?;
+        let n = self.data_len(b)?;
+        let data = b.get(h..).filter(|d| d.len() as u64 >= n).ok_or_else(|| {
+            format!(
+                "truncated: the size header announces {n} bytes, {} are present",
+                b.len().saturating_sub(h)
+            )
+        })?;
+        if !self.compressed {
+            return Ok(data[..n as usize].to_vec());
+        }
+        self.inflate(b, data)
+    }
+
+    /// Decompresses the zlib blocks described by the header at `b`.
+    fn inflate(&self, b: &[u8], mut data: &[u8]) -> R<Vec<u8>> {
+        let nb = self.word_at(b, 0)? as usize;
+        let block = self.word_at(b, 1)?;
+        let last = self.word_at(b, 2)?;
+        let total = match nb {
+            0 => 0,
+            _ => (nb as u64 - 1)
+                .saturating_mul(block)
+                .saturating_add(if last == 0 { block } else { last }),
+        };
+        volux_core::limits::check_alloc("decompressed array", total, 1)
+            .map_err(|e| e.to_string())?;
+        let mut out = Vec::with_capacity(total.min(64 << 20) as usize);
+        for i in 0..nb {
+            let c = self.word_at(b, 3 + i)? as usize;
+            let want = if i + 1 == nb && last != 0 {
+                last
+            } else {
+                block
+            };
+            let (chunk, rest) = data.split_at(c.min(data.len()));
+            data = rest;
+            let got = ZlibDecoder::new(chunk)
+                .take(want)
+                .read_to_end(&mut out)
+                .map_err(|e| format!("zlib block {i}: {e}"))?;
+            if got as u64 != want {
+                return Err(format!(
+                    "zlib block {i} holds {got} bytes, the header announces {want}"
+                ));
+            }
+        }
+        Ok(out)
+    }
+}
+
+fn b64(chars: &[u8]) -> R<Vec<u8>> {
+    B64.decode(chars).map_err(|e| format!("bad base64: {e}"))
+}
+
+/// Base64 characters needed for `n` bytes.
+fn b64_len(n: usize) -> usize {
+    n.div_ceil(3).saturating_mul(4)
+}
+
+impl Encoding<'_> {
+    /// Decodes a header encoded as its own base64 stream followed by the data stream, reading
+    /// at most the data the header announces; returns header + data bytes.
+    fn split_streams(&self, chars: &[u8]) -> R<Vec<u8>> {
+        let prefix = chars
+            .get(..b64_len(self.word))
+            .ok_or("base64 data too short")?;
+        let h = self.header_len(&b64(prefix)?)?;
+        let hc = chars.get(..b64_len(h)).ok_or("base64 header cut short")?;
+        let mut bytes = b64(hc)?;
+        bytes.truncate(h);
+        let dl = usize::try_from(self.data_len(&bytes)?).map_err(|e| e.to_string())?;
+        let rest = &chars[hc.len()..];
+        let dc = rest.get(..b64_len(dl).min(rest.len())).unwrap_or(&[]);
+        bytes.extend(b64(dc)?);
+        Ok(bytes)
+    }
+
+    /// The payload of inline base64 text (whitespace removed).
+    fn inline(&self, chars: &[u8]) -> R<Vec<u8>> {
+        let single = || b64(chars).and_then(|b| self.payload(&b));
+        let split = || self.split_streams(chars).and_then(|b| self.payload(&b));
+        if self.compressed {
+            split().or_else(|e| single().map_err(|_| e))
+        } else {
+            single().or_else(|e| split().map_err(|_| e))
+        }
+    }
+
+    /// The payload at `offset` in the appended section.
+    fn appended(&self, offset: usize) -> R<Vec<u8>> {
+        let (bytes, raw) = self
+            .appended
+            .ok_or("format=\"appended\" but the file has no <AppendedData>")?;
+        let at = bytes
+            .get(offset..)
+            .ok_or_else(|| format!("offset {offset} is beyond the appended data"))?;
+        if raw {
+            self.payload(at)
+        } else {
+            self.split_streams(at).and_then(|b| self.payload(&b))
+        }
+    }
+}
+
+/// Decodes a `<DataArray>`: its values and number of components.
+pub fn decode(e: &Elem, enc: &Encoding) -> R<(Values, usize)> {
+    let name = e.attr("Name").unwrap_or("(unnamed)");
+    let t = e
+        .attr("type")
+        .ok_or_else(|| format!("array '{name}' has no type"))?;
+    let ty = NumType::from_xml(t).ok_or_else(|| format!("array '{name}': unknown type '{t}'"))?;
+    let ncomp = match e.attr("NumberOfComponents") {
+        Some(s) => s
+            .trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|&k| (1..=64).contains(&k))
+            .ok_or_else(|| format!("array '{name}': bad NumberOfComponents '{s}'"))?,
+        None => 1,
+    };
+    let format = e.attr("format").unwrap_or("ascii");
+    let bytes = match format {
+        "ascii" => return Ok((ascii(&e.text, ty, name)?, ncomp)),
+        "binary" => {
+            let chars: Vec<u8> = e
+                .text
+                .bytes()
+                .filter(|b| !b.is_ascii_whitespace())
+                .collect();
+            enc.inline(&chars)
+        }
+        "appended" => {
+            let off = e.attr("offset").unwrap_or("0").trim();
+            let off = off
+                .parse::<usize>()
+                .map_err(|_| format!("array '{name}': bad offset '{off}'"))?;
+            enc.appended(off)
+        }
+        f => return Err(format!("array '{name}': unknown format '{f}'")),
+    }
+    .map_err(|m| format!("array '{name}': {m}"))?;
+    if bytes.len() % ty.size() != 0 {
+        return Err(format!(
+            "array '{name}': {} bytes is not a whole number of {} values",
+            bytes.len(),
+            ty.name()
+        ));
+    }
+    Ok((Values::decode(&bytes, ty, enc.little), ncomp))
+}
+
+fn ascii(text: &str, ty: NumType, name: &str) -> R<Values> {
+    let v = text
+        .split_ascii_whitespace()
+        .enumerate()
+        .map(|(i, t)| {
+            t.parse::<f64>()
+                .map_err(|_| format!("array '{name}': value {i} '{t}' is not a number"))
+        })
+        .collect::<R<Vec<f64>>>()?;
+    Ok(Values::from_f64(v, ty))
+}
