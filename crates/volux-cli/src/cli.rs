@@ -1,0 +1,157 @@
+//! Command-line arguments.
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+/// Volux: accurate, fast volume visualization of regular grids and tetrahedral meshes.
+#[derive(Debug, Parser)]
+#[command(name = "volux", version, about)]
+pub struct Cli {
+    /// Silence progress bars.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Describe a file: format, dims or counts, spacing, type, value range, histogram, memory,
+    /// mesh validation.
+    Info {
+        /// The file (or DICOM folder).
+        file: PathBuf,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        load: LoadArgs,
+    },
+    /// Convert between formats, chosen by OUT's extension: `.raw` (raw + JSON sidecar) or
+    /// `.nrrd` for grids, `.vtet` (Volux binary tet mesh) for meshes and for grids split into
+    /// tets.
+    Convert {
+        /// Input file.
+        input: PathBuf,
+        /// Output file.
+        output: PathBuf,
+        #[command(flatten)]
+        load: LoadArgs,
+    },
+    /// Generate a synthetic dataset: marschner-lobb, shepp-logan, sphere (grids, SIZE^3),
+    /// tets-smooth (about SIZE tets), torus (SIZE segments around the ring).
+    Generate {
+        /// What to generate.
+        kind: String,
+        /// Grid size per axis, tet count, or ring segments.
+        #[arg(long, default_value_t = 128)]
+        size: usize,
+        /// Output file (`.raw`, `.nrrd` or `.vtet`).
+        #[arg(long, short)]
+        output: PathBuf,
+    },
+    /// Render a file to PNG.
+    Render(RenderArgs),
+    /// Render a built-in dataset to demo.png in the current folder.
+    Demo,
+}
+
+/// Options that some readers need.
+#[derive(Debug, Args, Clone, Default)]
+pub struct LoadArgs {
+    /// PLOT3D: q variable (density, momentum-x|y|z, energy, velocity-magnitude, or 0..4).
+    #[arg(long)]
+    pub q_variable: Option<String>,
+    /// PLOT3D: q file (default: the xyz name with xyz replaced by q).
+    #[arg(long)]
+    pub q_file: Option<PathBuf>,
+    /// DICOM: SeriesInstanceUID to load from a folder holding several series.
+    #[arg(long)]
+    pub series: Option<String>,
+    /// VTK: name of the scalar array to use.
+    #[arg(long)]
+    pub array: Option<String>,
+}
+
+/// `volux render` options.
+#[derive(Debug, Args, Clone)]
+pub struct RenderArgs {
+    /// The file (or DICOM folder) to render.
+    pub file: PathBuf,
+    /// Output PNG.
+    #[arg(long, short, default_value = "out.png")]
+    pub output: PathBuf,
+    /// Transfer function: a preset (auto, grayscale, ct-bone, ct-skin, ct-soft-tissue,
+    /// mr-default, viridis, inferno, cool-warm) or a JSON file.
+    #[arg(long, default_value = "auto")]
+    pub tf: String,
+    /// Multiply the extinction of the transfer function.
+    #[arg(long, default_value_t = 1.0)]
+    pub opacity_scale: f64,
+    /// Camera JSON file (look-at or orbit form); overrides the angle options.
+    #[arg(long)]
+    pub camera: Option<PathBuf>,
+    /// Orbit azimuth in degrees.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub azimuth: f64,
+    /// Orbit elevation in degrees.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub elevation: f64,
+    /// Zoom factor.
+    #[arg(long, default_value_t = 1.0)]
+    pub zoom: f64,
+    /// Use an orthographic projection.
+    #[arg(long)]
+    pub orthographic: bool,
+    /// Image size WxH.
+    #[arg(long, default_value = "512x512")]
+    pub size: String,
+    /// Integrator: riemann, trapezoid, simpson (fixed step), adaptive-simpson (error
+    /// control), reference (f64 ground truth, slow).
+    #[arg(long, default_value = "riemann")]
+    pub integrator: String,
+    /// Fixed-step integrators: step in voxel units.
+    #[arg(long, default_value_t = 0.5)]
+    pub step: f64,
+    /// adaptive-simpson: absolute error tolerance per channel and ray.
+    #[arg(long, default_value_t = 0.01)]
+    pub tol: f64,
+    /// adaptive-simpson: initial step (voxels).
+    #[arg(long, default_value_t = 0.5)]
+    pub h0: f64,
+    /// adaptive-simpson: smallest step (voxels), accepted whatever its error.
+    #[arg(long, default_value_t = 0.01)]
+    pub hmin: f64,
+    /// adaptive-simpson: largest step (voxels).
+    #[arg(long, default_value_t = 0.5)]
+    pub hmax: f64,
+    /// adaptive-simpson: control the colour integral's step apart from the opacity's.
+    #[arg(long)]
+    pub decoupled: bool,
+    /// Integrate every ray to its end (no early ray termination).
+    #[arg(long)]
+    pub no_early_termination: bool,
+    /// Write the per-pixel estimated integration error as a PNG (rays that missed the
+    /// tolerance in magenta).
+    #[arg(long)]
+    pub error_map: Option<PathBuf>,
+    /// Background colour as R,G,B in 0..1 (linear), or `none` for a transparent PNG.
+    #[arg(long, default_value = "0,0,0")]
+    pub background: String,
+    /// Write 16 bits per channel.
+    #[arg(long)]
+    pub sixteen_bit: bool,
+    /// Meshes: samples along the longest side of the resampling grid.
+    #[arg(long, default_value_t = 256)]
+    pub resample: usize,
+    /// Print render statistics.
+    #[arg(long)]
+    pub stats: bool,
+    /// With --stats: print them as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub load: LoadArgs,
+}

@@ -1,0 +1,44 @@
+//! The commands, one module each.
+mod convert;
+mod info;
+mod render;
+
+use std::path::Path;
+
+use volux_io::{Dataset, Format, LoadOptions};
+
+use crate::cli::{Cli, Command, LoadArgs};
+use crate::progress;
+
+/// An error of a command: one readable line.
+pub type CmdError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Runs the command.
+pub fn run(cli: Cli) -> Result<(), CmdError> {
+    let show = progress::enabled(cli.quiet);
+    match cli.command {
+        Command::Info { file, json, load } => info::run(&file, json, &load, show),
+        Command::Convert {
+            input,
+            output,
+            load,
+        } => convert::run(&input, &output, &load, show),
+        Command::Generate { kind, size, output } => convert::generate(&kind, size, &output),
+        Command::Render(args) => render::run(&args, show),
+        Command::Demo => render::demo(show),
+    }
+}
+
+/// Loads a file with a spinner.
+pub fn load(path: &Path, args: &LoadArgs, show: bool) -> Result<(Dataset, Format), CmdError> {
+    let pb = progress::spinner(show, format!("loading {}", path.display()));
+    let opts = LoadOptions {
+        q_variable: args.q_variable.clone(),
+        q_file: args.q_file.clone(),
+        series_uid: args.series.clone(),
+        array: args.array.clone(),
+    };
+    let out = volux_io::load(path, &opts);
+    pb.finish_and_clear();
+    Ok(out?)
+}
