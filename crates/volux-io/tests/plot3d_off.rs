@@ -410,3 +410,40 @@ fn plot3d_real_lox_post_matches_off() {
         "nasa_lox_post/lox_post_tets_velmag.off.gz",
     );
 }
+
+/// Deterministic byte mutations (flips, truncations) of valid files never panic.
+#[test]
+fn mutated_files_never_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut mutate = |seed: &[u8]| {
+        let mut b = seed.to_vec();
+        for _ in 0..1 + next() % 4 {
+            let i = (next() % b.len() as u64) as usize;
+            b[i] = match next() % 3 {
+                0 => next() as u8,
+                1 => b"0123456789 -.e\n#"[(next() % 16) as usize],
+                _ => b[i] ^ 0x80,
+            };
+        }
+        if next() % 4 == 0 {
+            b.truncate((next() % b.len() as u64) as usize);
+        }
+        b
+    };
+    for _ in 0..200 {
+        let p = write(dir.path(), "m.off", &mutate(CUBE_OFF.as_bytes()));
+        let _ = off::read(&p);
+    }
+    let (xyz, q) = small_plot3d(false, true, 4);
+    for _ in 0..200 {
+        let p = plot3d_files(dir.path(), (mutate(&xyz), mutate(&q)));
+        let _ = plot3d::read(&p, None, Some("velocity-magnitude"));
+    }
+}

@@ -576,7 +576,11 @@ fn xml_malformed_inputs_are_errors() {
     let e = xml_err(s.replace("1 4 0 2 0 1", "1 5 0 2 0 1").as_bytes(), "t.vti");
     assert!(e.to_string().contains("values"), "{e}");
     // Extents whose product overflows, zero or negative extents.
-    for ext in ["0 4000000000 0 4000000000 0 4000000000", "3 1 0 2 0 1"] {
+    for ext in [
+        "0 4000000000 0 4000000000 0 4000000000",
+        "-1e300 1e300 0 1 0 1",
+        "3 1 0 2 0 1",
+    ] {
         let e = xml_err(s.replacen("1 4 0 2 0 1", ext, 1).as_bytes(), "t.vti");
         assert!(matches!(e.kind, ErrorKind::Data(_)), "{ext}: {e}");
     }
@@ -652,4 +656,52 @@ fn vtu_real_kiefer_quadratic_tets() {
         "{:?}",
         m.range()
     );
+}
+
+/// Deterministic byte mutations (flips, truncations) of valid files never panic.
+#[test]
+fn mutated_files_never_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut seeds: Vec<(&str, Vec<u8>)> = vec![
+        ("m.vtk", SP_ASCII.as_bytes().to_vec()),
+        (
+            "m.vtk",
+            ug_ascii("CELL_DATA 5\nSCALARS c float\n1 2 3 4 5\n").into_bytes(),
+        ),
+        ("m.vtk", sp_binary("short", &[0, 1, 0, 2, 0, 3], 3)),
+    ];
+    for mut x in all_modes() {
+        seeds.push(("m.vtu", vtu(&mut x, true)));
+        let mut x = Xml::new(x.mode, x.zlib, x.word64, x.big);
+        seeds.push(("m.vti", vti(&mut x)));
+    }
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    for (name, seed) in &seeds {
+        for _ in 0..60 {
+            let mut b = seed.clone();
+            for _ in 0..1 + next() % 4 {
+                let i = (next() % b.len() as u64) as usize;
+                b[i] = match next() % 3 {
+                    0 => next() as u8,
+                    1 => b"0123456789 -.e\n"[(next() % 15) as usize],
+                    _ => b[i] ^ 0x80,
+                };
+            }
+            if next() % 4 == 0 {
+                b.truncate((next() % b.len() as u64) as usize);
+            }
+            let p = write(dir.path(), name, &b);
+            let _ = if name.ends_with(".vtk") {
+                vtk_legacy::read(&p, None)
+            } else {
+                vtk_xml::read(&p, None)
+            };
+        }
+    }
 }

@@ -172,7 +172,7 @@ fn image_data(path: &Path, file: &Elem, enc: &Encoding, want: Option<&str>) -> R
     if ext.iter().any(|e| e.fract() != 0.0) {
         return Err(err(ErrorKind::Header(format!("bad WholeExtent {ext:?}"))));
     }
-    let dims = [0, 1, 2].map(|k| (ext[2 * k + 1] - ext[2 * k]) as i64 + 1);
+    let dims = [0, 1, 2].map(|k| ((ext[2 * k + 1] - ext[2 * k]) as i64).saturating_add(1));
     let (dims, n) = volux_core::limits::checked_dims(dims).map_err(|e| err(e.into()))?;
     let spacing = numbers(ds.attr("Spacing"), [1.0; 3], "Spacing").map_err(err)?;
     let o = numbers(ds.attr("Origin"), [0.0; 3], "Origin").map_err(err)?;
