@@ -53,7 +53,7 @@ pub enum Command {
         output: PathBuf,
     },
     /// Render a file to PNG.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Render a built-in dataset to demo.png in the current folder.
     Demo,
 }

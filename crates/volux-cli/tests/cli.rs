@@ -12,7 +12,9 @@ fn volux(args: &[&str], dir: &Path) -> Output {
 }
 
 fn shared(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data").join(rel);
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
     if p.exists() {
         Some(p)
     } else {
@@ -31,7 +33,10 @@ fn png_stats(path: &Path) -> (u32, u32, f64) {
     let ch = info.color_type.samples();
     let px: Vec<&[u8]> = buf[..info.buffer_size()].chunks(ch).collect();
     let bg = px[0];
-    let differ = px.iter().filter(|p| p.iter().zip(bg).any(|(a, b)| a.abs_diff(*b) > 8)).count();
+    let differ = px
+        .iter()
+        .filter(|p| p.iter().zip(bg).any(|(a, b)| a.abs_diff(*b) > 8))
+        .count();
     (info.width, info.height, differ as f64 / px.len() as f64)
 }
 
@@ -39,7 +44,11 @@ fn png_stats(path: &Path) -> (u32, u32, f64) {
 fn demo_writes_a_non_blank_png() {
     let dir = tempfile::tempdir().unwrap();
     let out = volux(&["demo"], dir.path());
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("demo.png"), "says where it wrote: {stdout}");
     let (w, h, covered) = png_stats(&dir.path().join("demo.png"));
@@ -51,16 +60,45 @@ fn demo_writes_a_non_blank_png() {
 fn generate_info_render_round() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let out = volux(&["generate", "shepp-logan", "--size", "48", "-o", "sl.raw"], d);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = volux(
+        &["generate", "shepp-logan", "--size", "48", "-o", "sl.raw"],
+        d,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let out = volux(&["info", "--json", "sl.raw"], d);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["dims"], serde_json::json!([48, 48, 48]));
     assert_eq!(v["dtype"], "float32");
     assert_eq!(v["range"][1].as_f64().unwrap(), 1.0);
-    let out = volux(&["render", "sl.raw", "-o", "sl.png", "--size", "96x64", "--stats", "--json", "--tf", "grayscale"], d);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = volux(
+        &[
+            "render",
+            "sl.raw",
+            "-o",
+            "sl.png",
+            "--size",
+            "96x64",
+            "--stats",
+            "--json",
+            "--tf",
+            "grayscale",
+        ],
+        d,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     for k in ["ms", "rays", "samples", "samples_per_s"] {
         assert!(s[k].as_f64().unwrap() > 0.0, "{k}");
@@ -69,7 +107,11 @@ fn generate_info_render_round() {
     assert_eq!((w, h), (96, 64));
     assert!(covered > 0.05, "the phantom shows: {covered}");
     let out = volux(&["generate", "torus", "--size", "24", "-o", "t.vtet"], d);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let out = volux(&["info", "--json", "t.vtet"], d);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v["tets"].as_u64().unwrap() > 1000);
@@ -82,7 +124,11 @@ fn bad_input_gives_one_line_and_no_output() {
     let d = dir.path();
     std::fs::write(d.join("junk.bin"), b"\x00\x01garbage").unwrap();
     std::fs::write(d.join("t.raw"), [0u8; 10]).unwrap();
-    std::fs::write(d.join("t.raw.json"), r#"{"dims_xyz": [4, 4, 4], "dtype": "uint8", "spacing": [1, 1, 1]}"#).unwrap();
+    std::fs::write(
+        d.join("t.raw.json"),
+        r#"{"dims_xyz": [4, 4, 4], "dtype": "uint8", "spacing": [1, 1, 1]}"#,
+    )
+    .unwrap();
     let cases: [&[&str]; 6] = [
         &["render", "missing.raw", "-o", "o.png"],
         &["render", "junk.bin", "-o", "o.png"],
@@ -95,7 +141,11 @@ fn bad_input_gives_one_line_and_no_output() {
         let out = volux(args, d);
         assert!(!out.status.success(), "{args:?} should fail");
         let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(err.trim().lines().count(), 1, "{args:?}: one line, got {err}");
+        assert_eq!(
+            err.trim().lines().count(),
+            1,
+            "{args:?}: one line, got {err}"
+        );
         assert!(err.starts_with("volux: error:"), "{err}");
         assert!(!d.join("o.png").exists() && !d.join("o.raw").exists());
     }
@@ -105,26 +155,56 @@ fn render_shared(rel: &str, extra: &[&str], min_cover: f64) {
     let Some(p) = shared(rel) else { return };
     let dir = tempfile::tempdir().unwrap();
     let out_png = dir.path().join("r.png");
-    let mut args = vec!["render", p.to_str().unwrap(), "-o", out_png.to_str().unwrap(), "--size", "128x128"];
+    let mut args = vec![
+        "render",
+        p.to_str().unwrap(),
+        "-o",
+        out_png.to_str().unwrap(),
+        "--size",
+        "128x128",
+    ];
     args.extend_from_slice(extra);
     let out = volux(&args, dir.path());
-    assert!(out.status.success(), "{rel}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{rel}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let (_, _, covered) = png_stats(&out_png);
-    assert!(covered > min_cover, "{rel}: only {covered} of the image shows data");
+    assert!(
+        covered > min_cover,
+        "{rel}: only {covered} of the image shows data"
+    );
 }
 
 #[test]
 fn renders_the_shared_ct_head() {
-    render_shared("invesalius_cranium_ct/cranium_256x256x108_int16.raw.gz", &[], 0.15);
-    render_shared("invesalius_cranium_ct/cranium_256x256x108_int16.raw.gz", &["--tf", "ct-bone"], 0.1);
+    render_shared(
+        "invesalius_cranium_ct/cranium_256x256x108_int16.raw.gz",
+        &[],
+        0.15,
+    );
+    render_shared(
+        "invesalius_cranium_ct/cranium_256x256x108_int16.raw.gz",
+        &["--tf", "ct-bone"],
+        0.1,
+    );
 }
 
 #[test]
 fn renders_the_shared_mri_head() {
-    render_shared("niivue_chris_t1/chris_t1_188x256x190_uint8.raw.gz", &[], 0.15);
+    render_shared(
+        "niivue_chris_t1/chris_t1_188x256x190_uint8.raw.gz",
+        &[],
+        0.15,
+    );
 }
 
 #[test]
 fn renders_the_blunt_fin_tets() {
-    render_shared("nasa_blunt_fin/blunt_fin_tets_density.off.gz", &["--elevation", "30", "--azimuth", "40"], 0.1);
+    render_shared(
+        "nasa_blunt_fin/blunt_fin_tets_density.off.gz",
+        &["--elevation", "30", "--azimuth", "40"],
+        0.1,
+    );
 }

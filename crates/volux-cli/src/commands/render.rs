@@ -5,11 +5,11 @@ use volux_core::histogram::Histogram;
 use volux_core::image::PngOptions;
 use volux_core::{synth, CameraSpec, Image, TransferFunction};
 use volux_io::Dataset;
+use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
 use volux_render::raycast::render_field;
+use volux_render::raycast::Rendered;
 use volux_render::resample::resample_mesh;
 use volux_render::sampling::Trilinear;
-use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
-use volux_render::raycast::Rendered;
 use volux_render::{render_grid, RenderOptions, RenderStats};
 
 use super::CmdError;
@@ -73,7 +73,11 @@ pub fn integrator(args: &RenderArgs) -> Result<Integrator, CmdError> {
             early_termination: None,
         })
     };
-    let control = if args.decoupled { StepControl::Decoupled } else { StepControl::Coupled };
+    let control = if args.decoupled {
+        StepControl::Decoupled
+    } else {
+        StepControl::Coupled
+    };
     Ok(match args.integrator.as_str() {
         "riemann" => Integrator::Riemann { step: args.step },
         "trapezoid" => Integrator::Trapezoid { step: args.step },
@@ -118,8 +122,13 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     integrator.validate()?;
     let (data, _) = super::load(&args.file, &args.load, show)?;
     let out = render_dataset(&data, args, integrator, &spec, (w, h), show)?;
-    let png = PngOptions { background, sixteen_bit: args.sixteen_bit };
-    out.image.write_png(&args.output, &png).map_err(|e| format!("{}: {e}", args.output.display()))?;
+    let png = PngOptions {
+        background,
+        sixteen_bit: args.sixteen_bit,
+    };
+    out.image
+        .write_png(&args.output, &png)
+        .map_err(|e| format!("{}: {e}", args.output.display()))?;
     if let Some(path) = &args.error_map {
         error_map_image(&out, args.tol, w, h)
             .write_png(path, &PngOptions::default())
