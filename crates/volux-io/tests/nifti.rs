@@ -1,0 +1,438 @@
+//! NIfTI-1 reader tests: files written byte by byte (both byte orders, gzip or not, every
+//! datatype, scaling, geometry), malformed headers and data, and a shared dataset converted
+//! to `.nii.gz`.
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use volux_core::{Samples, ScalarType};
+use volux_io::{nifti, ErrorKind};
+
+/// Header fields a test sets.
+#[derive(Clone)]
+struct Spec {
+    le: bool,
+    sizeof_hdr: i32,
+    dim: [i16; 8],
+    datatype: i16,
+    bitpix: i16,
+    pixdim: [f32; 8],
+    vox_offset: f32,
+    slope: f32,
+    inter: f32,
+    qform: i16,
+    sform: i16,
+    qoffset: [f32; 3],
+    srow: [[f32; 4]; 3],
+    magic: [u8; 4],
+}
+
+impl Spec {
+    fn new(le: bool, dims: [i16; 3], datatype: i16, bitpix: i16) -> Self {
+        Spec {
+            le,
+            sizeof_hdr: 348,
+            dim: [3, dims[0], dims[1], dims[2], 1, 1, 1, 1],
+            datatype,
+            bitpix,
+            pixdim: [1.0, 0.5, 0.75, 2.0, 0.0, 0.0, 0.0, 0.0],
+            vox_offset: 352.0,
+            slope: 0.0,
+            inter: 0.0,
+            qform: 0,
+            sform: 0,
+            qoffset: [0.0; 3],
+            srow: [[0.0; 4]; 3],
+            magic: *b"n+1\0",
+        }
+    }
+
+    fn header(&self) -> Vec<u8> {
+        let mut h = vec![0u8; 348];
+        let le = self.le;
+        let mut put = |at: usize, b: &[u8]| {
+            let mut b = b.to_vec();
+            if !le {
+                b.reverse();
+            }
+            h[at..at + b.len()].copy_from_slice(&b);
+        };
+        put(0, &self.sizeof_hdr.to_le_bytes());
+        for (i, d) in self.dim.iter().enumerate() {
+            put(40 + 2 * i, &d.to_le_bytes());
+        }
+        put(70, &self.datatype.to_le_bytes());
+        put(72, &self.bitpix.to_le_bytes());
+        for (i, p) in self.pixdim.iter().enumerate() {
+            put(76 + 4 * i, &p.to_le_bytes());
+        }
+        put(108, &self.vox_offset.to_le_bytes());
+        put(112, &self.slope.to_le_bytes());
+        put(116, &self.inter.to_le_bytes());
+        put(252, &self.qform.to_le_bytes());
+        put(254, &self.sform.to_le_bytes());
+        for (i, q) in self.qoffset.iter().enumerate() {
+            put(268 + 4 * i, &q.to_le_bytes());
+        }
+        for (r, row) in self.srow.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                put(280 + 16 * r + 4 * c, &v.to_le_bytes());
+            }
+        }
+        h[344..348].copy_from_slice(&self.magic);
+        h
+    }
+
+    /// Header, 4 extension bytes, padding up to vox_offset, data.
+    fn file(&self, data: &[u8]) -> Vec<u8> {
+        let mut f = self.header();
+        f.extend_from_slice(&[0; 4]);
+        let off = self.vox_offset.max(352.0) as usize;
+        f.resize(off, 0);
+        f.extend_from_slice(data);
+        f
+    }
+}
+
+/// Encodes values with the given byte order.
+fn enc<const N: usize>(vals: impl IntoIterator<Item = [u8; N]>, le: bool) -> Vec<u8> {
+    vals.into_iter()
+        .flat_map(|mut b| {
+            if !le {
+                b.reverse();
+            }
+            b
+        })
+        .collect()
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    if name.ends_with(".gz") {
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        e.write_all(bytes).unwrap();
+        std::fs::write(&p, e.finish().unwrap()).unwrap();
+    } else {
+        std::fs::write(&p, bytes).unwrap();
+    }
+    p
+}
+
+fn values(s: &Samples) -> Vec<f32> {
+    (0..s.len()).map(|i| s.get_f32(i)).collect()
+}
+
+/// 2 x 3 x 2 values 0..12 (negated for signed types to exercise the sign).
+fn expected(signed: bool) -> Vec<f32> {
+    (0..12)
+        .map(|i| {
+            if signed && i % 2 == 1 {
+                -(i as f32)
+            } else {
+                i as f32
+            }
+        })
+        .collect()
+}
+
+/// Every datatype x byte order x gzip.
+#[test]
+fn datatypes_endianness_gzip() {
+    let dir = tempfile::tempdir().unwrap();
+    type Enc = fn(f32, bool) -> Vec<u8>;
+    let cases: [(i16, i16, Option<ScalarType>, bool, Enc); 8] = [
+        (2, 8, Some(ScalarType::U8), false, |v, _| vec![v as u8]),
+        (256, 8, None, true, |v, _| vec![v as i8 as u8]),
+        (4, 16, Some(ScalarType::I16), true, |v, le| {
+            enc([(v as i16).to_le_bytes()], le)
+        }),
+        (512, 16, Some(ScalarType::U16), false, |v, le| {
+            enc([(v as u16).to_le_bytes()], le)
+        }),
+        (8, 32, None, true, |v, le| {
+            enc([(v as i32).to_le_bytes()], le)
+        }),
+        (768, 32, None, false, |v, le| {
+            enc([(v as u32).to_le_bytes()], le)
+        }),
+        (16, 32, Some(ScalarType::F32), true, |v, le| {
+            enc([v.to_le_bytes()], le)
+        }),
+        (64, 64, None, true, |v, le| {
+            enc([(v as f64).to_le_bytes()], le)
+        }),
+    ];
+    for (code, bitpix, native, signed, f) in cases {
+        for le in [true, false] {
+            for gz in [false, true] {
+                let want = expected(signed);
+                let data: Vec<u8> = want.iter().flat_map(|&v| f(v, le)).collect();
+                let spec = Spec::new(le, [2, 3, 2], code, bitpix);
+                let name = format!("t{code}_{le}.nii{}", if gz { ".gz" } else { "" });
+                let p = write(dir.path(), &name, &spec.file(&data));
+                let g = nifti::read(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+                assert_eq!(g.dims(), [2, 3, 2], "{name}");
+                assert_eq!(values(g.samples()), want, "{name}");
+                assert_eq!(g.spacing().to_array(), [0.5, 0.75, 2.0], "{name}");
+                match native {
+                    Some(t) => {
+                        assert_eq!(g.scalar_type(), t, "{name}");
+                        assert!(g.notes().is_empty(), "{name}: {:?}", g.notes());
+                        // Uncompressed little-endian native data is memory-mapped.
+                        assert_eq!(g.samples().is_mapped(), le && !gz, "{name}");
+                    }
+                    None => {
+                        assert_eq!(g.scalar_type(), ScalarType::F32, "{name}");
+                        assert!(g.notes().iter().any(|n| n.contains("converted from")));
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn scl_slope_applied_as_f32() {
+    let dir = tempfile::tempdir().unwrap();
+    for le in [true, false] {
+        let mut spec = Spec::new(le, [2, 2, 1], 4, 16);
+        spec.slope = 2.0;
+        spec.inter = -10.0;
+        let data = enc((0..4i16).map(|v| v.to_le_bytes()), le);
+        let p = write(dir.path(), "s.nii.gz", &spec.file(&data));
+        let g = nifti::read(&p).unwrap();
+        assert_eq!(g.scalar_type(), ScalarType::F32);
+        assert_eq!(values(g.samples()), vec![-10.0, -8.0, -6.0, -4.0]);
+        assert!(g.notes().iter().any(|n| n.contains("scl_slope")));
+    }
+    // Slope (1, 0) and slope 0 leave the data native.
+    for (slope, inter) in [(1.0, 0.0), (0.0, 5.0)] {
+        let mut spec = Spec::new(true, [2, 2, 1], 4, 16);
+        (spec.slope, spec.inter) = (slope, inter);
+        let data = enc((0..4i16).map(|v| v.to_le_bytes()), true);
+        let p = write(dir.path(), "n.nii", &spec.file(&data));
+        let g = nifti::read(&p).unwrap();
+        assert_eq!(g.scalar_type(), ScalarType::I16);
+        assert_eq!(values(g.samples()), vec![0.0, 1.0, 2.0, 3.0]);
+    }
+}
+
+#[test]
+fn geometry_sform_qform_pixdim() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = [0u8; 8];
+    let mut spec = Spec::new(true, [2, 2, 2], 2, 8);
+    spec.pixdim = [1.0, -1.5, 0.0, 3.0, 0.0, 0.0, 0.0, 0.0];
+    spec.qform = 1;
+    spec.qoffset = [7.0, 8.0, 9.0];
+    let p = write(dir.path(), "q.nii", &spec.file(&data));
+    let g = nifti::read(&p).unwrap();
+    assert_eq!(g.spacing().to_array(), [1.5, 1.0, 3.0]);
+    assert_eq!(g.origin().to_array(), [7.0, 8.0, 9.0]);
+    assert!(g.notes().iter().any(|n| n.contains("pixdim[2]")));
+    // The sform wins over the qform.
+    spec.sform = 2;
+    spec.srow = [
+        [1.5, 0.0, 0.0, -10.0],
+        [0.0, 1.0, 0.0, -20.0],
+        [0.0, 0.0, 3.0, -30.0],
+    ];
+    let p = write(dir.path(), "s.nii", &spec.file(&data));
+    let g = nifti::read(&p).unwrap();
+    assert_eq!(g.origin().to_array(), [-10.0, -20.0, -30.0]);
+    assert!(!g.notes().iter().any(|n| n.contains("sform")));
+    // A flipped sform is noted as not applied.
+    spec.srow[0][0] = -1.5;
+    let p = write(dir.path(), "f.nii", &spec.file(&data));
+    let g = nifti::read(&p).unwrap();
+    assert!(g.notes().iter().any(|n| n.contains("sform")));
+    // Neither: origin 0.
+    spec.sform = 0;
+    spec.qform = 0;
+    let p = write(dir.path(), "o.nii", &spec.file(&data));
+    assert_eq!(nifti::read(&p).unwrap().origin().to_array(), [0.0; 3]);
+}
+
+#[test]
+fn dims_2d_and_4d() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut spec = Spec::new(true, [3, 2, 7], 2, 8);
+    spec.dim[0] = 2;
+    let p = write(dir.path(), "2d.nii", &spec.file(&[1; 6]));
+    assert_eq!(nifti::read(&p).unwrap().dims(), [3, 2, 1]);
+    let mut spec = Spec::new(true, [2, 2, 2], 2, 8);
+    spec.dim[0] = 4;
+    let p = write(dir.path(), "4d.nii", &spec.file(&[1; 8]));
+    assert_eq!(nifti::read(&p).unwrap().dims(), [2, 2, 2]);
+    spec.dim[4] = 3;
+    let p = write(dir.path(), "4dt.nii", &spec.file(&[1; 24]));
+    let e = nifti::read(&p).unwrap_err();
+    assert!(matches!(e.kind, ErrorKind::Unsupported(_)), "{e}");
+}
+
+#[test]
+fn hdr_img_pair() {
+    let dir = tempfile::tempdir().unwrap();
+    for gz in [false, true] {
+        let mut spec = Spec::new(false, [2, 2, 1], 512, 16);
+        spec.magic = *b"ni1\0";
+        spec.vox_offset = 0.0;
+        let stem = format!("pair{gz}");
+        write(dir.path(), &format!("{stem}.hdr"), &spec.header());
+        let data = enc((1..5u16).map(|v| v.to_le_bytes()), false);
+        let img = format!("{stem}.img{}", if gz { ".gz" } else { "" });
+        write(dir.path(), &img, &data);
+        let g = nifti::read(&dir.path().join(format!("{stem}.hdr"))).unwrap();
+        assert_eq!(values(g.samples()), vec![1.0, 2.0, 3.0, 4.0]);
+    }
+    let mut spec = Spec::new(true, [2, 2, 1], 2, 8);
+    spec.magic = *b"ni1\0";
+    let p = write(dir.path(), "lonely.hdr", &spec.header());
+    let e = nifti::read(&p).unwrap_err();
+    assert!(e.to_string().contains("lonely.img"), "{e}");
+}
+
+#[test]
+fn nan_values_are_noted() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = Spec::new(true, [2, 2, 1], 16, 32);
+    let vals = [1.0f32, f32::NAN, 3.0, 4.0];
+    let p = write(
+        dir.path(),
+        "nan.nii.gz",
+        &spec.file(&enc(vals.map(f32::to_le_bytes), true)),
+    );
+    let g = nifti::read(&p).unwrap();
+    assert_eq!(g.range(), [1.0, 4.0]);
+    assert!(g.notes().iter().any(|n| n.contains("non-finite")));
+}
+
+/// Writes `bytes` as both `.nii` and `.nii.gz` and checks that each read fails as `check` says.
+fn fails(name: &str, bytes: &[u8], check: impl Fn(&ErrorKind) -> bool) {
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["nii", "nii.gz"] {
+        let p = write(dir.path(), &format!("{name}.{ext}"), bytes);
+        match nifti::read(&p) {
+            Ok(_) => panic!("{name}.{ext}: read a malformed file"),
+            Err(e) => assert!(check(&e.kind), "{name}.{ext}: unexpected error {e}"),
+        }
+    }
+}
+
+#[test]
+fn malformed_files() {
+    let good = Spec::new(true, [4, 4, 4], 4, 16);
+    let data = vec![0u8; 128];
+    let header = |k: &ErrorKind| matches!(k, ErrorKind::Header(_));
+    let unsupported = |k: &ErrorKind| matches!(k, ErrorKind::Unsupported(_));
+    let truncated = |k: &ErrorKind| matches!(k, ErrorKind::Truncated { .. });
+    let data_err = |k: &ErrorKind| matches!(k, ErrorKind::Data(_));
+
+    fails("short_data", &good.file(&data[..100]), truncated);
+    fails("short_header", &good.header()[..200], truncated);
+    fails("empty", &[], truncated);
+    fails("garbage", &[0xAB; 400], header);
+    let mut s = good.clone();
+    s.sizeof_hdr = 349;
+    fails("sizeof_hdr", &s.file(&data), header);
+    s.sizeof_hdr = 540;
+    fails("nifti2", &s.file(&data), unsupported);
+    for d0 in [0, 8, -1] {
+        let mut s = good.clone();
+        s.dim[0] = d0;
+        fails("dim0", &s.file(&data), header);
+    }
+    let mut s = good.clone();
+    s.dim[0] = 1;
+    fails("dim0_1", &s.file(&data), unsupported);
+    for bad in [[4, -4, 4], [0, 4, 4], [4, 4, 0]] {
+        let mut s = good.clone();
+        s.dim[1..4].copy_from_slice(&bad);
+        fails("dims", &s.file(&data), data_err);
+    }
+    // The largest dims a NIfTI-1 header can hold: rejected before any allocation.
+    let mut s = good.clone();
+    s.dim[1..4].copy_from_slice(&[i16::MAX; 3]);
+    s.datatype = 64;
+    s.bitpix = 64;
+    fails("huge", &s.file(&data), |k| truncated(k) || data_err(k));
+    for code in [0, 3, 32, 128, 1024, 9999] {
+        let mut s = good.clone();
+        s.datatype = code;
+        fails("dtype", &s.file(&data), unsupported);
+    }
+    let mut s = good.clone();
+    s.magic = *b"abc\0";
+    fails("magic", &s.file(&data), unsupported);
+    for off in [f32::NAN, -352.0, 352.5] {
+        let mut s = good.clone();
+        s.vox_offset = off;
+        fails("vox_offset", &s.file(&data), header);
+    }
+    let bytes = {
+        let mut b = good.file(&data);
+        b[108..112].copy_from_slice(&1e9f32.to_le_bytes());
+        b
+    };
+    fails("vox_offset_past_end", &bytes, |k| header(k) || truncated(k));
+}
+
+#[test]
+fn bitpix_mismatch_is_noted() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = Spec::new(true, [2, 1, 1], 2, 16);
+    let p = write(dir.path(), "b.nii", &spec.file(&[1, 2]));
+    let g = nifti::read(&p).unwrap();
+    assert_eq!(values(g.samples()), vec![1.0, 2.0]);
+    assert!(g.notes().iter().any(|n| n.contains("bitpix")));
+}
+
+/// The shared VTK head MR (raw + JSON sidecar) written as `.nii.gz` reads back identically.
+#[test]
+fn shared_head_mr_as_nii_gz() {
+    let raw = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/vtk_head_mr/HeadMRVolume_48x62x42_uint8.raw"
+    );
+    if !Path::new(raw).exists() {
+        eprintln!("skipping: {raw} is absent");
+        return;
+    }
+    let side: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(format!("{raw}.json")).unwrap()).unwrap();
+    let dims: Vec<i16> = side["dims_xyz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_i64().unwrap() as i16)
+        .collect();
+    let spacing: Vec<f64> = side["spacing"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(side["dtype"], "uint8");
+    let data = std::fs::read(raw).unwrap();
+    let mut spec = Spec::new(true, [dims[0], dims[1], dims[2]], 2, 8);
+    spec.pixdim[1..4].copy_from_slice(&spacing.iter().map(|&s| s as f32).collect::<Vec<_>>());
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "head.nii.gz", &spec.file(&data));
+    let g = nifti::read(&p).unwrap();
+    assert_eq!(
+        g.dims(),
+        [dims[0] as usize, dims[1] as usize, dims[2] as usize]
+    );
+    assert_eq!(g.spacing().to_array().to_vec(), spacing);
+    assert_eq!(g.scalar_type(), ScalarType::U8);
+    let range = side["value_range"].as_array().unwrap();
+    assert_eq!(g.range()[0], range[0].as_f64().unwrap());
+    assert_eq!(g.range()[1], range[1].as_f64().unwrap());
+    match g.samples() {
+        Samples::U8(b) => assert_eq!(&b[..], &data[..]),
+        _ => unreachable!(),
+    }
+    // Through the format detection and `load` as well.
+    let (ds, fmt) = volux_io::load(&p, &Default::default()).unwrap();
+    assert_eq!(fmt, volux_io::Format::Nifti);
+    assert!(matches!(ds, volux_io::Dataset::Grid(_)));
+}
