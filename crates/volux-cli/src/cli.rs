@@ -122,7 +122,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0.5)]
     pub h0: f64,
     /// adaptive-simpson: smallest step (voxels), accepted whatever its error.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.001)]
     pub hmin: f64,
     /// adaptive-simpson: largest step (voxels).
     #[arg(long, default_value_t = 0.5)]

@@ -19,6 +19,8 @@ pub struct Classified {
 #[derive(Clone, Debug)]
 pub struct ClassifyTable {
     entries: Vec<Classified>,
+    /// `opaque_prefix[i]`: number of entries before `i` with non-zero extinction.
+    opaque_prefix: Vec<u32>,
     lo: f32,
     scale: f32,
 }
@@ -35,7 +37,7 @@ impl ClassifyTable {
         let hi = range[1].max(bp.last().copied().unwrap_or(range[1]));
         let hi = if hi > lo { hi } else { lo + 1.0 };
         let size = size.max(2);
-        let entries = (0..size)
+        let entries: Vec<Classified> = (0..size)
             .map(|i| {
                 let s = lo + (hi - lo) * i as f64 / (size - 1) as f64;
                 let c = tf.color_at(s);
@@ -45,11 +47,28 @@ impl ClassifyTable {
                 }
             })
             .collect();
+        let mut opaque_prefix = Vec::with_capacity(size + 1);
+        opaque_prefix.push(0u32);
+        for e in entries.iter() {
+            let e: &Classified = e;
+            let last = *opaque_prefix.last().unwrap_or(&0);
+            opaque_prefix.push(last + u32::from(e.tau > 0.0));
+        }
         Self {
             entries,
+            opaque_prefix,
             lo: lo as f32,
             scale: ((size - 1) as f64 / (hi - lo)) as f32,
         }
+    }
+
+    /// Whether the extinction is zero for every value in `[lo, hi]` (including the table
+    /// entries that lookups in that range interpolate from).
+    pub fn is_transparent(&self, lo: f32, hi: f32) -> bool {
+        let last = (self.entries.len() - 1) as f32;
+        let a = ((lo - self.lo) * self.scale).clamp(0.0, last).floor() as usize;
+        let b = ((hi - self.lo) * self.scale).clamp(0.0, last).ceil() as usize;
+        self.opaque_prefix[b + 1] == self.opaque_prefix[a]
     }
 
     /// Colour and extinction at value `s` (clamped to the table's domain).

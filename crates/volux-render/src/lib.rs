@@ -16,6 +16,7 @@
 
 pub mod classify;
 pub mod integrate;
+pub mod macrocell;
 pub mod raycast;
 pub mod resample;
 pub mod sampling;

@@ -7,7 +7,7 @@
 //! `001_...txt`. Output does not depend on the number of threads: every pixel is computed
 //! independently.
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -16,9 +16,10 @@ use volux_core::{Camera, Grid, Image, TransferFunction};
 
 use crate::classify::{Classified, ClassifyTable};
 use crate::integrate::{
-    adaptive_simpson, adaptive_simpson_pieces, hides_breakpoints, riemann_step, simpson, trapezoid,
-    AdaptiveParams, Integrator, Medium, RayAccumulator, RayIntegral, RayMedium,
+    adaptive_simpson_intervals, adaptive_simpson_pieces, hides_breakpoints, riemann_step, simpson,
+    trapezoid, AdaptiveParams, Integrator, Medium, RayAccumulator, RayIntegral, RayMedium,
 };
+use crate::macrocell::{MacrocellGrid, Occupancy};
 use crate::sampling::{Field, Trilinear};
 use crate::RenderError;
 
@@ -41,6 +42,11 @@ pub struct RenderOptions {
     /// Stop a ray once its opacity reaches this value; `None` integrates to the end
     /// (reference mode).
     pub early_termination: Option<f32>,
+    /// Skip macrocells whose extinction is zero (never changes the image).
+    pub empty_space_skipping: bool,
+    /// Offset each ray's first Riemann sample by a per-pixel pseudo-random fraction of the
+    /// step, trading wood-grain artifacts for fine noise (deterministic per pixel).
+    pub jitter: bool,
     /// Set to true from another thread to stop the render with [`RenderError::Cancelled`].
     pub cancel: Option<Arc<AtomicBool>>,
     /// Progress callback.
@@ -57,6 +63,8 @@ impl RenderOptions {
             tf,
             integrator: Integrator::Riemann { step: 0.5 },
             early_termination: Some(0.99),
+            empty_space_skipping: true,
+            jitter: false,
             cancel: None,
             progress: None,
         }
@@ -132,15 +140,50 @@ impl Placement {
     }
 }
 
-/// Renders a grid with the integrator of `opts`.
+/// Renders a grid with the integrator of `opts` (no caching: see [`GridRenderer`]).
 pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<Rendered, RenderError> {
-    let place = Placement::of(grid);
-    volux_core::with_samples!(grid.samples(), |s| render_field(
-        &Trilinear::new(s, grid.dims()),
-        place,
-        grid.range(),
-        opts
-    ))
+    GridRenderer::new(grid).render(opts)
+}
+
+/// A grid ray caster that keeps data-derived structures (the macrocell min/max grid) between
+/// renders, so an interactive session pays for them once per volume; TF-derived data (the
+/// classification table, empty flags) is rebuilt per render, which costs milliseconds.
+pub struct GridRenderer<'g> {
+    grid: &'g Grid,
+    macrocells: OnceLock<MacrocellGrid>,
+}
+
+impl<'g> GridRenderer<'g> {
+    /// A renderer for `grid`.
+    pub fn new(grid: &'g Grid) -> Self {
+        Self {
+            grid,
+            macrocells: OnceLock::new(),
+        }
+    }
+
+    /// The macrocell min/max grid, built on first use.
+    pub fn macrocells(&self) -> &MacrocellGrid {
+        self.macrocells.get_or_init(|| {
+            volux_core::with_samples!(self.grid.samples(), |s| MacrocellGrid::build(
+                s,
+                self.grid.dims()
+            ))
+        })
+    }
+
+    /// Renders with `opts`.
+    pub fn render(&self, opts: &RenderOptions) -> Result<Rendered, RenderError> {
+        let g = self.grid;
+        let cells = opts.empty_space_skipping.then(|| self.macrocells());
+        volux_core::with_samples!(g.samples(), |s| render_with(
+            &Trilinear::new(s, g.dims()),
+            Placement::of(g),
+            g.range(),
+            opts,
+            cells
+        ))
+    }
 }
 
 /// One pixel's result.
@@ -153,19 +196,33 @@ struct PixelOut {
     hit: bool,
 }
 
-/// Renders any [`Field`] placed in the world, classifying with `opts.tf` over `range`.
+/// Renders any [`Field`] placed in the world, classifying with `opts.tf` over `range`
+/// (without empty-space skipping).
 pub fn render_field<F: Field>(
     field: &F,
     place: Placement,
     range: [f64; 2],
     opts: &RenderOptions,
 ) -> Result<Rendered, RenderError> {
+    render_with(field, place, range, opts, None)
+}
+
+fn render_with<F: Field>(
+    field: &F,
+    place: Placement,
+    range: [f64; 2],
+    opts: &RenderOptions,
+    macrocells: Option<&MacrocellGrid>,
+) -> Result<Rendered, RenderError> {
     opts.validate()?;
     let start = Instant::now();
+    let table = ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE);
+    let occupancy = macrocells.map(|m| Occupancy::new(m, &table));
     let ctx = RayContext {
         field,
         place,
-        table: ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE),
+        table: &table,
+        occupancy: occupancy.as_ref(),
         tf: opts.tf.resolved(range),
         breakpoints: opts.tf.resolved(range).breakpoints(),
         opts,
@@ -184,7 +241,8 @@ pub fn render_field<F: Field>(
         }
         for (x, px) in row.iter_mut().enumerate() {
             let ray = opts.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
-            *px = ctx.cast(ray.origin, ray.dir);
+            let jitter = if opts.jitter { pixel_hash(x, y) } else { 0.0 };
+            *px = ctx.cast(ray.origin, ray.dir, jitter);
         }
         let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
         if let Some(p) = &opts.progress {
@@ -224,7 +282,8 @@ pub fn ray_box(origin: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> Option<(f64, 
 struct RayContext<'a, F> {
     field: &'a F,
     place: Placement,
-    table: ClassifyTable,
+    table: &'a ClassifyTable,
+    occupancy: Option<&'a Occupancy<'a>>,
     tf: TransferFunction,
     breakpoints: Vec<f64>,
     opts: &'a RenderOptions,
@@ -269,7 +328,7 @@ impl<F: Field> RayMedium for GridRay<'_, F> {
 }
 
 impl<F: Field> RayContext<'_, F> {
-    fn cast(&self, origin: DVec3, dir: DVec3) -> PixelOut {
+    fn cast(&self, origin: DVec3, dir: DVec3, jitter: f64) -> PixelOut {
         let place = &self.place;
         let Some((t0, t1)) = ray_box(origin, dir, place.origin, place.origin + place.extent())
         else {
@@ -278,8 +337,15 @@ impl<F: Field> RayContext<'_, F> {
         let unit = place.spacing.min_element();
         let o_v = (origin - place.origin) / place.spacing;
         let d_v = dir / place.spacing;
+        let mut spans = Vec::new();
+        match self.occupancy {
+            Some(occ) => occ.occupied(o_v, d_v, t0, t1, &mut spans),
+            None => spans.push((t0, t1)),
+        }
         let integral = match self.opts.integrator {
-            Integrator::Riemann { step } => return self.riemann(o_v, d_v, t0, t1, step * unit),
+            Integrator::Riemann { step } => {
+                return self.riemann(o_v, d_v, (t0, t1), &spans, step * unit, jitter)
+            }
             Integrator::Trapezoid { step } => {
                 trapezoid(&mut self.medium(o_v, d_v), t0, t1, step * unit)
             }
@@ -294,7 +360,7 @@ impl<F: Field> RayContext<'_, F> {
                     early_termination: self.opts.early_termination.map(f64::from),
                     ..p
                 };
-                adaptive_simpson(&mut self.medium(o_v, d_v), t0, t1, &p)
+                adaptive_simpson_intervals(&mut self.medium(o_v, d_v), &spans, &p)
             }
             Integrator::Reference => self.reference(o_v, d_v, t0, t1, unit),
         };
@@ -307,7 +373,7 @@ impl<F: Field> RayContext<'_, F> {
             field: self.field,
             o_v,
             d_v,
-            table: &self.table,
+            table: self.table,
             exact: None,
             breakpoints: &self.breakpoints,
         }
@@ -330,27 +396,39 @@ impl<F: Field> RayContext<'_, F> {
         adaptive_simpson_pieces(&mut medium, &breaks, &p)
     }
 
-    /// The fast f32 path: left Riemann sum (eq. 2.14) with early ray termination.
-    fn riemann(&self, o_v: DVec3, d_v: DVec3, t0: f64, t1: f64, h_world: f64) -> PixelOut {
+    /// The fast f32 path: left Riemann sum (eq. 2.14) with early ray termination. Samples sit
+    /// on the lattice `t0 + (i + jitter) h` whatever the skipped spans, so skipping empty
+    /// space changes nothing in the image.
+    fn riemann(
+        &self,
+        o_v: DVec3,
+        d_v: DVec3,
+        (t0, t1): (f64, f64),
+        spans: &[(f64, f64)],
+        h: f64,
+        jitter: f64,
+    ) -> PixelOut {
         let (o_v, d_v) = (o_v.as_vec3(), d_v.as_vec3());
         let stop = self.opts.early_termination.unwrap_or(2.0);
         let mut acc = RayAccumulator::default();
         let mut n = 0u64;
-        let mut i = 0u32;
-        loop {
-            let t = t0 + h_world * i as f64;
-            if t >= t1 {
-                break;
-            }
-            let len = h_world.min(t1 - t);
-            if let Some(v) = self.field.sample(o_v + d_v * t as f32) {
-                let c: Classified = self.table.lookup(v);
-                riemann_step(&mut acc, c, len as f32);
-            }
-            n += 1;
-            i += 1;
-            if acc.alpha() >= stop {
-                break;
+        let start = t0 + jitter * h;
+        'spans: for &(a, b) in spans {
+            let mut i = ((a - start) / h).ceil().max(0.0) as u64;
+            loop {
+                let t = start + h * i as f64;
+                if t >= b {
+                    break;
+                }
+                if let Some(v) = self.field.sample(o_v + d_v * t as f32) {
+                    let c: Classified = self.table.lookup(v);
+                    riemann_step(&mut acc, c, h.min(t1 - t) as f32);
+                }
+                n += 1;
+                i += 1;
+                if acc.alpha() >= stop {
+                    break 'spans;
+                }
             }
         }
         PixelOut {
@@ -361,6 +439,18 @@ impl<F: Field> RayContext<'_, F> {
             hit: true,
         }
     }
+}
+
+/// A deterministic pseudo-random number in [0, 1) for pixel (x, y) (a 32-bit integer hash), so
+/// jittered images do not depend on the thread count.
+fn pixel_hash(x: usize, y: usize) -> f64 {
+    let mut v = (x as u32).wrapping_mul(0x9E37_79B9) ^ (y as u32).wrapping_mul(0x85EB_CA6B);
+    v ^= v >> 16;
+    v = v.wrapping_mul(0x7FEB_352D);
+    v ^= v >> 15;
+    v = v.wrapping_mul(0x846C_A68B);
+    v ^= v >> 16;
+    v as f64 / 4_294_967_296.0
 }
 
 fn pixel(r: &RayIntegral) -> PixelOut {
@@ -469,6 +559,61 @@ mod tests {
     }
 
     #[test]
+    fn empty_space_skipping_changes_nothing() {
+        let g = volux_core::synth::marschner_lobb(40).unwrap();
+        // Transparent below 0.45 and above 0.6: most macrocells are empty.
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[0,0.2,0.4,1],[1,1,0.6,0.2]], "extinction": [[0,0],[0.45,0],[0.5,0.4],[0.6,0],[1,0]]}"#,
+        )
+        .unwrap();
+        let spec = CameraSpec {
+            azimuth: Some(35.0),
+            elevation: Some(20.0),
+            ..Default::default()
+        };
+        let mut o = RenderOptions::new(spec.resolve(&g.bounds()).unwrap(), tf);
+        (o.width, o.height) = (48, 40);
+        let p = AdaptiveParams {
+            tol: 0.01,
+            h0: 0.5,
+            hmin: 0.01,
+            hmax: 0.5,
+            control: crate::integrate::StepControl::Coupled,
+            early_termination: None,
+        };
+        for integrator in [
+            Integrator::Riemann { step: 0.5 },
+            Integrator::AdaptiveSimpson(p),
+        ] {
+            for jitter in [false, true] {
+                (o.integrator, o.jitter) = (integrator, jitter);
+                o.empty_space_skipping = false;
+                let full = render_grid(&g, &o).unwrap();
+                o.empty_space_skipping = true;
+                let skip = render_grid(&g, &o).unwrap();
+                let diff = full
+                    .image
+                    .pixels()
+                    .iter()
+                    .zip(skip.image.pixels())
+                    .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
+                    .fold(0.0, f32::max);
+                let tol = if matches!(integrator, Integrator::Riemann { .. }) {
+                    1e-6
+                } else {
+                    0.01
+                };
+                assert!(diff <= tol, "{integrator:?} jitter {jitter}: {diff}");
+                assert!(
+                    skip.stats.samples < full.stats.samples,
+                    "skipping saves samples"
+                );
+                assert!(skip.image.coverage(0.05) > 0.1);
+            }
+        }
+    }
+
+    #[test]
     fn cancellation_stops_the_render() {
         let g = constant_grid(1.0);
         let tf = TransferFunction::from_json(r#"{"color": [[0,1,1,1]], "extinction": [[0,0.2]]}"#)
@@ -542,7 +687,7 @@ mod accuracy_tests {
                     let p = AdaptiveParams {
                         tol: eps,
                         h0: 0.5,
-                        hmin: 0.01,
+                        hmin: 0.001,
                         hmax: 0.5,
                         control,
                         early_termination: None,

@@ -190,19 +190,33 @@ pub fn adaptive_simpson(
     t1: f64,
     p: &AdaptiveParams,
 ) -> RayIntegral {
-    let len = t1 - t0;
+    adaptive_simpson_intervals(m, &[(t0, t1)], p)
+}
+
+/// Adaptive Simpson over disjoint, ordered intervals of one ray, the medium being transparent
+/// in the gaps (empty-space skipping); the tolerance is shared over their total length.
+pub fn adaptive_simpson_intervals(
+    m: &mut impl RayMedium,
+    intervals: &[(f64, f64)],
+    p: &AdaptiveParams,
+) -> RayIntegral {
+    let len: f64 = intervals.iter().map(|(a, b)| (b - a).max(0.0)).sum();
     let mut ray = Ray {
         color: [0.0; 3],
         depth: 0.0,
-        samples: 1,
+        samples: 0,
         error: 0.0,
         missed: false,
     };
-    if len > 0.0 {
+    for &(t0, t1) in intervals {
+        if t1 <= t0 || ray.done(p) {
+            continue;
+        }
         let first = m.at(t0);
+        ray.samples += 1;
         match p.control {
-            StepControl::Coupled => coupled(m, t0, t1, first, p, &mut ray),
-            StepControl::Decoupled => decoupled(m, t0, t1, first, p, &mut ray),
+            StepControl::Coupled => coupled_scaled(m, t0, t1, len, first, p, &mut ray),
+            StepControl::Decoupled => decoupled(m, t0, t1, len, first, p, &mut ray),
         }
     }
     let mut out = RayIntegral::from_parts(ray.color, ray.depth, ray.samples);
@@ -248,17 +262,6 @@ fn clamp_step(h: f64, p: &AdaptiveParams, room: f64) -> f64 {
     h.clamp(p.hmin, p.hmax).min(room)
 }
 
-fn coupled(
-    m: &mut impl RayMedium,
-    t0: f64,
-    t1: f64,
-    first: Medium,
-    p: &AdaptiveParams,
-    ray: &mut Ray,
-) {
-    coupled_scaled(m, t0, t1, t1 - t0, first, p, ray)
-}
-
 /// Coupled control over `[t0, t1]`, the tolerance scaled by a ray length `len`.
 fn coupled_scaled(
     m: &mut impl RayMedium,
@@ -293,15 +296,16 @@ fn coupled_scaled(
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn decoupled(
     m: &mut impl RayMedium,
     t0: f64,
     t1: f64,
+    len: f64,
     first: Medium,
     p: &AdaptiveParams,
     ray: &mut Ray,
 ) {
-    let len = t1 - t0;
     let mut inner = StepSize {
         h: p.h0,
         successes: 0,

@@ -18,7 +18,10 @@ use crate::classify::Classified;
 pub mod adaptive;
 pub mod fixed;
 
-pub use adaptive::{adaptive_simpson, adaptive_simpson_pieces, AdaptiveParams, StepControl};
+pub use adaptive::{
+    adaptive_simpson, adaptive_simpson_intervals, adaptive_simpson_pieces, AdaptiveParams,
+    StepControl,
+};
 pub use fixed::{simpson, trapezoid};
 
 /// How rays are integrated; lengths are in voxel units (of the smallest grid spacing), as in

@@ -1,0 +1,195 @@
+//! Empty-space skipping: a grid of macrocells holding the min/max of the samples they cover.
+//!
+//! Macrocell `(I, J, K)` covers the voxel cells `[B I, B (I + 1)]` along each axis (`B` =
+//! [`MacrocellGrid::BLOCK`]), and its range includes the samples on its boundary, so every
+//! trilinear sample taken inside it lies within `[min, max]`. A macrocell is *empty* for a
+//! transfer function when the extinction is zero over its whole range; rays skip empty
+//! macrocells with a 3D DDA. The min/max grid depends only on the data (built once per
+//! volume); the empty flags depend on the TF and are rebuilt, cheaply, when it changes.
+use glam::DVec3;
+use rayon::prelude::*;
+use volux_core::grid::Scalar;
+
+use crate::classify::ClassifyTable;
+
+/// Min/max of the samples covered by each macrocell.
+#[derive(Clone, Debug)]
+pub struct MacrocellGrid {
+    counts: [usize; 3],
+    ranges: Vec<[f32; 2]>,
+}
+
+impl MacrocellGrid {
+    /// Voxel cells per macrocell along each axis.
+    pub const BLOCK: usize = 8;
+
+    /// Builds the min/max grid of `values` laid out x fastest with `dims` samples per axis.
+    pub fn build<T: Scalar>(values: &[T], dims: [usize; 3]) -> Self {
+        let cells = dims.map(|d| d.saturating_sub(1).max(1));
+        let counts = cells.map(|c| c.div_ceil(Self::BLOCK));
+        let n = counts[0] * counts[1] * counts[2];
+        let ranges = (0..n)
+            .into_par_iter()
+            .map(|m| {
+                let c = [
+                    m % counts[0],
+                    (m / counts[0]) % counts[1],
+                    m / (counts[0] * counts[1]),
+                ];
+                let lo = c.map(|c| c * Self::BLOCK);
+                let hi: [usize; 3] =
+                    std::array::from_fn(|a| ((c[a] + 1) * Self::BLOCK).min(dims[a] - 1));
+                let mut r = [f32::INFINITY, f32::NEG_INFINITY];
+                for k in lo[2]..=hi[2] {
+                    for j in lo[1]..=hi[1] {
+                        let row = dims[0] * (j + dims[1] * k);
+                        for v in &values[row + lo[0]..=row + hi[0]] {
+                            let v = v.to_f32();
+                            r = [r[0].min(v), r[1].max(v)];
+                        }
+                    }
+                }
+                r
+            })
+            .collect();
+        Self { counts, ranges }
+    }
+
+    /// Macrocells per axis.
+    pub fn counts(&self) -> [usize; 3] {
+        self.counts
+    }
+
+    /// Which macrocells are empty (zero extinction over their range) for `table`.
+    pub fn empty_flags(&self, table: &ClassifyTable) -> Vec<bool> {
+        self.ranges
+            .par_iter()
+            .map(|r| !r[0].is_finite() || table.is_transparent(r[0], r[1]))
+            .collect()
+    }
+}
+
+/// The macrocells of one render: geometry plus empty flags for the current TF.
+#[derive(Clone, Debug)]
+pub struct Occupancy<'a> {
+    grid: &'a MacrocellGrid,
+    empty: Vec<bool>,
+}
+
+impl<'a> Occupancy<'a> {
+    /// Empty flags of `grid` for `table`.
+    pub fn new(grid: &'a MacrocellGrid, table: &ClassifyTable) -> Self {
+        Self {
+            grid,
+            empty: grid.empty_flags(table),
+        }
+    }
+
+    /// Fraction of macrocells that are empty.
+    pub fn empty_fraction(&self) -> f64 {
+        self.empty.iter().filter(|e| **e).count() as f64 / self.empty.len().max(1) as f64
+    }
+
+    /// The parts of the voxel-space ray `o + t d`, `t` in `[t0, t1]`, that cross non-empty
+    /// macrocells, merged into maximal intervals, in order. Found by a 3D DDA.
+    pub fn occupied(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, out: &mut Vec<(f64, f64)>) {
+        out.clear();
+        let b = MacrocellGrid::BLOCK as f64;
+        let counts = self.grid.counts;
+        let p = (o + d * t0) / b;
+        let mut cell: [i64; 3] =
+            std::array::from_fn(|a| (p[a].floor() as i64).clamp(0, counts[a] as i64 - 1));
+        let step: [i64; 3] = std::array::from_fn(|a| if d[a] > 0.0 { 1 } else { -1 });
+        let next_t = |a: usize, c: i64| -> f64 {
+            if d[a] == 0.0 {
+                return f64::INFINITY;
+            }
+            let boundary = if d[a] > 0.0 { (c + 1) as f64 } else { c as f64 } * b;
+            (boundary - o[a]) / d[a]
+        };
+        let mut t_next: [f64; 3] = std::array::from_fn(|a| next_t(a, cell[a]));
+        let mut t = t0;
+        while t < t1 {
+            let axis = (0..3)
+                .min_by(|&x, &y| t_next[x].total_cmp(&t_next[y]))
+                .unwrap_or(0);
+            let exit = t_next[axis].min(t1).max(t);
+            let idx =
+                cell[0] as usize + counts[0] * (cell[1] as usize + counts[1] * cell[2] as usize);
+            if !self.empty[idx] {
+                match out.last_mut() {
+                    Some(last) if (last.1 - t).abs() <= 1e-9 * (1.0 + t.abs()) => last.1 = exit,
+                    _ => out.push((t, exit)),
+                }
+            }
+            t = exit;
+            cell[axis] += step[axis];
+            if cell[axis] < 0 || cell[axis] >= counts[axis] as i64 {
+                break;
+            }
+            t_next[axis] = next_t(axis, cell[axis]);
+        }
+        if let Some(last) = out.last_mut() {
+            last.1 = last.1.min(t1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use volux_core::TransferFunction;
+
+    #[test]
+    fn ranges_cover_their_samples() {
+        let dims = [20, 11, 9];
+        let v: Vec<f32> = (0..dims[0] * dims[1] * dims[2])
+            .map(|i| (i % 97) as f32)
+            .collect();
+        let g = MacrocellGrid::build(&v, dims);
+        assert_eq!(g.counts(), [3, 2, 1]);
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let x = v[i + dims[0] * (j + dims[1] * k)];
+                    // every macrocell touching this sample includes it
+                    for (mi, mj) in [
+                        (i / 8, j / 8),
+                        (i.saturating_sub(1) / 8, j.saturating_sub(1) / 8),
+                    ] {
+                        let (mi, mj) = (mi.min(2), mj.min(1));
+                        let r = g.ranges[mi + 3 * mj];
+                        if i <= (mi + 1) * 8 && i >= mi * 8 && j <= (mj + 1) * 8 && j >= mj * 8 {
+                            assert!(r[0] <= x && x <= r[1]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn occupied_intervals_follow_the_data() {
+        // A 33^3 volume, zero except a blob in macrocell (2, 2, 2).
+        let dims = [33, 33, 33];
+        let mut v = vec![0.0f32; 33 * 33 * 33];
+        v[20 + 33 * (20 + 33 * 20)] = 1.0;
+        let g = MacrocellGrid::build(&v, dims);
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[0,1,1,1]], "extinction": [[0,0],[0.5,0],[1,1]]}"#,
+        )
+        .unwrap();
+        let table = ClassifyTable::new(&tf, [0.0, 1.0], 256);
+        let occ = Occupancy::new(&g, &table);
+        assert!(occ.empty_fraction() > 0.9);
+        let mut out = Vec::new();
+        occ.occupied(DVec3::new(-5.0, 20.0, 20.0), DVec3::X, 5.0, 37.0, &mut out);
+        assert_eq!(out.len(), 1);
+        assert!(
+            (out[0].0 - 21.0).abs() < 1e-9 && (out[0].1 - 29.0).abs() < 1e-9,
+            "{out:?}"
+        );
+        occ.occupied(DVec3::new(-5.0, 2.0, 2.0), DVec3::X, 5.0, 37.0, &mut out);
+        assert!(out.is_empty());
+    }
+}
