@@ -1,0 +1,400 @@
+//! DICOM (PS3.10 files with the 128-byte preamble and `DICM` marker): a folder of single-frame
+//! slices, one series picked by SeriesInstanceUID, or one file (enhanced multi-frame or a
+//! single slice). Parsing uses `dicom-object` 0.10 (a maintained, pure-Rust DICOM parser);
+//! no pixel-data codec is linked, so only uncompressed transfer syntaxes are read (implicit
+//! and explicit VR little endian, explicit VR big endian); compressed ones (JPEG, JPEG 2000,
+//! RLE, deflate) are [`ErrorKind::Unsupported`] naming the transfer syntax.
+//!
+//! - Folder: every file with the `DICM` marker is parsed (others, e.g. `series.json`, and
+//!   non-image DICOM files such as a DICOMDIR are skipped); slices are grouped by
+//!   SeriesInstanceUID and the requested series, else the one with the most slices, is loaded
+//!   (noted when there were several). Slices are ordered by ImagePositionPatient projected on
+//!   the slice normal (row x column direction cosines), or by InstanceNumber when positions
+//!   are missing (noted). Differing Rows / Columns / BitsAllocated, duplicate positions and
+//!   missing slices (a gap over 1.5 times the median gap) are [`ErrorKind::Invalid`].
+//! - Multi-frame file: frames are the z slices; spacing, orientation, positions and rescale
+//!   come from the shared / per-frame functional groups (PixelMeasures, PlaneOrientation,
+//!   PlanePosition, PixelValueTransformation sequences), falling back to top-level attributes.
+//! - Spacing: PixelSpacing is (row spacing = y, column spacing = x); z is the median gap of the
+//!   sorted positions, else SpacingBetweenSlices, else SliceThickness (noted).
+//! - Pixels: BitsAllocated 8 -> uint8, 16 -> uint16 / int16 (PixelRepresentation), 32 ->
+//!   float32 (noted); SamplesPerPixel must be 1. RescaleSlope / RescaleIntercept (per slice or
+//!   frame) are applied: slope 1 with values that still fit int16 gives int16 (CT Hounsfield
+//!   units), anything else float32. The pixel data length is checked against
+//!   Rows x Columns x frames x bytes before use; a file that ends inside its pixel data is
+//!   [`ErrorKind::Truncated`].
+//!
+//! The orientation is not applied: the grid is axis-aligned in (column, row, slice) order with
+//! its origin at the first slice's ImagePositionPatient (noted when the orientation is not the
+//! identity). `dicom-parser` allocates each element's declared length (at most 4 GiB, a `u32`)
+//! before reading it; Volux's own buffers are checked with `check_alloc`.
+use std::collections::BTreeMap;
+use std::io::{Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+
+use dicom_dictionary_std::tags;
+use dicom_object::{DefaultDicomObject, OpenFileOptions};
+use volux_core::Grid;
+
+use crate::{ErrorKind, ReadError, Result};
+
+mod attrs;
+mod geometry;
+mod pixels;
+
+use attrs::ImageInfo;
+use geometry::{Stack, StackInput};
+
+/// Reads a DICOM folder (one series) or file. `series_uid` picks the series in a folder
+/// holding several (default: the one with the most slices).
+pub fn read(path: &Path, series_uid: Option<&str>) -> Result<Grid> {
+    let meta = std::fs::metadata(path).map_err(|e| ReadError::new(path, e))?;
+    if meta.is_dir() {
+        read_folder(path, series_uid)
+    } else {
+        read_file(path, Vec::new())
+    }
+}
+
+fn invalid(path: &Path, msg: impl Into<String>) -> ReadError {
+    ReadError::new(path, ErrorKind::Invalid(msg.into()))
+}
+
+/// Whether the file has the `DICM` marker after the 128-byte preamble.
+fn has_dicm(path: &Path) -> Result<bool> {
+    let mut head = [0u8; 132];
+    let f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    let n = f
+        .take(132)
+        .read(&mut head)
+        .map_err(|e| ReadError::new(path, e))?;
+    Ok(n == 132 && &head[128..] == b"DICM")
+}
+
+/// The header of one file of a folder: `None` when it is not a DICOM image.
+fn scan(path: &Path) -> Result<Option<ImageInfo>> {
+    if !path.is_file() || !has_dicm(path)? {
+        return Ok(None);
+    }
+    let obj = OpenFileOptions::new()
+        .read_until(tags::PIXEL_DATA)
+        .open_file(path)
+        .map_err(|e| parse_error(path, &e))?;
+    let ts = obj.meta().transfer_syntax().to_string();
+    Ok(ImageInfo::from_obj(path.to_path_buf(), ts, &obj))
+}
+
+/// Parses a whole file (with its pixel data).
+fn open_full(path: &Path) -> Result<DefaultDicomObject> {
+    OpenFileOptions::new()
+        .open_file(path)
+        .map_err(|e| parse_error(path, &e))
+}
+
+/// Explains why `dicom-object` could not read `path`: a file ending inside its pixel data, a
+/// transfer syntax Volux does not read, or the parser's message.
+fn parse_error(path: &Path, e: &dyn std::error::Error) -> ReadError {
+    if let Some(ts) = meta_transfer_syntax(path) {
+        if let Some((expected, found)) = pixels::truncation(path, &ts) {
+            return ReadError::new(path, ErrorKind::Truncated { expected, found });
+        }
+    }
+    let mut msg = e.to_string();
+    let mut src = e.source();
+    while let Some(s) = src {
+        msg.push_str(": ");
+        msg.push_str(&s.to_string());
+        src = s.source();
+    }
+    invalid(path, format!("cannot parse the DICOM file: {msg}"))
+}
+
+/// The transfer syntax from the file meta group, if readable.
+fn meta_transfer_syntax(path: &Path) -> Option<String> {
+    let mut f = std::io::BufReader::new(std::fs::File::open(path).ok()?);
+    f.seek(SeekFrom::Start(128)).ok()?;
+    let meta = dicom_object::meta::FileMetaTable::from_reader(f).ok()?;
+    Some(meta.transfer_syntax().to_string())
+}
+
+/// Reads one file: a multi-frame volume or a single slice (z = 1).
+fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
+    if !has_dicm(path)? {
+        return Err(invalid(
+            path,
+            "not a DICOM file (no \"DICM\" marker at byte 128)",
+        ));
+    }
+    let info = scan(path)?.ok_or_else(|| invalid(path, "not a DICOM image (no Rows / Columns)"))?;
+    pixels::check_format(&info).map_err(|k| ReadError::new(path, k))?;
+    let obj = open_full(path)?;
+    let frames = info.frames.max(1) as usize;
+    // The pixel data must hold every frame before per-frame tables are built.
+    let frame = frame_len(path, &info)?;
+    let total = frame
+        .checked_mul(frames as u64)
+        .ok_or_else(|| invalid(path, "the pixel data size overflows"))?;
+    let bytes = pixels::le_bytes(path, &obj, total)?;
+    let (positions, rescale) = frame_geometry(&obj, &info, frames);
+    let labels = (1..=frames).map(|i| format!("frame {i}")).collect();
+    let stack = order(
+        path,
+        &info,
+        (positions, labels),
+        vec![None; frames],
+        "frame",
+    )?;
+    let mut data = Vec::new();
+    reserve(path, &mut data, total)?;
+    for &i in &stack.order {
+        let start = i as u64 * frame;
+        data.extend_from_slice(
+            bytes
+                .get(start as usize..(start + frame) as usize)
+                .unwrap_or(&[]),
+        );
+    }
+    let rescale: Vec<_> = stack.order.iter().map(|&i| rescale[i]).collect();
+    notes.extend(stack.notes.iter().cloned());
+    build_grid(path, &info, &stack, &data, &rescale, notes)
+}
+
+/// Per-frame positions (PlanePositionSequence) and rescale of a multi-frame file; the
+/// top-level values for a single frame.
+fn frame_geometry(
+    obj: &DefaultDicomObject,
+    info: &ImageInfo,
+    frames: usize,
+) -> (Vec<Option<glam::DVec3>>, Vec<(f64, f64)>) {
+    if frames <= 1 {
+        return (vec![info.position], vec![info.rescale]);
+    }
+    (0..frames)
+        .map(|i| {
+            let g = attrs::frame_group(obj, i);
+            let pos = g
+                .and_then(|g| attrs::items(g, tags::PLANE_POSITION_SEQUENCE))
+                .and_then(|p| p.first())
+                .and_then(attrs::position);
+            (pos, attrs::rescale(obj, g))
+        })
+        .unzip()
+}
+
+/// Orders slices or frames, mapping geometry errors to [`ErrorKind::Invalid`].
+fn order(
+    path: &Path,
+    info: &ImageInfo,
+    (positions, labels): (Vec<Option<glam::DVec3>>, Vec<String>),
+    instances: Vec<Option<i64>>,
+    what: &str,
+) -> Result<Stack> {
+    geometry::stack(&StackInput {
+        what,
+        labels,
+        positions,
+        instances,
+        fallback_order: if what == "frame" {
+            "frame order"
+        } else {
+            "InstanceNumber"
+        },
+        orientation: info.orientation,
+        spacing_between: info.spacing_between,
+        thickness: info.thickness,
+    })
+    .map_err(|m| invalid(path, m))
+}
+
+/// Bytes of one frame, checked.
+fn frame_len(path: &Path, info: &ImageInfo) -> Result<u64> {
+    match pixels::frame_bytes(info) {
+        Some(0) => Err(invalid(path, "Rows or Columns is 0")),
+        Some(n) => Ok(n),
+        None => Err(invalid(path, "the frame size overflows")),
+    }
+}
+
+/// Reserves `bytes` after checking they fit in memory.
+fn reserve(path: &Path, v: &mut Vec<u8>, bytes: u64) -> Result<()> {
+    volux_core::limits::check_alloc("pixel data", bytes, 1).map_err(|e| ReadError::new(path, e))?;
+    v.reserve_exact(bytes as usize);
+    Ok(())
+}
+
+/// Builds the grid from ordered little-endian slice bytes.
+fn build_grid(
+    path: &Path,
+    info: &ImageInfo,
+    stack: &Stack,
+    data: &[u8],
+    rescale: &[(f64, f64)],
+    mut notes: Vec<String>,
+) -> Result<Grid> {
+    let err = |e| ReadError::new(path, e);
+    let dims = [
+        i64::from(info.cols),
+        i64::from(info.rows),
+        stack.order.len() as i64,
+    ];
+    let (dims, _) = volux_core::limits::checked_dims(dims).map_err(err)?;
+    let samples =
+        pixels::assemble(data, info.bits, info.signed, rescale, &mut notes).map_err(err)?;
+    let [row, col] = info.pixel_spacing.unwrap_or_else(|| {
+        notes.push("no PixelSpacing: an in-plane spacing of 1 was used".into());
+        [1.0, 1.0]
+    });
+    if info.photometric == "MONOCHROME1" {
+        notes.push("MONOCHROME1: low values are displayed bright; values kept as stored".into());
+    }
+    let grid = Grid::new(
+        dims,
+        [col, row, stack.z_spacing],
+        stack.origin.into(),
+        samples,
+    )
+    .map_err(err)?;
+    Ok(notes.into_iter().fold(grid, Grid::with_note))
+}
+
+/// Reads the DICOM images of a folder, groups them by series and loads one.
+fn read_folder(dir: &Path, series_uid: Option<&str>) -> Result<Grid> {
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| ReadError::new(dir, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .collect();
+    entries.sort();
+    let mut series: BTreeMap<String, Vec<ImageInfo>> = BTreeMap::new();
+    for p in &entries {
+        if let Some(info) = scan(p)? {
+            series
+                .entry(info.series_uid.clone())
+                .or_default()
+                .push(info);
+        }
+    }
+    if series.is_empty() {
+        return Err(invalid(
+            dir,
+            format!(
+                "no DICOM image files in this folder ({} entries looked at)",
+                entries.len()
+            ),
+        ));
+    }
+    let (slices, notes) = select(dir, series, series_uid)?;
+    match slices.as_slice() {
+        [one] if one.frames > 1 => read_file(&one.path, notes),
+        _ => load_series(dir, &slices, notes),
+    }
+}
+
+/// Picks the requested series, else the one with the most slices.
+fn select(
+    dir: &Path,
+    mut series: BTreeMap<String, Vec<ImageInfo>>,
+    uid: Option<&str>,
+) -> Result<(Vec<ImageInfo>, Vec<String>)> {
+    let list = series
+        .iter()
+        .map(|(k, v)| format!("{k} ({} files)", v.len()))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let chosen = match uid {
+        Some(u) => u.to_string(),
+        None => series
+            .iter()
+            .max_by_key(|(k, v)| (v.len(), std::cmp::Reverse((*k).clone())))
+            .map(|(k, _)| k.clone())
+            .unwrap_or_default(),
+    };
+    let Some(slices) = series.remove(&chosen) else {
+        return Err(invalid(
+            dir,
+            format!("series {chosen} is not in this folder; available: {list}"),
+        ));
+    };
+    let mut notes = Vec::new();
+    if uid.is_none() && !series.is_empty() {
+        notes.push(format!(
+            "{} series in this folder ({list}); loaded {chosen}, the one with the most files",
+            series.len() + 1
+        ));
+    }
+    Ok((slices, notes))
+}
+
+/// Checks that every slice matches the first: size, type, format, orientation.
+fn check_slices(dir: &Path, slices: &[ImageInfo]) -> Result<()> {
+    let Some(first) = slices.first() else {
+        return Err(invalid(dir, "the series has no slices"));
+    };
+    let name = |s: &ImageInfo| s.path.file_name().map(|n| n.to_string_lossy().into_owned());
+    for s in slices {
+        pixels::check_format(s).map_err(|k| ReadError::new(&s.path, k))?;
+        let shape = |s: &ImageInfo| (s.rows, s.cols, s.bits, s.signed);
+        if shape(s) != shape(first) || s.frames > 1 {
+            return Err(invalid(
+                dir,
+                format!(
+                    "slices differ: {:?} has Rows {} Columns {} BitsAllocated {} frames {} but \
+                     {:?} has Rows {} Columns {} BitsAllocated {} frames {}",
+                    name(s).unwrap_or_default(),
+                    s.rows,
+                    s.cols,
+                    s.bits,
+                    s.frames,
+                    name(first).unwrap_or_default(),
+                    first.rows,
+                    first.cols,
+                    first.bits,
+                    first.frames
+                ),
+            ));
+        }
+        let same_orientation = match (s.orientation, first.orientation) {
+            (Some(a), Some(b)) => a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-4),
+            (a, b) => a.is_none() == b.is_none(),
+        };
+        if !same_orientation {
+            return Err(invalid(
+                dir,
+                format!(
+                    "{:?} has a different ImageOrientationPatient than {:?}",
+                    name(s).unwrap_or_default(),
+                    name(first).unwrap_or_default()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Loads the slices of one series in position order.
+fn load_series(dir: &Path, slices: &[ImageInfo], mut notes: Vec<String>) -> Result<Grid> {
+    check_slices(dir, slices)?;
+    let first = slices
+        .first()
+        .ok_or_else(|| invalid(dir, "the series has no slices"))?;
+    let positions = slices.iter().map(|s| s.position).collect();
+    let labels = slices
+        .iter()
+        .map(|s| format!("{:?}", s.path.file_name().unwrap_or_default()))
+        .collect();
+    let instances = slices.iter().map(|s| s.instance).collect();
+    let stack = order(dir, first, (positions, labels), instances, "slice")?;
+    let frame = frame_len(dir, first)?;
+    let total = frame
+        .checked_mul(slices.len() as u64)
+        .ok_or_else(|| invalid(dir, "the series size overflows"))?;
+    let mut data = Vec::new();
+    reserve(dir, &mut data, total)?;
+    let mut rescale = Vec::with_capacity(slices.len());
+    for s in stack.order.iter().filter_map(|&i| slices.get(i)) {
+        let obj = open_full(&s.path)?;
+        data.extend_from_slice(&pixels::le_bytes(&s.path, &obj, frame)?);
+        rescale.push(attrs::rescale(&obj, None));
+    }
+    notes.extend(stack.notes.iter().cloned());
+    build_grid(dir, first, &stack, &data, &rescale, notes)
+}

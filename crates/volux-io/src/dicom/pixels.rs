@@ -1,0 +1,242 @@
+//! Pixel data of uncompressed transfer syntaxes: extraction, length checks, rescaling.
+use std::borrow::Cow;
+use std::path::Path;
+
+use dicom_core::value::{PrimitiveValue, Value};
+use dicom_dictionary_std::tags;
+use volux_core::grid::Scalar;
+use volux_core::{with_samples, Buffer, Samples, ScalarType};
+
+use super::attrs::{ImageInfo, Obj};
+use crate::{ErrorKind, ReadError, Result};
+
+/// Implicit VR little endian.
+pub(super) const IMPLICIT_LE: &str = "1.2.840.10008.1.2";
+/// Explicit VR little endian.
+pub(super) const EXPLICIT_LE: &str = "1.2.840.10008.1.2.1";
+/// Explicit VR big endian (retired).
+pub(super) const EXPLICIT_BE: &str = "1.2.840.10008.1.2.2";
+
+/// A readable name for common compressed transfer syntaxes.
+fn ts_name(uid: &str) -> &'static str {
+    match uid {
+        "1.2.840.10008.1.2.1.99" => "Deflated Explicit VR Little Endian",
+        "1.2.840.10008.1.2.4.50" => "JPEG Baseline",
+        "1.2.840.10008.1.2.4.51" => "JPEG Extended",
+        "1.2.840.10008.1.2.4.57" | "1.2.840.10008.1.2.4.70" => "JPEG Lossless",
+        "1.2.840.10008.1.2.4.80" | "1.2.840.10008.1.2.4.81" => "JPEG-LS",
+        "1.2.840.10008.1.2.4.90" | "1.2.840.10008.1.2.4.91" => "JPEG 2000",
+        "1.2.840.10008.1.2.4.201" | "1.2.840.10008.1.2.4.202" | "1.2.840.10008.1.2.4.203" => {
+            "High-Throughput JPEG 2000"
+        }
+        "1.2.840.10008.1.2.5" => "RLE Lossless",
+        _ => "compressed or unknown",
+    }
+}
+
+/// Checks that the pixel format is one Volux decodes.
+pub(super) fn check_format(info: &ImageInfo) -> Result<(), ErrorKind> {
+    let ts = info.transfer_syntax.as_str();
+    if ![IMPLICIT_LE, EXPLICIT_LE, EXPLICIT_BE].contains(&ts) {
+        return Err(ErrorKind::Unsupported(format!(
+            "transfer syntax {ts} ({}): Volux reads uncompressed DICOM only (implicit or \
+             explicit VR little endian, explicit VR big endian)",
+            ts_name(ts)
+        )));
+    }
+    if info.samples_per_pixel != 1 {
+        return Err(ErrorKind::Unsupported(format!(
+            "SamplesPerPixel {} ({}): Volux reads single-channel images",
+            info.samples_per_pixel, info.photometric
+        )));
+    }
+    if ![8, 16, 32].contains(&info.bits) {
+        return Err(ErrorKind::Unsupported(format!(
+            "BitsAllocated {}: Volux reads 8, 16 and 32",
+            info.bits
+        )));
+    }
+    Ok(())
+}
+
+/// Bytes of one frame.
+pub(super) fn frame_bytes(info: &ImageInfo) -> Option<u64> {
+    u64::from(info.rows)
+        .checked_mul(u64::from(info.cols))?
+        .checked_mul(u64::from(info.bits / 8))
+}
+
+/// The PixelData of `obj` as a little-endian byte stream, exactly `expected` bytes long.
+pub(super) fn le_bytes<'a>(path: &Path, obj: &'a Obj, expected: u64) -> Result<Cow<'a, [u8]>> {
+    let err = |k: ErrorKind| ReadError::new(path, k);
+    let elem = obj
+        .element_opt(tags::PIXEL_DATA)
+        .ok()
+        .flatten()
+        .ok_or_else(|| {
+            err(ErrorKind::Invalid(
+                "no PixelData (7FE0,0010) element".into(),
+            ))
+        })?;
+    let prim = match elem.value() {
+        Value::Primitive(p) => p,
+        _ => {
+            return Err(err(ErrorKind::Unsupported(
+                "encapsulated (compressed) pixel data".into(),
+            )))
+        }
+    };
+    let bytes = to_le(prim);
+    let found = bytes.len() as u64;
+    if found < expected {
+        return Err(err(ErrorKind::Truncated { expected, found }));
+    }
+    Ok(match bytes {
+        Cow::Borrowed(b) => Cow::Borrowed(b.get(..expected as usize).unwrap_or(b)),
+        Cow::Owned(mut v) => {
+            v.truncate(expected as usize);
+            Cow::Owned(v)
+        }
+    })
+}
+
+/// Raw bytes in little-endian order: OB values are the file bytes (8-bit data in any
+/// transfer syntax, or little-endian words), OW and wider values are native numbers decoded
+/// by the parser in the file's byte order.
+fn to_le(p: &PrimitiveValue) -> Cow<'_, [u8]> {
+    fn le<T: Copy, const N: usize>(v: &[T], f: impl Fn(T) -> [u8; N]) -> Cow<'static, [u8]> {
+        Cow::Owned(v.iter().flat_map(|x| f(*x)).collect())
+    }
+    match p {
+        PrimitiveValue::U8(v) => Cow::Borrowed(&v[..]),
+        PrimitiveValue::U16(v) => le(v, u16::to_le_bytes),
+        PrimitiveValue::I16(v) => le(v, i16::to_le_bytes),
+        PrimitiveValue::U32(v) => le(v, u32::to_le_bytes),
+        PrimitiveValue::I32(v) => le(v, i32::to_le_bytes),
+        PrimitiveValue::F32(v) => le(v, f32::to_le_bytes),
+        other => other.to_bytes().into_owned().into(),
+    }
+}
+
+/// Turns the little-endian bytes of all slices into samples, applying each slice's
+/// `(slope, intercept)`: integers stay native when no rescale is needed, become int16 when
+/// slope is 1 and the shifted values fit (CT Hounsfield units), float32 otherwise.
+pub(super) fn assemble(
+    bytes: &[u8],
+    bits: u32,
+    signed: bool,
+    rescale: &[(f64, f64)],
+    notes: &mut Vec<String>,
+) -> Result<Samples, volux_core::Error> {
+    let raw = match (bits, signed) {
+        (8, false) => Samples::from_bytes(ScalarType::U8, bytes, true)?,
+        (8, true) => {
+            notes.push("signed 8-bit pixels widened to int16".into());
+            Samples::I16(Buffer::owned(
+                bytes.iter().map(|&b| i16::from(b as i8)).collect(),
+            ))
+        }
+        (16, false) => Samples::from_bytes(ScalarType::U16, bytes, true)?,
+        (16, true) => Samples::from_bytes(ScalarType::I16, bytes, true)?,
+        _ => {
+            notes.push(format!(
+                "32-bit {} pixels converted to float32",
+                if signed { "signed" } else { "unsigned" }
+            ));
+            Samples::F32(Buffer::owned(
+                bytes
+                    .chunks_exact(4)
+                    .map(|c| {
+                        let a = [c[0], c[1], c[2], c[3]];
+                        if signed {
+                            i32::from_le_bytes(a) as f32
+                        } else {
+                            u32::from_le_bytes(a) as f32
+                        }
+                    })
+                    .collect(),
+            ))
+        }
+    };
+    if rescale.iter().all(|&r| r == (1.0, 0.0)) {
+        return Ok(raw);
+    }
+    let slice_len = raw.len() / rescale.len().max(1);
+    if let Some(s) = shifted_i16(&raw, rescale, slice_len) {
+        notes.push("RescaleIntercept applied; values stored as int16".into());
+        return Ok(s);
+    }
+    volux_core::limits::check_alloc("float32 pixels", raw.len() as u64, 4)?;
+    notes.push("RescaleSlope / RescaleIntercept applied; values stored as float32".into());
+    let out: Vec<f32> = with_samples!(&raw, |s| s
+        .chunks(slice_len.max(1))
+        .zip(rescale)
+        .flat_map(|(c, &(m, b))| c
+            .iter()
+            .map(move |v| (f64::from(v.to_f32()) * m + b) as f32))
+        .collect());
+    Ok(Samples::F32(Buffer::owned(out)))
+}
+
+/// Integer data with slope 1 and whole intercepts whose shifted values fit int16.
+fn shifted_i16(raw: &Samples, rescale: &[(f64, f64)], slice_len: usize) -> Option<Samples> {
+    if raw.scalar_type() == ScalarType::F32
+        || rescale.iter().any(|&(m, b)| m != 1.0 || b.fract() != 0.0)
+    {
+        return None;
+    }
+    let fits = |v: f64| (f64::from(i16::MIN)..=f64::from(i16::MAX)).contains(&v);
+    let ok = with_samples!(raw, |s| s.chunks(slice_len.max(1)).zip(rescale).all(
+        |(c, &(_, b))| {
+            let (lo, hi) = c
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                    let v = f64::from(v.to_f32());
+                    (l.min(v), h.max(v))
+                });
+            c.is_empty() || (fits(lo + b) && fits(hi + b))
+        }
+    ));
+    ok.then(|| {
+        let out: Vec<i16> = with_samples!(raw, |s| s
+            .chunks(slice_len.max(1))
+            .zip(rescale)
+            .flat_map(|(c, &(_, b))| c.iter().map(move |v| (f64::from(v.to_f32()) + b) as i16))
+            .collect());
+        Samples::I16(Buffer::owned(out))
+    })
+}
+
+/// For a file the parser could not read: the declared and present bytes of its PixelData
+/// when the file ends inside it (found by scanning for the PixelData element header).
+pub(super) fn truncation(path: &Path, transfer_syntax: &str) -> Option<(u64, u64)> {
+    let data = std::fs::read(path).ok()?;
+    let (tag, explicit, le): (&[u8], bool, bool) = match transfer_syntax {
+        IMPLICIT_LE => (&[0xE0, 0x7F, 0x10, 0x00], false, true),
+        EXPLICIT_BE => (&[0x7F, 0xE0, 0x00, 0x10], true, false),
+        _ => (&[0xE0, 0x7F, 0x10, 0x00], true, true),
+    };
+    let hit = |i: usize| {
+        let rest = data.get(i + 4..)?;
+        let (len_at, start) = if explicit {
+            matches!(rest.get(..4)?, b"OW\0\0" | b"OB\0\0").then_some((i + 8, i + 12))?
+        } else {
+            (i + 4, i + 8)
+        };
+        let l: [u8; 4] = data.get(len_at..len_at + 4)?.try_into().ok()?;
+        let len = if le {
+            u32::from_le_bytes(l)
+        } else {
+            u32::from_be_bytes(l)
+        };
+        Some((
+            u64::from(len),
+            (data.len() as u64).saturating_sub(start as u64),
+        ))
+    };
+    data.windows(4)
+        .enumerate()
+        .filter(|(_, w)| *w == tag)
+        .find_map(|(i, _)| hit(i))
+        .filter(|&(len, found)| len != u32::MAX as u64 && found < len)
+}

@@ -1,0 +1,421 @@
+//! DICOM reader tests on the shared series and multi-frame file, and on damaged copies of
+//! them (uneven gaps, duplicate positions, truncation, differing Rows, several series,
+//! compressed transfer syntax, implicit VR and big-endian re-encodings, rescale).
+use std::path::{Path, PathBuf};
+
+use dicom_core::VR;
+use dicom_dictionary_std::tags;
+use volux_core::ScalarType;
+use volux_io::{dicom, ErrorKind};
+
+const SERIES: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/data/tcia_cptac_sar_mr_3slice_dicom"
+);
+const EMRI: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/data/pydicom_emri_small/emri_small.dcm"
+);
+const FILES: [&str; 3] = ["1-1.dcm", "1-2.dcm", "1-3.dcm"];
+
+fn present(p: &str) -> bool {
+    let ok = Path::new(p).exists();
+    if !ok {
+        eprintln!("skipping: {p} is absent");
+    }
+    ok
+}
+
+fn sidecar(p: &str) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
+
+/// Copies the shared series into a new temp folder.
+fn copy_series() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for f in FILES {
+        std::fs::copy(Path::new(SERIES).join(f), dir.path().join(f)).unwrap();
+    }
+    dir
+}
+
+/// Rewrites `path` (or writes it to `to`) after `edit`.
+fn edit(path: &Path, to: &Path, edit: impl FnOnce(&mut dicom_object::DefaultDicomObject)) {
+    let mut obj = dicom_object::open_file(path).unwrap();
+    edit(&mut obj);
+    obj.write_to_file(to).unwrap();
+}
+
+fn set_z(obj: &mut dicom_object::DefaultDicomObject, z: f64) {
+    obj.put_str(
+        tags::IMAGE_POSITION_PATIENT,
+        VR::DS,
+        format!("-250\\-250\\{z}"),
+    );
+}
+
+fn err_kind(r: volux_io::Result<volux_core::Grid>) -> ErrorKind {
+    match r {
+        Ok(g) => panic!("read a damaged input: dims {:?}", g.dims()),
+        Err(e) => {
+            eprintln!("expected error: {e}");
+            e.kind
+        }
+    }
+}
+
+#[test]
+fn shared_series_folder() {
+    if !present(SERIES) {
+        return;
+    }
+    let side = sidecar(&format!("{SERIES}/series.json"));
+    assert_eq!(side["files"].as_array().unwrap().len(), 3);
+    let g = dicom::read(Path::new(SERIES), None).unwrap();
+    assert_eq!(g.dims(), [512, 512, 3]);
+    assert_eq!(g.scalar_type(), ScalarType::U16);
+    let s = g.spacing();
+    assert!((s.x - 0.9765625).abs() < 1e-9 && (s.y - 0.9765625).abs() < 1e-9);
+    assert!((s.z - 12.0).abs() < 1e-9, "{s:?}");
+    assert_eq!(g.origin().to_array(), [-250.0, -250.0, -12.0]);
+    assert!(g.notes().is_empty(), "{:?}", g.notes());
+    // Slice k of the volume is the file at z = -12 + 12 k (1-1 is at z = 12).
+    let mut range = [f64::INFINITY, f64::NEG_INFINITY];
+    for (k, f) in FILES.iter().rev().enumerate() {
+        let one = dicom::read(&Path::new(SERIES).join(f), None).unwrap();
+        assert_eq!(one.dims(), [512, 512, 1]);
+        assert_eq!(one.origin().z, -12.0 + 12.0 * k as f64);
+        for i in (0..512 * 512).step_by(97) {
+            assert_eq!(
+                one.samples().get_f32(i),
+                g.samples().get_f32(i + k * 512 * 512)
+            );
+        }
+        range = [range[0].min(one.range()[0]), range[1].max(one.range()[1])];
+    }
+    assert_eq!(g.range(), range);
+    assert!(g.range()[1] > 0.0);
+}
+
+#[test]
+fn shared_multiframe() {
+    if !present(EMRI) {
+        return;
+    }
+    let side = sidecar(&format!("{EMRI}.json"));
+    let g = dicom::read(Path::new(EMRI), None).unwrap();
+    let (c, r, f) = (
+        side["columns"].as_u64().unwrap() as usize,
+        side["rows"].as_u64().unwrap() as usize,
+        side["frames"].as_u64().unwrap() as usize,
+    );
+    assert_eq!(g.dims(), [c, r, f]);
+    assert_eq!(g.scalar_type(), ScalarType::U16);
+    let pr = side["pixel_range"].as_array().unwrap();
+    assert_eq!(
+        g.range(),
+        [pr[0].as_f64().unwrap(), pr[1].as_f64().unwrap()]
+    );
+    // No PixelSpacing in this file; SpacingBetweenSlices is 1.2.
+    assert_eq!(g.spacing().to_array(), [1.0, 1.0, 1.2]);
+    assert!(g.notes().iter().any(|n| n.contains("PixelSpacing")));
+    assert!(g.notes().iter().any(|n| n.contains("SpacingBetweenSlices")));
+    // Through `load` (magic-byte detection).
+    let (_, fmt) = volux_io::load(Path::new(EMRI), &Default::default()).unwrap();
+    assert_eq!(fmt, volux_io::Format::Dicom);
+}
+
+#[test]
+fn folder_skips_non_dicom_files() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = copy_series();
+    std::fs::copy(
+        format!("{SERIES}/series.json"),
+        dir.path().join("series.json"),
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("notes.txt"), "hello").unwrap();
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    let g = dicom::read(dir.path(), None).unwrap();
+    assert_eq!(g.dims(), [512, 512, 3]);
+}
+
+#[test]
+fn uneven_gap_is_a_missing_slice() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = copy_series();
+    let p = dir.path().join("1-1.dcm");
+    edit(&p, &p, |o| set_z(o, 40.0));
+    let k = err_kind(dicom::read(dir.path(), None));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("missing")),
+        "{k}"
+    );
+}
+
+#[test]
+fn duplicate_position() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = copy_series();
+    let p = dir.path().join("1-1.dcm");
+    edit(&p, &p, |o| set_z(o, 0.0));
+    let k = err_kind(dicom::read(dir.path(), None));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("same position")),
+        "{k}"
+    );
+}
+
+#[test]
+fn missing_positions_fall_back_to_instance_number() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = copy_series();
+    for (i, f) in FILES.iter().enumerate() {
+        let p = dir.path().join(f);
+        edit(&p, &p, |o| {
+            o.remove_element(tags::IMAGE_POSITION_PATIENT);
+            o.put_str(tags::INSTANCE_NUMBER, VR::IS, format!("{}", 3 - i));
+        });
+    }
+    let g = dicom::read(dir.path(), None).unwrap();
+    assert_eq!(g.dims(), [512, 512, 3]);
+    assert!(g.notes().iter().any(|n| n.contains("InstanceNumber")));
+    assert!(g.notes().iter().any(|n| n.contains("SpacingBetweenSlices")));
+    assert_eq!(g.spacing().z, 12.0);
+}
+
+#[test]
+fn truncated_file() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = copy_series();
+    let p = dir.path().join("1-2.dcm");
+    let bytes = std::fs::read(&p).unwrap();
+    std::fs::write(&p, &bytes[..bytes.len() - 200_000]).unwrap();
+    let k = err_kind(dicom::read(&p, None));
+    assert!(
+        matches!(
+            k,
+            ErrorKind::Truncated {
+                expected: 524288,
+                ..
+            }
+        ),
+        "{k}"
+    );
+    let k = err_kind(dicom::read(dir.path(), None));
+    assert!(matches!(k, ErrorKind::Truncated { .. }), "{k}");
+    // Cut inside the header: a parse error, not a panic.
+    std::fs::write(&p, &bytes[..700]).unwrap();
+    let k = err_kind(dicom::read(&p, None));
+    assert!(
+        matches!(k, ErrorKind::Invalid(_) | ErrorKind::Truncated { .. }),
+        "{k}"
+    );
+}
+
+#[test]
+fn short_pixel_data_element() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("short.dcm");
+    edit(&Path::new(SERIES).join("1-1.dcm"), &p, |o| {
+        o.put(dicom_core::DataElement::new(
+            tags::PIXEL_DATA,
+            VR::OW,
+            dicom_core::PrimitiveValue::U16(vec![7u16; 1000].into()),
+        ));
+    });
+    let k = err_kind(dicom::read(&p, None));
+    assert!(
+        matches!(
+            k,
+            ErrorKind::Truncated {
+                expected: 524288,
+                found: 2000
+            }
+        ),
+        "{k}"
+    );
+}
+
+#[test]
+fn different_rows() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = copy_series();
+    let p = dir.path().join("1-2.dcm");
+    edit(&p, &p, |o| {
+        o.put(dicom_core::DataElement::new(
+            tags::ROWS,
+            VR::US,
+            dicom_core::PrimitiveValue::from(256u16),
+        ));
+    });
+    let k = err_kind(dicom::read(dir.path(), None));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("Rows")),
+        "{k}"
+    );
+}
+
+#[test]
+fn no_dicom_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let k = err_kind(dicom::read(dir.path(), None));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("no DICOM")),
+        "{k}"
+    );
+    std::fs::write(dir.path().join("a.txt"), "not dicom").unwrap();
+    let k = err_kind(dicom::read(dir.path(), None));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("no DICOM")),
+        "{k}"
+    );
+    // A lone non-DICOM file, and garbage after a DICM marker.
+    let k = err_kind(dicom::read(&dir.path().join("a.txt"), None));
+    assert!(matches!(k, ErrorKind::Invalid(_)), "{k}");
+    let mut junk = vec![0u8; 128];
+    junk.extend_from_slice(b"DICM");
+    junk.extend((0..5000u32).map(|i| (i * 7919 % 251) as u8));
+    std::fs::write(dir.path().join("junk.dcm"), &junk).unwrap();
+    let k = err_kind(dicom::read(&dir.path().join("junk.dcm"), None));
+    assert!(
+        matches!(k, ErrorKind::Invalid(_) | ErrorKind::Truncated { .. }),
+        "{k}"
+    );
+}
+
+#[test]
+fn two_series() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = copy_series();
+    for f in ["1-1.dcm", "1-2.dcm"] {
+        let to = dir.path().join(format!("b{f}"));
+        edit(&Path::new(SERIES).join(f), &to, |o| {
+            o.put_str(tags::SERIES_INSTANCE_UID, VR::UI, "1.2.3.4");
+        });
+    }
+    let g = dicom::read(dir.path(), None).unwrap();
+    assert_eq!(g.dims(), [512, 512, 3]);
+    assert!(
+        g.notes().iter().any(|n| n.contains("2 series")),
+        "{:?}",
+        g.notes()
+    );
+    let g = dicom::read(dir.path(), Some("1.2.3.4")).unwrap();
+    assert_eq!(g.dims(), [512, 512, 2]);
+    assert_eq!(g.origin().z, 0.0);
+    let k = err_kind(dicom::read(dir.path(), Some("9.9")));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("1.2.3.4 (2 files)")),
+        "{k}"
+    );
+}
+
+#[test]
+fn compressed_transfer_syntax_is_unsupported() {
+    if !present(SERIES) {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = std::fs::read(Path::new(SERIES).join("1-1.dcm")).unwrap();
+    // Same length: "1.2.840.10008.1.2.1\0" -> "1.2.840.10008.1.2.5\0" (RLE Lossless).
+    let at = bytes
+        .windows(20)
+        .position(|w| w == b"1.2.840.10008.1.2.1\0")
+        .unwrap();
+    bytes[at + 18] = b'5';
+    let p = dir.path().join("rle.dcm");
+    std::fs::write(&p, &bytes).unwrap();
+    for path in [p.as_path(), dir.path()] {
+        let k = err_kind(dicom::read(path, None));
+        assert!(
+            matches!(&k, ErrorKind::Unsupported(m) if m.contains("1.2.840.10008.1.2.5") && m.contains("RLE")),
+            "{k}"
+        );
+    }
+}
+
+/// The same slice re-encoded as implicit VR little endian and explicit VR big endian.
+#[test]
+fn other_uncompressed_transfer_syntaxes() {
+    if !present(SERIES) {
+        return;
+    }
+    let src = Path::new(SERIES).join("1-1.dcm");
+    let want = dicom::read(&src, None).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for ts in ["1.2.840.10008.1.2", "1.2.840.10008.1.2.2"] {
+        let p: PathBuf = dir.path().join(format!("{ts}.dcm"));
+        edit(&src, &p, |o| {
+            o.meta_mut().transfer_syntax = ts.to_string();
+            o.meta_mut().update_information_group_length();
+        });
+        let g = dicom::read(&p, None).unwrap_or_else(|e| panic!("{ts}: {e}"));
+        assert_eq!(g.dims(), want.dims());
+        assert_eq!(g.range(), want.range(), "{ts}");
+        for i in (0..g.len()).step_by(101) {
+            assert_eq!(g.samples().get_f32(i), want.samples().get_f32(i), "{ts}");
+        }
+    }
+}
+
+#[test]
+fn rescale_to_i16_and_f32() {
+    if !present(SERIES) {
+        return;
+    }
+    let src = Path::new(SERIES).join("1-1.dcm");
+    let raw = dicom::read(&src, None).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("1", "-1024", ScalarType::I16),
+        ("2", "-1024", ScalarType::F32),
+        ("1", "40000", ScalarType::F32),
+    ];
+    for (slope, inter, ty) in cases {
+        let p = dir.path().join(format!("r{slope}_{inter}.dcm"));
+        edit(&src, &p, |o| {
+            o.put_str(tags::RESCALE_SLOPE, VR::DS, slope);
+            o.put_str(tags::RESCALE_INTERCEPT, VR::DS, inter);
+        });
+        let g = dicom::read(&p, None).unwrap();
+        assert_eq!(g.scalar_type(), ty, "{slope} {inter}");
+        let (m, b): (f64, f64) = (slope.parse().unwrap(), inter.parse().unwrap());
+        for i in (0..g.len()).step_by(89) {
+            let v = f64::from(raw.samples().get_f32(i)) * m + b;
+            assert_eq!(f64::from(g.samples().get_f32(i)), v);
+        }
+        assert!(g.notes().iter().any(|n| n.contains("Rescale")));
+    }
+}
+
+#[test]
+fn lying_frame_count_is_truncated() {
+    if !present(EMRI) {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("frames.dcm");
+    edit(Path::new(EMRI), &p, |o| {
+        o.put_str(tags::NUMBER_OF_FRAMES, VR::IS, "2000000000");
+    });
+    let k = err_kind(dicom::read(&p, None));
+    assert!(matches!(k, ErrorKind::Truncated { .. }), "{k}");
+}
