@@ -56,6 +56,43 @@ pub enum Command {
     Render(Box<RenderArgs>),
     /// Render a built-in dataset to demo.png in the current folder.
     Demo,
+    /// Accuracy of Riemann sums and adaptive Simpson against the f64 reference (seed
+    /// `001` tables B.1, B.2 and 5.5).
+    Accuracy {
+        /// The file (or DICOM folder); a generator name (marschner-lobb, shepp-logan,
+        /// sphere) renders that synthetic volume at 64^3.
+        file: PathBuf,
+        /// Transfer function preset or JSON file.
+        #[arg(long, default_value = "auto")]
+        tf: String,
+        /// Image size WxH.
+        #[arg(long, default_value = "128x128")]
+        size: String,
+        /// Error threshold for the Riemann rows.
+        #[arg(long, default_value_t = 0.01)]
+        eps: f64,
+        /// Print a JSON list.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        load: LoadArgs,
+    },
+    /// Speed of the grid ray caster: ms/frame and samples/s per integrator on synthetic and
+    /// shared volumes.
+    Bench {
+        /// One frame per case and 512x512 only.
+        #[arg(long)]
+        quick: bool,
+        /// Frames per case (the median is reported).
+        #[arg(long, default_value_t = 3)]
+        frames: usize,
+        /// Synthetic volume size per axis.
+        #[arg(long, default_value_t = 256)]
+        grid_size: usize,
+        /// Print a JSON list.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// Options that some readers need.

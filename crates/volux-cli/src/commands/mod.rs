@@ -1,4 +1,6 @@
 //! The commands, one module each.
+mod accuracy;
+mod bench;
 mod convert;
 mod info;
 mod render;
@@ -26,6 +28,30 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
         Command::Generate { kind, size, output } => convert::generate(&kind, size, &output),
         Command::Render(args) => render::run(&args, show),
         Command::Demo => render::demo(show),
+        Command::Accuracy {
+            file,
+            tf,
+            size,
+            eps,
+            json,
+            load,
+        } => accuracy::run(
+            &accuracy::Args {
+                file,
+                tf,
+                size,
+                eps,
+                json,
+                load,
+            },
+            show,
+        ),
+        Command::Bench {
+            quick,
+            frames,
+            grid_size,
+            json,
+        } => bench::run(quick, frames, grid_size, json),
     }
 }
 

@@ -46,7 +46,7 @@ fn parse_background(s: &str) -> Result<Option<[f32; 3]>, CmdError> {
 }
 
 /// A preset name or a JSON file, with presets scaled to `unit_length` world units.
-fn transfer_function(
+pub fn transfer_function(
     spec: &str,
     hist: &Histogram,
     unit_length: f64,

@@ -1,0 +1,155 @@
+//! `volux bench`: ms/frame and samples/s of the grid ray caster per integrator, on synthetic
+//! volumes and the shared CT and MRI heads (when `../shared/data` is present).
+use std::path::Path;
+
+use serde_json::json;
+use volux_core::histogram::Histogram;
+use volux_core::{synth, CameraSpec, Grid, TransferFunction};
+use volux_io::{Dataset, LoadOptions};
+use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
+use volux_render::raycast::GridRenderer;
+use volux_render::RenderOptions;
+
+use super::CmdError;
+
+/// A semi-transparent TF for the synthetic volumes (normalized).
+const SYNTHETIC_TF: &str = r#"{"space": "normalized",
+  "color": [[0, 0.1, 0.2, 0.9], [0.5, 0.9, 0.5, 0.1], [1, 1, 1, 1]],
+  "extinction": [[0, 0], [0.2, 0], [0.3, 0.05], [0.45, 0.0], [0.5, 0.2], [0.55, 0.0], [1, 0.1]]}"#;
+
+const SHARED: [(&str, &str); 2] = [
+    (
+        "ct-head",
+        "invesalius_cranium_ct/cranium_256x256x108_int16.raw.gz",
+    ),
+    (
+        "mri-head",
+        "niivue_chris_t1/chris_t1_188x256x190_uint8.raw.gz",
+    ),
+];
+
+fn datasets(n: usize) -> Result<Vec<(String, Grid, TransferFunction)>, CmdError> {
+    let synthetic = TransferFunction::from_json(SYNTHETIC_TF)?;
+    let mut out = vec![
+        (
+            format!("marschner-lobb-{n}"),
+            synth::marschner_lobb(n)?,
+            synthetic.clone(),
+        ),
+        (
+            format!("shepp-logan-{n}"),
+            synth::shepp_logan(n)?,
+            synthetic,
+        ),
+    ];
+    let root = Path::new("../shared/data");
+    for (name, rel) in SHARED {
+        let p = root.join(rel);
+        if !p.exists() {
+            eprintln!("bench: {} absent, skipped", p.display());
+            continue;
+        }
+        if let (Dataset::Grid(g), _) = volux_io::load(&p, &LoadOptions::default())? {
+            let tf = TransferFunction::preset("auto", &Histogram::of_grid(&g, 256))?
+                .with_unit_length(g.spacing().min_element());
+            out.push((name.to_string(), g, tf));
+        }
+    }
+    Ok(out)
+}
+
+fn integrators() -> Vec<Integrator> {
+    let adaptive = |control| {
+        Integrator::AdaptiveSimpson(AdaptiveParams {
+            tol: 0.01,
+            h0: 0.5,
+            hmin: 0.001,
+            hmax: 0.5,
+            control,
+            early_termination: None,
+        })
+    };
+    vec![
+        Integrator::Riemann { step: 0.5 },
+        Integrator::Riemann { step: 0.2 },
+        Integrator::Trapezoid { step: 0.5 },
+        Integrator::Simpson { step: 0.5 },
+        adaptive(StepControl::Coupled),
+        adaptive(StepControl::Decoupled),
+    ]
+}
+
+fn param(i: &Integrator) -> String {
+    match i {
+        Integrator::Riemann { step }
+        | Integrator::Trapezoid { step }
+        | Integrator::Simpson { step } => format!("h={step}"),
+        Integrator::AdaptiveSimpson(p) => format!("tol={}", p.tol),
+        _ => String::new(),
+    }
+}
+
+pub fn run(quick: bool, frames: usize, n: usize, as_json: bool) -> Result<(), CmdError> {
+    let frames = if quick { 1 } else { frames.max(1) };
+    let sizes: &[(usize, usize)] = if quick {
+        &[(512, 512)]
+    } else {
+        &[(512, 512), (800, 600)]
+    };
+    let threads = rayon::current_num_threads();
+    let mut rows = Vec::new();
+    if !as_json {
+        println!("threads: {threads}; frames per case: {frames} (median)");
+        println!(
+            "{:<22} {:>8} {:<20} {:>10} {:>12} {:>14} {:>16}",
+            "dataset", "size", "integrator", "ms/frame", "samples", "Msamples/s", "Msamples/s/core"
+        );
+    }
+    for (name, grid, tf) in datasets(n)? {
+        let renderer = GridRenderer::new(&grid);
+        renderer.macrocells();
+        let spec = CameraSpec {
+            azimuth: Some(30.0),
+            elevation: Some(20.0),
+            ..Default::default()
+        };
+        for &(w, h) in sizes {
+            for integrator in integrators() {
+                let mut opts = RenderOptions::new(spec.resolve(&grid.bounds())?, tf.clone());
+                (opts.width, opts.height, opts.integrator) = (w, h, integrator);
+                let mut times = Vec::new();
+                let mut samples = 0;
+                for _ in 0..frames {
+                    let r = renderer.render(&opts)?;
+                    times.push(r.stats.seconds);
+                    samples = r.stats.samples;
+                }
+                times.sort_by(f64::total_cmp);
+                let s = times[times.len() / 2];
+                let rate = samples as f64 / s / 1e6;
+                let row = json!({
+                    "dataset": name, "width": w, "height": h, "integrator": integrator.name(),
+                    "param": param(&integrator), "ms": s * 1e3, "samples": samples,
+                    "samples_per_s": rate * 1e6, "samples_per_s_per_core": rate * 1e6 / threads as f64,
+                });
+                if !as_json {
+                    println!(
+                        "{:<22} {:>8} {:<20} {:>10.1} {:>12} {:>14.1} {:>16.1}",
+                        name,
+                        format!("{w}x{h}"),
+                        format!("{} {}", integrator.name(), param(&integrator)),
+                        s * 1e3,
+                        samples,
+                        rate,
+                        rate / threads as f64
+                    );
+                }
+                rows.push(row);
+            }
+        }
+    }
+    if as_json {
+        println!("{}", serde_json::Value::Array(rows));
+    }
+    Ok(())
+}
