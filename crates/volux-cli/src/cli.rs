@@ -167,6 +167,9 @@ pub struct RenderArgs {
     /// adaptive-simpson: control the colour integral's step apart from the opacity's.
     #[arg(long)]
     pub decoupled: bool,
+    /// Jitter each ray's first sample (fine noise instead of wood-grain rings).
+    #[arg(long)]
+    pub jitter: bool,
     /// Integrate every ray to its end (no early ray termination).
     #[arg(long)]
     pub no_early_termination: bool,

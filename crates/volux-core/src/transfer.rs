@@ -224,7 +224,11 @@ impl TransferFunction {
             i if i == pts.len() => (pts[i - 1], pts[i - 1]),
             i => (pts[i - 1], pts[i]),
         };
-        let t = if b[0] > a[0] { (s - a[0]) / (b[0] - a[0]) } else { 0.0 };
+        let t = if b[0] > a[0] {
+            (s - a[0]) / (b[0] - a[0])
+        } else {
+            0.0
+        };
         [1, 2, 3].map(|c| a[c] + (b[c] - a[c]) * t)
     }
 

@@ -166,6 +166,7 @@ fn render_dataset(
     let camera = spec.resolve(&bounds)?;
     let mut opts = RenderOptions::new(camera, tf);
     (opts.width, opts.height, opts.integrator) = (w, h, integrator);
+    opts.jitter = args.jitter;
     if args.no_early_termination || integrator == Integrator::Reference {
         opts.early_termination = None;
     }
