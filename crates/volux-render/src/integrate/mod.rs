@@ -17,6 +17,7 @@ use crate::classify::Classified;
 
 pub mod adaptive;
 pub mod fixed;
+pub mod preintegrated;
 
 pub use adaptive::{
     adaptive_simpson, adaptive_simpson_intervals, adaptive_simpson_pieces, AdaptiveParams,
