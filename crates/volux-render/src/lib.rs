@@ -16,10 +16,13 @@
 
 pub mod classify;
 pub mod integrate;
+pub mod isosurface;
 pub mod macrocell;
+pub mod mip;
 pub mod raycast;
 pub mod resample;
 pub mod sampling;
+pub mod shading;
 
 pub use raycast::{render_grid, RenderOptions, RenderStats};
 
