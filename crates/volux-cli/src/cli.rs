@@ -146,7 +146,8 @@ pub struct RenderArgs {
     #[arg(long, default_value = "512x512")]
     pub size: String,
     /// Integrator: riemann, trapezoid, simpson (fixed step), adaptive-simpson (error
-    /// control), reference (f64 ground truth, slow).
+    /// control), preintegrated (table over front/back values), reference (f64 ground
+    /// truth, slow).
     #[arg(long, default_value = "riemann")]
     pub integrator: String,
     /// Fixed-step integrators: step in voxel units.

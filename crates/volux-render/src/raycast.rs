@@ -7,7 +7,7 @@
 //! `001_...txt`. Output does not depend on the number of threads: every pixel is computed
 //! independently.
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -15,6 +15,7 @@ use rayon::prelude::*;
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
 use crate::classify::{Classified, ClassifyTable};
+use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{
     adaptive_simpson_intervals, adaptive_simpson_pieces, hides_breakpoints, riemann_step, simpson,
     trapezoid, AdaptiveParams, Integrator, Medium, RayAccumulator, RayIntegral, RayMedium,
@@ -151,6 +152,7 @@ pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<Rendered, Render
 pub struct GridRenderer<'g> {
     grid: &'g Grid,
     macrocells: OnceLock<MacrocellGrid>,
+    preintegration: Mutex<Option<Arc<PreintegrationTable>>>,
 }
 
 impl<'g> GridRenderer<'g> {
@@ -159,6 +161,7 @@ impl<'g> GridRenderer<'g> {
         Self {
             grid,
             macrocells: OnceLock::new(),
+            preintegration: Mutex::new(None),
         }
     }
 
@@ -172,16 +175,47 @@ impl<'g> GridRenderer<'g> {
         })
     }
 
+    /// The pre-integration table for `opts`, rebuilt only when the TF or the step changed.
+    pub fn preintegration(
+        &self,
+        opts: &RenderOptions,
+    ) -> Result<Option<Arc<PreintegrationTable>>, RenderError> {
+        let Integrator::Preintegrated { step } = opts.integrator else {
+            return Ok(None);
+        };
+        let d = step * self.grid.spacing().min_element();
+        let range = self.grid.range();
+        let mut cache = self
+            .preintegration
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        if let Some(t) = cache
+            .as_ref()
+            .filter(|t| t.is_valid_for(&opts.tf, range, d))
+        {
+            return Ok(Some(t.clone()));
+        }
+        let table = Arc::new(
+            PreintegrationTable::new(&opts.tf, range, d).map_err(RenderError::InvalidOptions)?,
+        );
+        *cache = Some(table.clone());
+        Ok(Some(table))
+    }
+
     /// Renders with `opts`.
     pub fn render(&self, opts: &RenderOptions) -> Result<Rendered, RenderError> {
         let g = self.grid;
         let cells = opts.empty_space_skipping.then(|| self.macrocells());
+        let pre = self.preintegration(opts)?;
         volux_core::with_samples!(g.samples(), |s| render_with(
             &Trilinear::new(s, g.dims()),
             Placement::of(g),
             g.range(),
             opts,
-            cells
+            Derived {
+                macrocells: cells,
+                preintegration: pre.as_deref()
+            }
         ))
     }
 }
@@ -204,7 +238,30 @@ pub fn render_field<F: Field>(
     range: [f64; 2],
     opts: &RenderOptions,
 ) -> Result<Rendered, RenderError> {
-    render_with(field, place, range, opts, None)
+    let pre = match opts.integrator {
+        Integrator::Preintegrated { step } => Some(
+            PreintegrationTable::new(&opts.tf, range, step * place.spacing.min_element())
+                .map_err(RenderError::InvalidOptions)?,
+        ),
+        _ => None,
+    };
+    render_with(
+        field,
+        place,
+        range,
+        opts,
+        Derived {
+            macrocells: None,
+            preintegration: pre.as_ref(),
+        },
+    )
+}
+
+/// Data derived from the volume and the TF that a render uses, built (and cached) by the caller.
+#[derive(Clone, Copy, Default)]
+struct Derived<'a> {
+    macrocells: Option<&'a MacrocellGrid>,
+    preintegration: Option<&'a PreintegrationTable>,
 }
 
 fn render_with<F: Field>(
@@ -212,17 +269,18 @@ fn render_with<F: Field>(
     place: Placement,
     range: [f64; 2],
     opts: &RenderOptions,
-    macrocells: Option<&MacrocellGrid>,
+    derived: Derived<'_>,
 ) -> Result<Rendered, RenderError> {
     opts.validate()?;
     let start = Instant::now();
     let table = ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE);
-    let occupancy = macrocells.map(|m| Occupancy::new(m, &table));
+    let occupancy = derived.macrocells.map(|m| Occupancy::new(m, &table));
     let ctx = RayContext {
         field,
         place,
         table: &table,
         occupancy: occupancy.as_ref(),
+        preintegration: derived.preintegration,
         tf: opts.tf.resolved(range),
         breakpoints: opts.tf.resolved(range).breakpoints(),
         opts,
@@ -284,6 +342,7 @@ struct RayContext<'a, F> {
     place: Placement,
     table: &'a ClassifyTable,
     occupancy: Option<&'a Occupancy<'a>>,
+    preintegration: Option<&'a PreintegrationTable>,
     tf: TransferFunction,
     breakpoints: Vec<f64>,
     opts: &'a RenderOptions,
@@ -362,6 +421,9 @@ impl<F: Field> RayContext<'_, F> {
                 };
                 adaptive_simpson_intervals(&mut self.medium(o_v, d_v), &spans, &p)
             }
+            Integrator::Preintegrated { step } => {
+                return self.preintegrated(o_v, d_v, (t0, t1), &spans, step * unit, jitter)
+            }
             Integrator::Reference => self.reference(o_v, d_v, t0, t1, unit),
         };
         pixel(&integral)
@@ -426,6 +488,85 @@ impl<F: Field> RayContext<'_, F> {
                 }
                 n += 1;
                 i += 1;
+                if acc.alpha() >= stop {
+                    break 'spans;
+                }
+            }
+        }
+        PixelOut {
+            rgba: acc.rgba,
+            samples: n,
+            error: 0.0,
+            missed: false,
+            hit: true,
+        }
+    }
+}
+
+impl<F: Field> RayContext<'_, F> {
+    /// Pre-integrated classification: segments `[t_i, t_i + h]` on the same lattice as the
+    /// Riemann sum, each composited with the table entry for its front and back values; a
+    /// shortened last segment takes the fraction of the optical depth it covers. Segments
+    /// entirely inside skipped (transparent) space are not visited.
+    fn preintegrated(
+        &self,
+        o_v: DVec3,
+        d_v: DVec3,
+        (t0, t1): (f64, f64),
+        spans: &[(f64, f64)],
+        h: f64,
+        jitter: f64,
+    ) -> PixelOut {
+        let Some(table) = self.preintegration else {
+            return PixelOut::default();
+        };
+        let stop = self.opts.early_termination.unwrap_or(2.0);
+        let start = (t0 + jitter * h - h).max(t0 - h);
+        let value = |t: f64| {
+            self.field
+                .sample64(o_v + d_v * t.clamp(t0, t1))
+                .map(|v| v as f32)
+        };
+        let mut acc = RayAccumulator::default();
+        let (mut n, mut next) = (0u64, 0u64);
+        'spans: for &(a, b) in spans {
+            let mut i = (((a - start) / h).floor().max(0.0) as u64).max(next);
+            let mut front = None;
+            loop {
+                let (ta, tb) = (
+                    (start + h * i as f64).max(t0),
+                    (start + h * (i + 1) as f64).min(t1),
+                );
+                if ta >= b || ta >= t1 {
+                    break;
+                }
+                let f = match front {
+                    Some(f) => f,
+                    None => {
+                        n += 1;
+                        value(ta)
+                    }
+                };
+                let back = value(tb);
+                n += 1;
+                if let (Some(sf), Some(sb)) = (f, back) {
+                    let e = table.lookup(sf, sb);
+                    let frac = ((tb - ta) / h) as f32;
+                    let alpha = if frac < 0.999_999 {
+                        1.0 - (1.0 - e[3]).max(0.0).powf(frac)
+                    } else {
+                        e[3]
+                    };
+                    let scale = if e[3] > 0.0 { alpha / e[3] } else { frac };
+                    let w = 1.0 - acc.rgba[3];
+                    for (a, ec) in acc.rgba.iter_mut().zip(&e[..3]) {
+                        *a += w * ec * scale;
+                    }
+                    acc.rgba[3] += w * alpha;
+                }
+                front = Some(back);
+                i += 1;
+                next = i;
                 if acc.alpha() >= stop {
                     break 'spans;
                 }
@@ -702,6 +843,58 @@ mod accuracy_tests {
                 }
             }
         }
+    }
+
+    /// Pre-integration is exact for a field linear within each step: with a sharp TF it stays
+    /// close to the reference at a coarse step where a Riemann sum shows slab artifacts.
+    #[test]
+    fn preintegration_beats_riemann_on_a_sharp_tf() {
+        let g = synth::marschner_lobb(33).unwrap();
+        let sharp = TransferFunction::from_json(
+            r#"{"space": "normalized", "color": [[0, 0.2, 0.4, 1], [1, 1, 0.7, 0.3]],
+                "extinction": [[0, 0], [0.49, 0], [0.5, 1.5], [0.51, 0], [1, 0]]}"#,
+        )
+        .unwrap();
+        let spec = CameraSpec {
+            azimuth: Some(25.0),
+            elevation: Some(20.0),
+            ..Default::default()
+        };
+        let mut o = RenderOptions::new(spec.resolve(&g.bounds()).unwrap(), sharp);
+        (o.width, o.height, o.early_termination) = (40, 40, None);
+        let mut render = |i: Integrator, skip: bool| {
+            (o.integrator, o.empty_space_skipping) = (i, skip);
+            render_grid(&g, &o).unwrap().image
+        };
+        let reference = render(Integrator::Reference, false);
+        let mean_err = |img: &Image| {
+            let e: f32 = img
+                .pixels()
+                .iter()
+                .zip(reference.pixels())
+                .map(|(p, q)| (0..4).map(|c| (p[c] - q[c]).abs()).sum::<f32>())
+                .sum();
+            e / (4 * img.pixels().len()) as f32
+        };
+        // Measured (ML 33^3, 40x40): step 1: 0.0137 vs 0.0265; step 0.25: 0.0024 vs 0.0076.
+        for (step, ratio) in [(1.0, 0.6), (0.25, 0.5)] {
+            let pre = mean_err(&render(Integrator::Preintegrated { step }, true));
+            let riemann = mean_err(&render(Integrator::Riemann { step }, true));
+            assert!(
+                pre < ratio * riemann,
+                "step {step}: preintegrated {pre} vs riemann {riemann}"
+            );
+        }
+        // Skipping empty space changes nothing for pre-integration either.
+        let a = render(Integrator::Preintegrated { step: 0.7 }, true);
+        let b = render(Integrator::Preintegrated { step: 0.7 }, false);
+        let d = a
+            .pixels()
+            .iter()
+            .zip(b.pixels())
+            .map(|(p, q)| (0..4).map(|c| (p[c] - q[c]).abs()).fold(0.0f32, f32::max))
+            .fold(0.0, f32::max);
+        assert!(d < 1e-6, "skipping changed the pre-integrated image by {d}");
     }
 
     #[test]

@@ -74,6 +74,7 @@ fn integrators() -> Vec<Integrator> {
         Integrator::Riemann { step: 0.2 },
         Integrator::Trapezoid { step: 0.5 },
         Integrator::Simpson { step: 0.5 },
+        Integrator::Preintegrated { step: 0.5 },
         adaptive(StepControl::Coupled),
         adaptive(StepControl::Decoupled),
     ]
@@ -83,7 +84,8 @@ fn param(i: &Integrator) -> String {
     match i {
         Integrator::Riemann { step }
         | Integrator::Trapezoid { step }
-        | Integrator::Simpson { step } => format!("h={step}"),
+        | Integrator::Simpson { step }
+        | Integrator::Preintegrated { step } => format!("h={step}"),
         Integrator::AdaptiveSimpson(p) => format!("tol={}", p.tol),
         _ => String::new(),
     }

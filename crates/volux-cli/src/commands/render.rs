@@ -83,10 +83,11 @@ pub fn integrator(args: &RenderArgs) -> Result<Integrator, CmdError> {
         "trapezoid" => Integrator::Trapezoid { step: args.step },
         "simpson" => Integrator::Simpson { step: args.step },
         "adaptive-simpson" | "adaptive" => adaptive(control),
+        "preintegrated" => Integrator::Preintegrated { step: args.step },
         "reference" => Integrator::Reference,
         other => {
             return Err(format!(
-                "unknown integrator '{other}' (riemann, trapezoid, simpson, adaptive-simpson, reference)"
+                "unknown integrator '{other}' (riemann, trapezoid, simpson, adaptive-simpson, preintegrated, reference)"
             )
             .into())
         }

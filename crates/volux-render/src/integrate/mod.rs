@@ -47,6 +47,12 @@ pub enum Integrator {
     },
     /// Iterative adaptive Simpson with error control.
     AdaptiveSimpson(AdaptiveParams),
+    /// Pre-integrated classification: each step's colour and opacity looked up in a table
+    /// over (front value, back value), exact for a linear field within the step.
+    Preintegrated {
+        /// Step.
+        step: f64,
+    },
     /// The f64 ground truth: adaptive Simpson at a tolerance of 1e-7, exact classification,
     /// f64 reconstruction, and steps that never straddle a voxel boundary (where the
     /// trilinear field has a kink), so the result is accurate to about 1e-6.
@@ -74,6 +80,7 @@ impl Integrator {
                 "adaptive-coupled"
             }
             Integrator::AdaptiveSimpson(_) => "adaptive-decoupled",
+            Integrator::Preintegrated { .. } => "preintegrated",
             Integrator::Reference => "reference",
         }
     }
@@ -90,7 +97,8 @@ impl Integrator {
         match self {
             Integrator::Riemann { step }
             | Integrator::Trapezoid { step }
-            | Integrator::Simpson { step } => pos("step", *step),
+            | Integrator::Simpson { step }
+            | Integrator::Preintegrated { step } => pos("step", *step),
             Integrator::AdaptiveSimpson(p) => {
                 pos("h0", p.h0)?;
                 pos("hmin", p.hmin)?;
