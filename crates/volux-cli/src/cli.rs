@@ -168,6 +168,30 @@ pub struct RenderArgs {
     /// adaptive-simpson: control the colour integral's step apart from the opacity's.
     #[arg(long)]
     pub decoupled: bool,
+    /// Blinn-Phong gradient shading (riemann integrator).
+    #[arg(long)]
+    pub shade: bool,
+    /// Shading: ambient coefficient.
+    #[arg(long, default_value_t = 0.3)]
+    pub ambient: f32,
+    /// Shading: diffuse coefficient.
+    #[arg(long, default_value_t = 0.7)]
+    pub diffuse: f32,
+    /// Shading: specular coefficient.
+    #[arg(long, default_value_t = 0.3)]
+    pub specular: f32,
+    /// Shading: specular exponent.
+    #[arg(long, default_value_t = 32.0)]
+    pub shininess: f32,
+    /// Shading: light direction X,Y,Z (towards the light), or `headlight`.
+    #[arg(long, default_value = "headlight")]
+    pub light: String,
+    /// An isosurface VALUE:R,G,B,A (repeatable; riemann integrator).
+    #[arg(long = "iso")]
+    pub isos: Vec<String>,
+    /// Maximum intensity projection.
+    #[arg(long)]
+    pub mip: bool,
     /// Jitter each ray's first sample (fine noise instead of wood-grain rings).
     #[arg(long)]
     pub jitter: bool,

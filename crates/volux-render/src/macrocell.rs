@@ -60,11 +60,16 @@ impl MacrocellGrid {
         self.counts
     }
 
-    /// Which macrocells are empty (zero extinction over their range) for `table`.
-    pub fn empty_flags(&self, table: &ClassifyTable) -> Vec<bool> {
+    /// Which macrocells are empty for `table`: zero extinction over their range and no
+    /// isovalue inside it.
+    pub fn empty_flags(&self, table: &ClassifyTable, isovalues: &[f32]) -> Vec<bool> {
         self.ranges
             .par_iter()
-            .map(|r| !r[0].is_finite() || table.is_transparent(r[0], r[1]))
+            .map(|r| {
+                !r[0].is_finite()
+                    || (table.is_transparent(r[0], r[1])
+                        && !isovalues.iter().any(|v| (r[0]..=r[1]).contains(v)))
+            })
             .collect()
     }
 }
@@ -77,11 +82,11 @@ pub struct Occupancy<'a> {
 }
 
 impl<'a> Occupancy<'a> {
-    /// Empty flags of `grid` for `table`.
-    pub fn new(grid: &'a MacrocellGrid, table: &ClassifyTable) -> Self {
+    /// Empty flags of `grid` for `table` and `isovalues`.
+    pub fn new(grid: &'a MacrocellGrid, table: &ClassifyTable, isovalues: &[f32]) -> Self {
         Self {
             grid,
-            empty: grid.empty_flags(table),
+            empty: grid.empty_flags(table, isovalues),
         }
     }
 
@@ -180,7 +185,8 @@ mod tests {
         )
         .unwrap();
         let table = ClassifyTable::new(&tf, [0.0, 1.0], 256);
-        let occ = Occupancy::new(&g, &table);
+        let occ = Occupancy::new(&g, &table, &[]);
+        assert!(Occupancy::new(&g, &table, &[0.0]).empty_fraction() < 0.01);
         assert!(occ.empty_fraction() > 0.9);
         let mut out = Vec::new();
         occ.occupied(DVec3::new(-5.0, 20.0, 20.0), DVec3::X, 5.0, 37.0, &mut out);

@@ -20,8 +20,11 @@ use crate::integrate::{
     adaptive_simpson_intervals, adaptive_simpson_pieces, hides_breakpoints, riemann_step, simpson,
     trapezoid, AdaptiveParams, Integrator, Medium, RayAccumulator, RayIntegral, RayMedium,
 };
+use crate::isosurface::{Crossing, Isosurfaces};
 use crate::macrocell::{MacrocellGrid, Occupancy};
+use crate::mip;
 use crate::sampling::{Field, Trilinear};
+use crate::shading::{self, BlinnPhong};
 use crate::RenderError;
 
 /// Called with (rows done, total rows) as the render progresses.
@@ -48,6 +51,14 @@ pub struct RenderOptions {
     /// Offset each ray's first Riemann sample by a per-pixel pseudo-random fraction of the
     /// step, trading wood-grain artifacts for fine noise (deterministic per pixel).
     pub jitter: bool,
+    /// Blinn-Phong gradient shading of the volume samples and isosurfaces (`None`: emission
+    /// only).
+    pub shading: Option<BlinnPhong>,
+    /// Isosurfaces composited with the volume (Riemann integrator).
+    pub isosurfaces: Isosurfaces,
+    /// Maximum intensity projection instead of compositing: each pixel shows the TF colour of
+    /// the largest value along its ray.
+    pub mip: bool,
     /// Set to true from another thread to stop the render with [`RenderError::Cancelled`].
     pub cancel: Option<Arc<AtomicBool>>,
     /// Progress callback.
@@ -66,6 +77,9 @@ impl RenderOptions {
             early_termination: Some(0.99),
             empty_space_skipping: true,
             jitter: false,
+            shading: None,
+            isosurfaces: Isosurfaces::default(),
+            mip: false,
             cancel: None,
             progress: None,
         }
@@ -81,6 +95,16 @@ impl RenderOptions {
         self.integrator
             .validate()
             .map_err(RenderError::InvalidOptions)?;
+        if let Some(s) = &self.shading {
+            s.validate().map_err(RenderError::InvalidOptions)?;
+        }
+        let lit = !self.isosurfaces.is_empty() || self.shading.is_some();
+        if lit && !self.mip && !matches!(self.integrator, Integrator::Riemann { .. }) {
+            return Err(RenderError::InvalidOptions(format!(
+                "shading and isosurfaces are drawn by the riemann integrator only, not {}",
+                self.integrator.name()
+            )));
+        }
         self.tf.validate()?;
         self.camera.validate()?;
         Ok(())
@@ -274,7 +298,16 @@ fn render_with<F: Field>(
     opts.validate()?;
     let start = Instant::now();
     let table = ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE);
-    let occupancy = derived.macrocells.map(|m| Occupancy::new(m, &table));
+    let isovalues: Vec<f32> = opts
+        .isosurfaces
+        .as_slice()
+        .iter()
+        .map(|i| i.value)
+        .collect();
+    let occupancy = derived
+        .macrocells
+        .filter(|_| !opts.mip)
+        .map(|m| Occupancy::new(m, &table, &isovalues));
     let ctx = RayContext {
         field,
         place,
@@ -300,7 +333,11 @@ fn render_with<F: Field>(
         for (x, px) in row.iter_mut().enumerate() {
             let ray = opts.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
             let jitter = if opts.jitter { pixel_hash(x, y) } else { 0.0 };
-            *px = ctx.cast(ray.origin, ray.dir, jitter);
+            *px = if opts.mip {
+                ctx.mip(ray.origin, ray.dir)
+            } else {
+                ctx.cast(ray.origin, ray.dir, jitter)
+            };
         }
         let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
         if let Some(p) = &opts.progress {
@@ -472,8 +509,12 @@ impl<F: Field> RayContext<'_, F> {
     ) -> PixelOut {
         let (o_v, d_v) = (o_v.as_vec3(), d_v.as_vec3());
         let stop = self.opts.early_termination.unwrap_or(2.0);
+        let lit = self.opts.shading.is_some() || !self.opts.isosurfaces.is_empty();
+        let view = (d_v * self.place.spacing.as_vec3()).normalize_or_zero();
         let mut acc = RayAccumulator::default();
         let mut n = 0u64;
+        let mut prev: Option<(f64, f32)> = None;
+        let mut crossings = Vec::new();
         let start = t0 + jitter * h;
         'spans: for &(a, b) in spans {
             let mut i = ((a - start) / h).ceil().max(0.0) as u64;
@@ -482,9 +523,25 @@ impl<F: Field> RayContext<'_, F> {
                 if t >= b {
                     break;
                 }
-                if let Some(v) = self.field.sample(o_v + d_v * t as f32) {
-                    let c: Classified = self.table.lookup(v);
-                    riemann_step(&mut acc, c, h.min(t1 - t) as f32);
+                let p = o_v + d_v * t as f32;
+                match self.field.sample(p) {
+                    Some(v) if lit => {
+                        self.isosurfaces_between(
+                            prev,
+                            (t, v),
+                            (o_v, d_v),
+                            &mut crossings,
+                            &mut acc,
+                        );
+                        let mut c: Classified = self.table.lookup(v);
+                        if let (Some(sh), true) = (&self.opts.shading, c.tau > 0.0) {
+                            c.rgb = sh.shade(c.rgb, self.gradient(p), view);
+                        }
+                        riemann_step(&mut acc, c, h.min(t1 - t) as f32);
+                        prev = Some((t, v));
+                    }
+                    Some(v) => riemann_step(&mut acc, self.table.lookup(v), h.min(t1 - t) as f32),
+                    None => prev = None,
                 }
                 n += 1;
                 i += 1;
@@ -499,6 +556,73 @@ impl<F: Field> RayContext<'_, F> {
             error: 0.0,
             missed: false,
             hit: true,
+        }
+    }
+
+    /// The world-space gradient at voxel position `p`.
+    fn gradient(&self, p: Vec3) -> Vec3 {
+        shading::gradient(self.field, p, self.place.spacing.as_vec3())
+    }
+
+    /// Composites the isosurfaces crossed between the previous sample and `(t, v)`, lit when
+    /// shading is on (`000`/`001`: surfaces located between samples by root refinement).
+    fn isosurfaces_between(
+        &self,
+        prev: Option<(f64, f32)>,
+        (t, v): (f64, f32),
+        (o_v, d_v): (Vec3, Vec3),
+        crossings: &mut Vec<Crossing>,
+        acc: &mut RayAccumulator,
+    ) {
+        let (Some((tp, vp)), false) = (prev, self.opts.isosurfaces.is_empty()) else {
+            return;
+        };
+        crossings.clear();
+        let sample = |tt: f64| self.field.sample(o_v + d_v * tt as f32).unwrap_or(f32::NAN);
+        let view = (d_v * self.place.spacing.as_vec3()).normalize_or_zero();
+        self.opts
+            .isosurfaces
+            .crossings(tp, vp, t, v, sample, crossings);
+        for c in crossings.iter() {
+            let iso = self.opts.isosurfaces.as_slice()[c.iso_index];
+            let mut rgb = [iso.rgba[0], iso.rgba[1], iso.rgba[2]];
+            if let Some(sh) = &self.opts.shading {
+                rgb = sh.shade(rgb, self.gradient(o_v + d_v * c.t as f32), view);
+            }
+            acc.under(rgb, iso.rgba[3]);
+        }
+    }
+
+    /// Maximum intensity projection along one ray: the TF colour of the largest value, opaque.
+    fn mip(&self, origin: DVec3, dir: DVec3) -> PixelOut {
+        let place = &self.place;
+        let Some((t0, t1)) = ray_box(origin, dir, place.origin, place.origin + place.extent())
+        else {
+            return PixelOut::default();
+        };
+        let step = match self.opts.integrator {
+            Integrator::Riemann { step } | Integrator::Preintegrated { step } => step,
+            _ => 0.5,
+        } * place.spacing.min_element();
+        let (o_v, d_v) = ((origin - place.origin) / place.spacing, dir / place.spacing);
+        let mut n = 0u64;
+        let best = mip::max_along(t0, t1, step, |t| {
+            n += 1;
+            self.field.sample64(o_v + d_v * t).map(|v| v as f32)
+        });
+        let Some((v, _)) = best else {
+            return PixelOut {
+                samples: n,
+                hit: true,
+                ..PixelOut::default()
+            };
+        };
+        let c = self.tf.color_at(v as f64);
+        PixelOut {
+            rgba: [c[0] as f32, c[1] as f32, c[2] as f32, 1.0],
+            samples: n,
+            hit: true,
+            ..PixelOut::default()
         }
     }
 }
@@ -918,5 +1042,86 @@ mod accuracy_tests {
             assert!(fine < coarse * 0.5, "{:?}: {coarse} -> {fine}", rule(0.1));
         }
         assert!(err(Integrator::Simpson { step: 0.1 }) < err(Integrator::Riemann { step: 0.1 }));
+    }
+}
+
+/// Isosurfaces, shading and MIP on the sphere distance field, whose isosurfaces and maxima
+/// are known in closed form.
+#[cfg(test)]
+mod surface_tests {
+    use super::*;
+    use crate::isosurface::Isovalue;
+    use volux_core::{synth, CameraSpec};
+
+    fn setup(n: usize) -> (Grid, RenderOptions) {
+        let g = synth::sphere(n).unwrap();
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[-2,0,0,0],[1,1,1,1]], "extinction": [[-2,0],[1,0]]}"#,
+        )
+        .unwrap();
+        let spec = CameraSpec {
+            projection: Some("orthographic".into()),
+            ..Default::default()
+        };
+        let mut o = RenderOptions::new(spec.resolve(&g.bounds()).unwrap(), tf);
+        (o.width, o.height) = (64, 64);
+        (g, o)
+    }
+
+    #[test]
+    fn isosurface_of_a_sphere_covers_its_disc() {
+        let (g, mut o) = setup(41);
+        o.isosurfaces = Isosurfaces::new(vec![Isovalue {
+            value: 0.0,
+            rgba: [1.0, 0.2, 0.1, 1.0],
+        }])
+        .unwrap();
+        let img = render_grid(&g, &o).unwrap().image;
+        let c = img.get(32, 32);
+        assert!(
+            (c[0] - 1.0).abs() < 1e-5 && (c[3] - 1.0).abs() < 1e-5,
+            "centre {c:?}"
+        );
+        assert_eq!(img.get(1, 1)[3], 0.0);
+        // The sphere has radius 0.6 of the half-size (20 voxels): 12 voxels; the orthographic
+        // view shows the box diagonal (40 sqrt 3 voxels) over 64 pixels.
+        let r_px = 12.0 / (40.0 * 3f64.sqrt()) * 64.0;
+        let expected = std::f64::consts::PI * r_px * r_px / (64.0 * 64.0);
+        let cover = img.coverage(0.5);
+        assert!(
+            (cover - expected).abs() / expected < 0.05,
+            "coverage {cover} vs {expected}"
+        );
+    }
+
+    #[test]
+    fn headlight_shading_darkens_towards_the_silhouette() {
+        let (g, mut o) = setup(41);
+        o.isosurfaces = Isosurfaces::new(vec![Isovalue {
+            value: 0.0,
+            rgba: [0.8, 0.8, 0.8, 1.0],
+        }])
+        .unwrap();
+        o.shading = Some(BlinnPhong::default());
+        let img = render_grid(&g, &o).unwrap().image;
+        let (centre, edge) = (img.get(32, 32)[0], img.get(32 + 7, 32)[0]);
+        assert!(centre > edge + 0.05, "centre {centre} edge {edge}");
+        // Facing the light: ambient + diffuse + specular on 0.8 grey (clamped by compositing).
+        assert!(centre > 0.8, "{centre}");
+    }
+
+    #[test]
+    fn mip_shows_the_maximum() {
+        let (g, mut o) = setup(41);
+        o.mip = true;
+        let img = render_grid(&g, &o).unwrap().image;
+        // The ray through pixel (32, 32) passes half a pixel (0.54 voxel, 0.027 units) off the
+        // centre along x and y: its maximum is 0.6 - 0.038 (trilinear: a little less); the TF
+        // colour is linear, (v + 2) / 3.
+        let c = img.get(32, 32);
+        let expected = (0.6 - 0.038 + 2.0) / 3.0;
+        assert!((c[0] - expected).abs() < 0.006, "{c:?} vs {expected}");
+        assert_eq!(c[3], 1.0);
+        assert!(img.get(40, 32)[0] < c[0]);
     }
 }

@@ -6,10 +6,12 @@ use volux_core::image::PngOptions;
 use volux_core::{synth, CameraSpec, Image, TransferFunction};
 use volux_io::Dataset;
 use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
+use volux_render::isosurface::{parse_iso, Isosurfaces};
 use volux_render::raycast::render_field;
 use volux_render::raycast::Rendered;
 use volux_render::resample::resample_mesh;
 use volux_render::sampling::Trilinear;
+use volux_render::shading::{BlinnPhong, Light};
 use volux_render::{render_grid, RenderOptions, RenderStats};
 
 use super::CmdError;
@@ -59,6 +61,50 @@ pub fn transfer_function(
         TransferFunction::preset(spec, hist)?.with_unit_length(unit_length)
     };
     Ok(tf)
+}
+
+/// Blinn-Phong parameters from the command line.
+fn shading(args: &RenderArgs) -> Result<Option<BlinnPhong>, CmdError> {
+    if !args.shade {
+        return Ok(None);
+    }
+    let light = if args.light == "headlight" {
+        Light::Headlight
+    } else {
+        let v: Vec<f32> = args
+            .light
+            .split(',')
+            .map(|c| c.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("--light '{}': expected X,Y,Z or 'headlight'", args.light))?;
+        match v.as_slice() {
+            [x, y, z] => Light::Direction(glam::Vec3::new(*x, *y, *z)),
+            _ => {
+                return Err(
+                    format!("--light '{}': expected X,Y,Z or 'headlight'", args.light).into(),
+                )
+            }
+        }
+    };
+    let s = BlinnPhong {
+        ambient: args.ambient,
+        diffuse: args.diffuse,
+        specular: args.specular,
+        shininess: args.shininess,
+        light,
+        ..BlinnPhong::default()
+    };
+    s.validate()?;
+    Ok(Some(s))
+}
+
+fn isosurfaces(args: &RenderArgs) -> Result<Isosurfaces, CmdError> {
+    let values = args
+        .isos
+        .iter()
+        .map(|s| parse_iso(s).map_err(|e| format!("--iso '{s}': {e}")))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Isosurfaces::new(values)?)
 }
 
 /// The integrator named on the command line.
@@ -168,6 +214,9 @@ fn render_dataset(
     let mut opts = RenderOptions::new(camera, tf);
     (opts.width, opts.height, opts.integrator) = (w, h, integrator);
     opts.jitter = args.jitter;
+    opts.mip = args.mip;
+    opts.shading = shading(args)?;
+    opts.isosurfaces = isosurfaces(args)?;
     if args.no_early_termination || integrator == Integrator::Reference {
         opts.early_termination = None;
     }
