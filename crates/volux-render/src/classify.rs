@@ -90,6 +90,53 @@ impl ClassifyTable {
     }
 }
 
+impl ClassifyTable {
+    /// The table for a fixed Riemann step `h` (world units): per entry the premultiplied
+    /// colour and opacity `1 - exp(-tau h)` of one slab, so the hot loop needs no `exp`.
+    pub fn for_step(&self, h: f32) -> StepTable {
+        let entries = self
+            .entries
+            .iter()
+            .map(|c| {
+                let a = 1.0 - (-c.tau * h).exp();
+                [c.rgb[0] * a, c.rgb[1] * a, c.rgb[2] * a, a]
+            })
+            .collect();
+        StepTable {
+            entries,
+            lo: self.lo,
+            scale: self.scale,
+        }
+    }
+}
+
+/// Premultiplied colour and opacity of one fixed-length slab per value (see
+/// [`ClassifyTable::for_step`]); lookups interpolate linearly between entries.
+#[derive(Clone, Debug)]
+pub struct StepTable {
+    entries: Vec<[f32; 4]>,
+    lo: f32,
+    scale: f32,
+}
+
+impl StepTable {
+    /// Premultiplied RGBA of a slab of value `s`.
+    #[inline]
+    pub fn lookup(&self, s: f32) -> [f32; 4] {
+        let last = self.entries.len() - 1;
+        let x = ((s - self.lo) * self.scale).clamp(0.0, last as f32);
+        let i = (x as usize).min(last - 1);
+        let f = x - i as f32;
+        let (a, b) = (self.entries[i], self.entries[i + 1]);
+        [
+            a[0] + (b[0] - a[0]) * f,
+            a[1] + (b[1] - a[1]) * f,
+            a[2] + (b[2] - a[2]) * f,
+            a[3] + (b[3] - a[3]) * f,
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -14,7 +14,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
-use crate::classify::{Classified, ClassifyTable};
+use crate::classify::{Classified, ClassifyTable, StepTable};
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{
     adaptive_simpson_intervals, adaptive_simpson_pieces, hides_breakpoints, riemann_step, simpson,
@@ -244,6 +244,9 @@ impl<'g> GridRenderer<'g> {
     }
 }
 
+/// Side of the square image tiles rendered in parallel.
+const TILE: usize = 16;
+
 /// One pixel's result.
 #[derive(Clone, Copy, Debug, Default)]
 struct PixelOut {
@@ -314,37 +317,59 @@ fn render_with<F: Field>(
         table: &table,
         occupancy: occupancy.as_ref(),
         preintegration: derived.preintegration,
+        step_table: match opts.integrator {
+            Integrator::Riemann { step } => {
+                Some(table.for_step((step * place.spacing.min_element()) as f32))
+            }
+            _ => None,
+        },
         tf: opts.tf.resolved(range),
         breakpoints: opts.tf.resolved(range).breakpoints(),
         opts,
     };
     let (w, h) = (opts.width, opts.height);
     let mut out = vec![PixelOut::default(); w * h];
-    let rows_done = AtomicU64::new(0);
+    let tiles_done = AtomicU64::new(0);
     let cancelled = || {
         opts.cancel
             .as_ref()
             .is_some_and(|c| c.load(Ordering::Relaxed))
     };
-    out.par_chunks_mut(w).enumerate().try_for_each(|(y, row)| {
-        if cancelled() {
-            return Err(RenderError::Cancelled);
+    // Square tiles keep neighbouring rays, which read the same voxels, on one core.
+    let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let tiles: Vec<Vec<PixelOut>> = (0..tx * ty)
+        .into_par_iter()
+        .map(|tile| {
+            if cancelled() {
+                return Err(RenderError::Cancelled);
+            }
+            let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
+            let mut px = Vec::with_capacity(TILE * TILE);
+            for y in y0..(y0 + TILE).min(h) {
+                for x in x0..(x0 + TILE).min(w) {
+                    let ray = opts.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                    let jitter = if opts.jitter { pixel_hash(x, y) } else { 0.0 };
+                    px.push(if opts.mip {
+                        ctx.mip(ray.origin, ray.dir)
+                    } else {
+                        ctx.cast(ray.origin, ray.dir, jitter)
+                    });
+                }
+            }
+            let done = tiles_done.fetch_add(1, Ordering::Relaxed) + 1;
+            if let Some(p) = &opts.progress {
+                p(done as usize * h / (tx * ty), h);
+            }
+            Ok(px)
+        })
+        .collect::<Result<_, _>>()?;
+    for (tile, px) in tiles.into_iter().enumerate() {
+        let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
+        let tw = (x0 + TILE).min(w) - x0;
+        for (k, p) in px.into_iter().enumerate() {
+            out[(y0 + k / tw) * w + x0 + k % tw] = p;
         }
-        for (x, px) in row.iter_mut().enumerate() {
-            let ray = opts.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
-            let jitter = if opts.jitter { pixel_hash(x, y) } else { 0.0 };
-            *px = if opts.mip {
-                ctx.mip(ray.origin, ray.dir)
-            } else {
-                ctx.cast(ray.origin, ray.dir, jitter)
-            };
-        }
-        let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
-        if let Some(p) = &opts.progress {
-            p(done as usize, h);
-        }
-        Ok(())
-    })?;
+    }
     let stats = RenderStats {
         rays: out.iter().filter(|p| p.hit).count() as u64,
         samples: out.iter().map(|p| p.samples).sum(),
@@ -380,6 +405,8 @@ struct RayContext<'a, F> {
     table: &'a ClassifyTable,
     occupancy: Option<&'a Occupancy<'a>>,
     preintegration: Option<&'a PreintegrationTable>,
+    /// Per-slab colour and opacity for the Riemann step (no `exp` per sample).
+    step_table: Option<StepTable>,
     tf: TransferFunction,
     breakpoints: Vec<f64>,
     opts: &'a RenderOptions,
@@ -540,7 +567,16 @@ impl<F: Field> RayContext<'_, F> {
                         riemann_step(&mut acc, c, h.min(t1 - t) as f32);
                         prev = Some((t, v));
                     }
-                    Some(v) => riemann_step(&mut acc, self.table.lookup(v), h.min(t1 - t) as f32),
+                    Some(v) => match &self.step_table {
+                        Some(st) if t + h <= t1 => {
+                            let e = st.lookup(v);
+                            let w = 1.0 - acc.rgba[3];
+                            for (a, ec) in acc.rgba.iter_mut().zip(e) {
+                                *a += w * ec;
+                            }
+                        }
+                        _ => riemann_step(&mut acc, self.table.lookup(v), (t1 - t).min(h) as f32),
+                    },
                     None => prev = None,
                 }
                 n += 1;
