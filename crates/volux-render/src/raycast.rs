@@ -24,7 +24,7 @@ use crate::isosurface::{Crossing, Isosurfaces};
 use crate::macrocell::{MacrocellGrid, Occupancy};
 use crate::mip;
 use crate::sampling::{Field, Trilinear};
-use crate::shading::{self, BlinnPhong};
+use crate::shading::{self, BlinnPhong, GradientVolume};
 use crate::RenderError;
 
 /// Called with (rows done, total rows) as the render progresses.
@@ -177,6 +177,7 @@ pub struct GridRenderer<'g> {
     grid: &'g Grid,
     macrocells: OnceLock<MacrocellGrid>,
     preintegration: Mutex<Option<Arc<PreintegrationTable>>>,
+    gradients: OnceLock<Option<GradientVolume>>,
 }
 
 impl<'g> GridRenderer<'g> {
@@ -186,6 +187,7 @@ impl<'g> GridRenderer<'g> {
             grid,
             macrocells: OnceLock::new(),
             preintegration: Mutex::new(None),
+            gradients: OnceLock::new(),
         }
     }
 
@@ -226,11 +228,41 @@ impl<'g> GridRenderer<'g> {
         Ok(Some(table))
     }
 
+    /// The precomputed gradient volume, built on the first shaded render (`None` if it does
+    /// not fit in memory: gradients are then computed on the fly).
+    pub fn gradients(&self) -> Option<&GradientVolume> {
+        self.gradients
+            .get_or_init(|| {
+                let g = self.grid;
+                volux_core::with_samples!(g.samples(), |s| GradientVolume::build(
+                    &Trilinear::new(s, g.dims()),
+                    g.spacing().as_vec3(),
+                    0
+                )
+                .ok())
+            })
+            .as_ref()
+    }
+
+    /// Renders with `opts`, at `1 / divisor` of the resolution (progressive refinement: a
+    /// viewer shows a coarse image first); `divisor` 1 is the full image.
+    pub fn render_reduced(
+        &self,
+        opts: &RenderOptions,
+        divisor: usize,
+    ) -> Result<Rendered, RenderError> {
+        let k = divisor.max(1);
+        let mut small = opts.clone();
+        (small.width, small.height) = (opts.width.div_ceil(k), opts.height.div_ceil(k));
+        self.render(&small)
+    }
+
     /// Renders with `opts`.
     pub fn render(&self, opts: &RenderOptions) -> Result<Rendered, RenderError> {
         let g = self.grid;
         let cells = opts.empty_space_skipping.then(|| self.macrocells());
         let pre = self.preintegration(opts)?;
+        let gradients = opts.shading.as_ref().and_then(|_| self.gradients());
         volux_core::with_samples!(g.samples(), |s| render_with(
             &Trilinear::new(s, g.dims()),
             Placement::of(g),
@@ -238,7 +270,8 @@ impl<'g> GridRenderer<'g> {
             opts,
             Derived {
                 macrocells: cells,
-                preintegration: pre.as_deref()
+                preintegration: pre.as_deref(),
+                gradients,
             }
         ))
     }
@@ -280,6 +313,7 @@ pub fn render_field<F: Field>(
         Derived {
             macrocells: None,
             preintegration: pre.as_ref(),
+            gradients: None,
         },
     )
 }
@@ -289,6 +323,7 @@ pub fn render_field<F: Field>(
 struct Derived<'a> {
     macrocells: Option<&'a MacrocellGrid>,
     preintegration: Option<&'a PreintegrationTable>,
+    gradients: Option<&'a GradientVolume>,
 }
 
 fn render_with<F: Field>(
@@ -317,6 +352,7 @@ fn render_with<F: Field>(
         table: &table,
         occupancy: occupancy.as_ref(),
         preintegration: derived.preintegration,
+        gradients: derived.gradients,
         step_table: match opts.integrator {
             Integrator::Riemann { step } => {
                 Some(table.for_step((step * place.spacing.min_element()) as f32))
@@ -405,6 +441,7 @@ struct RayContext<'a, F> {
     table: &'a ClassifyTable,
     occupancy: Option<&'a Occupancy<'a>>,
     preintegration: Option<&'a PreintegrationTable>,
+    gradients: Option<&'a GradientVolume>,
     /// Per-slab colour and opacity for the Riemann step (no `exp` per sample).
     step_table: Option<StepTable>,
     tf: TransferFunction,
@@ -597,7 +634,10 @@ impl<F: Field> RayContext<'_, F> {
 
     /// The world-space gradient at voxel position `p`.
     fn gradient(&self, p: Vec3) -> Vec3 {
-        shading::gradient(self.field, p, self.place.spacing.as_vec3())
+        match self.gradients {
+            Some(g) => g.gradient(p),
+            None => shading::gradient(self.field, p, self.place.spacing.as_vec3()),
+        }
     }
 
     /// Composites the isosurfaces crossed between the previous sample and `(t, v)`, lit when
@@ -912,6 +952,36 @@ mod tests {
                 assert!(skip.image.coverage(0.05) > 0.1);
             }
         }
+    }
+
+    /// The cached gradient volume shades like on-the-fly gradients (both are trilinear
+    /// interpolations of the same central differences, up to i16 quantization).
+    #[test]
+    fn cached_gradients_match_on_the_fly_shading() {
+        let g = volux_core::synth::sphere(33).unwrap();
+        let tf = TransferFunction::from_json(r#"{"color": [[-2,0.9,0.8,0.7],[1,0.9,0.8,0.7]], "extinction": [[-2,0],[-0.05,0],[0,0.5],[1,0.5]]}"#).unwrap();
+        let mut o = RenderOptions::new(Camera::fit(&g.bounds()), tf);
+        (o.width, o.height, o.shading) = (40, 40, Some(BlinnPhong::default()));
+        let cached = GridRenderer::new(&g).render(&o).unwrap().image;
+        let fly = render_field(
+            &Trilinear::new(&g.to_f32_vec().unwrap(), g.dims()),
+            Placement::of(&g),
+            g.range(),
+            &o,
+        )
+        .unwrap()
+        .image;
+        let d = cached
+            .pixels()
+            .iter()
+            .zip(fly.pixels())
+            .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
+            .fold(0.0, f32::max);
+        assert!(d < 0.01, "{d}");
+        assert!(cached.coverage(0.5) > 0.05);
+        // A reduced-resolution render has the reduced size.
+        let r = GridRenderer::new(&g).render_reduced(&o, 4).unwrap();
+        assert_eq!((r.image.width(), r.image.height()), (10, 10));
     }
 
     #[test]
