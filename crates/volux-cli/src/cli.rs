@@ -168,6 +168,9 @@ pub struct RenderArgs {
     /// adaptive-simpson: control the colour integral's step apart from the opacity's.
     #[arg(long)]
     pub decoupled: bool,
+    /// Reconstruction filter: trilinear, catmull-rom or b-spline (tricubic).
+    #[arg(long, default_value = "trilinear")]
+    pub reconstruction: String,
     /// Blinn-Phong gradient shading (riemann integrator).
     #[arg(long)]
     pub shade: bool,

@@ -10,6 +10,7 @@ use volux_render::isosurface::{parse_iso, Isosurfaces};
 use volux_render::raycast::render_field;
 use volux_render::raycast::Rendered;
 use volux_render::resample::resample_mesh;
+use volux_render::sampling::Reconstruction;
 use volux_render::sampling::Trilinear;
 use volux_render::shading::{BlinnPhong, Light};
 use volux_render::{render_grid, RenderOptions, RenderStats};
@@ -215,6 +216,17 @@ fn render_dataset(
     (opts.width, opts.height, opts.integrator) = (w, h, integrator);
     opts.jitter = args.jitter;
     opts.mip = args.mip;
+    opts.reconstruction = match args.reconstruction.as_str() {
+        "trilinear" => Reconstruction::Trilinear,
+        "catmull-rom" => Reconstruction::CatmullRom,
+        "b-spline" | "bspline" => Reconstruction::BSpline,
+        other => {
+            return Err(format!(
+                "unknown reconstruction '{other}' (trilinear, catmull-rom, b-spline)"
+            )
+            .into())
+        }
+    };
     opts.shading = shading(args)?;
     opts.isosurfaces = isosurfaces(args)?;
     if args.no_early_termination || integrator == Integrator::Reference {
