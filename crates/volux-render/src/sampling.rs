@@ -23,13 +23,25 @@ pub trait Field: Sync {
 pub struct Trilinear<'a, T> {
     values: &'a [T],
     dims: [usize; 3],
+    /// Offsets of the +1 neighbour along x, y, z (0 along an axis with one sample).
+    step: [usize; 3],
+    /// Largest coordinate and largest cell index per axis.
+    hi: [f32; 3],
+    cell_max: [usize; 3],
 }
 
 impl<'a, T: Scalar> Trilinear<'a, T> {
     /// A sampler over `values` laid out x fastest with `dims` samples per axis.
     pub fn new(values: &'a [T], dims: [usize; 3]) -> Self {
         debug_assert_eq!(values.len(), dims[0] * dims[1] * dims[2]);
-        Self { values, dims }
+        let stride = [1, dims[0], dims[0] * dims[1]];
+        Self {
+            values,
+            dims,
+            step: std::array::from_fn(|a| if dims[a] > 1 { stride[a] } else { 0 }),
+            hi: dims.map(|n| n.saturating_sub(1) as f32),
+            cell_max: dims.map(|n| n.saturating_sub(2)),
+        }
     }
 }
 
@@ -49,17 +61,21 @@ impl<T: Scalar> Field for Trilinear<'_, T> {
         self.dims
     }
 
-    #[inline]
+    #[inline(always)]
     fn sample(&self, p: Vec3) -> Option<f32> {
-        let [nx, ny, nz] = self.dims;
-        let (i, fx) = axis(p.x, nx);
-        let (j, fy) = axis(p.y, ny);
-        let (k, fz) = axis(p.z, nz);
-        let dx = usize::from(nx > 1);
-        let sy = if ny > 1 { nx } else { 0 };
-        let sz = if nz > 1 { nx * ny } else { 0 };
-        let b = i + nx * (j + ny * k);
-        let v = |o: usize| self.values[b + o].to_f32();
+        // Branch-free in the common case: clamp, cell index, fraction per axis.
+        let x = p.x.clamp(0.0, self.hi[0]);
+        let y = p.y.clamp(0.0, self.hi[1]);
+        let z = p.z.clamp(0.0, self.hi[2]);
+        let (i, j, k) = (
+            (x as usize).min(self.cell_max[0]),
+            (y as usize).min(self.cell_max[1]),
+            (z as usize).min(self.cell_max[2]),
+        );
+        let (fx, fy, fz) = (x - i as f32, y - j as f32, z - k as f32);
+        let [dx, sy, sz] = self.step;
+        let b = i + self.dims[0] * (j + self.dims[1] * k);
+        let v = |o: usize| self.values.get(b + o).map_or(f32::NAN, |v| v.to_f32());
         let c00 = v(0) + (v(dx) - v(0)) * fx;
         let c10 = v(sy) + (v(sy + dx) - v(sy)) * fx;
         let c01 = v(sz) + (v(sz + dx) - v(sz)) * fx;
