@@ -130,12 +130,12 @@ pub struct RenderArgs {
     /// Camera JSON file (look-at or orbit form); overrides the angle options.
     #[arg(long)]
     pub camera: Option<PathBuf>,
-    /// Orbit azimuth in degrees.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub azimuth: f64,
-    /// Orbit elevation in degrees.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub elevation: f64,
+    /// Orbit azimuth in degrees (default 0: looking along +y; thin slabs are seen along z).
+    #[arg(long, allow_hyphen_values = true)]
+    pub azimuth: Option<f64>,
+    /// Orbit elevation in degrees (default 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub elevation: Option<f64>,
     /// Zoom factor.
     #[arg(long, default_value_t = 1.0)]
     pub zoom: f64,

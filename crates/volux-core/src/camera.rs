@@ -91,6 +91,25 @@ impl CameraSpec {
         }
         let radius = (bounds.diagonal() * 0.5).max(1e-9);
         let target = self.target.map(DVec3::from).unwrap_or(bounds.center());
+        let slab = self.eye.is_none()
+            && self.azimuth.is_none()
+            && self.elevation.is_none()
+            && self.up.is_none()
+            && is_thin_in_z(bounds);
+        if slab {
+            // A few slices (a scout series, a thin slab): look along the slice axis, rows
+            // running down the screen, as a radiologist sees an axial image.
+            let fit = radius / (fov.to_radians() * 0.5).sin() / zoom;
+            let eye = target - DVec3::Z * self.distance.unwrap_or(fit);
+            let cam = Camera {
+                eye,
+                target,
+                up: -DVec3::Y,
+                projection: self.projection(fov, radius, zoom)?,
+            };
+            cam.validate()?;
+            return Ok(cam);
+        }
         let up = self.up.map(DVec3::from).unwrap_or(DVec3::Z);
         let eye = match self.eye {
             Some(e) => DVec3::from(e),
@@ -105,17 +124,7 @@ impl CameraSpec {
                 target + dir * dist
             }
         };
-        let projection = match self.projection.as_deref().unwrap_or("perspective") {
-            "perspective" => Projection::Perspective { fov_y_deg: fov },
-            "orthographic" => Projection::Orthographic {
-                height: 2.0 * radius / zoom,
-            },
-            other => {
-                return Err(Error::InvalidCamera(format!(
-                    "unknown projection '{other}' (perspective, orthographic)"
-                )))
-            }
-        };
+        let projection = self.projection(fov, radius, zoom)?;
         let cam = Camera {
             eye,
             target,
@@ -125,6 +134,26 @@ impl CameraSpec {
         cam.validate()?;
         Ok(cam)
     }
+}
+
+impl CameraSpec {
+    fn projection(&self, fov: f64, radius: f64, zoom: f64) -> Result<Projection> {
+        match self.projection.as_deref().unwrap_or("perspective") {
+            "perspective" => Ok(Projection::Perspective { fov_y_deg: fov }),
+            "orthographic" => Ok(Projection::Orthographic {
+                height: 2.0 * radius / zoom,
+            }),
+            other => Err(Error::InvalidCamera(format!(
+                "unknown projection '{other}' (perspective, orthographic)"
+            ))),
+        }
+    }
+}
+
+/// Whether the box is a thin slab across z (z extent under a fifth of both others).
+fn is_thin_in_z(b: &Aabb) -> bool {
+    let e = b.max - b.min;
+    e.z < 0.2 * e.x.min(e.y)
 }
 
 /// A right/forward pair perpendicular to `up` (forward is +y for up = +z).
@@ -251,6 +280,23 @@ mod tests {
                 "{proj}: {x} {y}"
             );
         }
+    }
+
+    #[test]
+    fn thin_slabs_are_seen_along_z_by_default() {
+        let slab = Aabb {
+            min: DVec3::ZERO,
+            max: DVec3::new(500.0, 500.0, 24.0),
+        };
+        let (_, u, f) = Camera::fit(&slab).basis();
+        assert!((f - DVec3::Z).length() < 1e-9 && (u + DVec3::Y).length() < 1e-9);
+        // An explicit angle keeps the orbit.
+        let spec = CameraSpec {
+            azimuth: Some(0.0),
+            ..Default::default()
+        };
+        let (_, _, f) = spec.resolve(&slab).unwrap().basis();
+        assert!((f - DVec3::Y).length() < 1e-9);
     }
 
     #[test]

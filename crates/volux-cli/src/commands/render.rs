@@ -155,8 +155,8 @@ fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
             }
             .into(),
         ),
-        azimuth: Some(args.azimuth),
-        elevation: Some(args.elevation),
+        azimuth: args.azimuth,
+        elevation: args.elevation,
         zoom: Some(args.zoom),
         ..Default::default()
     })
