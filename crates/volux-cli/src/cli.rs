@@ -171,7 +171,7 @@ pub struct RenderArgs {
     /// Reconstruction filter: trilinear, catmull-rom or b-spline (tricubic).
     #[arg(long, default_value = "trilinear")]
     pub reconstruction: String,
-    /// Blinn-Phong gradient shading (riemann integrator).
+    /// Blinn-Phong gradient shading.
     #[arg(long)]
     pub shade: bool,
     /// Shading: ambient coefficient.
