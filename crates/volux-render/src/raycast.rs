@@ -315,6 +315,19 @@ struct PixelOut {
     hit: bool,
 }
 
+impl PixelOut {
+    /// A hit ray composited into `acc` with `samples` samples (no error estimate).
+    fn composited(acc: &RayAccumulator, samples: u64) -> Self {
+        Self {
+            rgba: acc.rgba,
+            samples,
+            error: 0.0,
+            missed: false,
+            hit: true,
+        }
+    }
+}
+
 /// Renders any [`Field`] placed in the world, classifying with `opts.tf` over `range`
 /// (without empty-space skipping).
 pub fn render_field<F: Field>(
@@ -683,13 +696,7 @@ impl<F: Field> RayContext<'_, F> {
                 }
             }
         }
-        PixelOut {
-            rgba: acc.rgba,
-            samples: n,
-            error: 0.0,
-            missed: false,
-            hit: true,
-        }
+        PixelOut::composited(&acc, n)
     }
 
     /// The world-space gradient at voxel position `p`.
@@ -840,13 +847,7 @@ impl<F: Field> RayContext<'_, F> {
                 }
             }
         }
-        PixelOut {
-            rgba: acc.rgba,
-            samples: n,
-            error: 0.0,
-            missed: false,
-            hit: true,
-        }
+        PixelOut::composited(&acc, n)
     }
 }
 
