@@ -19,6 +19,7 @@ pub mod integrate;
 pub mod isosurface;
 pub mod macrocell;
 pub mod mip;
+pub mod pt;
 pub mod raycast;
 pub mod resample;
 pub mod sampling;
