@@ -419,6 +419,7 @@ fn render_with<F: Field>(
             }
             let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
             let mut px = Vec::with_capacity(TILE * TILE);
+            let mut spans = Vec::new();
             for y in y0..(y0 + TILE).min(h) {
                 for x in x0..(x0 + TILE).min(w) {
                     let ray = opts.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
@@ -426,7 +427,7 @@ fn render_with<F: Field>(
                     px.push(if opts.mip {
                         ctx.mip(ray.origin, ray.dir)
                     } else {
-                        ctx.cast(ray.origin, ray.dir, jitter)
+                        ctx.cast(ray.origin, ray.dir, jitter, &mut spans)
                     });
                 }
             }
@@ -555,7 +556,14 @@ impl<F: Field> GridRay<'_, F> {
 }
 
 impl<F: Field> RayContext<'_, F> {
-    fn cast(&self, origin: DVec3, dir: DVec3, jitter: f64) -> PixelOut {
+    /// Integrates one ray; `spans` is scratch space reused across the rays of a tile.
+    fn cast(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        jitter: f64,
+        spans: &mut Vec<(f64, f64)>,
+    ) -> PixelOut {
         let place = &self.place;
         let Some((t0, t1)) = ray_box(origin, dir, place.origin, place.origin + place.extent())
         else {
@@ -564,14 +572,15 @@ impl<F: Field> RayContext<'_, F> {
         let unit = place.spacing.min_element();
         let o_v = (origin - place.origin) / place.spacing;
         let d_v = dir / place.spacing;
-        let mut spans = Vec::new();
+        spans.clear();
         match self.occupancy {
-            Some(occ) => occ.occupied(o_v, d_v, t0, t1, &mut spans),
+            Some(occ) => occ.occupied(o_v, d_v, t0, t1, spans),
             None => spans.push((t0, t1)),
         }
+        let spans = &spans[..];
         let integral = match self.opts.integrator {
             Integrator::Riemann { step } => {
-                return self.riemann(o_v, d_v, (t0, t1), &spans, step * unit, jitter)
+                return self.riemann(o_v, d_v, (t0, t1), spans, step * unit, jitter)
             }
             Integrator::Trapezoid { step } => {
                 trapezoid(&mut self.medium(o_v, d_v), t0, t1, step * unit)
@@ -587,10 +596,10 @@ impl<F: Field> RayContext<'_, F> {
                     early_termination: self.opts.early_termination.map(f64::from),
                     ..p
                 };
-                adaptive_simpson_intervals(&mut self.medium(o_v, d_v), &spans, &p)
+                adaptive_simpson_intervals(&mut self.medium(o_v, d_v), spans, &p)
             }
             Integrator::Preintegrated { step } => {
-                return self.preintegrated(o_v, d_v, (t0, t1), &spans, step * unit, jitter)
+                return self.preintegrated(o_v, d_v, (t0, t1), spans, step * unit, jitter)
             }
             Integrator::Reference => self.reference(o_v, d_v, t0, t1, unit),
         };
