@@ -18,6 +18,7 @@ use crate::classify::Classified;
 pub mod adaptive;
 pub mod fixed;
 pub mod preintegrated;
+pub mod psi;
 
 pub use adaptive::{
     adaptive_simpson, adaptive_simpson_intervals, adaptive_simpson_pieces, AdaptiveParams,

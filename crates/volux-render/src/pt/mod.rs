@@ -43,3 +43,5 @@
 //! `(s_f, s_b, l)` interpolation, the optical model per fragment, and compositing.
 
 pub mod classify;
+pub mod reference;
+pub mod sort;

@@ -1,0 +1,1 @@
+//! Brute-force per-pixel reference renderer for tetrahedral meshes (work in progress).

@@ -1,0 +1,1 @@
+//! Visibility ordering of tetrahedra (work in progress).
