@@ -1,1 +1,0 @@
-//! Visibility ordering of tetrahedra (work in progress).
