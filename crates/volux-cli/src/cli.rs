@@ -77,8 +77,8 @@ pub enum Command {
         #[command(flatten)]
         load: LoadArgs,
     },
-    /// Speed of the grid ray caster: ms/frame and samples/s per integrator on synthetic and
-    /// shared volumes.
+    /// Speed: ms/frame and samples/s of the grid ray caster per integrator, tets/s of
+    /// Projected Tetrahedra per colour mode, on synthetic and shared data.
     Bench {
         /// One frame per case and 512x512 only.
         #[arg(long)]
@@ -92,6 +92,9 @@ pub enum Command {
         /// Print a JSON list.
         #[arg(long)]
         json: bool,
+        /// Which renderers: `grid` (ray casting), `pt` (Projected Tetrahedra) or `all`.
+        #[arg(long, default_value = "all")]
+        suite: String,
     },
 }
 
@@ -189,7 +192,7 @@ pub struct RenderArgs {
     /// Shading: light direction X,Y,Z (towards the light), or `headlight`.
     #[arg(long, default_value = "headlight")]
     pub light: String,
-    /// An isosurface VALUE:R,G,B,A (repeatable; riemann integrator).
+    /// An isosurface VALUE:R,G,B,A (repeatable; grids: riemann integrator; PT: any colour).
     #[arg(long = "iso")]
     pub isos: Vec<String>,
     /// Maximum intensity projection.
@@ -211,6 +214,22 @@ pub struct RenderArgs {
     /// Write 16 bits per channel.
     #[arg(long)]
     pub sixteen_bit: bool,
+    /// Renderer: `auto` (grids: ray casting; meshes: Projected Tetrahedra), `pt` (cell
+    /// projection of tetrahedral meshes), `raycast` (grids; meshes are resampled onto a grid
+    /// until the tetrahedral ray caster lands).
+    #[arg(long, default_value = "auto")]
+    pub method: String,
+    /// PT: visibility order, `centroid` (radix sort, approximate) or `exact` (MPVO on convex
+    /// meshes, per-pixel fragment sort otherwise).
+    #[arg(long, default_value = "centroid")]
+    pub sort: String,
+    /// PT: fragment colour, `average` (Shirley-Tuchman), `psi` (partial pre-integration) or
+    /// `exact` (closed-form integral, the reference).
+    #[arg(long, default_value = "psi")]
+    pub color: String,
+    /// PT: render a grid by splitting every cell into five tetrahedra.
+    #[arg(long)]
+    pub as_tets: bool,
     /// Meshes: samples along the longest side of the resampling grid.
     #[arg(long, default_value_t = 256)]
     pub resample: usize,

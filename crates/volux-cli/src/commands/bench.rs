@@ -91,7 +91,39 @@ fn param(i: &Integrator) -> String {
     }
 }
 
-pub fn run(quick: bool, frames: usize, n: usize, as_json: bool) -> Result<(), CmdError> {
+pub fn run(
+    quick: bool,
+    frames: usize,
+    n: usize,
+    as_json: bool,
+    suite: &str,
+) -> Result<(), CmdError> {
+    let (grid, pt) = match suite {
+        "all" => (true, true),
+        "grid" => (true, false),
+        "pt" => (false, true),
+        other => return Err(format!("unknown suite '{other}' (all, grid, pt)").into()),
+    };
+    let mut rows = if grid {
+        run_grid(quick, frames, n, as_json)?
+    } else {
+        Vec::new()
+    };
+    if pt {
+        rows.extend(super::bench_pt::run(quick, frames, as_json)?);
+    }
+    if as_json {
+        println!("{}", serde_json::Value::Array(rows));
+    }
+    Ok(())
+}
+
+fn run_grid(
+    quick: bool,
+    frames: usize,
+    n: usize,
+    as_json: bool,
+) -> Result<Vec<serde_json::Value>, CmdError> {
     let frames = if quick { 1 } else { frames.max(1) };
     let sizes: &[(usize, usize)] = if quick {
         &[(512, 512)]
@@ -150,8 +182,5 @@ pub fn run(quick: bool, frames: usize, n: usize, as_json: bool) -> Result<(), Cm
             }
         }
     }
-    if as_json {
-        println!("{}", serde_json::Value::Array(rows));
-    }
-    Ok(())
+    Ok(rows)
 }

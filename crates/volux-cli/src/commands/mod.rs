@@ -1,9 +1,11 @@
 //! The commands, one module each.
 mod accuracy;
 mod bench;
+mod bench_pt;
 mod convert;
 mod info;
 mod render;
+mod render_pt;
 
 use std::path::Path;
 
@@ -51,7 +53,8 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             frames,
             grid_size,
             json,
-        } => bench::run(quick, frames, grid_size, json),
+            suite,
+        } => bench::run(quick, frames, grid_size, json, &suite),
     }
 }
 

@@ -69,6 +69,11 @@ fn shading(args: &RenderArgs) -> Result<Option<BlinnPhong>, CmdError> {
     if !args.shade {
         return Ok(None);
     }
+    blinn_phong(args).map(Some)
+}
+
+/// The lighting parameters of the command line (used by `--shade` and by PT isosurfaces).
+pub fn blinn_phong(args: &RenderArgs) -> Result<BlinnPhong, CmdError> {
     let light = if args.light == "headlight" {
         Light::Headlight
     } else {
@@ -96,10 +101,11 @@ fn shading(args: &RenderArgs) -> Result<Option<BlinnPhong>, CmdError> {
         ..BlinnPhong::default()
     };
     s.validate()?;
-    Ok(Some(s))
+    Ok(s)
 }
 
-fn isosurfaces(args: &RenderArgs) -> Result<Isosurfaces, CmdError> {
+/// The `--iso` options.
+pub fn isosurfaces(args: &RenderArgs) -> Result<Isosurfaces, CmdError> {
     let values = args
         .isos
         .iter()
@@ -141,7 +147,7 @@ pub fn integrator(args: &RenderArgs) -> Result<Integrator, CmdError> {
     })
 }
 
-fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
+pub fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
     if let Some(p) = &args.camera {
         let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
         return Ok(CameraSpec::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?);
@@ -169,11 +175,14 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let integrator = integrator(args)?;
     integrator.validate()?;
     let (data, _) = super::load(&args.file, &args.load, show)?;
-    let out = render_dataset(&data, args, integrator, &spec, (w, h), show)?;
     let png = PngOptions {
         background,
         sixteen_bit: args.sixteen_bit,
     };
+    if let Some(mesh) = super::render_pt::mesh_for_pt(&data, args)? {
+        return super::render_pt::run(&mesh, args, &spec, (w, h), &png);
+    }
+    let out = render_dataset(&data, args, integrator, &spec, (w, h), show)?;
     out.image
         .write_png(&args.output, &png)
         .map_err(|e| format!("{}: {e}", args.output.display()))?;

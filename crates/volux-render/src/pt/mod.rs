@@ -34,14 +34,26 @@
 //! - [`classify`]: the per-tetrahedron classification of step 1: an exact orientation
 //!   predicate, the 81-entry ternary truth table (derived, not transcribed, and checked
 //!   against brute-force geometry for every entry), and [`classify::classify`], which turns
-//!   four projected vertices into a class, a triangle fan and a thick vertex with the
-//!   parameters needed to interpolate depth and scalar at its front and back points.
-//!
-//! Still to come for a complete PT renderer: the thick vertex's front and back depths and
-//! scalars (with perspective-correct conversion of the screen-space parameters returned by
-//! [`classify::classify`]), the thickness `l`, visibility sorting, fan rasterization with
-//! `(s_f, s_b, l)` interpolation, the optical model per fragment, and compositing.
+//!   four projected vertices into a class, a triangle fan and a thick vertex;
+//! - [`project`]: vertex projection per view (snapped to a sub-pixel grid so that shared
+//!   faces rasterize identically) and the thick vertex's front and back depth, scalar and
+//!   gradient, perspective-correct;
+//! - [`sort`]: visibility order: centroid radix sort, MPVO, violation counts, convexity;
+//! - [`raster`]: screen tiles, binning in drawing order, scanline rasterization with exact
+//!   fixed-point edge functions and the top-left rule;
+//! - [`fragment`]: the colour of a fragment (average, ψ, exact) with isosurfaces;
+//! - [`render`]: [`PtRenderer`], the stages wired together with the caches of the update step
+//!   (discard, per-tetrahedron pass, order, bins), parallel over tiles and deterministic;
+//! - [`reference`]: a brute-force per-pixel ray/tetrahedron integrator, the independent
+//!   reference of the tests.
 
 pub mod classify;
+pub mod fragment;
+pub mod project;
+pub mod raster;
 pub mod reference;
+pub mod render;
 pub mod sort;
+
+pub use fragment::ColorMode;
+pub use render::{PtOptions, PtRendered, PtRenderer, PtStats, SortMode};

@@ -1,0 +1,130 @@
+//! `volux bench --suite pt`: tets/s and ms/frame of Projected Tetrahedra at 512x512 for the
+//! basic (average), ψ and ψ + isosurfaces modes (seed `002` table 2), on generated meshes of
+//! about 200K and 1.25M tetrahedra and on the shared Blunt Fin and LOx Post.
+//!
+//! Every timed frame uses a new view (the camera turns one degree per frame), so the whole
+//! pipeline runs: per-tetrahedron pass, sort, binning, rasterization. A recolour-only frame
+//! (same view, new TF) is timed too.
+use std::path::Path;
+
+use serde_json::json;
+use volux_core::histogram::Histogram;
+use volux_core::{synth, CameraSpec, TetMesh, TransferFunction};
+use volux_io::{Dataset, LoadOptions};
+use volux_render::isosurface::{Isosurfaces, Isovalue};
+use volux_render::pt::{ColorMode, PtOptions, PtRenderer, SortMode};
+
+use super::CmdError;
+
+const SHARED: [(&str, &str); 2] = [
+    ("blunt-fin", "nasa_blunt_fin/blunt_fin_tets_density.off.gz"),
+    ("lox-post", "nasa_lox_post/lox_post_tets_velmag.off.gz"),
+];
+
+fn meshes(quick: bool) -> Result<Vec<(String, TetMesh)>, CmdError> {
+    let mut out = vec![("smooth-200k".to_string(), synth::smooth_tets(200_000)?)];
+    if !quick {
+        out.push(("smooth-1.25m".to_string(), synth::smooth_tets(1_250_000)?));
+    }
+    let root = Path::new("../shared/data");
+    for (name, rel) in SHARED {
+        let p = root.join(rel);
+        if !p.exists() {
+            eprintln!("bench: {} absent, skipped", p.display());
+            continue;
+        }
+        if let (Dataset::Mesh(m), _) = volux_io::load(&p, &LoadOptions::default())? {
+            out.push((name.to_string(), m));
+        }
+    }
+    Ok(out)
+}
+
+/// Two isosurfaces at a third and two thirds of the range.
+fn isos(range: [f64; 2]) -> Result<Isosurfaces, CmdError> {
+    let at = |f: f64| (range[0] + f * (range[1] - range[0])) as f32;
+    Ok(Isosurfaces::new(vec![
+        Isovalue {
+            value: at(1.0 / 3.0),
+            rgba: [0.9, 0.8, 0.3, 0.6],
+        },
+        Isovalue {
+            value: at(2.0 / 3.0),
+            rgba: [0.3, 0.6, 0.9, 0.8],
+        },
+    ])?)
+}
+
+/// Runs the PT benchmark; returns the JSON rows.
+pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
+    let frames = if quick { 1 } else { frames.max(1) };
+    let threads = rayon::current_num_threads();
+    let mut rows = Vec::new();
+    if !as_json {
+        println!("PT, 512x512, centroid order; threads: {threads}; frames per case: {frames} (median), new view each frame");
+        println!(
+            "{:<14} {:>9} {:<12} {:>9} {:>9} {:>11} {:>12} {:>10}",
+            "mesh", "tets", "mode", "ms/frame", "M tets/s", "recolour ms", "fragments", "bytes/tet"
+        );
+    }
+    for (name, mesh) in meshes(quick)? {
+        let hist = Histogram::from_values(mesh.scalars(), mesh.range(), 256);
+        let tf = TransferFunction::preset("auto", &hist)?
+            .with_unit_length(mesh.bounds().diagonal() / 256.0);
+        let mut renderer = PtRenderer::new(&mesh);
+        let modes = [
+            ("average", ColorMode::Average, false),
+            ("psi", ColorMode::Psi, false),
+            ("psi+iso", ColorMode::Psi, true),
+        ];
+        for (label, color, with_iso) in modes {
+            let mut times = Vec::new();
+            let mut last = None;
+            for f in 0..frames + 1 {
+                let spec = CameraSpec {
+                    azimuth: Some(30.0 + f as f64),
+                    elevation: Some(20.0),
+                    ..Default::default()
+                };
+                let mut opts = PtOptions::new(spec.resolve(&mesh.bounds())?, tf.clone());
+                opts.color = color;
+                opts.sort = SortMode::Centroid;
+                if with_iso {
+                    opts.isosurfaces = isos(mesh.range())?;
+                }
+                let r = renderer.render(&opts)?;
+                if f > 0 {
+                    // The first frame builds the per-mesh caches (ψ table, gradients).
+                    times.push(r.stats.seconds);
+                }
+                last = Some((r.stats, opts));
+            }
+            let (stats, mut opts) = last.expect("at least one frame");
+            opts.tf = opts.tf.with_opacity_scale(1.5);
+            let recolour = renderer.render(&opts)?.stats.seconds;
+            times.sort_by(f64::total_cmp);
+            let s = times[times.len() / 2];
+            let rate = stats.tets as f64 / s / 1e6;
+            if !as_json {
+                println!(
+                    "{:<14} {:>9} {:<12} {:>9.1} {:>9.2} {:>11.1} {:>12} {:>10.1}",
+                    name,
+                    stats.tets,
+                    label,
+                    s * 1e3,
+                    rate,
+                    recolour * 1e3,
+                    stats.fragments,
+                    stats.bytes_per_tet
+                );
+            }
+            rows.push(json!({
+                "suite": "pt", "dataset": name, "width": 512, "height": 512, "mode": label,
+                "tets": stats.tets, "tets_drawn": stats.tets_drawn, "ms": s * 1e3,
+                "tets_per_s": rate * 1e6, "recolour_ms": recolour * 1e3,
+                "fragments": stats.fragments, "bytes_per_tet": stats.bytes_per_tet,
+            }));
+        }
+    }
+    Ok(rows)
+}

@@ -1,0 +1,129 @@
+//! `volux render --method pt`: Projected Tetrahedra of tetrahedral meshes (and of grids split
+//! into tetrahedra with `--as-tets`).
+use std::borrow::Cow;
+
+use volux_core::histogram::Histogram;
+use volux_core::image::PngOptions;
+use volux_core::tetrahedralize::grid_to_tets;
+use volux_core::{CameraSpec, TetMesh};
+use volux_io::Dataset;
+use volux_render::pt::{ColorMode, PtOptions, PtRenderer, PtStats, SortMode};
+
+use super::render::{blinn_phong, isosurfaces, transfer_function};
+use super::CmdError;
+use crate::cli::RenderArgs;
+
+/// The mesh to render with PT, or `None` when the options ask for another renderer.
+pub fn mesh_for_pt<'a>(
+    data: &'a Dataset,
+    args: &RenderArgs,
+) -> Result<Option<Cow<'a, TetMesh>>, CmdError> {
+    let method = args.method.as_str();
+    match (method, data) {
+        ("auto" | "pt", Dataset::Mesh(m)) => Ok(Some(Cow::Borrowed(m))),
+        ("auto", Dataset::Grid(_)) if !args.as_tets => Ok(None),
+        ("auto" | "pt", Dataset::Grid(g)) => {
+            if !args.as_tets {
+                return Err(
+                    "--method pt renders tetrahedral meshes; add --as-tets to split the \
+                            grid's cells into tetrahedra"
+                        .into(),
+                );
+            }
+            Ok(Some(Cow::Owned(grid_to_tets(g)?)))
+        }
+        ("raycast", _) => Ok(None),
+        ("auto" | "pt", _) => Err("unsupported dataset kind for PT".into()),
+        (other, _) => Err(format!("unknown method '{other}' (auto, pt, raycast)").into()),
+    }
+}
+
+/// Renders `mesh` with PT and writes the PNG.
+pub fn run(
+    mesh: &TetMesh,
+    args: &RenderArgs,
+    spec: &CameraSpec,
+    (w, h): (usize, usize),
+    png: &PngOptions,
+) -> Result<(), CmdError> {
+    let bounds = mesh.bounds();
+    let hist = Histogram::from_values(mesh.scalars(), mesh.range(), 256);
+    let tf = transfer_function(&args.tf, &hist, bounds.diagonal() / 256.0)?
+        .with_opacity_scale(args.opacity_scale);
+    let mut opts = PtOptions::new(spec.resolve(&bounds)?, tf);
+    (opts.width, opts.height) = (w, h);
+    opts.sort = SortMode::parse(&args.sort)?;
+    opts.color = ColorMode::parse(&args.color)?;
+    opts.isosurfaces = isosurfaces(args)?;
+    opts.shading = blinn_phong(args)?;
+    opts.count_violations = args.stats;
+    if args.no_early_termination {
+        opts.early_termination = None;
+    }
+    let out = PtRenderer::new(mesh).render(&opts)?;
+    out.image
+        .write_png(&args.output, png)
+        .map_err(|e| format!("{}: {e}", args.output.display()))?;
+    report(args, &out.stats, (w, h));
+    Ok(())
+}
+
+fn report(args: &RenderArgs, s: &PtStats, (w, h): (usize, usize)) {
+    if args.stats && args.json {
+        let v = serde_json::json!({
+            "method": "pt",
+            "ms": s.seconds * 1e3,
+            "width": w,
+            "height": h,
+            "tets": s.tets,
+            "tets_kept": s.tets_kept,
+            "tets_drawn": s.tets_drawn,
+            "degenerate": s.degenerate,
+            "clipped": s.clipped,
+            "tets_per_s": s.tets as f64 / s.seconds.max(1e-9),
+            "fragments": s.fragments,
+            "sort": args.sort,
+            "color": args.color,
+            "exact_strategy": s.exact_strategy,
+            "sort_violations": s.sort_violations,
+            "cycles_broken": s.cycles_broken,
+            "centroid_sort_ms": s.centroid_sort_s * 1e3,
+            "exact_sort_ms": s.exact_sort_s * 1e3,
+            "project_ms": s.project_s * 1e3,
+            "sort_ms": s.sort_s * 1e3,
+            "bin_ms": s.bin_s * 1e3,
+            "raster_ms": s.raster_s * 1e3,
+            "bytes_per_tet": s.bytes_per_tet,
+            "threads": rayon::current_num_threads(),
+        });
+        println!("{v}");
+        return;
+    }
+    if args.stats {
+        eprintln!(
+            "{w}x{h} PT: {:.1} ms ({:.2} M tets/s), {} tets, {} kept, {} drawn, {} degenerate, \
+             {} fragments, {:.1} bytes/tet per frame",
+            s.seconds * 1e3,
+            s.tets as f64 / s.seconds.max(1e-9) / 1e6,
+            s.tets,
+            s.tets_kept,
+            s.tets_drawn,
+            s.degenerate,
+            s.fragments,
+            s.bytes_per_tet
+        );
+        eprintln!(
+            "  stages: project {:.1} ms, sort {:.1} ms, bin {:.1} ms, raster {:.1} ms; \
+             centroid sort {:.1} ms, exact sort {:.1} ms, centroid-order violations {}",
+            s.project_s * 1e3,
+            s.sort_s * 1e3,
+            s.bin_s * 1e3,
+            s.raster_s * 1e3,
+            s.centroid_sort_s * 1e3,
+            s.exact_sort_s * 1e3,
+            s.sort_violations
+                .map_or_else(|| "-".to_string(), |v| v.to_string())
+        );
+    }
+    eprintln!("wrote {}", args.output.display());
+}

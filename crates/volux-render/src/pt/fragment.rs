@@ -1,0 +1,168 @@
+//! The colour of one PT fragment: a ray segment through a tetrahedron, from scalar `s_f` at
+//! the front to `s_b` at the back over a length `l`, with the isosurfaces it crosses
+//! (seed `000` §4.3 and eqs. 2.2-2.3; seed `002` §4.3, §4.4 and §4.6).
+//!
+//! Three optical models, one per [`ColorMode`]:
+//! - `average`: Shirley and Tuchman's averaged colour and extinction
+//!   ([`psi::average_fragment`]);
+//! - `psi`: Moreland and Angel's partial pre-integration ([`psi::psi_fragment`]);
+//! - `exact`: the closed-form integral of the linear segment for the piecewise-linear TF
+//!   ([`SegmentIntegrator`]), the same function the ray casters use.
+//!
+//! # Isosurfaces (`002` §4.6)
+//!
+//! An isovalue `v` strictly between `s_f` and `s_b` (half-open, `t = (v - s_f)/(s_b - s_f)`
+//! in `[0, 1)`, so a surface through a shared face is drawn by one cell only) is crossed at
+//! `t l`. The segment is cut at its crossings: the volume before the first, the lit surface,
+//! the volume to the next, and so on, composited front to back. The surface normal is the
+//! gradient interpolated between the front and back gradients at `t`, and the surface is lit
+//! with [`BlinnPhong`] (two-sided) and drawn with the isovalue's colour and opacity.
+use glam::Vec3;
+
+use crate::integrate::preintegrated::SegmentIntegrator;
+use crate::integrate::psi::{self, CellClassifier, PsiTable};
+use crate::isosurface::Isovalue;
+use crate::shading::BlinnPhong;
+
+/// How a fragment's colour and opacity are computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ColorMode {
+    /// Shirley-Tuchman averages (the seeds' basic mode).
+    Average,
+    /// Partial pre-integration with the ψ table (the seeds' accurate mode).
+    #[default]
+    Psi,
+    /// Exact integral of the linear segment (the reference).
+    Exact,
+}
+
+impl ColorMode {
+    /// Parses `average`, `psi` or `exact`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s {
+            "average" => Ok(Self::Average),
+            "psi" => Ok(Self::Psi),
+            "exact" => Ok(Self::Exact),
+            other => Err(format!(
+                "unknown colour mode '{other}' (average, psi, exact)"
+            )),
+        }
+    }
+
+    /// The name `parse` accepts.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Average => "average",
+            Self::Psi => "psi",
+            Self::Exact => "exact",
+        }
+    }
+}
+
+/// Everything a fragment's colour depends on besides its own `(s_f, s_b, l)`.
+pub struct FragmentShader<'a> {
+    /// The optical model.
+    pub mode: ColorMode,
+    /// The exact integrator (for [`ColorMode::Exact`]).
+    pub exact: &'a SegmentIntegrator,
+    /// The TF lookup table (for the average and ψ modes).
+    pub classifier: &'a CellClassifier,
+    /// The ψ table.
+    pub psi: &'a PsiTable,
+    /// Isovalues, sorted by value.
+    pub isosurfaces: &'a [Isovalue],
+    /// Lighting of the isosurfaces.
+    pub shading: BlinnPhong,
+}
+
+/// Composites `rgba` (premultiplied) behind `acc` (front-to-back "under").
+#[inline]
+pub fn under(acc: &mut [f32; 4], rgba: [f32; 4]) {
+    let w = 1.0 - acc[3];
+    acc[0] += w * rgba[0];
+    acc[1] += w * rgba[1];
+    acc[2] += w * rgba[2];
+    acc[3] += w * rgba[3];
+}
+
+impl FragmentShader<'_> {
+    /// Premultiplied RGBA of the volume along a segment.
+    #[inline]
+    pub fn segment(&self, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
+        if l.is_nan() || l <= 0.0 {
+            return [0.0; 4];
+        }
+        match self.mode {
+            ColorMode::Average => psi::average_fragment(self.classifier, s_f, s_b, l),
+            ColorMode::Psi => psi::psi_fragment(self.classifier, self.psi, s_f, s_b, l),
+            ColorMode::Exact => self
+                .exact
+                .integrate(f64::from(s_f), f64::from(s_b), f64::from(l))
+                .map(|v| v as f32),
+        }
+    }
+
+    /// Premultiplied RGBA of a fragment, isosurfaces included. `gradients` gives the front
+    /// and back gradients (called only when a surface is crossed); `view_dir` is the pixel's
+    /// ray direction.
+    #[inline]
+    pub fn fragment(
+        &self,
+        s_f: f32,
+        s_b: f32,
+        l: f32,
+        gradients: impl FnOnce() -> (Vec3, Vec3),
+        view_dir: impl FnOnce() -> Vec3,
+    ) -> [f32; 4] {
+        if self.isosurfaces.is_empty() || s_f == s_b {
+            return self.segment(s_f, s_b, l);
+        }
+        let (lo, hi) = if s_f < s_b { (s_f, s_b) } else { (s_b, s_f) };
+        let first = self.isosurfaces.partition_point(|i| i.value < lo);
+        let crossing = |iso: &Isovalue| {
+            let t = (iso.value - s_f) / (s_b - s_f);
+            (0.0..1.0).contains(&t).then_some(t)
+        };
+        let hits = self.isosurfaces[first..]
+            .iter()
+            .take_while(|i| i.value <= hi)
+            .filter_map(|i| crossing(i).map(|t| (t, i)));
+        let mut acc = [0.0f32; 4];
+        let (mut s0, mut t0) = (s_f, 0.0f32);
+        let mut lit: Option<(Vec3, Vec3, Vec3)> = None;
+        let mut view_dir = Some(view_dir);
+        let mut gradients = Some(gradients);
+        // Crossings come in the order of the values; along the ray they are in order of t,
+        // which is the same order when s increases and the reverse when it decreases.
+        let mut list: [(f32, Option<&Isovalue>); 8] = [(0.0, None); 8];
+        let mut n = 0;
+        for h in hits {
+            if n < list.len() {
+                list[n] = (h.0, Some(h.1));
+                n += 1;
+            }
+        }
+        let list = &mut list[..n];
+        if s_b < s_f {
+            list.reverse();
+        }
+        for &(t, iso) in list.iter() {
+            let Some(iso) = iso else { continue };
+            under(&mut acc, self.segment(s0, iso.value, (t - t0) * l));
+            let (gf, gb, dir) = *lit.get_or_insert_with(|| {
+                let (gf, gb) = gradients.take().map_or((Vec3::ZERO, Vec3::ZERO), |g| g());
+                let dir = view_dir.take().map_or(Vec3::Z, |v| v());
+                (gf, gb, dir)
+            });
+            let normal = gf + (gb - gf) * t;
+            let rgb = self
+                .shading
+                .shade([iso.rgba[0], iso.rgba[1], iso.rgba[2]], normal, dir);
+            let a = iso.rgba[3];
+            under(&mut acc, [rgb[0] * a, rgb[1] * a, rgb[2] * a, a]);
+            (s0, t0) = (iso.value, t);
+        }
+        under(&mut acc, self.segment(s0, s_b, (1.0 - t0) * l));
+        acc
+    }
+}

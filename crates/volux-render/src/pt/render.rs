@@ -1,0 +1,719 @@
+//! The Projected Tetrahedra renderer: the stages of [`super`] wired together, with the caches
+//! of the seeds' update step (seed `000` §4.2, seed `002` §4.2 and §4.5).
+//!
+//! Per frame:
+//!
+//! 1. **discard** (`002` §4.5): the tetrahedra whose scalar interval maps to zero extinction
+//!    everywhere and that no isosurface crosses are dropped; the kept set is rebuilt only
+//!    when the TF's zero set or the isovalues change;
+//! 2. **per-tetrahedron pass** (view changes only): vertex projection
+//!    ([`ViewProjection`]), the four exact orientation tests of every kept tetrahedron
+//!    (degenerate projections are dropped) and its centroid's sort key (distance from the eye
+//!    under perspective, which orders far fewer face pairs wrongly than the view depth of
+//!    the seeds; see [`sort`]);
+//! 3. **visibility order** (view changes only): centroid radix sort, or the exact order
+//!    (MPVO on a convex mesh; a per-pixel fragment sort otherwise);
+//! 4. **binning** of the ordered tetrahedra into screen tiles;
+//! 5. **rasterization and compositing**, tiles in parallel, each compositing its own
+//!    fragments front to back in the global order (so the image does not depend on the
+//!    number of threads): classification and thick vertex ([`classify`],
+//!    [`fan_vertices`]), scanline rasterization with the top-left rule, perspective-correct
+//!    `(s_f, s_b, l)` and gradients, the fragment colour of [`FragmentShader`].
+//!
+//! A TF change that keeps the zero set re-runs only step 5 (recolouring without
+//! re-projecting). Compositing is front to back (the "under" operator, equivalent to the
+//! seeds' back-to-front "over" in the reverse order) so that pixels can stop early once
+//! opaque.
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use volux_core::{Camera, Image, TetMesh, TransferFunction};
+
+use super::classify::{classify, projection_tests, ternary_code, TERNARY_TABLE};
+use super::fragment::{under, ColorMode, FragmentShader};
+use super::project::{fan_vertices, pixel_secant, screen_points, FanVertex};
+use super::project::{TetVertices, ViewProjection};
+use super::raster::{bin, fixed, rasterize_triangle, Bins, Rect, Tiles};
+use super::sort;
+use crate::integrate::preintegrated::SegmentIntegrator;
+use crate::integrate::psi::{CellClassifier, PsiTable};
+use crate::isosurface::Isosurfaces;
+use crate::shading::BlinnPhong;
+use crate::RenderError;
+
+/// Visibility order.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SortMode {
+    /// Centroid depth, radix sorted (the seeds' order; approximate).
+    #[default]
+    Centroid,
+    /// Exact: MPVO for convex meshes, per-pixel fragment sorting otherwise.
+    Exact,
+}
+
+impl SortMode {
+    /// Parses `centroid` or `exact`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s {
+            "centroid" => Ok(Self::Centroid),
+            "exact" => Ok(Self::Exact),
+            other => Err(format!("unknown sort '{other}' (centroid, exact)")),
+        }
+    }
+}
+
+/// Options of a PT render.
+#[derive(Clone, Debug)]
+pub struct PtOptions {
+    /// Image width.
+    pub width: usize,
+    /// Image height.
+    pub height: usize,
+    /// The camera.
+    pub camera: Camera,
+    /// The transfer function (resolved against the mesh's range by the renderer).
+    pub tf: TransferFunction,
+    /// Visibility order.
+    pub sort: SortMode,
+    /// Fragment colour.
+    pub color: ColorMode,
+    /// Isosurfaces.
+    pub isosurfaces: Isosurfaces,
+    /// Lighting of the isosurfaces.
+    pub shading: BlinnPhong,
+    /// Stop compositing a pixel once its opacity reaches this (`None`: never).
+    pub early_termination: Option<f32>,
+    /// Count the centroid order's violations of the exact face order (`--stats`).
+    pub count_violations: bool,
+    /// Set from another thread to stop with [`RenderError::Cancelled`].
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl PtOptions {
+    /// 512 x 512, centroid order, ψ colour, early termination at 0.999.
+    pub fn new(camera: Camera, tf: TransferFunction) -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            camera,
+            tf,
+            sort: SortMode::Centroid,
+            color: ColorMode::Psi,
+            isosurfaces: Isosurfaces::default(),
+            shading: BlinnPhong::default(),
+            early_termination: Some(0.999),
+            count_violations: false,
+            cancel: None,
+        }
+    }
+
+    fn validate(&self) -> Result<(), RenderError> {
+        if self.width == 0 || self.height == 0 || self.width > 1 << 15 || self.height > 1 << 15 {
+            return Err(RenderError::InvalidOptions(format!(
+                "image size {}x{} must be between 1 and 32768",
+                self.width, self.height
+            )));
+        }
+        self.camera.validate()?;
+        self.tf.validate()?;
+        self.shading
+            .validate()
+            .map_err(RenderError::InvalidOptions)?;
+        Ok(())
+    }
+}
+
+/// What a PT render did and how long each stage took.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PtStats {
+    /// Tetrahedra in the mesh.
+    pub tets: usize,
+    /// Kept by the discard step.
+    pub tets_kept: usize,
+    /// Drawn (kept, projected, not degenerate).
+    pub tets_drawn: usize,
+    /// Kept but with a degenerate projection.
+    pub degenerate: usize,
+    /// Kept but with a vertex behind the near plane or outside the guard band.
+    pub clipped: usize,
+    /// Fragments shaded.
+    pub fragments: u64,
+    /// Face pairs ordered against the exact face order by the centroid sort (when counted).
+    pub sort_violations: Option<u64>,
+    /// How the exact order was obtained: "mpvo", "per-pixel", or "" for centroid.
+    pub exact_strategy: &'static str,
+    /// Cycles MPVO had to break.
+    pub cycles_broken: usize,
+    /// Seconds in the discard step (0 when cached).
+    pub discard_s: f64,
+    /// Seconds in the per-tetrahedron pass (0 when cached).
+    pub project_s: f64,
+    /// Seconds sorting (0 when cached).
+    pub sort_s: f64,
+    /// Seconds of the centroid sort when violations were counted.
+    pub centroid_sort_s: f64,
+    /// Seconds of the MPVO sort when violations were counted or the exact order was asked.
+    pub exact_sort_s: f64,
+    /// Seconds binning (0 when cached).
+    pub bin_s: f64,
+    /// Seconds rasterizing and compositing.
+    pub raster_s: f64,
+    /// Seconds in total.
+    pub seconds: f64,
+    /// Per-frame bytes per tetrahedron (projection, order, bins; not the mesh).
+    pub bytes_per_tet: f64,
+}
+
+/// A PT image with its statistics.
+#[derive(Clone, Debug)]
+pub struct PtRendered {
+    /// Premultiplied linear RGBA.
+    pub image: Image,
+    /// Statistics.
+    pub stats: PtStats,
+}
+
+/// The kept set and what it was built from.
+struct Kept {
+    key: (Vec<u8>, Vec<f32>, Vec<f32>),
+    mask: Vec<bool>,
+    count: usize,
+}
+
+/// The view-dependent data.
+struct ViewData {
+    key: (Camera, usize, usize, SortMode, u64),
+    proj: ViewProjection,
+    bins: Bins,
+    per_pixel: bool,
+    drawn: usize,
+    degenerate: usize,
+    clipped: usize,
+    violations: Option<u64>,
+    strategy: &'static str,
+    cycles: usize,
+    order_bytes: usize,
+}
+
+/// A PT renderer for one mesh, holding the caches of the update step.
+pub struct PtRenderer<'m> {
+    mesh: &'m TetMesh,
+    adjacency: Option<Vec<[u32; 4]>>,
+    gradients: Option<Vec<Vec3>>,
+    convex: Option<bool>,
+    psi: Option<PsiTable>,
+    kept: Option<Kept>,
+    kept_version: u64,
+    view: Option<ViewData>,
+}
+
+impl<'m> PtRenderer<'m> {
+    /// A renderer for `mesh`; nothing is computed until the first render.
+    pub fn new(mesh: &'m TetMesh) -> Self {
+        Self {
+            mesh,
+            adjacency: None,
+            gradients: None,
+            convex: None,
+            psi: None,
+            kept: None,
+            kept_version: 0,
+            view: None,
+        }
+    }
+
+    /// Renders one frame.
+    pub fn render(&mut self, opts: &PtOptions) -> Result<PtRendered, RenderError> {
+        opts.validate()?;
+        let start = Instant::now();
+        let mut stats = PtStats {
+            tets: self.mesh.tets().len(),
+            ..Default::default()
+        };
+        let range = self.mesh.range();
+        let tf = opts.tf.resolved(range);
+        let t = Instant::now();
+        self.update_kept(&tf, &opts.isosurfaces);
+        stats.discard_s = t.elapsed().as_secs_f64();
+        cancelled(opts)?;
+        self.update_view(opts, &mut stats)?;
+        cancelled(opts)?;
+        if !opts.isosurfaces.is_empty() && self.gradients.is_none() {
+            self.gradients = Some(self.mesh.vertex_gradients());
+        }
+        if opts.color == ColorMode::Psi && self.psi.is_none() {
+            self.psi = Some(PsiTable::new());
+        }
+        let exact = SegmentIntegrator::new(&tf);
+        let classifier = CellClassifier::new(&tf, range);
+        let psi_table = match &self.psi {
+            Some(p) => p,
+            None => &*self.psi.insert(PsiTable::new()),
+        };
+        let shader = FragmentShader {
+            mode: opts.color,
+            exact: &exact,
+            classifier: &classifier,
+            psi: psi_table,
+            isosurfaces: opts.isosurfaces.as_slice(),
+            shading: opts.shading,
+        };
+        let view = self.view.as_ref().expect("view updated above");
+        let kept = self.kept.as_ref().expect("kept set updated above");
+        let t = Instant::now();
+        let ctx = TileContext {
+            mesh: self.mesh,
+            proj: &view.proj,
+            gradients: self.gradients.as_deref(),
+            shader: &shader,
+            camera: &opts.camera,
+            early: if view.per_pixel {
+                None
+            } else {
+                opts.early_termination
+            },
+            per_pixel: view.per_pixel,
+        };
+        let tiles = Tiles::new(opts.width, opts.height);
+        let results: Vec<Result<TileOutput, RenderError>> = (0..tiles.count())
+            .into_par_iter()
+            .map(|i| {
+                cancelled(opts)?;
+                Ok(ctx.render_tile(tiles.rect(i), view.bins.tile(i)))
+            })
+            .collect();
+        let mut pixels = vec![[0.0f32; 4]; opts.width * opts.height];
+        for (i, r) in results.into_iter().enumerate() {
+            let (tile, frags) = r?;
+            stats.fragments += frags;
+            let rect = tiles.rect(i);
+            for (row, y) in (rect.y0..rect.y1).enumerate() {
+                let src = &tile[row * rect.width()..(row + 1) * rect.width()];
+                pixels[y * opts.width + rect.x0..y * opts.width + rect.x1].copy_from_slice(src);
+            }
+        }
+        stats.raster_s = t.elapsed().as_secs_f64();
+        stats.tets_kept = kept.count;
+        stats.tets_drawn = view.drawn;
+        stats.degenerate = view.degenerate;
+        stats.clipped = view.clipped;
+        stats.sort_violations = view.violations;
+        stats.exact_strategy = view.strategy;
+        stats.cycles_broken = view.cycles;
+        let per_frame = view.proj.vertices.capacity() * ViewProjection::BYTES_PER_VERTEX
+            + view.bins.bytes()
+            + view.order_bytes;
+        stats.bytes_per_tet = per_frame as f64 / stats.tets.max(1) as f64;
+        stats.seconds = start.elapsed().as_secs_f64();
+        let image = Image::from_pixels(opts.width, opts.height, pixels)?;
+        Ok(PtRendered { image, stats })
+    }
+
+    /// Rebuilds the kept set if the TF's zero set or the isovalues changed.
+    fn update_kept(&mut self, tf: &TransferFunction, isos: &Isosurfaces) {
+        let support = Support::new(tf);
+        let isovalues: Vec<f32> = isos.as_slice().iter().map(|i| i.value).collect();
+        let key = (support.nonzero.clone(), support.knots.clone(), isovalues);
+        if self.kept.as_ref().is_some_and(|k| k.key == key) {
+            return;
+        }
+        let mesh = self.mesh;
+        let s = mesh.scalars();
+        let mask: Vec<bool> = mesh
+            .tets()
+            .par_iter()
+            .with_min_len(4096)
+            .map(|t| {
+                let v = t.map(|i| s[i as usize]);
+                let lo = v.iter().copied().fold(f32::INFINITY, f32::min);
+                let hi = v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                support.visible(lo, hi) || key.2.iter().any(|&iso| lo <= iso && iso <= hi)
+            })
+            .collect();
+        let count = mask.iter().filter(|&&k| k).count();
+        self.kept = Some(Kept { key, mask, count });
+        self.kept_version += 1;
+    }
+
+    fn update_view(&mut self, opts: &PtOptions, stats: &mut PtStats) -> Result<(), RenderError> {
+        let key = (
+            opts.camera,
+            opts.width,
+            opts.height,
+            opts.sort,
+            self.kept_version,
+        );
+        let counting = opts.count_violations;
+        if self
+            .view
+            .as_ref()
+            .is_some_and(|v| v.key == key && (!counting || v.violations.is_some() || v.per_pixel))
+        {
+            return Ok(());
+        }
+        let mesh = self.mesh;
+        let kept = &self.kept.as_ref().expect("kept set").mask;
+        let t = Instant::now();
+        let proj = ViewProjection::new(mesh, &opts.camera, opts.width, opts.height);
+        let view_dir = sort::View::from_camera(&opts.camera);
+        // The per-tetrahedron pass: orientation tests and centroid depth.
+        #[derive(Clone, Copy)]
+        enum Fate {
+            Skip,
+            Clipped,
+            Degenerate,
+            Drawn(f32),
+        }
+        let fates: Vec<Fate> = mesh
+            .tets()
+            .par_iter()
+            .zip(kept.par_iter())
+            .with_min_len(4096)
+            .map(|(t, &k)| {
+                if !k {
+                    return Fate::Skip;
+                }
+                let Some(v) = proj.tet(t) else {
+                    return Fate::Clipped;
+                };
+                let code = ternary_code(projection_tests(screen_points(&v)));
+                if TERNARY_TABLE[usize::from(code)].is_valid() {
+                    let p = mesh.positions();
+                    let c = t
+                        .iter()
+                        .fold(DVec3::ZERO, |a, &i| a + p[i as usize].as_dvec3());
+                    Fate::Drawn(view_dir.depth(c * 0.25) as f32)
+                } else {
+                    Fate::Degenerate
+                }
+            })
+            .collect();
+        let (mut ids, mut depths) = (Vec::new(), Vec::new());
+        let (mut degenerate, mut clipped) = (0, 0);
+        for (i, f) in fates.iter().enumerate() {
+            match *f {
+                Fate::Drawn(d) => {
+                    ids.push(i as u32);
+                    depths.push(d);
+                }
+                Fate::Degenerate => degenerate += 1,
+                Fate::Clipped => clipped += 1,
+                Fate::Skip => {}
+            }
+        }
+        drop(fates);
+        stats.project_s = t.elapsed().as_secs_f64();
+        cancelled(opts)?;
+        let t = Instant::now();
+        let need_exact = opts.sort == SortMode::Exact || counting;
+        if need_exact && self.adjacency.is_none() {
+            self.adjacency = Some(mesh.face_adjacency());
+        }
+        if opts.sort == SortMode::Exact && self.convex.is_none() {
+            self.convex = Some(sort::is_convex(mesh));
+        }
+        let tc = Instant::now();
+        let centroid = (opts.sort == SortMode::Centroid || counting)
+            .then(|| sort::centroid_order(&depths, &ids));
+        stats.centroid_sort_s = tc.elapsed().as_secs_f64();
+        let mut strategy = "";
+        let mut cycles = 0;
+        let mut per_pixel = false;
+        let mut exact_order = None;
+        if need_exact {
+            let adjacency = self.adjacency.as_deref().expect("built above");
+            let te = Instant::now();
+            let r = sort::mpvo(mesh, adjacency, &view_dir, Some(&ids))
+                .map_err(|e| RenderError::InvalidOptions(format!("visibility sort: {e}")))?;
+            stats.exact_sort_s = te.elapsed().as_secs_f64();
+            let order = r.order;
+            cycles = r.cycles_broken as usize;
+            if opts.sort == SortMode::Exact {
+                if self.convex == Some(true) && cycles == 0 {
+                    strategy = "mpvo";
+                } else {
+                    strategy = "per-pixel";
+                    per_pixel = true;
+                }
+            }
+            exact_order = Some(order);
+        }
+        let violations = match (&centroid, counting) {
+            (Some(c), true) => {
+                let adjacency = self.adjacency.as_deref().expect("built above");
+                Some(sort::count_violations(c, adjacency, mesh, &view_dir))
+            }
+            _ => None,
+        };
+        let order = match opts.sort {
+            SortMode::Centroid => centroid.unwrap_or_default(),
+            SortMode::Exact => exact_order.unwrap_or_default(),
+        };
+        stats.sort_s = t.elapsed().as_secs_f64();
+        cancelled(opts)?;
+        let t = Instant::now();
+        let tiles = Tiles::new(opts.width, opts.height);
+        let bins = bin(&order, mesh.tets(), &proj, &tiles);
+        stats.bin_s = t.elapsed().as_secs_f64();
+        self.view = Some(ViewData {
+            key,
+            proj,
+            bins,
+            per_pixel,
+            drawn: ids.len(),
+            degenerate,
+            clipped,
+            violations,
+            strategy,
+            cycles,
+            order_bytes: 4 * order.capacity(),
+        });
+        Ok(())
+    }
+}
+
+fn cancelled(opts: &PtOptions) -> Result<(), RenderError> {
+    if opts
+        .cancel
+        .as_ref()
+        .is_some_and(|c| c.load(Ordering::Relaxed))
+    {
+        Err(RenderError::Cancelled)
+    } else {
+        Ok(())
+    }
+}
+
+/// Where the TF's extinction is non-zero: the pieces between consecutive breakpoints (and
+/// the two unbounded ends) on which it is not identically zero.
+struct Support {
+    knots: Vec<f32>,
+    nonzero: Vec<u8>,
+    /// Prefix counts of non-zero pieces.
+    prefix: Vec<u32>,
+}
+
+impl Support {
+    fn new(tf: &TransferFunction) -> Self {
+        let knots: Vec<f64> = tf
+            .breakpoints()
+            .into_iter()
+            .filter(|x| x.is_finite())
+            .collect();
+        let tau = |s: f64| {
+            let v = tf.tau_per_world(s);
+            v.is_finite() && v > 0.0
+        };
+        let mut nonzero = Vec::with_capacity(knots.len() + 1);
+        match knots.first() {
+            Some(&k) => nonzero.push(u8::from(tau(k - 1.0) || tau(k))),
+            None => nonzero.push(u8::from(tau(0.0))),
+        }
+        for w in knots.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let inner = [0.0, 0.25, 0.5, 0.75, 1.0]
+                .iter()
+                .any(|f| tau(a + f * (b - a)));
+            nonzero.push(u8::from(inner));
+        }
+        if let Some(&k) = knots.last() {
+            nonzero.push(u8::from(tau(k) || tau(k + 1.0)));
+        }
+        let mut prefix = vec![0u32; nonzero.len() + 1];
+        for (i, &z) in nonzero.iter().enumerate() {
+            prefix[i + 1] = prefix[i] + u32::from(z);
+        }
+        Self {
+            knots: knots.iter().map(|&k| k as f32).collect(),
+            nonzero,
+            prefix,
+        }
+    }
+
+    /// Whether the extinction can be non-zero somewhere in `[lo, hi]` (conservative).
+    fn visible(&self, lo: f32, hi: f32) -> bool {
+        if lo.is_nan() || hi.is_nan() || lo > hi {
+            return true;
+        }
+        // Piece k spans [knots[k-1], knots[k]]; closed ends are shared with neighbours.
+        let a = self.knots.partition_point(|&k| k < lo);
+        let b = self.knots.partition_point(|&k| k <= hi);
+        self.prefix[b + 1] > self.prefix[a]
+    }
+}
+
+/// What every tile needs to draw.
+struct TileContext<'a> {
+    mesh: &'a TetMesh,
+    proj: &'a ViewProjection,
+    gradients: Option<&'a [Vec3]>,
+    shader: &'a FragmentShader<'a>,
+    camera: &'a Camera,
+    early: Option<f32>,
+    per_pixel: bool,
+}
+
+/// A tile's premultiplied pixels and its fragment count.
+type TileOutput = (Vec<[f32; 4]>, u64);
+
+/// A fragment kept for per-pixel sorting.
+#[derive(Clone, Copy)]
+struct Fragment {
+    pixel: u32,
+    depth: f32,
+    rgba: [f32; 4],
+}
+
+impl TileContext<'_> {
+    /// Draws the tetrahedra `list` (in order) into tile `rect`; returns its pixels and the
+    /// number of fragments shaded.
+    fn render_tile(&self, rect: Rect, list: &[u32]) -> (Vec<[f32; 4]>, u64) {
+        let (tw, th) = (rect.width(), rect.height());
+        let mut acc = vec![[0.0f32; 4]; tw * th];
+        let mut frags: Vec<Fragment> = Vec::new();
+        let mut count = 0u64;
+        let secant: Vec<f32> = (0..tw * th)
+            .map(|p| {
+                let (x, y) = (rect.x0 + p % tw, rect.y0 + p / tw);
+                pixel_secant(self.proj, x as f32 + 0.5, y as f32 + 0.5)
+            })
+            .collect();
+        let (right, up, forward) = self.camera.basis();
+        let (w, h) = self.proj.size;
+        let view_dir = |x: usize, y: usize| -> Vec3 {
+            if !self.proj.perspective {
+                return forward.as_vec3();
+            }
+            let t = self.proj.tan_half_fov;
+            let nx = (2.0 * (x as f64 + 0.5) / w as f64 - 1.0) * (w as f64 / h as f64) * t;
+            let ny = (1.0 - 2.0 * (y as f64 + 0.5) / h as f64) * t;
+            (forward + right * nx + up * ny).as_vec3()
+        };
+        let tets = self.mesh.tets();
+        let scalars = self.mesh.scalars();
+        let early = self.early.unwrap_or(f32::INFINITY);
+        for &t in list {
+            let tet = &tets[t as usize];
+            let Some(screen) = self.proj.tet(tet) else {
+                continue;
+            };
+            let c = classify(screen_points(&screen));
+            let tv = TetVertices {
+                screen,
+                scalars: tet.map(|i| scalars[i as usize]),
+                gradients: match self.gradients {
+                    Some(g) => tet.map(|i| g[i as usize]),
+                    None => [Vec3::ZERO; 4],
+                },
+                perspective: self.proj.perspective,
+                _marker: std::marker::PhantomData,
+            };
+            let Some(fan) = fan_vertices(&tv, &c) else {
+                continue;
+            };
+            for tri in c.fan.triangles() {
+                let fv = tri.map(|k| fan[usize::from(k)]);
+                let interp = Interpolator::new(&fv, self.proj.perspective);
+                let pos = fv.map(|v| fixed(v.xy));
+                rasterize_triangle(pos, rect, |x, y, l| {
+                    let p = (y - rect.y0) * tw + (x - rect.x0);
+                    if acc[p][3] >= early {
+                        return;
+                    }
+                    count += 1;
+                    let (z_f, s_f, z_b, s_b) = interp.at(l);
+                    let len = ((z_b - z_f) * secant[p]).max(0.0);
+                    let rgba = self.shader.fragment(
+                        s_f,
+                        s_b,
+                        len,
+                        || interp.gradients(l),
+                        || view_dir(x, y),
+                    );
+                    if self.per_pixel {
+                        frags.push(Fragment {
+                            pixel: p as u32,
+                            depth: z_f,
+                            rgba,
+                        });
+                    } else {
+                        under(&mut acc[p], rgba);
+                    }
+                });
+            }
+        }
+        if self.per_pixel {
+            frags.sort_unstable_by(|a, b| a.pixel.cmp(&b.pixel).then(a.depth.total_cmp(&b.depth)));
+            for f in &frags {
+                under(&mut acc[f.pixel as usize], f.rgba);
+            }
+        }
+        let _ = th;
+        (acc, count)
+    }
+}
+
+/// Perspective-correct interpolation of front and back attributes over one fan triangle.
+struct Interpolator {
+    fv: [FanVertex; 3],
+    /// Per vertex `1 / z_f` and `1 / z_b` (perspective) or 1 (orthographic).
+    kf: [f32; 3],
+    kb: [f32; 3],
+    perspective: bool,
+}
+
+impl Interpolator {
+    #[inline]
+    fn new(fv: &[FanVertex; 3], perspective: bool) -> Self {
+        let k = |z: f32| if perspective { 1.0 / z } else { 1.0 };
+        Self {
+            fv: *fv,
+            kf: fv.map(|v| k(v.z_f)),
+            kb: fv.map(|v| k(v.z_b)),
+            perspective,
+        }
+    }
+
+    /// `(z_f, s_f, z_b, s_b)` at screen barycentrics `l`.
+    #[inline]
+    fn at(&self, l: [f32; 3]) -> (f32, f32, f32, f32) {
+        let v = &self.fv;
+        if self.perspective {
+            let wf = [l[0] * self.kf[0], l[1] * self.kf[1], l[2] * self.kf[2]];
+            let wb = [l[0] * self.kb[0], l[1] * self.kb[1], l[2] * self.kb[2]];
+            let sf = wf[0] + wf[1] + wf[2];
+            let sb = wb[0] + wb[1] + wb[2];
+            let (z_f, z_b) = (1.0 / sf, 1.0 / sb);
+            let s_f = (wf[0] * v[0].s_f + wf[1] * v[1].s_f + wf[2] * v[2].s_f) * z_f;
+            let s_b = (wb[0] * v[0].s_b + wb[1] * v[1].s_b + wb[2] * v[2].s_b) * z_b;
+            (z_f, s_f, z_b, s_b)
+        } else {
+            let dot = |a: [f32; 3]| l[0] * a[0] + l[1] * a[1] + l[2] * a[2];
+            (
+                dot(v.map(|x| x.z_f)),
+                dot(v.map(|x| x.s_f)),
+                dot(v.map(|x| x.z_b)),
+                dot(v.map(|x| x.s_b)),
+            )
+        }
+    }
+
+    /// Front and back gradients at screen barycentrics `l`.
+    fn gradients(&self, l: [f32; 3]) -> (Vec3, Vec3) {
+        let v = &self.fv;
+        let wf = [l[0] * self.kf[0], l[1] * self.kf[1], l[2] * self.kf[2]];
+        let wb = [l[0] * self.kb[0], l[1] * self.kb[1], l[2] * self.kb[2]];
+        let nf = (wf[0] + wf[1] + wf[2]).max(f32::MIN_POSITIVE);
+        let nb = (wb[0] + wb[1] + wb[2]).max(f32::MIN_POSITIVE);
+        (
+            (v[0].g_f * wf[0] + v[1].g_f * wf[1] + v[2].g_f * wf[2]) / nf,
+            (v[0].g_b * wb[0] + v[1].g_b * wb[1] + v[2].g_b * wb[2]) / nb,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests;
