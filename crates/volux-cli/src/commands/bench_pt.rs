@@ -16,6 +16,12 @@ use volux_render::pt::{ColorMode, PtOptions, PtRenderer, SortMode};
 
 use super::CmdError;
 
+/// Non-zero extinction over the whole range (normalized), up to 3 optical depths across the
+/// mesh's diagonal.
+const DENSE_TF: &str = r#"{"space": "normalized",
+  "color": [[0, 0.1, 0.2, 0.9], [0.5, 0.9, 0.5, 0.1], [1, 1, 1, 1]],
+  "extinction": [[0, 0.05], [0.5, 0.3], [1, 1.5]]}"#;
+
 const SHARED: [(&str, &str); 2] = [
     ("blunt-fin", "nasa_blunt_fin/blunt_fin_tets_density.off.gz"),
     ("lox-post", "nasa_lox_post/lox_post_tets_velmag.off.gz"),
@@ -63,8 +69,16 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
     if !as_json {
         println!("PT, 512x512, centroid order; threads: {threads}; frames per case: {frames} (median), new view each frame");
         println!(
-            "{:<14} {:>9} {:<12} {:>9} {:>9} {:>11} {:>12} {:>10}",
-            "mesh", "tets", "mode", "ms/frame", "M tets/s", "recolour ms", "fragments", "bytes/tet"
+            "{:<14} {:>9} {:<14} {:>9} {:>9} {:>11} {:>12} {:>10} {:>9}",
+            "mesh",
+            "tets",
+            "mode",
+            "ms/frame",
+            "M tets/s",
+            "recolour ms",
+            "fragments",
+            "bytes/tet",
+            "drawn"
         );
     }
     for (name, mesh) in meshes(quick)? {
@@ -72,12 +86,18 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
         let tf = TransferFunction::preset("auto", &hist)?
             .with_unit_length(mesh.bounds().diagonal() / 256.0);
         let mut renderer = PtRenderer::new(&mesh);
+        // The automatic TF (most tetrahedra discarded on these meshes) and a dense one whose
+        // extinction is non-zero over the whole range (every tetrahedron drawn).
+        let dense =
+            TransferFunction::from_json(DENSE_TF)?.with_unit_length(mesh.bounds().diagonal() / 2.0);
         let modes = [
-            ("average", ColorMode::Average, false),
-            ("psi", ColorMode::Psi, false),
-            ("psi+iso", ColorMode::Psi, true),
+            ("average", ColorMode::Average, false, &tf),
+            ("psi", ColorMode::Psi, false, &tf),
+            ("psi+iso", ColorMode::Psi, true, &tf),
+            ("average-dense", ColorMode::Average, false, &dense),
+            ("psi-dense", ColorMode::Psi, false, &dense),
         ];
-        for (label, color, with_iso) in modes {
+        for (label, color, with_iso, tf) in modes {
             let mut times = Vec::new();
             let mut last = None;
             for f in 0..frames + 1 {
@@ -107,7 +127,7 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
             let rate = stats.tets as f64 / s / 1e6;
             if !as_json {
                 println!(
-                    "{:<14} {:>9} {:<12} {:>9.1} {:>9.2} {:>11.1} {:>12} {:>10.1}",
+                    "{:<14} {:>9} {:<14} {:>9.1} {:>9.2} {:>11.1} {:>12} {:>10.1} {:>9}",
                     name,
                     stats.tets,
                     label,
@@ -115,7 +135,8 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
                     rate,
                     recolour * 1e3,
                     stats.fragments,
-                    stats.bytes_per_tet
+                    stats.bytes_per_tet,
+                    stats.tets_drawn
                 );
             }
             rows.push(json!({

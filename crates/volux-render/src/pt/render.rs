@@ -249,9 +249,14 @@ impl<'m> PtRenderer<'m> {
         }
         let exact = SegmentIntegrator::new(&tf);
         let classifier = CellClassifier::new(&tf, range);
-        let psi_table = match &self.psi {
-            Some(p) => p,
-            None => &*self.psi.insert(PsiTable::new()),
+        // Only the ψ mode reads the table; the others get a trivial one (4 entries).
+        let tiny;
+        let psi_table = match (&self.psi, opts.color) {
+            (Some(p), ColorMode::Psi) => p,
+            _ => {
+                tiny = PsiTable::with_size(2);
+                &tiny
+            }
         };
         let shader = FragmentShader {
             mode: opts.color,
