@@ -56,6 +56,26 @@ pub enum Command {
     Render(Box<RenderArgs>),
     /// Render a built-in dataset to demo.png in the current folder.
     Demo,
+    /// Compare two PNG images: RMSE, largest and mean error per channel (in 0..1), and the
+    /// percentage of pixels with a channel off by more than the threshold.
+    Compare {
+        /// First image.
+        a: PathBuf,
+        /// Second image.
+        b: PathBuf,
+        /// Per-channel error (0..1) above which a pixel counts as different.
+        #[arg(long, default_value_t = 1.0 / 255.0)]
+        threshold: f64,
+        /// Write the absolute difference, multiplied by --scale, as a PNG.
+        #[arg(long)]
+        diff: Option<PathBuf>,
+        /// Amplification of the difference image.
+        #[arg(long, default_value_t = 10.0)]
+        scale: f32,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
     /// Accuracy of Riemann sums and adaptive Simpson against the f64 reference (seed
     /// `001` tables B.1, B.2 and 5.5).
     Accuracy {

@@ -208,3 +208,46 @@ fn renders_the_blunt_fin_tets() {
         0.1,
     );
 }
+
+#[test]
+fn compare_reports_differences_and_rejects_mismatched_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let render = |name: &str, size: &str, extra: &[&str]| {
+        let mut args = vec!["render", "t.vtet", "--size", size, "-o", name];
+        args.extend_from_slice(extra);
+        let out = volux(&args, d);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    assert!(
+        volux(&["generate", "torus", "--size", "16", "-o", "t.vtet"], d)
+            .status
+            .success()
+    );
+    render("a.png", "48x40", &[]);
+    render("b.png", "48x40", &["--opacity-scale", "2"]);
+    let same = volux(&["compare", "a.png", "a.png", "--json"], d);
+    let v: serde_json::Value = serde_json::from_slice(&same.stdout).unwrap();
+    assert_eq!(v["rmse"].as_f64(), Some(0.0));
+    assert_eq!(v["pct_over"].as_f64(), Some(0.0));
+    let diff = volux(
+        &["compare", "a.png", "b.png", "--json", "--diff", "d.png"],
+        d,
+    );
+    assert!(diff.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&diff.stdout).unwrap();
+    assert!(v["rmse"].as_f64().unwrap() > 0.0);
+    assert!(v["max_error"].as_f64().unwrap() > 0.01);
+    assert!(v["pct_over"].as_f64().unwrap() > 1.0);
+    assert!(d.join("d.png").exists());
+    render("c.png", "40x40", &[]);
+    let bad = volux(&["compare", "a.png", "c.png"], d);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("differ in size"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "one readable line: {err}");
+}

@@ -9,9 +9,11 @@ use std::path::Path;
 
 use serde_json::json;
 use volux_core::histogram::Histogram;
+use volux_core::Image;
 use volux_core::{synth, CameraSpec, TetMesh, TransferFunction};
 use volux_io::{Dataset, LoadOptions};
 use volux_render::isosurface::{Isosurfaces, Isovalue};
+use volux_render::pt::reference::{render_mesh_reference, ReferenceOptions};
 use volux_render::pt::{ColorMode, PtOptions, PtRenderer, SortMode};
 
 use super::CmdError;
@@ -145,6 +147,94 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
                 "tets_per_s": rate * 1e6, "recolour_ms": recolour * 1e3,
                 "fragments": stats.fragments, "bytes_per_tet": stats.bytes_per_tet,
             }));
+        }
+    }
+    if !quick {
+        rows.extend(accuracy(as_json)?);
+    }
+    Ok(rows)
+}
+
+/// Mean and largest absolute difference per channel.
+fn image_error(a: &Image, b: &Image) -> (f64, f64) {
+    let (mut sum, mut max) = (0.0f64, 0.0f64);
+    for (p, q) in a.pixels().iter().zip(b.pixels()) {
+        for c in 0..4 {
+            let d = f64::from((p[c] - q[c]).abs());
+            sum += d;
+            max = max.max(d);
+        }
+    }
+    (sum / (4 * a.pixels().len()).max(1) as f64, max)
+}
+
+/// PT against the brute-force per-pixel reference at 128x128 (exact colour, exact order):
+/// how wrong the seeds' fast modes (centroid order, average or ψ colour) are, in numbers.
+fn accuracy(as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
+    let (w, h) = (128, 128);
+    let mut rows = Vec::new();
+    if !as_json {
+        println!("\nPT accuracy against the brute-force reference, {w}x{h}, automatic TF, no early termination");
+        println!(
+            "{:<14} {:<10} {:<8} {:>14} {:>12} {:>12}",
+            "mesh", "sort", "colour", "mean |err|", "max |err|", "violations"
+        );
+    }
+    for (name, mesh) in meshes(true)? {
+        let hist = Histogram::from_values(mesh.scalars(), mesh.range(), 256);
+        let tf = TransferFunction::preset("auto", &hist)?
+            .with_unit_length(mesh.bounds().diagonal() / 256.0);
+        let spec = CameraSpec {
+            azimuth: Some(30.0),
+            elevation: Some(20.0),
+            ..Default::default()
+        };
+        let camera = spec.resolve(&mesh.bounds())?;
+        let reference = render_mesh_reference(
+            &mesh,
+            &ReferenceOptions {
+                width: w,
+                height: h,
+                camera,
+                tf: tf.clone(),
+            },
+        )?;
+        let mut renderer = PtRenderer::new(&mesh);
+        for sort in [SortMode::Centroid, SortMode::Exact] {
+            for color in [ColorMode::Average, ColorMode::Psi, ColorMode::Exact] {
+                let mut opts = PtOptions::new(camera, tf.clone());
+                (opts.width, opts.height) = (w, h);
+                (opts.sort, opts.color) = (sort, color);
+                opts.early_termination = None;
+                opts.count_violations = sort == SortMode::Centroid;
+                let r = renderer.render(&opts)?;
+                let (mean, max) = image_error(&r.image, &reference);
+                let sort_name = if sort == SortMode::Centroid {
+                    "centroid"
+                } else {
+                    "exact"
+                };
+                let violations = r
+                    .stats
+                    .sort_violations
+                    .map_or("-".into(), |v| v.to_string());
+                if !as_json {
+                    println!(
+                        "{:<14} {:<10} {:<8} {:>14.2e} {:>12.2e} {:>12}",
+                        name,
+                        sort_name,
+                        color.name(),
+                        mean,
+                        max,
+                        violations
+                    );
+                }
+                rows.push(json!({
+                    "suite": "pt-accuracy", "dataset": name, "width": w, "height": h,
+                    "sort": sort_name, "color": color.name(), "mean_abs_error": mean,
+                    "max_abs_error": max, "sort_violations": r.stats.sort_violations,
+                }));
+            }
         }
     }
     Ok(rows)

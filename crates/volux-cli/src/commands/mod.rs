@@ -2,6 +2,7 @@
 mod accuracy;
 mod bench;
 mod bench_pt;
+mod compare;
 mod convert;
 mod info;
 mod render;
@@ -30,6 +31,21 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
         Command::Generate { kind, size, output } => convert::generate(&kind, size, &output),
         Command::Render(args) => render::run(&args, show),
         Command::Demo => render::demo(show),
+        Command::Compare {
+            a,
+            b,
+            threshold,
+            diff,
+            scale,
+            json,
+        } => compare::run(&compare::Args {
+            a: &a,
+            b: &b,
+            threshold,
+            diff: diff.as_deref(),
+            scale,
+            json,
+        }),
         Command::Accuracy {
             file,
             tf,
