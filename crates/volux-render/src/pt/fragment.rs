@@ -85,21 +85,62 @@ pub fn under(acc: &mut [f32; 4], rgba: [f32; 4]) {
     acc[3] += w * rgba[3];
 }
 
+/// An optical model as a type, so that the per-fragment loop can be compiled once per model
+/// (the mode is dispatched once per tile, not once per fragment).
+pub trait ColorModel {
+    /// Premultiplied RGBA of the volume along a segment of positive finite length.
+    fn segment(shader: &FragmentShader<'_>, s_f: f32, s_b: f32, l: f32) -> [f32; 4];
+}
+
+/// [`ColorMode::Average`] as a type.
+pub struct AverageModel;
+/// [`ColorMode::Psi`] as a type.
+pub struct PsiModel;
+/// [`ColorMode::Exact`] as a type.
+pub struct ExactModel;
+
+impl ColorModel for AverageModel {
+    #[inline(always)]
+    fn segment(shader: &FragmentShader<'_>, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
+        psi::average_fragment(shader.classifier, s_f, s_b, l)
+    }
+}
+
+impl ColorModel for PsiModel {
+    #[inline(always)]
+    fn segment(shader: &FragmentShader<'_>, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
+        psi::psi_fragment(shader.classifier, shader.psi, s_f, s_b, l)
+    }
+}
+
+impl ColorModel for ExactModel {
+    #[inline(always)]
+    fn segment(shader: &FragmentShader<'_>, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
+        shader
+            .exact
+            .integrate(f64::from(s_f), f64::from(s_b), f64::from(l))
+            .map(|v| v as f32)
+    }
+}
+
 impl FragmentShader<'_> {
     /// Premultiplied RGBA of the volume along a segment.
     #[inline]
     pub fn segment(&self, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
+        match self.mode {
+            ColorMode::Average => self.segment_with::<AverageModel>(s_f, s_b, l),
+            ColorMode::Psi => self.segment_with::<PsiModel>(s_f, s_b, l),
+            ColorMode::Exact => self.segment_with::<ExactModel>(s_f, s_b, l),
+        }
+    }
+
+    /// [`FragmentShader::segment`] with the model `M` (which should be the shader's mode).
+    #[inline(always)]
+    pub fn segment_with<M: ColorModel>(&self, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
         if l.is_nan() || l <= 0.0 {
             return [0.0; 4];
         }
-        match self.mode {
-            ColorMode::Average => psi::average_fragment(self.classifier, s_f, s_b, l),
-            ColorMode::Psi => psi::psi_fragment(self.classifier, self.psi, s_f, s_b, l),
-            ColorMode::Exact => self
-                .exact
-                .integrate(f64::from(s_f), f64::from(s_b), f64::from(l))
-                .map(|v| v as f32),
-        }
+        M::segment(self, s_f, s_b, l)
     }
 
     /// Premultiplied RGBA of a fragment, isosurfaces included. `gradients` gives the front
@@ -114,9 +155,41 @@ impl FragmentShader<'_> {
         gradients: impl FnOnce() -> (Vec3, Vec3),
         view_dir: impl FnOnce() -> Vec3,
     ) -> [f32; 4] {
-        if self.isosurfaces.is_empty() || s_f == s_b {
-            return self.segment(s_f, s_b, l);
+        match self.mode {
+            ColorMode::Average => {
+                self.fragment_with::<AverageModel>(s_f, s_b, l, gradients, view_dir)
+            }
+            ColorMode::Psi => self.fragment_with::<PsiModel>(s_f, s_b, l, gradients, view_dir),
+            ColorMode::Exact => self.fragment_with::<ExactModel>(s_f, s_b, l, gradients, view_dir),
         }
+    }
+
+    /// [`FragmentShader::fragment`] with the model `M` (which should be the shader's mode).
+    #[inline(always)]
+    pub fn fragment_with<M: ColorModel>(
+        &self,
+        s_f: f32,
+        s_b: f32,
+        l: f32,
+        gradients: impl FnOnce() -> (Vec3, Vec3),
+        view_dir: impl FnOnce() -> Vec3,
+    ) -> [f32; 4] {
+        if self.isosurfaces.is_empty() || s_f == s_b {
+            return self.segment_with::<M>(s_f, s_b, l);
+        }
+        self.fragment_iso::<M>(s_f, s_b, l, gradients, view_dir)
+    }
+
+    /// The isosurface path of [`FragmentShader::fragment_with`] (kept out of line).
+    #[inline(never)]
+    fn fragment_iso<M: ColorModel>(
+        &self,
+        s_f: f32,
+        s_b: f32,
+        l: f32,
+        gradients: impl FnOnce() -> (Vec3, Vec3),
+        view_dir: impl FnOnce() -> Vec3,
+    ) -> [f32; 4] {
         let (lo, hi) = if s_f < s_b { (s_f, s_b) } else { (s_b, s_f) };
         let first = self.isosurfaces.partition_point(|i| i.value < lo);
         let crossing = |iso: &Isovalue| {
@@ -148,7 +221,10 @@ impl FragmentShader<'_> {
         }
         for &(t, iso) in list.iter() {
             let Some(iso) = iso else { continue };
-            under(&mut acc, self.segment(s0, iso.value, (t - t0) * l));
+            under(
+                &mut acc,
+                self.segment_with::<M>(s0, iso.value, (t - t0) * l),
+            );
             let (gf, gb, dir) = *lit.get_or_insert_with(|| {
                 let (gf, gb) = gradients.take().map_or((Vec3::ZERO, Vec3::ZERO), |g| g());
                 let dir = view_dir.take().map_or(Vec3::Z, |v| v());
@@ -162,7 +238,7 @@ impl FragmentShader<'_> {
             under(&mut acc, [rgb[0] * a, rgb[1] * a, rgb[2] * a, a]);
             (s0, t0) = (iso.value, t);
         }
-        under(&mut acc, self.segment(s0, s_b, (1.0 - t0) * l));
+        under(&mut acc, self.segment_with::<M>(s0, s_b, (1.0 - t0) * l));
         acc
     }
 }

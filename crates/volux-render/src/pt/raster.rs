@@ -188,16 +188,32 @@ pub fn bin(order: &[u32], tets: &[[u32; 4]], proj: &ViewProjection, tiles: &Tile
 }
 
 /// A screen position in fixed point (`SUBPIXEL` units).
+///
+/// Projected positions are snapped to the sub-pixel grid, so `xy * SUBPIXEL` is normally an
+/// exact integer and the conversion needs no rounding; other values are rounded to nearest.
 #[inline]
 pub fn fixed(xy: [f32; 2]) -> [i64; 2] {
-    [
-        (xy[0] * SUBPIXEL).round() as i64,
-        (xy[1] * SUBPIXEL).round() as i64,
-    ]
+    #[inline(always)]
+    fn one(v: f32) -> i64 {
+        let t = v * SUBPIXEL;
+        let i = t as i64;
+        if i as f32 == t {
+            i
+        } else {
+            t.round() as i64
+        }
+    }
+    [one(xy[0]), one(xy[1])]
 }
 
+const SHIFT: u32 = 8;
 const HALF: i64 = (SUBPIXEL as i64) / 2;
 const ONE: i64 = SUBPIXEL as i64;
+const _: () = assert!(ONE == 1 << SHIFT);
+
+/// Rows (or columns) wider than this are clipped to their span with divisions; narrower
+/// ones are walked pixel by pixel with incremental edge functions.
+const WALK_MAX: i64 = 16;
 
 /// One edge `a -> b` of a triangle: `E = C_row + D x` along a row.
 #[derive(Clone, Copy, Debug)]
@@ -209,6 +225,7 @@ struct Edge {
 }
 
 impl Edge {
+    #[inline]
     fn new(a: [i64; 2], b: [i64; 2]) -> Self {
         let d = [b[0] - a[0], b[1] - a[1]];
         let top_left = d[1] < 0 || (d[1] == 0 && d[0] > 0);
@@ -240,76 +257,143 @@ fn ceil_div(a: i64, b: i64) -> i64 {
     -(-a).div_euclid(b)
 }
 
+/// The first pixel index whose centre `i * ONE + HALF` is `>= v` (fixed point).
+#[inline]
+fn first_centre(v: i64) -> i64 {
+    // ceil((v - HALF) / ONE)
+    -((HALF - v) >> SHIFT)
+}
+
+/// The last pixel index whose centre is `<= v` (fixed point).
+#[inline]
+fn last_centre(v: i64) -> i64 {
+    // floor((v - HALF) / ONE)
+    (v - HALF) >> SHIFT
+}
+
+/// A triangle set up for scan conversion inside a clip rectangle: its edges (positively
+/// oriented, with the top-left biases), `1 / area`, and the pixels of the clip rectangle
+/// whose centres lie in its bounding box.
+#[derive(Clone, Copy, Debug)]
+pub struct Triangle {
+    /// `edges[j]` is the edge opposite vertex `j` of the triangle as given, so that its `E`
+    /// over the area is that vertex's barycentric coordinate.
+    edges: [Edge; 3],
+    inv_area: f32,
+    x0: i64,
+    x1: i64,
+    y0: i64,
+    y1: i64,
+}
+
+impl Triangle {
+    /// Sets up the triangle `v` (fixed-point positions) inside `clip`; `None` when it has zero
+    /// area or no pixel centre of `clip` lies in its bounding box (it draws nothing).
+    #[inline]
+    pub fn new(v: [[i64; 2]; 3], clip: Rect) -> Option<Self> {
+        let xmin = v[0][0].min(v[1][0]).min(v[2][0]);
+        let xmax = v[0][0].max(v[1][0]).max(v[2][0]);
+        let ymin = v[0][1].min(v[1][1]).min(v[2][1]);
+        let ymax = v[0][1].max(v[1][1]).max(v[2][1]);
+        let x0 = first_centre(xmin).max(clip.x0 as i64);
+        let x1 = last_centre(xmax).min(clip.x1 as i64 - 1);
+        let y0 = first_centre(ymin).max(clip.y0 as i64);
+        let y1 = last_centre(ymax).min(clip.y1 as i64 - 1);
+        if x0 > x1 || y0 > y1 {
+            return None;
+        }
+        let area =
+            (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[1][1] - v[0][1]) * (v[2][0] - v[0][0]);
+        if area == 0 {
+            return None;
+        }
+        // Positively oriented edges; λ_j is E of the edge opposite v_j.
+        let edges = if area > 0 {
+            [
+                Edge::new(v[1], v[2]),
+                Edge::new(v[2], v[0]),
+                Edge::new(v[0], v[1]),
+            ]
+        } else {
+            // The triangle (v0, v2, v1): the edge opposite v0 is v2 -> v1, opposite v2 (its
+            // second vertex) is v1 -> v0, opposite v1 is v0 -> v2.
+            [
+                Edge::new(v[2], v[1]),
+                Edge::new(v[0], v[2]),
+                Edge::new(v[1], v[0]),
+            ]
+        };
+        Some(Self {
+            edges,
+            inv_area: 1.0 / area.abs() as f32,
+            x0,
+            x1,
+            y0,
+            y1,
+        })
+    }
+
+    /// Calls `frag(x, y, λ)` for every covered pixel, row by row, with the barycentric
+    /// coordinates `λ` of its centre in the order of the vertices given to [`Triangle::new`].
+    #[inline(always)]
+    pub fn for_each(&self, frag: impl FnMut(usize, usize, [f32; 3])) {
+        self.scan(self.x1 - self.x0 < WALK_MAX, frag);
+    }
+
+    /// [`Triangle::for_each`], walking every pixel of the box's rows (`walk`) or clipping
+    /// each row to its span with exact divisions first; both draw the same pixels.
+    #[inline(always)]
+    fn scan(&self, walk: bool, mut frag: impl FnMut(usize, usize, [f32; 3])) {
+        let inv = self.inv_area;
+        let [e0, e1, e2] = self.edges;
+        let bias = [e0.bias, e1.bias, e2.bias];
+        for y in self.y0..self.y1 + 1 {
+            let (c0, d0) = e0.row(y);
+            let (c1, d1) = e1.row(y);
+            let (c2, d2) = e2.row(y);
+            let (mut lo, mut hi) = (self.x0, self.x1);
+            if !walk {
+                // Need c + d x >= bias for every edge.
+                for (c, d, b) in [(c0, d0, bias[0]), (c1, d1, bias[1]), (c2, d2, bias[2])] {
+                    if d > 0 {
+                        lo = lo.max(ceil_div(b - c, d));
+                    } else if d < 0 {
+                        hi = hi.min(floor_div(c - b, -d));
+                    } else if c < b {
+                        hi = lo - 1;
+                    }
+                }
+                if lo > hi {
+                    continue;
+                }
+            }
+            let mut cur = [c0 + d0 * lo, c1 + d1 * lo, c2 + d2 * lo];
+            for x in lo..hi + 1 {
+                // Inside when every E >= its bias (exact integers).
+                if !walk || ((cur[0] - bias[0]) | (cur[1] - bias[1]) | (cur[2] - bias[2])) >= 0 {
+                    let l = [
+                        cur[0] as f32 * inv,
+                        cur[1] as f32 * inv,
+                        cur[2] as f32 * inv,
+                    ];
+                    frag(x as usize, y as usize, l);
+                }
+                cur[0] += d0;
+                cur[1] += d1;
+                cur[2] += d2;
+            }
+        }
+    }
+}
+
 /// Scan-converts the triangle `v` (fixed-point positions) inside `clip`, calling
 /// `frag(x, y, λ)` for every covered pixel with the barycentric coordinates `λ` of its centre
 /// relative to `v` (in `v`'s order, whatever the orientation). Zero-area triangles draw
 /// nothing.
 #[inline]
-pub fn rasterize_triangle(
-    v: [[i64; 2]; 3],
-    clip: Rect,
-    mut frag: impl FnMut(usize, usize, [f32; 3]),
-) {
-    let area =
-        (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[1][1] - v[0][1]) * (v[2][0] - v[0][0]);
-    if area == 0 {
-        return;
-    }
-    // Make the triangle positively oriented; `perm` maps edge functions back to `v`'s order.
-    let (p, perm) = if area > 0 {
-        ([v[0], v[1], v[2]], [0usize, 1, 2])
-    } else {
-        ([v[0], v[2], v[1]], [0usize, 2, 1])
-    };
-    let inv_area = 1.0 / area.abs() as f32;
-    // λ_k is E of the edge opposite p_k.
-    let edges = [
-        Edge::new(p[1], p[2]),
-        Edge::new(p[2], p[0]),
-        Edge::new(p[0], p[1]),
-    ];
-    let ymin = p.iter().map(|q| q[1]).min().unwrap_or(0);
-    let ymax = p.iter().map(|q| q[1]).max().unwrap_or(0);
-    // Rows whose centre y*ONE+HALF lies in [ymin, ymax].
-    let y0 = ceil_div(ymin - HALF, ONE).max(clip.y0 as i64);
-    let y1 = floor_div(ymax - HALF, ONE).min(clip.y1 as i64 - 1);
-    for y in y0..=y1 {
-        let mut lo = clip.x0 as i64;
-        let mut hi = clip.x1 as i64 - 1;
-        let mut e = [0i64; 3];
-        let mut de = [0i64; 3];
-        for (k, edge) in edges.iter().enumerate() {
-            let (c, d) = edge.row(y);
-            e[k] = c;
-            de[k] = d;
-            // Need c + d x >= bias.
-            if d > 0 {
-                lo = lo.max(ceil_div(edge.bias - c, d));
-            } else if d < 0 {
-                hi = hi.min(floor_div(c - edge.bias, -d));
-            } else if c < edge.bias {
-                hi = lo - 1;
-            }
-        }
-        if lo > hi {
-            continue;
-        }
-        let mut cur = [e[0] + de[0] * lo, e[1] + de[1] * lo, e[2] + de[2] * lo];
-        for x in lo..=hi {
-            let l = [
-                cur[0] as f32 * inv_area,
-                cur[1] as f32 * inv_area,
-                cur[2] as f32 * inv_area,
-            ];
-            let mut out = [0.0f32; 3];
-            for k in 0..3 {
-                out[perm[k]] = l[k];
-            }
-            frag(x as usize, y as usize, out);
-            cur[0] += de[0];
-            cur[1] += de[1];
-            cur[2] += de[2];
-        }
+pub fn rasterize_triangle(v: [[i64; 2]; 3], clip: Rect, frag: impl FnMut(usize, usize, [f32; 3])) {
+    if let Some(t) = Triangle::new(v, clip) {
+        t.for_each(frag);
     }
 }
 
@@ -399,6 +483,38 @@ mod tests {
                 .collect();
             let count = coverage(&tris, 24, 24);
             assert!(count.iter().all(|&n| n == 1), "a pixel missed or doubled");
+        }
+    }
+
+    #[test]
+    fn walking_and_spans_draw_the_same_pixels() {
+        let mut seed = 987654321u64;
+        let mut rnd = |n: i64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as i64 % n
+        };
+        let clip = Rect {
+            x0: 3,
+            y0: 2,
+            x1: 29,
+            y1: 27,
+        };
+        for i in 0..20_000 {
+            // Small and large triangles, on and off the pixel-centre grid (multiples of HALF
+            // put vertices and edges through centres).
+            let span = if i % 2 == 0 { 8 * ONE } else { 40 * ONE };
+            let step = if i % 3 == 0 { HALF } else { 1 };
+            let mut p = || [rnd(span / step) * step, rnd(span / step) * step];
+            let v = [p(), p(), p()];
+            let Some(t) = Triangle::new(v, clip) else {
+                continue;
+            };
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            t.scan(true, |x, y, l| a.push((x, y, l)));
+            t.scan(false, |x, y, l| b.push((x, y, l)));
+            assert_eq!(a, b, "{v:?}");
         }
     }
 

@@ -34,9 +34,10 @@ use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
 use super::classify::{classify, projection_tests, ternary_code, TERNARY_TABLE};
 use super::fragment::{under, ColorMode, FragmentShader};
+use super::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
 use super::project::{fan_vertices, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
-use super::raster::{bin, fixed, rasterize_triangle, Bins, Rect, Tiles};
+use super::raster::{bin, fixed, Bins, Rect, Tiles, Triangle};
 use super::sort;
 use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{CellClassifier, PsiTable};
@@ -572,11 +573,40 @@ struct Fragment {
     rgba: [f32; 4],
 }
 
+/// Tetrahedra gathered at a time before drawing: the gather loop's loads are independent of
+/// each other, so their cache misses overlap.
+const GATHER: usize = 64;
+
+/// What drawing one tetrahedron reads from the mesh and the projection.
+#[derive(Clone, Copy)]
+struct Gathered {
+    id: u32,
+    screen: [[f32; 3]; 4],
+    scalars: [f32; 4],
+}
+
 impl TileContext<'_> {
     /// Draws the tetrahedra `list` (in order) into tile `rect`; returns its pixels and the
     /// number of fragments shaded.
     fn render_tile(&self, rect: Rect, list: &[u32]) -> (Vec<[f32; 4]>, u64) {
-        let (tw, th) = (rect.width(), rect.height());
+        match (self.shader.mode, self.proj.perspective) {
+            (ColorMode::Average, true) => self.render_tile_with::<AverageModel, true>(rect, list),
+            (ColorMode::Average, false) => self.render_tile_with::<AverageModel, false>(rect, list),
+            (ColorMode::Psi, true) => self.render_tile_with::<PsiModel, true>(rect, list),
+            (ColorMode::Psi, false) => self.render_tile_with::<PsiModel, false>(rect, list),
+            (ColorMode::Exact, true) => self.render_tile_with::<ExactModel, true>(rect, list),
+            (ColorMode::Exact, false) => self.render_tile_with::<ExactModel, false>(rect, list),
+        }
+    }
+
+    /// [`TileContext::render_tile`] for the colour model `M` and the projection `PERSP`.
+    fn render_tile_with<M: ColorModel, const PERSP: bool>(
+        &self,
+        rect: Rect,
+        list: &[u32],
+    ) -> (Vec<[f32; 4]>, u64) {
+        let tw = rect.width();
+        let th = rect.height();
         let mut acc = vec![[0.0f32; 4]; tw * th];
         let mut frags: Vec<Fragment> = Vec::new();
         let mut count = 0u64;
@@ -600,54 +630,79 @@ impl TileContext<'_> {
         let tets = self.mesh.tets();
         let scalars = self.mesh.scalars();
         let early = self.early.unwrap_or(f32::INFINITY);
-        for &t in list {
-            let tet = &tets[t as usize];
-            let Some(screen) = self.proj.tet(tet) else {
-                continue;
-            };
-            let c = classify(screen_points(&screen));
-            let tv = TetVertices {
-                screen,
-                scalars: tet.map(|i| scalars[i as usize]),
-                gradients: match self.gradients {
-                    Some(g) => tet.map(|i| g[i as usize]),
-                    None => [Vec3::ZERO; 4],
-                },
-                perspective: self.proj.perspective,
-                _marker: std::marker::PhantomData,
-            };
-            let Some(fan) = fan_vertices(&tv, &c) else {
-                continue;
-            };
-            for tri in c.fan.triangles() {
-                let fv = tri.map(|k| fan[usize::from(k)]);
-                let interp = Interpolator::new(&fv, self.proj.perspective);
-                let pos = fv.map(|v| fixed(v.xy));
-                rasterize_triangle(pos, rect, |x, y, l| {
-                    let p = (y - rect.y0) * tw + (x - rect.x0);
-                    if acc[p][3] >= early {
-                        return;
-                    }
-                    count += 1;
-                    let (z_f, s_f, z_b, s_b) = interp.at(l);
-                    let len = ((z_b - z_f) * secant[p]).max(0.0);
-                    let rgba = self.shader.fragment(
-                        s_f,
-                        s_b,
-                        len,
-                        || interp.gradients(l),
-                        || view_dir(x, y),
-                    );
-                    if self.per_pixel {
-                        frags.push(Fragment {
-                            pixel: p as u32,
-                            depth: z_f,
-                            rgba,
-                        });
-                    } else {
-                        under(&mut acc[p], rgba);
-                    }
+        let shader = self.shader;
+        let per_pixel = self.per_pixel;
+        let mut gathered: Vec<Gathered> = Vec::with_capacity(GATHER);
+        for chunk in list.chunks(GATHER) {
+            gathered.clear();
+            for &t in chunk {
+                let tet = &tets[t as usize];
+                let Some(screen) = self.proj.tet(tet) else {
+                    continue;
+                };
+                gathered.push(Gathered {
+                    id: t,
+                    screen,
+                    scalars: tet.map(|i| scalars[i as usize]),
                 });
+            }
+            for g in &gathered {
+                let c = classify(screen_points(&g.screen));
+                let tet = &tets[g.id as usize];
+                let tv = TetVertices {
+                    screen: g.screen,
+                    scalars: g.scalars,
+                    gradients: match self.gradients {
+                        Some(gr) => tet.map(|i| gr[i as usize]),
+                        None => [Vec3::ZERO; 4],
+                    },
+                    perspective: PERSP,
+                    _marker: std::marker::PhantomData,
+                };
+                let Some(fan) = fan_vertices(&tv, &c) else {
+                    continue;
+                };
+                let pos = fan.map(|v| fixed(v.xy));
+                // Per fan point `1 / z_f` and `1 / z_b` (perspective) or 1, computed once.
+                let kf = fan.map(|v| if PERSP { 1.0 / v.z_f } else { 1.0 });
+                let kb = fan.map(|v| if PERSP { 1.0 / v.z_b } else { 1.0 });
+                for tri in c.fan.triangles() {
+                    let idx = tri.map(|k| usize::from(k) % 5);
+                    let Some(raster) = Triangle::new(idx.map(|k| pos[k]), rect) else {
+                        continue;
+                    };
+                    let interp = Interpolator {
+                        fv: idx.map(|k| fan[k]),
+                        kf: idx.map(|k| kf[k]),
+                        kb: idx.map(|k| kb[k]),
+                    };
+                    raster.for_each(|x, y, l| {
+                        let p = (y - rect.y0) * tw + (x - rect.x0);
+                        let a = &mut acc[p];
+                        if a[3] >= early {
+                            return;
+                        }
+                        count += 1;
+                        let (z_f, s_f, z_b, s_b) = interp.at::<PERSP>(l);
+                        let len = ((z_b - z_f) * secant[p]).max(0.0);
+                        let rgba = shader.fragment_with::<M>(
+                            s_f,
+                            s_b,
+                            len,
+                            || interp.gradients(l),
+                            || view_dir(x, y),
+                        );
+                        if per_pixel {
+                            frags.push(Fragment {
+                                pixel: p as u32,
+                                depth: z_f,
+                                rgba,
+                            });
+                        } else {
+                            under(a, rgba);
+                        }
+                    });
+                }
             }
         }
         if self.per_pixel {
@@ -656,7 +711,6 @@ impl TileContext<'_> {
                 under(&mut acc[f.pixel as usize], f.rgba);
             }
         }
-        let _ = th;
         (acc, count)
     }
 }
@@ -667,26 +721,14 @@ struct Interpolator {
     /// Per vertex `1 / z_f` and `1 / z_b` (perspective) or 1 (orthographic).
     kf: [f32; 3],
     kb: [f32; 3],
-    perspective: bool,
 }
 
 impl Interpolator {
-    #[inline]
-    fn new(fv: &[FanVertex; 3], perspective: bool) -> Self {
-        let k = |z: f32| if perspective { 1.0 / z } else { 1.0 };
-        Self {
-            fv: *fv,
-            kf: fv.map(|v| k(v.z_f)),
-            kb: fv.map(|v| k(v.z_b)),
-            perspective,
-        }
-    }
-
     /// `(z_f, s_f, z_b, s_b)` at screen barycentrics `l`.
-    #[inline]
-    fn at(&self, l: [f32; 3]) -> (f32, f32, f32, f32) {
+    #[inline(always)]
+    fn at<const PERSP: bool>(&self, l: [f32; 3]) -> (f32, f32, f32, f32) {
         let v = &self.fv;
-        if self.perspective {
+        if PERSP {
             let wf = [l[0] * self.kf[0], l[1] * self.kf[1], l[2] * self.kf[2]];
             let wb = [l[0] * self.kb[0], l[1] * self.kb[1], l[2] * self.kb[2]];
             let sf = wf[0] + wf[1] + wf[2];
