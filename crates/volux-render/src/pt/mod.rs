@@ -53,6 +53,7 @@ pub mod project;
 pub mod raster;
 pub mod reference;
 pub mod render;
+pub mod setup;
 pub mod sort;
 
 pub use fragment::ColorMode;

@@ -32,12 +32,13 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
-use super::classify::{classify, projection_tests, ternary_code, TERNARY_TABLE};
+use super::classify::{projection_tests, ternary_code, TERNARY_TABLE};
 use super::fragment::{under, ColorMode, FragmentShader};
 use super::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
 use super::project::{fan_vertices, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
 use super::raster::{bin, fixed, Bins, Rect, Tiles, Triangle};
+use super::setup::classify_fixed;
 use super::sort;
 use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{CellClassifier, PsiTable};
@@ -647,7 +648,8 @@ impl TileContext<'_> {
                 });
             }
             for g in &gathered {
-                let c = classify(screen_points(&g.screen));
+                let q = g.screen.map(|v| fixed([v[0], v[1]]));
+                let c = classify_fixed(screen_points(&g.screen), q);
                 let tet = &tets[g.id as usize];
                 let tv = TetVertices {
                     screen: g.screen,
@@ -662,7 +664,7 @@ impl TileContext<'_> {
                 let Some(fan) = fan_vertices(&tv, &c) else {
                     continue;
                 };
-                let pos = fan.map(|v| fixed(v.xy));
+                let pos = [q[0], q[1], q[2], q[3], fixed(fan[4].xy)];
                 // Per fan point `1 / z_f` and `1 / z_b` (perspective) or 1, computed once.
                 let kf = fan.map(|v| if PERSP { 1.0 / v.z_f } else { 1.0 });
                 let kb = fan.map(|v| if PERSP { 1.0 / v.z_b } else { 1.0 });

@@ -1,0 +1,198 @@
+//! The per-tetrahedron classification of the tile loop, from fixed-point positions.
+//!
+//! [`classify`] takes arbitrary `f64` positions: its orientation tests go through
+//! floating-point filters and exact expansions, and its parameters are computed on positions
+//! rescaled by a power of two so that nothing overflows. The tile loop's positions are
+//! snapped to the `1/SUBPIXEL` grid inside the guard band, so `SUBPIXEL` times a coordinate
+//! is an integer well below `2^29`: there the four tests are exact in `i64` (products of
+//! differences stay below `2^61`), and the rescaling is not needed, since scaling by a power
+//! of two changes neither the sign nor, without overflow or underflow, the rounding of any
+//! of the parameter computations (every product, difference and ratio is scaled exactly).
+//! [`classify_fixed`] therefore returns exactly what [`classify`] returns, more cheaply, and
+//! falls back to it for positions that are not on the grid or not in range.
+use glam::DVec2;
+
+use super::classify::{
+    classify, ternary_code, Classification, Sign, ThickKind, ThickTopology, ThickVertex,
+    TERNARY_TABLE,
+};
+use super::project::SUBPIXEL;
+
+/// Fixed-point coordinates must stay below this in magnitude for exact `i64` tests.
+const MAX_FIXED: i64 = 1 << 29;
+
+/// The exact orientation of `a b c` (fixed point; `|coordinates| < MAX_FIXED`).
+#[inline(always)]
+fn orient(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> Sign {
+    let d = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    Sign::from_i8(d.signum() as i8)
+}
+
+/// Twice the signed area of `a b c`, in floating point (as [`classify`] computes it).
+#[inline(always)]
+fn area2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    (b - a).perp_dot(c - a)
+}
+
+#[inline(always)]
+fn unit_or_half(x: f64) -> f64 {
+    if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
+}
+
+/// Parameter along `a → b` of its crossing with the line `c d`.
+#[inline(always)]
+fn crossing_param(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> f64 {
+    let na = area2(c, d, a);
+    let nb = area2(c, d, b);
+    unit_or_half(na / (na - nb))
+}
+
+/// [`classify`] of `projected`, given its fixed-point positions `q` (`q = SUBPIXEL *
+/// projected` when on the grid). The result is the same as [`classify`]'s.
+#[inline]
+pub fn classify_fixed(projected: [DVec2; 4], q: [[i64; 2]; 4]) -> Classification {
+    let scale = f64::from(SUBPIXEL);
+    let on_grid = projected.iter().zip(&q).all(|(p, q)| {
+        q[0].abs() < MAX_FIXED
+            && q[1].abs() < MAX_FIXED
+            && q[0] as f64 == p.x * scale
+            && q[1] as f64 == p.y * scale
+    });
+    if !on_grid {
+        return classify(projected);
+    }
+    let tests = [
+        orient(q[0], q[1], q[2]),
+        orient(q[0], q[1], q[3]),
+        orient(q[0], q[2], q[3]),
+        orient(q[1], q[2], q[3]),
+    ];
+    let code = ternary_code(tests);
+    let entry = &TERNARY_TABLE[usize::from(code) % TERNARY_TABLE.len()];
+    let p = |i: u8| projected[usize::from(i) % 4];
+    let qi = |i: u8| q[usize::from(i) % 4];
+    let thick = match entry.thick {
+        ThickTopology::None => None,
+        ThickTopology::Interior { vertex: k, face } => {
+            let [i, j, l] = face;
+            // The sign of the (exactly evaluated) face orientation.
+            let s = f64::from(orient(qi(i), qi(j), qi(l)).as_i8());
+            let raw = [
+                s * area2(p(k), p(j), p(l)),
+                s * area2(p(i), p(k), p(l)),
+                s * area2(p(i), p(j), p(k)),
+            ]
+            .map(|w| if w > 0.0 { w } else { 0.0 });
+            let sum = raw[0] + raw[1] + raw[2];
+            let barycentric = if sum > 0.0 && sum.is_finite() {
+                raw.map(|w| w / sum)
+            } else {
+                [1.0 / 3.0; 3]
+            };
+            Some(ThickVertex {
+                position: p(k),
+                kind: ThickKind::Interior {
+                    vertex: k,
+                    face,
+                    barycentric,
+                },
+            })
+        }
+        ThickTopology::Crossing { edges } => {
+            let [[a, b], [c, d]] = edges;
+            let u = crossing_param(p(a), p(b), p(c), p(d));
+            let w = crossing_param(p(c), p(d), p(a), p(b));
+            let lo = projected
+                .iter()
+                .fold(DVec2::splat(f64::INFINITY), |m, x| m.min(*x));
+            let hi = projected
+                .iter()
+                .fold(DVec2::splat(f64::NEG_INFINITY), |m, x| m.max(*x));
+            let position = (p(a) * (1.0 - u) + p(b) * u).max(lo).min(hi);
+            Some(ThickVertex {
+                position,
+                kind: ThickKind::Crossing {
+                    edges,
+                    params: [u, w],
+                },
+            })
+        }
+        ThickTopology::OnEdge { vertex, edge, apex } => {
+            let [e, f] = edge;
+            let d = p(f) - p(e);
+            let t = unit_or_half((p(vertex) - p(e)).dot(d) / d.length_squared());
+            Some(ThickVertex {
+                position: p(vertex),
+                kind: ThickKind::OnEdge {
+                    vertex,
+                    edge,
+                    apex,
+                    t,
+                },
+            })
+        }
+        ThickTopology::Coincident { pair } => Some(ThickVertex {
+            position: p(pair[0]),
+            kind: ThickKind::Coincident { pair },
+        }),
+    };
+    Classification {
+        code: Some(code),
+        class: entry.class,
+        fan: entry.fan,
+        thick,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pt::raster::fixed;
+
+    #[test]
+    fn matches_classify_on_grid_points() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = |n: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed % n
+        };
+        for i in 0..200_000 {
+            // Small grids make every degenerate class frequent; large spans and big offsets
+            // exercise the rounding of the parameters.
+            let (span, step) = match i % 4 {
+                0 => (4, 64),
+                1 => (64, 1),
+                2 => (1 << 16, 1),
+                _ => (1 << 26, 1),
+            };
+            let off = if i % 8 < 4 { 0 } else { 1 << 20 };
+            let mut pt = || {
+                let x = (rnd(span) * step) as f32 / SUBPIXEL + off as f32 / SUBPIXEL;
+                let y = (rnd(span) * step) as f32 / SUBPIXEL - off as f32 / SUBPIXEL;
+                [x, y]
+            };
+            let xy = [pt(), pt(), pt(), pt()];
+            let projected = xy.map(|p| DVec2::new(f64::from(p[0]), f64::from(p[1])));
+            let q = xy.map(fixed);
+            assert_eq!(classify_fixed(projected, q), classify(projected), "{xy:?}");
+        }
+    }
+
+    #[test]
+    fn falls_back_off_the_grid() {
+        let projected = [
+            DVec2::new(0.1, 0.2),
+            DVec2::new(5.3, 0.7),
+            DVec2::new(1.9, 4.4),
+            DVec2::new(1.5, 1.5),
+        ];
+        let q = projected.map(|p| fixed([p.x as f32, p.y as f32]));
+        assert_eq!(classify_fixed(projected, q), classify(projected));
+    }
+}
