@@ -167,7 +167,8 @@ pub struct TetVertices<'a> {
 
 impl TetVertices<'_> {
     /// The point at screen-space weights `w` over the vertices `idx` (weights sum to 1).
-    fn point<const N: usize>(&self, idx: [u8; N], w: [f64; N]) -> Point {
+    #[inline(always)]
+    fn point<const N: usize, const GRAD: bool>(&self, idx: [u8; N], w: [f64; N]) -> Point {
         let mut inv_z = 0.0f64;
         let mut s = 0.0f64;
         let mut g = DVec3::ZERO;
@@ -179,7 +180,9 @@ impl TetVertices<'_> {
             inv_z += k;
             z += wi * zi;
             s += k * f64::from(self.scalars[i]);
-            g += k * self.gradients[i].as_dvec3();
+            if GRAD {
+                g += k * self.gradients[i].as_dvec3();
+            }
         }
         if self.perspective {
             if inv_z.is_nan() || inv_z <= 0.0 {
@@ -213,24 +216,34 @@ impl TetVertices<'_> {
 /// The five fan points `[v_0, v_1, v_2, v_3, v_t]` of a classified tetrahedron; `None` when
 /// the projection is degenerate (nothing to draw).
 pub fn fan_vertices(tet: &TetVertices<'_>, c: &Classification) -> Option<[FanVertex; 5]> {
+    fan_vertices_with::<true>(tet, c)
+}
+
+/// [`fan_vertices`]; with `GRAD = false` the gradients are taken as zero without being read
+/// (the other attributes are the same).
+#[inline(always)]
+pub fn fan_vertices_with<const GRAD: bool>(
+    tet: &TetVertices<'_>,
+    c: &Classification,
+) -> Option<[FanVertex; 5]> {
     let thick = c.thick?;
     let (a, b) = match thick.kind {
         ThickKind::Interior {
             vertex,
             face,
             barycentric,
-        } => (tet.vertex(vertex), tet.point(face, barycentric)),
+        } => (tet.vertex(vertex), tet.point::<3, GRAD>(face, barycentric)),
         ThickKind::Crossing { edges, params } => {
             let [[e0, e1], [e2, e3]] = edges;
             let (u, v) = (params[0], params[1]);
             (
-                tet.point([e0, e1], [1.0 - u, u]),
-                tet.point([e2, e3], [1.0 - v, v]),
+                tet.point::<2, GRAD>([e0, e1], [1.0 - u, u]),
+                tet.point::<2, GRAD>([e2, e3], [1.0 - v, v]),
             )
         }
         ThickKind::OnEdge {
             vertex, edge, t, ..
-        } => (tet.vertex(vertex), tet.point(edge, [1.0 - t, t])),
+        } => (tet.vertex(vertex), tet.point::<2, GRAD>(edge, [1.0 - t, t])),
         ThickKind::Coincident { pair } => (tet.vertex(pair[0]), tet.vertex(pair[1])),
     };
     let (front, back) = if a.z <= b.z { (a, b) } else { (b, a) };

@@ -35,7 +35,7 @@ use volux_core::{Camera, Image, TetMesh, TransferFunction};
 use super::classify::{projection_tests, ternary_code, TERNARY_TABLE};
 use super::fragment::{under, ColorMode, FragmentShader};
 use super::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
-use super::project::{fan_vertices, pixel_secant, screen_points, FanVertex};
+use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
 use super::raster::{bin, fixed, Bins, Rect, Tiles, Triangle};
 use super::setup::classify_fixed;
@@ -661,7 +661,12 @@ impl TileContext<'_> {
                     perspective: PERSP,
                     _marker: std::marker::PhantomData,
                 };
-                let Some(fan) = fan_vertices(&tv, &c) else {
+                let fan = if self.gradients.is_some() {
+                    fan_vertices_with::<true>(&tv, &c)
+                } else {
+                    fan_vertices_with::<false>(&tv, &c)
+                };
+                let Some(fan) = fan else {
                     continue;
                 };
                 let pos = [q[0], q[1], q[2], q[3], fixed(fan[4].xy)];
