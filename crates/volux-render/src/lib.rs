@@ -24,6 +24,7 @@ pub mod raycast;
 pub mod resample;
 pub mod sampling;
 pub mod shading;
+pub mod tetray;
 
 pub use raycast::{render_grid, RenderOptions, RenderStats};
 

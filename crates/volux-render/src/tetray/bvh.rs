@@ -1,0 +1,229 @@
+//! A bounding volume hierarchy over a set of cells, for the ray's entry into the mesh
+//! (Garrity's boundary-face entry, seed `000` §2.4).
+//!
+//! The primitives are the cells owning boundary faces (each cell once, however many of its
+//! faces lie on the boundary) and the other cells with a vertex on the boundary, boxed by the
+//! cell's bounding box: a query returns the nearest cell whose reference clip
+//! ([`Geometry::clip`]) reaches past a given `t`. That is the cell entered through the
+//! nearest boundary face beyond `t` — also when the ray enters exactly through a boundary
+//! edge or vertex and continues in a cell touching the boundary only there (the tie rule may
+//! give the ray to it rather than to the face owners; such a cell has a boundary vertex) —
+//! and it also finds a boundary cell the ray is already inside (the walk's fallback). The
+//! same structure, built per frame over the cells around the eye (or across an orthographic
+//! camera's eye plane), starts rays whose origin lies inside the mesh.
+//!
+//! Nodes are a flat array (children of an inner node are adjacent), built by median split of
+//! the primitives' centroids on the widest axis, at most [`LEAF`] primitives per leaf; boxes
+//! are `f64`, padded by a small multiple of the mesh size so that rays lying in a box face are
+//! never rejected. Traversal is nearest child first with pruning against the best hit.
+use glam::DVec3;
+
+use super::geom::{Clip, Geometry};
+
+/// Most primitives in a leaf.
+pub(crate) const LEAF: usize = 4;
+
+/// A node: its box, then either two children at `first`, `first + 1` (`count == 0`) or
+/// `count` primitives from `first` in the primitive array.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    first: u32,
+    count: u32,
+}
+
+/// The hierarchy.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Bvh {
+    nodes: Vec<Node>,
+    prims: Vec<u32>,
+}
+
+/// A hit of [`Bvh::nearest`]: the tet and its clip.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Hit {
+    pub tet: u32,
+    pub clip: Clip,
+}
+
+impl Hit {
+    /// The hit's start beyond `t_lo`.
+    #[inline]
+    pub fn key(&self, t_lo: f64) -> f64 {
+        self.clip.t_in.max(t_lo)
+    }
+
+    /// Whether `self` starts before `other` (ties by tet index).
+    pub fn before(&self, other: &Hit, t_lo: f64) -> bool {
+        let (a, b) = (self.key(t_lo), other.key(t_lo));
+        a < b || (a == b && self.tet < other.tet)
+    }
+}
+
+impl Bvh {
+    /// Builds the hierarchy over the cells `tets`, boxed by `boxes` and padded by `pad`.
+    pub fn build(tets: Vec<u32>, boxes: impl Fn(u32) -> (DVec3, DVec3), pad: f64) -> Self {
+        let mut prims = tets;
+        if prims.is_empty() {
+            return Self::default();
+        }
+        let bounds: Vec<(DVec3, DVec3)> = prims
+            .iter()
+            .map(|&t| {
+                let (lo, hi) = boxes(t);
+                (lo - DVec3::splat(pad), hi + DVec3::splat(pad))
+            })
+            .collect();
+        // Work on (prim, box index) pairs; boxes are indexed by position in the input.
+        let mut items: Vec<(u32, u32)> = prims
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (t, i as u32))
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * items.len() / LEAF + 2);
+        nodes.push(Node {
+            lo: DVec3::ZERO,
+            hi: DVec3::ZERO,
+            first: 0,
+            count: 0,
+        });
+        let mut stack = vec![(0usize, 0usize, items.len())];
+        while let Some((node, begin, end)) = stack.pop() {
+            let slice = &mut items[begin..end];
+            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            let (mut clo, mut chi) = (lo, hi);
+            for &(_, b) in slice.iter() {
+                let (a, z) = bounds[b as usize];
+                lo = lo.min(a);
+                hi = hi.max(z);
+                let c = (a + z) * 0.5;
+                clo = clo.min(c);
+                chi = chi.max(c);
+            }
+            nodes[node].lo = lo;
+            nodes[node].hi = hi;
+            let ext = chi - clo;
+            if slice.len() <= LEAF || ext.max_element() <= 0.0 {
+                nodes[node].first = begin as u32;
+                nodes[node].count = slice.len() as u32;
+                continue;
+            }
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
+            let mid = slice.len() / 2;
+            let centre = |b: u32| {
+                let (a, z) = bounds[b as usize];
+                (a[axis] + z[axis]) * 0.5
+            };
+            slice.select_nth_unstable_by(mid, |x, y| {
+                centre(x.1).total_cmp(&centre(y.1)).then(x.0.cmp(&y.0))
+            });
+            let left = nodes.len();
+            for _ in 0..2 {
+                nodes.push(Node {
+                    lo: DVec3::ZERO,
+                    hi: DVec3::ZERO,
+                    first: 0,
+                    count: 0,
+                });
+            }
+            nodes[node].first = left as u32;
+            stack.push((left + 1, begin + mid, end));
+            stack.push((left, begin, begin + mid));
+        }
+        prims = items.into_iter().map(|(t, _)| t).collect();
+        Self { nodes, prims }
+    }
+
+    /// Number of primitives.
+    pub fn len(&self) -> usize {
+        self.prims.len()
+    }
+
+    /// Bytes of the nodes and primitive list.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>() + self.prims.len() * 4
+    }
+
+    /// The cell whose clip reaches past `t_lo` and starts first (`max(t_in, t_lo)`, ties by
+    /// index), or `None`.
+    pub fn nearest(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let inv = DVec3::ONE / d;
+        let slab = |n: &Node| -> (f64, f64) {
+            let a = (n.lo - o) * inv;
+            let b = (n.hi - o) * inv;
+            // f64::min/max ignore a NaN (0 * inf: the origin on a padded face, parallel).
+            let near = a.x.min(b.x).max(a.y.min(b.y)).max(a.z.min(b.z));
+            let far = a.x.max(b.x).min(a.y.max(b.y)).min(a.z.max(b.z));
+            (near, far)
+        };
+        let mut best: Option<Hit> = None;
+        let mut best_key = f64::INFINITY;
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 0usize;
+        let (near, far) = slab(&self.nodes[0]);
+        if !(far >= t_lo && near <= far) {
+            return None;
+        }
+        stack[0] = 0;
+        sp += 1;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            let (near, far) = slab(node);
+            if far < t_lo || near > far || near > best_key {
+                continue;
+            }
+            if node.count > 0 {
+                let first = node.first as usize;
+                for &t in &self.prims[first..first + node.count as usize] {
+                    if let Some(clip) = geo.clip(t as usize, o, d) {
+                        if clip.t_out > t_lo {
+                            let hit = Hit { tet: t, clip };
+                            if best.is_none_or(|b| hit.before(&b, t_lo)) {
+                                best_key = hit.key(t_lo);
+                                best = Some(hit);
+                            }
+                        }
+                    }
+                }
+                continue;
+            }
+            let (l, r) = (node.first, node.first + 1);
+            let (nl, _) = slab(&self.nodes[l as usize]);
+            let (nr, _) = slab(&self.nodes[r as usize]);
+            // Push the farther child first so the nearer one is visited first.
+            let (first, second) = if nl <= nr { (r, l) } else { (l, r) };
+            if sp + 2 > stack.len() {
+                // Unreachable for median splits (depth <= log2(n) + 1); stay correct anyway.
+                return self.nearest_linear(geo, o, d, t_lo);
+            }
+            stack[sp] = first;
+            stack[sp + 1] = second;
+            sp += 2;
+        }
+        best
+    }
+
+    fn nearest_linear(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        for &t in &self.prims {
+            if let Some(clip) = geo.clip(t as usize, o, d) {
+                let hit = Hit { tet: t, clip };
+                if clip.t_out > t_lo && best.is_none_or(|b| hit.before(&b, t_lo)) {
+                    best = Some(hit);
+                }
+            }
+        }
+        best
+    }
+}

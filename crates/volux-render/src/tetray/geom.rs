@@ -1,0 +1,255 @@
+//! Per-mesh geometry of the ray caster: canonical face planes shared by the two cells of a
+//! face, the face-to-face adjacency and the linear scalar field of every cell.
+//!
+//! The planes follow [`crate::pt::reference`] exactly: a face's plane is computed from its
+//! three vertices sorted lexicographically by position, `n = (v1 - v0) x (v2 - v0)` in `f64`,
+//! and each cell sees it with the sign that makes it point outward. Since a face's plane is
+//! stored once and read by both of its cells with opposite signs, the numerators and
+//! denominators of the crossing parameter `t = -num / den` are exactly negated between the
+//! two cells, so both compute a bit-identical `t` (and bit-identical to the reference's): a
+//! ray leaving one cell at `t` enters its neighbour at the same `t`, never earlier or later.
+//! A ray lying in a face plane (`den == 0`, `num == 0`) is given to exactly one of the two
+//! cells by the reference's tie rule (simulation of simplicity along `(1, d, d^2)`).
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use volux_core::mesh::{FACES, NO_NEIGHBOR};
+use volux_core::TetMesh;
+
+/// Marks a tet-face whose outward normal is the negated canonical normal.
+pub(crate) const FLIP: u32 = 1 << 31;
+
+/// A cell whose `6 V` is at most this times the cube of its longest edge is skipped (the
+/// reference's threshold).
+const DEGENERATE_VOLUME: f64 = 1e-12;
+
+/// A canonical face plane: normal of the lexicographically sorted vertices and the smallest
+/// of them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FacePlane {
+    pub n: DVec3,
+    pub a: Vec3,
+}
+
+/// Where a ray crosses a cell (the reference's clip, plus the exit face).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Clip {
+    pub t_in: f64,
+    pub t_out: f64,
+    pub exit: u8,
+}
+
+/// The per-mesh structures of the walk.
+#[derive(Clone, Debug)]
+pub(crate) struct Geometry {
+    pub faces: Vec<FacePlane>,
+    /// Per tet and face slot: index into `faces`, with [`FLIP`] set when the outward normal
+    /// is `-n`.
+    pub tet_faces: Vec<[u32; 4]>,
+    /// Neighbour across each face slot, or [`NO_NEIGHBOR`].
+    pub adj: Vec<[u32; 4]>,
+    /// Scalar field of each cell, `s(p) = g . p + c` as `[g.x, g.y, g.z, c]`; `g.x` is NaN
+    /// for a skipped (degenerate or non-finite) cell.
+    pub field: Vec<[f64; 4]>,
+    /// Diagonal of the mesh's bounding box (tolerances are relative to it).
+    pub scale: f64,
+}
+
+fn lex_cmp(a: &DVec3, b: &DVec3) -> std::cmp::Ordering {
+    a.x.total_cmp(&b.x)
+        .then(a.y.total_cmp(&b.y))
+        .then(a.z.total_cmp(&b.z))
+}
+
+/// Whether the first non-zero component of `n` is negative (the reference's tie rule).
+#[inline]
+pub(crate) fn lex_negative(n: DVec3) -> bool {
+    if n.x != 0.0 {
+        n.x < 0.0
+    } else if n.y != 0.0 {
+        n.y < 0.0
+    } else {
+        n.z < 0.0
+    }
+}
+
+/// The linear field through four points, or `None` for a degenerate or non-finite cell.
+fn cell_field(p: [DVec3; 4], s: [f64; 4]) -> Option<[f64; 4]> {
+    if !s.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let (e1, e2, e3) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
+    let vol6 = e1.cross(e2).dot(e3);
+    let mut edge2 = 0.0f64;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            edge2 = edge2.max(p[i].distance_squared(p[j]));
+        }
+    }
+    let bound = DEGENERATE_VOLUME * edge2 * edge2.sqrt();
+    if !(vol6.is_finite() && bound.is_finite()) || vol6.abs() <= bound {
+        return None;
+    }
+    // Solve [e1; e2; e3] g = ds by Cramer's rule (rows e_i): g = (ds1 (e2 x e3) + ds2 (e3 x
+    // e1) + ds3 (e1 x e2)) / vol6.
+    let (d1, d2, d3) = (s[1] - s[0], s[2] - s[0], s[3] - s[0]);
+    let g = (e2.cross(e3) * d1 + e3.cross(e1) * d2 + e1.cross(e2) * d3) / vol6;
+    let c = s[0] - g.dot(p[0]);
+    (g.is_finite() && c.is_finite()).then_some([g.x, g.y, g.z, c])
+}
+
+impl Geometry {
+    /// Builds the faces, adjacency and fields of `mesh` (`O(n log n)`, parallel).
+    pub fn new(mesh: &TetMesh) -> Self {
+        let pos = mesh.positions();
+        let tets = mesh.tets();
+        let mut keys: Vec<([u32; 3], u32)> = tets
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(t, tet)| {
+                (0..4).map(move |f| {
+                    let mut k = FACES[f].map(|s| tet[s]);
+                    k.sort_unstable();
+                    (k, (t as u32) * 4 + f as u32)
+                })
+            })
+            .collect();
+        keys.par_sort_unstable();
+        let mut adj = vec![[NO_NEIGHBOR; 4]; tets.len()];
+        let mut tet_faces = vec![[0u32; 4]; tets.len()];
+        let mut faces = Vec::with_capacity(tets.len() * 2 + 16);
+        let mut i = 0;
+        while i < keys.len() {
+            let mut j = i + 1;
+            while j < keys.len() && keys[j].0 == keys[i].0 {
+                j += 1;
+            }
+            let id = faces.len() as u32;
+            let mut v = keys[i].0.map(|k| pos[k as usize].as_dvec3());
+            v.sort_by(lex_cmp);
+            let n = (v[1] - v[0]).cross(v[2] - v[0]);
+            faces.push(FacePlane {
+                n,
+                a: v[0].as_vec3(),
+            });
+            for &(_, code) in &keys[i..j] {
+                let (t, f) = ((code >> 2) as usize, (code & 3) as usize);
+                let opp = pos[tets[t][f] as usize].as_dvec3();
+                let h = n.dot(opp - v[0]);
+                tet_faces[t][f] = id | if h > 0.0 { FLIP } else { 0 };
+            }
+            if j - i >= 2 {
+                let (a, b) = (keys[i].1, keys[i + 1].1);
+                adj[(a >> 2) as usize][(a & 3) as usize] = b >> 2;
+                adj[(b >> 2) as usize][(b & 3) as usize] = a >> 2;
+            }
+            i = j;
+        }
+        let scalars = mesh.scalars();
+        let field = tets
+            .par_iter()
+            .map(|tet| {
+                let p = tet.map(|v| pos[v as usize].as_dvec3());
+                let s = tet.map(|v| scalars[v as usize] as f64);
+                // A face plane through the opposite vertex makes the cell unusable too.
+                cell_field(p, s).unwrap_or([f64::NAN, 0.0, 0.0, 0.0])
+            })
+            .collect::<Vec<_>>();
+        let mut geo = Self {
+            faces,
+            tet_faces,
+            adj,
+            field,
+            scale: mesh.bounds().diagonal().max(f64::MIN_POSITIVE),
+        };
+        // The reference also rejects a cell when a face's height `h` is zero.
+        for t in 0..tets.len() {
+            for f in 0..4 {
+                let (n, a) = geo.plane(t, f);
+                let h = n.dot(pos[tets[t][f] as usize].as_dvec3() - a);
+                if !(h < 0.0 && h.is_finite()) {
+                    geo.field[t][0] = f64::NAN;
+                }
+            }
+        }
+        geo
+    }
+
+    /// Outward normal and base point of face `f` of tet `t`.
+    #[inline]
+    pub fn plane(&self, t: usize, f: usize) -> (DVec3, DVec3) {
+        let code = self.tet_faces[t][f];
+        let pl = &self.faces[(code & !FLIP) as usize];
+        let n = if code & FLIP != 0 { -pl.n } else { pl.n };
+        (n, pl.a.as_dvec3())
+    }
+
+    /// Whether tet `t` is rendered (not degenerate, finite scalars).
+    #[inline]
+    pub fn usable(&self, t: usize) -> bool {
+        !self.field[t][0].is_nan()
+    }
+
+    /// The reference's clip of the ray `o + t d`, `t >= 0`, against tet `t`, with the exit
+    /// face (the first of the faces giving the smallest exit parameter). `None` when the ray
+    /// misses the cell, touches it in a point or the cell is skipped.
+    #[inline]
+    pub fn clip(&self, t: usize, o: DVec3, d: DVec3) -> Option<Clip> {
+        if !self.usable(t) {
+            return None;
+        }
+        let codes = self.tet_faces[t];
+        let mut t_in = 0.0f64;
+        let mut t_out = f64::INFINITY;
+        let mut exit = 0u8;
+        for (f, &code) in codes.iter().enumerate() {
+            let pl = &self.faces[(code & !FLIP) as usize];
+            let mut num = pl.n.dot(o - pl.a.as_dvec3());
+            let mut den = pl.n.dot(d);
+            if code & FLIP != 0 {
+                num = -num;
+                den = -den;
+            }
+            if den < 0.0 {
+                t_in = t_in.max(-num / den);
+            } else if den > 0.0 {
+                let te = -num / den;
+                if te < t_out {
+                    t_out = te;
+                    exit = f as u8;
+                }
+            } else {
+                let n = if code & FLIP != 0 { -pl.n } else { pl.n };
+                let inside = num < 0.0 || (num == 0.0 && lex_negative(n));
+                if den.is_nan() || !inside {
+                    return None;
+                }
+            }
+        }
+        (t_out > t_in && t_out.is_finite()).then_some(Clip { t_in, t_out, exit })
+    }
+
+    /// Whether point `p` lies in tet `t` up to `tol` (world units) from each face plane.
+    #[inline]
+    pub fn contains(&self, t: usize, p: DVec3, tol: f64) -> bool {
+        (0..4).all(|f| {
+            let (n, a) = self.plane(t, f);
+            let len = n.length();
+            n.dot(p - a) <= tol * len || len == 0.0
+        })
+    }
+
+    /// The scalar of tet `t` at point `p`.
+    #[inline]
+    pub fn scalar(&self, t: usize, p: DVec3) -> f64 {
+        let g = self.field[t];
+        g[0] * p.x + g[1] * p.y + g[2] * p.z + g[3]
+    }
+
+    /// Bytes of these structures.
+    pub fn bytes(&self) -> usize {
+        self.faces.len() * std::mem::size_of::<FacePlane>()
+            + self.tet_faces.len() * 16
+            + self.adj.len() * 16
+            + self.field.len() * 32
+    }
+}

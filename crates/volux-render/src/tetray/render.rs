@@ -1,0 +1,406 @@
+//! The renderer: per-pixel walks over 16 x 16 tiles in parallel, segments integrated and
+//! composited front to back.
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::DVec3;
+use rayon::prelude::*;
+use volux_core::mesh::{FACES, NO_NEIGHBOR};
+use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
+
+use super::bvh::Bvh;
+use super::geom::Geometry;
+use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
+use crate::integrate::preintegrated::SegmentIntegrator;
+use crate::integrate::psi::{psi_fragment, CellClassifier, PsiTable};
+use crate::RenderError;
+
+/// Side of the square tiles rendered in parallel, in pixels.
+pub const TILE: usize = 16;
+
+/// How a segment's colour is computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TetRayColor {
+    /// Exact integration of the piecewise-linear TF along the linear scalar
+    /// ([`SegmentIntegrator`]).
+    #[default]
+    Exact,
+    /// Partial pre-integration (ψ, seed `000` §2.6): [`psi_fragment`] with a
+    /// [`CellClassifier`] and a [`PsiTable`].
+    Psi,
+}
+
+impl TetRayColor {
+    /// Parses `exact` or `psi`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s {
+            "exact" => Ok(Self::Exact),
+            "psi" => Ok(Self::Psi),
+            other => Err(format!("unknown colour '{other}' (exact, psi)")),
+        }
+    }
+}
+
+/// Options of a ray-cast frame.
+#[derive(Clone, Debug)]
+pub struct TetRayOptions {
+    /// Image width (1 to 32768).
+    pub width: usize,
+    /// Image height (1 to 32768).
+    pub height: usize,
+    /// The camera.
+    pub camera: Camera,
+    /// The transfer function (resolved against the mesh's range by the renderer).
+    pub tf: TransferFunction,
+    /// Segment colour.
+    pub color: TetRayColor,
+    /// Stop a ray once its opacity reaches this (`None`: never).
+    pub early_termination: Option<f32>,
+    /// Set from another thread to stop with [`RenderError::Cancelled`].
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl TetRayOptions {
+    /// 512 x 512, exact colour, early termination at 0.999.
+    pub fn new(camera: Camera, tf: TransferFunction) -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            camera,
+            tf,
+            color: TetRayColor::Exact,
+            early_termination: Some(0.999),
+            cancel: None,
+        }
+    }
+
+    fn validate(&self) -> Result<(), RenderError> {
+        if self.width == 0 || self.height == 0 || self.width > 1 << 15 || self.height > 1 << 15 {
+            return Err(RenderError::InvalidOptions(format!(
+                "image size {}x{} must be between 1 and 32768",
+                self.width, self.height
+            )));
+        }
+        if let Some(e) = self.early_termination {
+            if !(e > 0.0 && e.is_finite()) {
+                return Err(RenderError::InvalidOptions(format!(
+                    "early termination {e} must be a positive opacity"
+                )));
+            }
+        }
+        self.camera.validate()?;
+        self.tf.validate()?;
+        Ok(())
+    }
+
+    fn cancelled(&self) -> Result<(), RenderError> {
+        match &self.cancel {
+            Some(c) if c.load(Ordering::Relaxed) => Err(RenderError::Cancelled),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// What a frame did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TetRayStats {
+    /// Rays cast (one per pixel).
+    pub rays: u64,
+    /// Segments integrated (cells crossed, summed over rays).
+    pub segments: u64,
+    /// Re-entries into the mesh after leaving it through a boundary face (non-convex meshes,
+    /// gaps).
+    pub reentries: u64,
+    /// Walks that lost the cell-to-cell path (non-manifold faces) and were resumed from the
+    /// boundary hierarchy.
+    pub recovered: u64,
+    /// Local searches around edges and vertices ([`WalkOutcome::local_searches`]).
+    pub local_searches: u64,
+    /// Rays stopped by the step bound.
+    pub abandoned: u64,
+    /// Cells in the per-frame start set (camera inside the mesh), 0 otherwise.
+    pub start_cells: usize,
+    /// Seconds for the frame.
+    pub seconds: f64,
+}
+
+/// A ray-cast image with its statistics.
+#[derive(Clone, Debug)]
+pub struct TetRayRendered {
+    /// Premultiplied linear RGBA.
+    pub image: Image,
+    /// Statistics.
+    pub stats: TetRayStats,
+}
+
+/// One ray's segments and outcome ([`TetRayCaster::trace`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TracedRay {
+    /// The segments, front to back.
+    pub segments: Vec<WalkSegment>,
+    /// What happened.
+    pub outcome: WalkOutcome,
+}
+
+/// A ray caster for one mesh: face planes, adjacency, cell fields and the boundary
+/// hierarchy, built once ([`TetRayCaster::new`]) and shared by every frame.
+pub struct TetRayCaster<'m> {
+    mesh: &'m TetMesh,
+    pub(crate) geo: Geometry,
+    pub(crate) boundary: Bvh,
+    pad: f64,
+}
+
+/// Bounding box of tet `t`.
+fn tet_box(mesh: &TetMesh, t: u32) -> (DVec3, DVec3) {
+    let p = mesh.tet_positions(t as usize).map(|v| v.as_dvec3());
+    let lo = p[0].min(p[1]).min(p[2].min(p[3]));
+    let hi = p[0].max(p[1]).max(p[2].max(p[3]));
+    (lo, hi)
+}
+
+impl<'m> TetRayCaster<'m> {
+    /// Builds the structures of `mesh` (`O(n log n)`).
+    pub fn new(mesh: &'m TetMesh) -> Self {
+        let geo = Geometry::new(mesh);
+        let pad = 1e-7 * geo.scale;
+        // Cells owning a boundary face, and every cell with a vertex on the boundary: a ray
+        // entering the mesh exactly through a boundary edge or vertex may continue in a cell
+        // that only touches the boundary there.
+        let mut on_boundary = vec![false; mesh.positions().len()];
+        for (t, adj) in geo.adj.iter().enumerate() {
+            for (f, &nb) in adj.iter().enumerate() {
+                if nb == NO_NEIGHBOR {
+                    for s in FACES[f] {
+                        on_boundary[mesh.tets()[t][s] as usize] = true;
+                    }
+                }
+            }
+        }
+        let owners: Vec<u32> = (0..mesh.tets().len() as u32)
+            .filter(|&t| {
+                geo.usable(t as usize)
+                    && mesh.tets()[t as usize]
+                        .iter()
+                        .any(|&v| on_boundary[v as usize])
+            })
+            .collect();
+        let boundary = Bvh::build(owners, |t| tet_box(mesh, t), pad);
+        Self {
+            mesh,
+            geo,
+            boundary,
+            pad,
+        }
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &'m TetMesh {
+        self.mesh
+    }
+
+    /// Bytes of the acceleration structures (face planes, cell-to-face table, adjacency,
+    /// cell fields, boundary hierarchy) per tet, not counting the mesh itself.
+    pub fn bytes_per_tet(&self) -> f64 {
+        (self.geo.bytes() + self.boundary.bytes()) as f64 / self.mesh.tets().len() as f64
+    }
+
+    fn max_steps(&self) -> usize {
+        4 * self.mesh.tets().len() + 64
+    }
+
+    /// The cells around the ray origins of `camera`: those whose box holds a perspective eye
+    /// or that straddle an orthographic camera's eye plane (`O(n)`, in parallel).
+    fn start_set(&self, camera: &Camera) -> Bvh {
+        let eye = camera.eye;
+        let (_, _, f) = camera.basis();
+        let pad = self.pad;
+        let b = self.mesh.bounds();
+        let candidates: Vec<u32> = match camera.projection {
+            Projection::Perspective { .. } => {
+                let inside = (eye.cmpge(b.min - pad) & eye.cmple(b.max + pad)).all();
+                if !inside {
+                    return Bvh::default();
+                }
+                (0..self.mesh.tets().len() as u32)
+                    .into_par_iter()
+                    .filter(|&t| {
+                        let (lo, hi) = tet_box(self.mesh, t);
+                        (eye.cmpge(lo - pad) & eye.cmple(hi + pad)).all()
+                    })
+                    .collect()
+            }
+            Projection::Orthographic { .. } => {
+                let depth = |p: DVec3| (p - eye).dot(f);
+                let corners = (0..8).map(|i| {
+                    DVec3::new(
+                        if i & 1 == 0 { b.min.x } else { b.max.x },
+                        if i & 2 == 0 { b.min.y } else { b.max.y },
+                        if i & 4 == 0 { b.min.z } else { b.max.z },
+                    )
+                });
+                if corners.map(depth).all(|z| z > pad) {
+                    return Bvh::default();
+                }
+                (0..self.mesh.tets().len() as u32)
+                    .into_par_iter()
+                    .filter(|&t| {
+                        let z = self
+                            .mesh
+                            .tet_positions(t as usize)
+                            .map(|p| depth(p.as_dvec3()));
+                        let lo = z.iter().copied().fold(f64::INFINITY, f64::min);
+                        let hi = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                        lo <= pad && hi >= -pad
+                    })
+                    .collect()
+            }
+        };
+        let candidates = candidates
+            .into_iter()
+            .filter(|&t| self.geo.usable(t as usize))
+            .collect();
+        Bvh::build(candidates, |t| tet_box(self.mesh, t), pad)
+    }
+
+    /// Walks one ray `origin + t dir` (`t >= 0`; `t` in units of `|dir|`) through the mesh
+    /// and returns its segments. The origin may lie inside the mesh (cells around it are
+    /// found by an `O(n)` scan, so this is for tests and tools, not for frames).
+    pub fn trace(&self, origin: DVec3, dir: DVec3) -> TracedRay {
+        let camera = Camera {
+            eye: origin,
+            target: origin + dir,
+            up: if dir.cross(DVec3::Z).length() > 1e-6 * dir.length() {
+                DVec3::Z
+            } else {
+                DVec3::X
+            },
+            projection: Projection::Perspective { fov_y_deg: 30.0 },
+        };
+        let start = if origin.is_finite() {
+            self.start_set(&camera)
+        } else {
+            Bvh::default()
+        };
+        let walker = Walker {
+            geo: &self.geo,
+            boundary: &self.boundary,
+            start: &start,
+            max_steps: self.max_steps(),
+        };
+        let mut segments = Vec::new();
+        let outcome = walker.trace(origin, dir, &mut Scratch::default(), |s| {
+            segments.push(*s);
+            true
+        });
+        TracedRay { segments, outcome }
+    }
+
+    /// Renders one frame: one ray per pixel centre ([`Camera::ray`]), premultiplied RGBA.
+    pub fn render(&self, opts: &TetRayOptions) -> Result<TetRayRendered, RenderError> {
+        opts.validate()?;
+        opts.cancelled()?;
+        let start_time = Instant::now();
+        let (w, h) = (opts.width, opts.height);
+        let range = self.mesh.range();
+        let tf = opts.tf.resolved(range);
+        let start = self.start_set(&opts.camera);
+        let walker = Walker {
+            geo: &self.geo,
+            boundary: &self.boundary,
+            start: &start,
+            max_steps: self.max_steps(),
+        };
+        let shade = Shade::new(opts.color, &tf, range);
+        let early = opts.early_termination.map(f64::from);
+        let camera = opts.camera;
+        let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let results: Vec<Result<TileOutput, RenderError>> = (0..tiles_x * tiles_y)
+            .into_par_iter()
+            .map(|ti| {
+                opts.cancelled()?;
+                let (tx, ty) = (ti % tiles_x, ti / tiles_x);
+                let xs = tx * TILE..((tx + 1) * TILE).min(w);
+                let ys = ty * TILE..((ty + 1) * TILE).min(h);
+                let mut out = Vec::with_capacity(xs.len() * ys.len());
+                let mut stats = TetRayStats::default();
+                let mut scratch = Scratch::default();
+                for y in ys {
+                    for x in xs.clone() {
+                        let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                        let mut acc = [0.0f64; 4];
+                        let outcome = walker.trace(ray.origin, ray.dir, &mut scratch, |s| {
+                            let c = shade.segment(s);
+                            let tr = 1.0 - acc[3];
+                            for k in 0..4 {
+                                acc[k] += tr * c[k];
+                            }
+                            early.is_none_or(|e| acc[3] < e)
+                        });
+                        stats.rays += 1;
+                        stats.segments += outcome.segments;
+                        stats.reentries += outcome.reentries;
+                        stats.recovered += outcome.recovered;
+                        stats.local_searches += outcome.local_searches;
+                        stats.abandoned += u64::from(outcome.abandoned);
+                        out.push(acc.map(|v| v as f32));
+                    }
+                }
+                Ok((out, stats))
+            })
+            .collect();
+        let mut pixels = vec![[0.0f32; 4]; w * h];
+        let mut stats = TetRayStats::default();
+        for (ti, r) in results.into_iter().enumerate() {
+            let (tile, s) = r?;
+            stats.rays += s.rays;
+            stats.segments += s.segments;
+            stats.reentries += s.reentries;
+            stats.recovered += s.recovered;
+            stats.local_searches += s.local_searches;
+            stats.abandoned += s.abandoned;
+            let (tx, ty) = (ti % tiles_x, ti / tiles_x);
+            let x0 = tx * TILE;
+            let tw = (x0 + TILE).min(w) - x0;
+            for (k, px) in tile.into_iter().enumerate() {
+                pixels[(ty * TILE + k / tw) * w + x0 + k % tw] = px;
+            }
+        }
+        stats.start_cells = start.len();
+        stats.seconds = start_time.elapsed().as_secs_f64();
+        Ok(TetRayRendered {
+            image: Image::from_pixels(w, h, pixels)?,
+            stats,
+        })
+    }
+}
+
+/// A tile's pixels (row-major) and statistics.
+type TileOutput = (Vec<[f32; 4]>, TetRayStats);
+
+/// The per-frame colour of a segment.
+enum Shade {
+    Exact(SegmentIntegrator),
+    Psi(CellClassifier, PsiTable),
+}
+
+impl Shade {
+    fn new(mode: TetRayColor, tf: &TransferFunction, range: [f64; 2]) -> Self {
+        match mode {
+            TetRayColor::Exact => Self::Exact(SegmentIntegrator::new(tf)),
+            TetRayColor::Psi => Self::Psi(CellClassifier::new(tf, range), PsiTable::new()),
+        }
+    }
+
+    #[inline]
+    fn segment(&self, s: &WalkSegment) -> [f64; 4] {
+        let len = s.t_out - s.t_in;
+        match self {
+            Self::Exact(i) => i.integrate(s.s_in, s.s_out, len),
+            Self::Psi(c, p) => {
+                psi_fragment(c, p, s.s_in as f32, s.s_out as f32, len as f32).map(f64::from)
+            }
+        }
+    }
+}

@@ -1,0 +1,203 @@
+//! The cell-to-cell walk of one ray (Garrity; Bunyk et al.; Weiler et al.'s HARC, seed `000`
+//! §2.4): enter through the nearest boundary face, then repeatedly clip the ray against the
+//! current cell, emit the segment `(s_in, s_out, length)` and step to the neighbour across
+//! the exit face; at a boundary exit, look the next entry up in the boundary hierarchy (a
+//! re-entry of a non-convex mesh).
+//!
+//! # Robustness
+//!
+//! Each cell's interval is the reference's clip ([`Geometry::clip`]): shared faces give
+//! bit-identical crossing parameters in both cells, and a ray in a face plane is claimed by
+//! exactly one of them. Every emitted segment has positive length and starts where the
+//! previous one ended (or later), so the current parameter `t` strictly increases and no cell
+//! is emitted twice: the walk cannot loop. When the neighbour across the exit face does not
+//! continue the ray (it left through an edge or a vertex, so the chosen exit face was one of
+//! several; or it runs in a face plane the tie rule gives to another cell), a **local
+//! search** visits the cells around the exit point (breadth first across faces, only cells
+//! containing the point up to a tolerance, at most [`LOCAL_SEARCH`] of them) and continues in
+//! the one whose clip starts first past `t`. Only when that finds nothing is the boundary
+//! hierarchy queried from `t`: a true exit from the mesh (counted as a re-entry when the
+//! hierarchy finds more of the mesh), or, on a non-manifold mesh, a lost walk (counted as a
+//! recovery). A step bound (`4 n + 64` cells) backs all this up; a ray that reaches it is
+//! abandoned (counted) with what it composited so far.
+use glam::DVec3;
+use volux_core::mesh::NO_NEIGHBOR;
+
+use super::bvh::{Bvh, Hit};
+use super::geom::Geometry;
+
+/// Most cells the local search around an edge or vertex visits.
+pub(crate) const LOCAL_SEARCH: usize = 512;
+
+/// One segment of a ray in one cell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WalkSegment {
+    /// Entry parameter.
+    pub t_in: f64,
+    /// Exit parameter (`> t_in`).
+    pub t_out: f64,
+    /// Scalar at the entry.
+    pub s_in: f64,
+    /// Scalar at the exit.
+    pub s_out: f64,
+    /// The cell.
+    pub tet: u32,
+}
+
+/// What happened to one ray.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WalkOutcome {
+    /// Segments emitted.
+    pub segments: u64,
+    /// Entries found by the boundary hierarchy after a boundary exit.
+    pub reentries: u64,
+    /// Walks that lost the cell-to-cell path and were resumed by the hierarchy.
+    pub recovered: u64,
+    /// Local searches around an edge or vertex, where the neighbour across the exit face did
+    /// not continue the ray (boundary exits are not counted).
+    pub local_searches: u64,
+    /// Whether the step bound stopped the ray.
+    pub abandoned: bool,
+}
+
+/// Reusable buffers of the local search.
+#[derive(Debug, Default)]
+pub(crate) struct Scratch {
+    visited: Vec<u32>,
+    queue: Vec<u32>,
+}
+
+/// A ray tracer over one mesh's geometry.
+pub(crate) struct Walker<'a> {
+    pub geo: &'a Geometry,
+    pub boundary: &'a Bvh,
+    /// Cells around the ray origins (camera inside the mesh), or an empty hierarchy.
+    pub start: &'a Bvh,
+    pub max_steps: usize,
+}
+
+impl Walker<'_> {
+    /// The first cell past `t_lo` of the boundary and start hierarchies.
+    fn query(&self, o: DVec3, d: DVec3, t_lo: f64, with_start: bool) -> Option<Hit> {
+        let a = self.boundary.nearest(self.geo, o, d, t_lo);
+        let b = if with_start {
+            self.start.nearest(self.geo, o, d, t_lo)
+        } else {
+            None
+        };
+        match (a, b) {
+            (Some(a), Some(b)) => Some(if b.before(&a, t_lo) { b } else { a }),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// The cell continuing the ray at `t` near cell `from`, by breadth-first search over the
+    /// cells containing the point `o + t d`; `None` when none reaches past `t`.
+    fn local_search(
+        &self,
+        from: u32,
+        o: DVec3,
+        d: DVec3,
+        t: f64,
+        scratch: &mut Scratch,
+    ) -> Option<Hit> {
+        let geo = self.geo;
+        let p = o + d * t;
+        let tol = 1e-9 * geo.scale;
+        scratch.visited.clear();
+        scratch.queue.clear();
+        scratch.visited.push(from);
+        scratch.queue.push(from);
+        let mut head = 0;
+        let mut best: Option<Hit> = None;
+        while head < scratch.queue.len() {
+            let x = scratch.queue[head] as usize;
+            head += 1;
+            for &y in &geo.adj[x] {
+                if y == NO_NEIGHBOR || scratch.visited.contains(&y) {
+                    continue;
+                }
+                if scratch.visited.len() >= LOCAL_SEARCH {
+                    break;
+                }
+                scratch.visited.push(y);
+                if !geo.contains(y as usize, p, tol) {
+                    continue;
+                }
+                scratch.queue.push(y);
+                if let Some(clip) = geo.clip(y as usize, o, d) {
+                    let hit = Hit { tet: y, clip };
+                    if clip.t_out > t && best.is_none_or(|b| hit.before(&b, t)) {
+                        best = Some(hit);
+                    }
+                }
+            }
+        }
+        // A cell starting well past `t` is not a continuation; let the hierarchy decide.
+        best.filter(|b| b.key(t) <= t + tol * (1.0 + d.length().recip()))
+    }
+
+    /// Walks the ray `o + t d`, `t >= 0`, calling `sink` with each segment in front-to-back
+    /// order until it returns `false` (early termination) or the ray leaves the mesh.
+    pub fn trace(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        scratch: &mut Scratch,
+        mut sink: impl FnMut(&WalkSegment) -> bool,
+    ) -> WalkOutcome {
+        let mut out = WalkOutcome::default();
+        if !(o.is_finite() && d.is_finite()) || d == DVec3::ZERO {
+            return out;
+        }
+        let geo = self.geo;
+        let mut t = 0.0f64;
+        let mut next = self.query(o, d, 0.0, true);
+        let mut steps = 0usize;
+        while let Some(hit) = next {
+            steps += 1;
+            if steps > self.max_steps {
+                out.abandoned = true;
+                break;
+            }
+            let tet = hit.tet as usize;
+            let (t0, t1) = (hit.clip.t_in.max(t), hit.clip.t_out);
+            let seg = WalkSegment {
+                t_in: t0,
+                t_out: t1,
+                s_in: geo.scalar(tet, o + d * t0),
+                s_out: geo.scalar(tet, o + d * t1),
+                tet: hit.tet,
+            };
+            out.segments += 1;
+            if !sink(&seg) {
+                break;
+            }
+            t = t1;
+            let nb = geo.adj[tet][hit.clip.exit as usize];
+            if nb != NO_NEIGHBOR {
+                if let Some(clip) = geo.clip(nb as usize, o, d) {
+                    if clip.t_out > t {
+                        next = Some(Hit { tet: nb, clip });
+                        continue;
+                    }
+                }
+            }
+            if nb != NO_NEIGHBOR {
+                out.local_searches += 1;
+            }
+            next = self.local_search(hit.tet, o, d, t, scratch);
+            if next.is_none() {
+                next = self.query(o, d, t, false);
+                if next.is_some() {
+                    if nb == NO_NEIGHBOR {
+                        out.reentries += 1;
+                    } else {
+                        out.recovered += 1;
+                    }
+                }
+            }
+        }
+        out
+    }
+}
