@@ -170,7 +170,7 @@ pub struct RenderArgs {
     pub size: String,
     /// Integrator: riemann, trapezoid, simpson (fixed step), adaptive-simpson (error
     /// control), preintegrated (table over front/back values), reference (f64 ground
-    /// truth, slow).
+    /// truth, slow); for tetrahedral meshes with --method raycast: exact or psi.
     #[arg(long, default_value = "riemann")]
     pub integrator: String,
     /// Fixed-step integrators: step in voxel units.
@@ -235,8 +235,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub sixteen_bit: bool,
     /// Renderer: `auto` (grids: ray casting; meshes: Projected Tetrahedra), `pt` (cell
-    /// projection of tetrahedral meshes), `raycast` (grids; meshes are resampled onto a grid
-    /// until the tetrahedral ray caster lands).
+    /// projection of tetrahedral meshes), `raycast` (grids; meshes: exact cell-by-cell ray
+    /// casting, colour from --integrator exact|psi or --color), `resample` (meshes resampled
+    /// onto a grid, then ray cast).
     #[arg(long, default_value = "auto")]
     pub method: String,
     /// PT: visibility order, `centroid` (radix sort, approximate) or `exact` (MPVO on convex

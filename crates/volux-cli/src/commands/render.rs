@@ -172,7 +172,12 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let (w, h) = parse_size(&args.size)?;
     let background = parse_background(&args.background)?;
     let spec = camera_spec(args)?;
-    let integrator = integrator(args)?;
+    let mesh_integrator = matches!(args.integrator.as_str(), "exact" | "psi");
+    let integrator = if mesh_integrator {
+        Integrator::Riemann { step: args.step }
+    } else {
+        integrator(args)?
+    };
     integrator.validate()?;
     let (data, _) = super::load(&args.file, &args.load, show)?;
     let png = PngOptions {
@@ -181,6 +186,16 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     };
     if let Some(mesh) = super::render_pt::mesh_for_pt(&data, args)? {
         return super::render_pt::run(&mesh, args, &spec, (w, h), &png);
+    }
+    if let (Dataset::Mesh(mesh), "raycast") = (&data, args.method.as_str()) {
+        return super::render_pt::run_raycast(mesh, args, &spec, (w, h), &png);
+    }
+    if mesh_integrator {
+        return Err(format!(
+            "--integrator {} applies to tetrahedral meshes (--method raycast)",
+            args.integrator
+        )
+        .into());
     }
     let out = render_dataset(&data, args, integrator, &spec, (w, h), show)?;
     out.image

@@ -8,6 +8,7 @@ use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::{CameraSpec, TetMesh};
 use volux_io::Dataset;
 use volux_render::pt::{ColorMode, PtOptions, PtRenderer, PtStats, SortMode};
+use volux_render::tetray::{TetRayCaster, TetRayColor, TetRayOptions};
 
 use super::render::{blinn_phong, isosurfaces, transfer_function};
 use super::CmdError;
@@ -32,9 +33,9 @@ pub fn mesh_for_pt<'a>(
             }
             Ok(Some(Cow::Owned(grid_to_tets(g)?)))
         }
-        ("raycast", _) => Ok(None),
+        ("raycast" | "resample", _) => Ok(None),
         ("auto" | "pt", _) => Err("unsupported dataset kind for PT".into()),
-        (other, _) => Err(format!("unknown method '{other}' (auto, pt, raycast)").into()),
+        (other, _) => Err(format!("unknown method '{other}' (auto, pt, raycast, resample)").into()),
     }
 }
 
@@ -65,6 +66,71 @@ pub fn run(
         .write_png(&args.output, png)
         .map_err(|e| format!("{}: {e}", args.output.display()))?;
     report(args, &out.stats, (w, h));
+    Ok(())
+}
+
+/// Renders `mesh` with the tetrahedral ray caster (`--method raycast`) and writes the PNG.
+pub fn run_raycast(
+    mesh: &TetMesh,
+    args: &RenderArgs,
+    spec: &CameraSpec,
+    (w, h): (usize, usize),
+    png: &PngOptions,
+) -> Result<(), CmdError> {
+    let bounds = mesh.bounds();
+    let hist = Histogram::from_values(mesh.scalars(), mesh.range(), 256);
+    let tf = transfer_function(&args.tf, &hist, bounds.diagonal() / 256.0)?
+        .with_opacity_scale(args.opacity_scale);
+    let mut opts = TetRayOptions::new(spec.resolve(&bounds)?, tf);
+    (opts.width, opts.height) = (w, h);
+    let colour = match args.integrator.as_str() {
+        "exact" | "psi" => args.integrator.as_str(),
+        _ => args.color.as_str(),
+    };
+    opts.color = TetRayColor::parse(colour)?;
+    if args.no_early_termination {
+        opts.early_termination = None;
+    }
+    let caster = TetRayCaster::new(mesh);
+    let out = caster.render(&opts)?;
+    out.image
+        .write_png(&args.output, png)
+        .map_err(|e| format!("{}: {e}", args.output.display()))?;
+    let s = &out.stats;
+    if args.stats && args.json {
+        let v = serde_json::json!({
+            "method": "raycast",
+            "ms": s.seconds * 1e3,
+            "width": w,
+            "height": h,
+            "tets": mesh.tets().len(),
+            "tets_per_s": mesh.tets().len() as f64 / s.seconds.max(1e-9),
+            "rays": s.rays,
+            "segments": s.segments,
+            "reentries": s.reentries,
+            "reentries_per_ray": s.reentries as f64 / (s.rays.max(1)) as f64,
+            "recovered": s.recovered,
+            "abandoned": s.abandoned,
+            "bytes_per_tet": caster.bytes_per_tet(),
+            "color": colour,
+            "threads": rayon::current_num_threads(),
+        });
+        println!("{v}");
+        return Ok(());
+    }
+    if args.stats {
+        eprintln!(
+            "{w}x{h} tet ray casting: {:.1} ms, {} rays, {} segments, {:.3} re-entries per ray, \
+             {} abandoned, {:.0} bytes/tet of acceleration structures",
+            s.seconds * 1e3,
+            s.rays,
+            s.segments,
+            s.reentries as f64 / (s.rays.max(1)) as f64,
+            s.abandoned,
+            caster.bytes_per_tet()
+        );
+    }
+    eprintln!("wrote {}", args.output.display());
     Ok(())
 }
 
