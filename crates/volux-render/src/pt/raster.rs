@@ -149,19 +149,30 @@ impl Bins {
 /// every tile (a two-pass counting sort). Tetrahedra whose vertices could not be projected or
 /// whose box covers no pixel centre are left out.
 pub fn bin(order: &[u32], tets: &[[u32; 4]], proj: &ViewProjection, tiles: &Tiles) -> Bins {
+    use rayon::prelude::*;
     let n = tiles.count();
-    let range = |t: u32| {
-        let v = proj.tet(tets.get(t as usize)?)?;
-        let (min, max) = screen_box(&v);
-        tiles.range(min, max)
-    };
+    // Every tetrahedron's tile range, once and in parallel (the random reads of the vertices
+    // are the cost); tile indices fit in 16 bits (images are at most 32768 pixels wide).
+    const NONE: [u16; 4] = [1, 1, 0, 0];
+    let ranges: Vec<[u16; 4]> = order
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&t| {
+            let Some(v) = tets.get(t as usize).and_then(|tet| proj.tet(tet)) else {
+                return NONE;
+            };
+            let (min, max) = screen_box(&v);
+            match tiles.range(min, max) {
+                Some(r) => r.map(|x| x as u16),
+                None => NONE,
+            }
+        })
+        .collect();
     let mut counts = vec![0u32; n + 1];
-    for &t in order {
-        if let Some([x0, y0, x1, y1]) = range(t) {
-            for ty in y0..=y1 {
-                for tx in x0..=x1 {
-                    counts[ty * tiles.cols + tx + 1] += 1;
-                }
+    for &[x0, y0, x1, y1] in &ranges {
+        for ty in usize::from(y0)..=usize::from(y1) {
+            for tx in usize::from(x0)..=usize::from(x1) {
+                counts[ty * tiles.cols + tx + 1] += 1;
             }
         }
     }
@@ -170,14 +181,12 @@ pub fn bin(order: &[u32], tets: &[[u32; 4]], proj: &ViewProjection, tiles: &Tile
     }
     let mut items = vec![0u32; counts[n] as usize];
     let mut cursor = counts.clone();
-    for &t in order {
-        if let Some([x0, y0, x1, y1]) = range(t) {
-            for ty in y0..=y1 {
-                for tx in x0..=x1 {
-                    let c = &mut cursor[ty * tiles.cols + tx];
-                    items[*c as usize] = t;
-                    *c += 1;
-                }
+    for (&t, &[x0, y0, x1, y1]) in order.iter().zip(&ranges) {
+        for ty in usize::from(y0)..=usize::from(y1) {
+            for tx in usize::from(x0)..=usize::from(x1) {
+                let c = &mut cursor[ty * tiles.cols + tx];
+                items[*c as usize] = t;
+                *c += 1;
             }
         }
     }
