@@ -32,13 +32,13 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
-use super::classify::{projection_tests, ternary_code, TERNARY_TABLE};
+use super::classify::{ternary_code, TERNARY_TABLE};
 use super::fragment::{under, ColorMode, FragmentShader};
 use super::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
 use super::raster::{bin, fixed, Bins, Rect, Tiles, Triangle};
-use super::setup::classify_fixed;
+use super::setup::{classify_fixed, projection_tests_screen};
 use super::sort;
 use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{CellClassifier, PsiTable};
@@ -386,7 +386,7 @@ impl<'m> PtRenderer<'m> {
                 let Some(v) = proj.tet(t) else {
                     return Fate::Clipped;
                 };
-                let code = ternary_code(projection_tests(screen_points(&v)));
+                let code = ternary_code(projection_tests_screen(&v));
                 if TERNARY_TABLE[usize::from(code)].is_valid() {
                     let p = mesh.positions();
                     let c = t
@@ -679,9 +679,14 @@ impl TileContext<'_> {
                         continue;
                     };
                     let interp = Interpolator {
-                        fv: idx.map(|k| fan[k]),
+                        z_f: idx.map(|k| fan[k].z_f),
+                        s_f: idx.map(|k| fan[k].s_f),
+                        z_b: idx.map(|k| fan[k].z_b),
+                        s_b: idx.map(|k| fan[k].s_b),
                         kf: idx.map(|k| kf[k]),
                         kb: idx.map(|k| kb[k]),
+                        fan: &fan,
+                        idx,
                     };
                     raster.for_each(|x, y, l| {
                         let p = (y - rect.y0) * tw + (x - rect.x0);
@@ -723,41 +728,42 @@ impl TileContext<'_> {
 }
 
 /// Perspective-correct interpolation of front and back attributes over one fan triangle.
-struct Interpolator {
-    fv: [FanVertex; 3],
+struct Interpolator<'f> {
+    /// Per vertex front and back depth and scalar.
+    z_f: [f32; 3],
+    s_f: [f32; 3],
+    z_b: [f32; 3],
+    s_b: [f32; 3],
     /// Per vertex `1 / z_f` and `1 / z_b` (perspective) or 1 (orthographic).
     kf: [f32; 3],
     kb: [f32; 3],
+    /// The fan points (for the gradients) and the triangle's indices into them.
+    fan: &'f [FanVertex; 5],
+    idx: [usize; 3],
 }
 
-impl Interpolator {
+impl Interpolator<'_> {
     /// `(z_f, s_f, z_b, s_b)` at screen barycentrics `l`.
     #[inline(always)]
     fn at<const PERSP: bool>(&self, l: [f32; 3]) -> (f32, f32, f32, f32) {
-        let v = &self.fv;
         if PERSP {
             let wf = [l[0] * self.kf[0], l[1] * self.kf[1], l[2] * self.kf[2]];
             let wb = [l[0] * self.kb[0], l[1] * self.kb[1], l[2] * self.kb[2]];
             let sf = wf[0] + wf[1] + wf[2];
             let sb = wb[0] + wb[1] + wb[2];
             let (z_f, z_b) = (1.0 / sf, 1.0 / sb);
-            let s_f = (wf[0] * v[0].s_f + wf[1] * v[1].s_f + wf[2] * v[2].s_f) * z_f;
-            let s_b = (wb[0] * v[0].s_b + wb[1] * v[1].s_b + wb[2] * v[2].s_b) * z_b;
+            let s_f = (wf[0] * self.s_f[0] + wf[1] * self.s_f[1] + wf[2] * self.s_f[2]) * z_f;
+            let s_b = (wb[0] * self.s_b[0] + wb[1] * self.s_b[1] + wb[2] * self.s_b[2]) * z_b;
             (z_f, s_f, z_b, s_b)
         } else {
             let dot = |a: [f32; 3]| l[0] * a[0] + l[1] * a[1] + l[2] * a[2];
-            (
-                dot(v.map(|x| x.z_f)),
-                dot(v.map(|x| x.s_f)),
-                dot(v.map(|x| x.z_b)),
-                dot(v.map(|x| x.s_b)),
-            )
+            (dot(self.z_f), dot(self.s_f), dot(self.z_b), dot(self.s_b))
         }
     }
 
     /// Front and back gradients at screen barycentrics `l`.
     fn gradients(&self, l: [f32; 3]) -> (Vec3, Vec3) {
-        let v = &self.fv;
+        let v = self.idx.map(|k| &self.fan[k]);
         let wf = [l[0] * self.kf[0], l[1] * self.kf[1], l[2] * self.kf[2]];
         let wb = [l[0] * self.kb[0], l[1] * self.kb[1], l[2] * self.kb[2]];
         let nf = (wf[0] + wf[1] + wf[2]).max(f32::MIN_POSITIVE);

@@ -13,10 +13,11 @@
 use glam::DVec2;
 
 use super::classify::{
-    classify, ternary_code, Classification, Sign, ThickKind, ThickTopology, ThickVertex,
-    TERNARY_TABLE,
+    classify, projection_tests, ternary_code, Classification, Sign, ThickKind, ThickTopology,
+    ThickVertex, TERNARY_TABLE,
 };
 use super::project::SUBPIXEL;
+use super::raster::fixed;
 
 /// Fixed-point coordinates must stay below this in magnitude for exact `i64` tests.
 const MAX_FIXED: i64 = 1 << 29;
@@ -51,26 +52,50 @@ fn crossing_param(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> f64 {
     unit_or_half(na / (na - nb))
 }
 
-/// [`classify`] of `projected`, given its fixed-point positions `q` (`q = SUBPIXEL *
-/// projected` when on the grid). The result is the same as [`classify`]'s.
-#[inline]
-pub fn classify_fixed(projected: [DVec2; 4], q: [[i64; 2]; 4]) -> Classification {
+/// Whether `q` is exactly `SUBPIXEL * projected`, within the range of exact `i64` tests.
+#[inline(always)]
+fn on_grid(projected: &[DVec2; 4], q: &[[i64; 2]; 4]) -> bool {
     let scale = f64::from(SUBPIXEL);
-    let on_grid = projected.iter().zip(&q).all(|(p, q)| {
+    projected.iter().zip(q).all(|(p, q)| {
         q[0].abs() < MAX_FIXED
             && q[1].abs() < MAX_FIXED
             && q[0] as f64 == p.x * scale
             && q[1] as f64 == p.y * scale
-    });
-    if !on_grid {
-        return classify(projected);
-    }
-    let tests = [
+    })
+}
+
+/// The four tests of [`projection_tests`] on fixed-point positions.
+#[inline(always)]
+fn tests_fixed(q: &[[i64; 2]; 4]) -> [Sign; 4] {
+    [
         orient(q[0], q[1], q[2]),
         orient(q[0], q[1], q[3]),
         orient(q[0], q[2], q[3]),
         orient(q[1], q[2], q[3]),
-    ];
+    ]
+}
+
+/// [`projection_tests`] of the projected vertices `screen` (`[x, y, depth]`), exact in `i64`
+/// when they are on the sub-pixel grid (the same result, more cheaply).
+#[inline]
+pub fn projection_tests_screen(screen: &[[f32; 3]; 4]) -> [Sign; 4] {
+    let projected = screen.map(|p| DVec2::new(f64::from(p[0]), f64::from(p[1])));
+    let q = screen.map(|p| fixed([p[0], p[1]]));
+    if on_grid(&projected, &q) {
+        tests_fixed(&q)
+    } else {
+        projection_tests(projected)
+    }
+}
+
+/// [`classify`] of `projected`, given its fixed-point positions `q` (`q = SUBPIXEL *
+/// projected` when on the grid). The result is the same as [`classify`]'s.
+#[inline]
+pub fn classify_fixed(projected: [DVec2; 4], q: [[i64; 2]; 4]) -> Classification {
+    if !on_grid(&projected, &q) {
+        return classify(projected);
+    }
+    let tests = tests_fixed(&q);
     let code = ternary_code(tests);
     let entry = &TERNARY_TABLE[usize::from(code) % TERNARY_TABLE.len()];
     let p = |i: u8| projected[usize::from(i) % 4];
@@ -151,7 +176,6 @@ pub fn classify_fixed(projected: [DVec2; 4], q: [[i64; 2]; 4]) -> Classification
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pt::raster::fixed;
 
     #[test]
     fn matches_classify_on_grid_points() {
@@ -181,6 +205,11 @@ mod tests {
             let projected = xy.map(|p| DVec2::new(f64::from(p[0]), f64::from(p[1])));
             let q = xy.map(fixed);
             assert_eq!(classify_fixed(projected, q), classify(projected), "{xy:?}");
+            let screen = xy.map(|p| [p[0], p[1], 1.0]);
+            assert_eq!(
+                projection_tests_screen(&screen),
+                projection_tests(projected)
+            );
         }
     }
 
