@@ -1,7 +1,9 @@
 //! Ray casting of tetrahedral meshes by cell-to-cell traversal (issue 5): Garrity's
 //! boundary-face entry, Bunyk et al.'s and Weiler et al.'s (HARC) walk from cell to cell
 //! through face adjacency (seed `000` §2.4), with the segment colours of the projection
-//! renderer (exact pre-integration, or partial pre-integration ψ of seed `000` §2.6).
+//! renderer (exact pre-integration, or partial pre-integration ψ of seed `000` §2.6), the
+//! adaptive Simpson rule of seed `001` ch. 4 along the whole ray, isosurfaces (seed `002`
+//! §4.6) and maximum intensity projection (`pixel.rs`).
 //!
 //! Per pixel, the ray through the pixel centre ([`Camera::ray`](volux_core::Camera::ray)):
 //!
@@ -37,9 +39,25 @@
 //! tet (face planes 40 bytes per face, cell-to-face table, adjacency, cell fields, boundary
 //! hierarchy).
 //!
+//! **Adaptive Simpson** ([`TetRayColor::AdaptiveSimpson`], seed `001` ch. 4): the walked
+//! segments of a ray form the medium (scalar linear per segment, exact TF classification,
+//! TF breakpoints inside a step reported as hidden features, gaps empty) and the whole ray
+//! is integrated across cell boundaries, with a per-pixel error estimate
+//! ([`TetRayRendered::error_map`]) and the rays over tolerance counted. In the tests, at
+//! `tol = 1e-3` (steps in units of `diagonal / 256`: `h0 = 2`, `hmin = 1e-3`, `hmax = 4`)
+//! no pixel of 64 x 64 differs from the exact colour by more than the tolerance
+//! (`smooth_tets(3000)`: max `1.6e-4`, 52 samples per ray; `torus_tets(24)`: max `6.4e-4`),
+//! and no ray is over tolerance.
+//!
+//! **Isosurfaces** (seed `002` §4.6) use the projection renderer's fragment shader, with
+//! normals interpolated from the vertex gradients at the segment's end points (barycentric):
+//! PT with exact order and colour and this caster agree to `3e-5` on average per channel.
+//! **MIP** shows the TF colour of the largest segment end point, opaque.
+//!
 //! [`render_mesh_reference`]: crate::pt::reference::render_mesh_reference
 mod bvh;
 mod geom;
+mod pixel;
 mod render;
 pub mod walk;
 

@@ -1,38 +1,51 @@
 //! The renderer: per-pixel walks over 16 x 16 tiles in parallel, segments integrated and
-//! composited front to back.
+//! composited front to back (or the whole ray integrated adaptively, or its maximum taken).
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::mesh::{FACES, NO_NEIGHBOR};
 use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
 use super::bvh::Bvh;
 use super::geom::Geometry;
+use super::pixel::{PixelContext, PixelOut};
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
-use crate::integrate::preintegrated::SegmentIntegrator;
-use crate::integrate::psi::{psi_fragment, CellClassifier, PsiTable};
+use crate::integrate::adaptive::AdaptiveParams;
+use crate::isosurface::Isosurfaces;
+use crate::shading::BlinnPhong;
 use crate::RenderError;
 
 /// Side of the square tiles rendered in parallel, in pixels.
 pub const TILE: usize = 16;
 
-/// How a segment's colour is computed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How a ray's colour is computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum TetRayColor {
     /// Exact integration of the piecewise-linear TF along the linear scalar
-    /// ([`SegmentIntegrator`]).
+    /// ([`SegmentIntegrator`](crate::integrate::preintegrated::SegmentIntegrator)).
     #[default]
     Exact,
     /// Partial pre-integration (ψ, seed `000` §2.6): [`psi_fragment`] with a
     /// [`CellClassifier`] and a [`PsiTable`].
+    ///
+    /// [`psi_fragment`]: crate::integrate::psi::psi_fragment
+    /// [`CellClassifier`]: crate::integrate::psi::CellClassifier
+    /// [`PsiTable`]: crate::integrate::psi::PsiTable
     Psi,
+    /// The iterative adaptive Simpson rule of seed `001` ch. 4 (Algorithms 3 and 4) over the
+    /// whole ray, across cell boundaries: the medium is the scalar, linear within each walked
+    /// segment, classified exactly by the TF; the gaps of a non-convex mesh are empty space.
+    /// Steps (`h0`, `hmin`, `hmax`) are in world units; the per-pixel estimated error is
+    /// returned in [`TetRayRendered::error_map`]. The early termination of the options
+    /// replaces the parameters' own.
+    AdaptiveSimpson(AdaptiveParams),
 }
 
 impl TetRayColor {
-    /// Parses `exact` or `psi`.
+    /// Parses `exact` or `psi` (the adaptive rule needs its parameters: build it directly).
     pub fn parse(s: &str) -> Result<Self, String> {
         match s {
             "exact" => Ok(Self::Exact),
@@ -53,8 +66,18 @@ pub struct TetRayOptions {
     pub camera: Camera,
     /// The transfer function (resolved against the mesh's range by the renderer).
     pub tf: TransferFunction,
-    /// Segment colour.
+    /// Ray colour.
     pub color: TetRayColor,
+    /// Isosurfaces (seed `002` §4.6), drawn where a segment's linear scalar crosses them, with
+    /// the fragment colour of the projection renderer
+    /// ([`FragmentShader::fragment`](crate::pt::fragment::FragmentShader::fragment)).
+    pub isosurfaces: Isosurfaces,
+    /// Lighting of the isosurfaces (normals interpolated from the vertex gradients).
+    pub shading: BlinnPhong,
+    /// Maximum intensity projection: each pixel shows the TF colour, opaque, of the largest
+    /// scalar along its ray (the largest segment end point: the field is linear per cell);
+    /// the colour mode, isosurfaces and early termination are ignored.
+    pub mip: bool,
     /// Stop a ray once its opacity reaches this (`None`: never).
     pub early_termination: Option<f32>,
     /// Set from another thread to stop with [`RenderError::Cancelled`].
@@ -62,7 +85,7 @@ pub struct TetRayOptions {
 }
 
 impl TetRayOptions {
-    /// 512 x 512, exact colour, early termination at 0.999.
+    /// 512 x 512, exact colour, no isosurfaces, default lighting, early termination at 0.999.
     pub fn new(camera: Camera, tf: TransferFunction) -> Self {
         Self {
             width: 512,
@@ -70,6 +93,9 @@ impl TetRayOptions {
             camera,
             tf,
             color: TetRayColor::Exact,
+            isosurfaces: Isosurfaces::default(),
+            shading: BlinnPhong::default(),
+            mip: false,
             early_termination: Some(0.999),
             cancel: None,
         }
@@ -89,6 +115,19 @@ impl TetRayOptions {
                 )));
             }
         }
+        if let TetRayColor::AdaptiveSimpson(p) = &self.color {
+            let ok = |v: f64| v.is_finite() && v > 0.0;
+            if !(ok(p.tol) && ok(p.h0) && ok(p.hmin) && ok(p.hmax) && p.hmin <= p.hmax) {
+                return Err(RenderError::InvalidOptions(format!(
+                    "adaptive tolerance {} and steps h0 {}, hmin {}, hmax {} must be positive \
+                     and finite, hmin <= hmax",
+                    p.tol, p.h0, p.hmin, p.hmax
+                )));
+            }
+        }
+        self.shading
+            .validate()
+            .map_err(RenderError::InvalidOptions)?;
         self.camera.validate()?;
         self.tf.validate()?;
         Ok(())
@@ -109,6 +148,11 @@ pub struct TetRayStats {
     pub rays: u64,
     /// Segments integrated (cells crossed, summed over rays).
     pub segments: u64,
+    /// Scalar values evaluated: the medium samples of the adaptive rule, two per segment
+    /// otherwise.
+    pub samples: u64,
+    /// Rays whose adaptive integration accepted a step at `hmin` above its tolerance.
+    pub rays_over_tolerance: u64,
     /// Re-entries into the mesh after leaving it through a boundary face (non-convex meshes,
     /// gaps).
     pub reentries: u64,
@@ -130,6 +174,9 @@ pub struct TetRayStats {
 pub struct TetRayRendered {
     /// Premultiplied linear RGBA.
     pub image: Image,
+    /// Estimated absolute error per pixel (largest channel), row-major: the adaptive rule's
+    /// estimate; 0 for the other colours, which do not estimate it.
+    pub error_map: Vec<f32>,
     /// Statistics.
     pub stats: TetRayStats,
 }
@@ -150,6 +197,8 @@ pub struct TetRayCaster<'m> {
     pub(crate) geo: Geometry,
     pub(crate) boundary: Bvh,
     pad: f64,
+    /// Vertex gradients for isosurface normals, computed on first use.
+    gradients: OnceLock<Vec<Vec3>>,
 }
 
 /// Bounding box of tet `t`.
@@ -192,7 +241,13 @@ impl<'m> TetRayCaster<'m> {
             geo,
             boundary,
             pad,
+            gradients: OnceLock::new(),
         }
+    }
+
+    /// The mesh's vertex gradients ([`TetMesh::vertex_gradients`]), computed on first use.
+    pub fn vertex_gradients(&self) -> &[Vec3] {
+        self.gradients.get_or_init(|| self.mesh.vertex_gradients())
     }
 
     /// The mesh.
@@ -312,8 +367,12 @@ impl<'m> TetRayCaster<'m> {
             start: &start,
             max_steps: self.max_steps(),
         };
-        let shade = Shade::new(opts.color, &tf, range);
-        let early = opts.early_termination.map(f64::from);
+        let gradients = if opts.isosurfaces.is_empty() || opts.mip {
+            &[][..]
+        } else {
+            self.vertex_gradients()
+        };
+        let ctx = PixelContext::new(self.mesh, opts, &tf, range, gradients);
         let camera = opts.camera;
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
         let results: Vec<Result<TileOutput, RenderError>> = (0..tiles_x * tiles_y)
@@ -326,31 +385,28 @@ impl<'m> TetRayCaster<'m> {
                 let mut out = Vec::with_capacity(xs.len() * ys.len());
                 let mut stats = TetRayStats::default();
                 let mut scratch = Scratch::default();
+                let mut segments = Vec::new();
                 for y in ys {
                     for x in xs.clone() {
                         let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                        let mut acc = [0.0f64; 4];
-                        let outcome = walker.trace(ray.origin, ray.dir, &mut scratch, |s| {
-                            let c = shade.segment(s);
-                            let tr = 1.0 - acc[3];
-                            for k in 0..4 {
-                                acc[k] += tr * c[k];
-                            }
-                            early.is_none_or(|e| acc[3] < e)
-                        });
+                        let (px, outcome) =
+                            ctx.pixel(&walker, ray.origin, ray.dir, &mut scratch, &mut segments);
                         stats.rays += 1;
                         stats.segments += outcome.segments;
                         stats.reentries += outcome.reentries;
                         stats.recovered += outcome.recovered;
                         stats.local_searches += outcome.local_searches;
                         stats.abandoned += u64::from(outcome.abandoned);
-                        out.push(acc.map(|v| v as f32));
+                        stats.samples += px.samples;
+                        stats.rays_over_tolerance += u64::from(px.missed);
+                        out.push(px);
                     }
                 }
                 Ok((out, stats))
             })
             .collect();
         let mut pixels = vec![[0.0f32; 4]; w * h];
+        let mut error_map = vec![0.0f32; w * h];
         let mut stats = TetRayStats::default();
         for (ti, r) in results.into_iter().enumerate() {
             let (tile, s) = r?;
@@ -360,47 +416,26 @@ impl<'m> TetRayCaster<'m> {
             stats.recovered += s.recovered;
             stats.local_searches += s.local_searches;
             stats.abandoned += s.abandoned;
+            stats.samples += s.samples;
+            stats.rays_over_tolerance += s.rays_over_tolerance;
             let (tx, ty) = (ti % tiles_x, ti / tiles_x);
             let x0 = tx * TILE;
             let tw = (x0 + TILE).min(w) - x0;
             for (k, px) in tile.into_iter().enumerate() {
-                pixels[(ty * TILE + k / tw) * w + x0 + k % tw] = px;
+                let i = (ty * TILE + k / tw) * w + x0 + k % tw;
+                pixels[i] = px.rgba;
+                error_map[i] = px.error;
             }
         }
         stats.start_cells = start.len();
         stats.seconds = start_time.elapsed().as_secs_f64();
         Ok(TetRayRendered {
             image: Image::from_pixels(w, h, pixels)?,
+            error_map,
             stats,
         })
     }
 }
 
 /// A tile's pixels (row-major) and statistics.
-type TileOutput = (Vec<[f32; 4]>, TetRayStats);
-
-/// The per-frame colour of a segment.
-enum Shade {
-    Exact(SegmentIntegrator),
-    Psi(CellClassifier, PsiTable),
-}
-
-impl Shade {
-    fn new(mode: TetRayColor, tf: &TransferFunction, range: [f64; 2]) -> Self {
-        match mode {
-            TetRayColor::Exact => Self::Exact(SegmentIntegrator::new(tf)),
-            TetRayColor::Psi => Self::Psi(CellClassifier::new(tf, range), PsiTable::new()),
-        }
-    }
-
-    #[inline]
-    fn segment(&self, s: &WalkSegment) -> [f64; 4] {
-        let len = s.t_out - s.t_in;
-        match self {
-            Self::Exact(i) => i.integrate(s.s_in, s.s_out, len),
-            Self::Psi(c, p) => {
-                psi_fragment(c, p, s.s_in as f32, s.s_out as f32, len as f32).map(f64::from)
-            }
-        }
-    }
-}
+type TileOutput = (Vec<PixelOut>, TetRayStats);

@@ -7,7 +7,10 @@ use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::{synth, Camera, CameraSpec, Grid, Image, Projection, TetMesh, TransferFunction};
 
 use super::*;
+use crate::integrate::adaptive::{AdaptiveParams, StepControl};
+use crate::isosurface::{Isosurfaces, Isovalue};
 use crate::pt::reference::{ray_segments, render_mesh_reference, ReferenceOptions};
+use crate::shading::BlinnPhong;
 use crate::RenderError;
 
 fn tf() -> TransferFunction {
@@ -450,6 +453,303 @@ fn renders_are_deterministic_and_options_are_checked() {
         .segments
         .is_empty());
     assert!(caster.trace(DVec3::ZERO, DVec3::ZERO).segments.is_empty());
+}
+
+/// Fraction of pixels where some channel differs by more than `eps`.
+fn fraction_over(a: &Image, b: &Image, eps: f32) -> f64 {
+    let over = a
+        .pixels()
+        .iter()
+        .zip(b.pixels())
+        .filter(|(p, q)| (0..4).any(|c| (p[c] - q[c]).abs() > eps))
+        .count();
+    over as f64 / a.pixels().len() as f64
+}
+
+/// Adaptive parameters in units of `diagonal / 256` of the mesh (as the CLI's voxel units).
+fn adaptive(mesh: &TetMesh, tol: f64, control: StepControl) -> TetRayColor {
+    let unit = mesh.bounds().diagonal() / 256.0;
+    TetRayColor::AdaptiveSimpson(AdaptiveParams {
+        tol,
+        h0: 2.0 * unit,
+        hmin: 1e-3 * unit,
+        hmax: 4.0 * unit,
+        control,
+        early_termination: None,
+    })
+}
+
+#[test]
+fn adaptive_simpson_matches_the_exact_colour_within_the_tolerance() {
+    let tol = 1e-3;
+    for (name, mesh) in [
+        ("smooth", synth::smooth_tets(3000).unwrap()),
+        ("torus", synth::torus_tets(24).unwrap()),
+    ] {
+        let caster = TetRayCaster::new(&mesh);
+        let cam = orbit("perspective", 35.0, 20.0, 1.0)
+            .resolve(&mesh.bounds())
+            .unwrap();
+        let n = 64;
+        let exact = caster.render(&options(cam, n, n)).unwrap();
+        assert!(exact.error_map.iter().all(|&e| e == 0.0));
+        assert_eq!(exact.stats.rays_over_tolerance, 0);
+        assert!(exact.image.coverage(1e-3) > 0.1, "{name}");
+        for control in [StepControl::Coupled, StepControl::Decoupled] {
+            let got = caster
+                .render(&TetRayOptions {
+                    color: adaptive(&mesh, tol, control),
+                    ..options(cam, n, n)
+                })
+                .unwrap();
+            let over = fraction_over(&got.image, &exact.image, tol as f32);
+            let (mean, max) = diff(&got.image, &exact.image);
+            let est_max = got.error_map.iter().copied().fold(0.0f32, f32::max);
+            let est_mean = got.error_map.iter().sum::<f32>() / (n * n) as f32;
+            eprintln!(
+                "{name} {control:?}: {:.3} % over tol, mean {mean:.2e}, max {max:.2e}, \
+                 estimated error mean {est_mean:.2e} max {est_max:.2e}, {:.0} samples/ray, \
+                 {} rays over tolerance, {:?}",
+                over * 100.0,
+                got.stats.samples as f64 / got.stats.rays as f64,
+                got.stats.rays_over_tolerance,
+                got.stats
+            );
+            assert!(over <= 0.001, "{name} {control:?}: {over}");
+            assert_eq!(got.error_map.len(), n * n);
+            assert!(got.error_map.iter().any(|&e| e > 0.0));
+            assert!(got.stats.samples > got.stats.segments);
+            assert_eq!(got.stats.segments, exact.stats.segments);
+            if name == "torus" {
+                assert!(got.stats.reentries > 0);
+            }
+        }
+    }
+}
+
+#[test]
+fn adaptive_simpson_converges_and_respects_early_termination() {
+    let mesh = synth::smooth_tets(3000).unwrap();
+    let caster = TetRayCaster::new(&mesh);
+    let cam = orbit("orthographic", -60.0, 45.0, 1.3)
+        .resolve(&mesh.bounds())
+        .unwrap();
+    let exact = caster.render(&options(cam, 32, 32)).unwrap();
+    let mut last = f64::INFINITY;
+    for tol in [1e-2, 1e-4] {
+        let r = caster
+            .render(&TetRayOptions {
+                color: adaptive(&mesh, tol, StepControl::Coupled),
+                ..options(cam, 32, 32)
+            })
+            .unwrap();
+        let (mean, max) = diff(&r.image, &exact.image);
+        eprintln!("tol {tol}: mean {mean:.2e} max {max:.2e}");
+        assert!(max <= tol * 2.0 + 1e-6, "tol {tol}: {max}");
+        assert!(mean < last);
+        last = mean;
+    }
+    // Early termination: an opaque TF stops rays (fewer samples), within the threshold.
+    let mut opts = TetRayOptions {
+        color: adaptive(&mesh, 1e-3, StepControl::Coupled),
+        ..options(cam, 32, 32)
+    };
+    opts.tf = TransferFunction::from_json(
+        r#"{"space": "normalized", "color": [[0, 1, 1, 1]], "extinction": [[0, 30], [1, 30]]}"#,
+    )
+    .unwrap();
+    let full = caster.render(&opts).unwrap();
+    opts.early_termination = Some(0.95);
+    let early = caster.render(&opts).unwrap();
+    assert!(early.stats.samples < full.stats.samples / 2);
+    let (_, max) = diff(&full.image, &early.image);
+    assert!(max <= 0.05 + 2e-3, "{max}");
+    // Bad parameters are rejected.
+    let mut bad = options(cam, 8, 8);
+    bad.color = TetRayColor::AdaptiveSimpson(AdaptiveParams {
+        tol: 0.0,
+        h0: 1.0,
+        hmin: 1.0,
+        hmax: 1.0,
+        control: StepControl::Coupled,
+        early_termination: None,
+    });
+    assert!(matches!(
+        caster.render(&bad),
+        Err(RenderError::InvalidOptions(_))
+    ));
+}
+
+/// A lattice mesh of `n^3` points, spacing 1, scalar `z / (n - 1)`.
+fn z_ramp(n: usize) -> TetMesh {
+    let vals = (0..n * n * n)
+        .map(|i| (i / (n * n)) as f32 / (n - 1) as f32)
+        .collect();
+    let g = Grid::new(
+        [n; 3],
+        [1.0; 3],
+        [0.0; 3],
+        Samples::F32(Buffer::owned(vals)),
+    )
+    .unwrap();
+    grid_to_tets(&g).unwrap()
+}
+
+#[test]
+fn opaque_isosurface_shows_its_lit_colour() {
+    // Field s = z / 3 seen from above (orthographic, headlight): the isosurface z = 1.5 faces
+    // the viewer, so its lit colour is rgb (ambient + diffuse) + specular exactly.
+    let mesh = z_ramp(4);
+    let caster = TetRayCaster::new(&mesh);
+    let cam = Camera {
+        eye: DVec3::new(1.5, 1.5, 10.0),
+        target: DVec3::new(1.5, 1.5, 1.5),
+        up: DVec3::Y,
+        projection: Projection::Orthographic { height: 2.0 },
+    };
+    let zero = TransferFunction::from_json(
+        r#"{"color": [[0, 0, 0, 0], [1, 0, 0, 0]], "extinction": [[0, 0], [1, 0]]}"#,
+    )
+    .unwrap();
+    let iso = Isosurfaces::new(vec![Isovalue {
+        value: 0.5,
+        rgba: [0.8, 0.4, 0.2, 1.0],
+    }])
+    .unwrap();
+    let sh = BlinnPhong::default();
+    let expect = [0.8, 0.4, 0.2].map(|c| c * (sh.ambient + sh.diffuse) + sh.specular);
+    for color in [
+        TetRayColor::Exact,
+        TetRayColor::Psi,
+        adaptive(&mesh, 1e-3, StepControl::Coupled),
+    ] {
+        let mut o = options(cam, 16, 16);
+        o.tf = zero.clone();
+        o.color = color;
+        o.isosurfaces = iso.clone();
+        let out = caster.render(&o).unwrap();
+        for p in out.image.pixels() {
+            assert!((p[3] - 1.0).abs() < 1e-6, "{color:?}: alpha {}", p[3]);
+            for c in 0..3 {
+                assert!(
+                    (p[c] - expect[c]).abs() < 1e-4,
+                    "{color:?}: {p:?} vs {expect:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn isosurfaces_agree_with_projected_tetrahedra() {
+    use crate::pt::{ColorMode, PtOptions, PtRenderer, SortMode};
+    let mesh = synth::smooth_tets(3000).unwrap();
+    let caster = TetRayCaster::new(&mesh);
+    let [lo, hi] = mesh.range();
+    let at = |f: f64| (lo + f * (hi - lo)) as f32;
+    let iso = Isosurfaces::new(vec![
+        Isovalue {
+            value: at(0.35),
+            rgba: [0.9, 0.3, 0.2, 0.6],
+        },
+        Isovalue {
+            value: at(0.7),
+            rgba: [0.2, 0.5, 1.0, 0.9],
+        },
+    ])
+    .unwrap();
+    let b = mesh.bounds();
+    for (i, cam) in [
+        orbit("perspective", 35.0, 20.0, 1.0).resolve(&b).unwrap(),
+        orbit("orthographic", -60.0, 45.0, 1.3).resolve(&b).unwrap(),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let n = 64;
+        // A light TF, so the surfaces show through the volume.
+        let light = tf().with_opacity_scale(0.25);
+        let mut o = options(cam, n, n);
+        o.tf = light.clone();
+        o.isosurfaces = iso.clone();
+        let ray = caster.render(&o).unwrap();
+        let mut po = PtOptions::new(cam, light.clone());
+        (po.width, po.height) = (n, n);
+        po.sort = SortMode::Exact;
+        po.color = ColorMode::Exact;
+        po.early_termination = None;
+        po.isosurfaces = iso.clone();
+        let pt = PtRenderer::new(&mesh).render(&po).unwrap();
+        let (mean, max) = diff(&ray.image, &pt.image);
+        let plain = caster
+            .render(&TetRayOptions {
+                isosurfaces: Isosurfaces::default(),
+                ..o.clone()
+            })
+            .unwrap();
+        let (shown, _) = diff(&ray.image, &plain.image);
+        eprintln!("camera {i}: PT vs tetray with isosurfaces: mean {mean:.2e}, max {max:.2e}; surfaces change the image by {shown:.2e}");
+        assert!(shown > 0.01, "the surfaces show");
+        assert!(mean < 1.0 / 255.0, "camera {i}: mean {mean}, max {max}");
+        // The adaptive rule draws the same surfaces.
+        o.color = adaptive(&mesh, 1e-3, StepControl::Coupled);
+        let ad = caster.render(&o).unwrap();
+        let over = fraction_over(&ad.image, &ray.image, 1e-3);
+        let (mean, max) = diff(&ad.image, &ray.image);
+        eprintln!("camera {i}: adaptive vs exact with isosurfaces: {:.3} % over, mean {mean:.2e}, max {max:.2e}", over * 100.0);
+        assert!(over <= 0.01, "camera {i}: {over}");
+    }
+}
+
+#[test]
+fn mip_shows_the_colour_of_the_largest_scalar() {
+    for (name, mesh) in [
+        ("smooth", synth::smooth_tets(3000).unwrap()),
+        ("torus", synth::torus_tets(24).unwrap()),
+    ] {
+        let caster = TetRayCaster::new(&mesh);
+        let b = mesh.bounds();
+        for cam in [
+            orbit("perspective", 35.0, 20.0, 1.0).resolve(&b).unwrap(),
+            orbit("orthographic", 100.0, -30.0, 1.2)
+                .resolve(&b)
+                .unwrap(),
+        ] {
+            let n = 40;
+            let mut o = options(cam, n, n);
+            o.mip = true;
+            // Ignored by MIP.
+            o.color = TetRayColor::Psi;
+            o.early_termination = Some(0.5);
+            let got = caster.render(&o).unwrap();
+            let tf = o.tf.resolved(mesh.range());
+            let mut hits = 0;
+            for y in 0..n {
+                for x in 0..n {
+                    let ray = cam.ray(x as f64 + 0.5, y as f64 + 0.5, n, n);
+                    let segs = ray_segments(&mesh, ray.origin, ray.dir);
+                    let want = segs
+                        .iter()
+                        .flat_map(|s| [s.s_in, s.s_out])
+                        .reduce(f64::max)
+                        .map_or([0.0; 4], |v| {
+                            let c = tf.color_at(v);
+                            [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]
+                        });
+                    hits += usize::from(!segs.is_empty());
+                    let p = got.image.pixels()[y * n + x];
+                    for c in 0..4 {
+                        assert!(
+                            (p[c] - want[c]).abs() < 1e-6,
+                            "{name} pixel {x} {y}: {p:?} vs {want:?}"
+                        );
+                    }
+                }
+            }
+            assert!(hits > n * n / 10, "{name}: {hits}");
+            assert_eq!(got.stats.samples, 2 * got.stats.segments);
+        }
+    }
 }
 
 /// Release-mode timing: `cargo test --release -p volux-render tetray::tests::timing -- --ignored

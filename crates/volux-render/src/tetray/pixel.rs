@@ -1,0 +1,425 @@
+//! One pixel of the tetrahedral ray caster: its ray walked through the mesh (seed `000`
+//! §2.4) and coloured in one of three ways.
+//!
+//! - **Per segment** (exact or ψ colour): each walked segment `(s_in, s_out, length)` is
+//!   coloured by the projection renderer's fragment shader
+//!   ([`FragmentShader::fragment`], one implementation with PT), isosurfaces included
+//!   (seed `002` §4.6: the segment is cut at its crossings, each lit with the normal
+//!   interpolated between the gradients at the segment's end points), and composited front
+//!   to back.
+//! - **Adaptive Simpson** (seed `001` ch. 4, Algorithms 3 and 4): the segments are collected
+//!   and the whole ray is integrated with [`adaptive_simpson_intervals`] over a
+//!   [`SegmentMedium`], across cell boundaries, the contiguous runs of segments being the
+//!   intervals (the gaps of a non-convex mesh are empty space, zero extinction). With
+//!   isosurfaces, the ray is cut at their crossings and each piece is integrated with the
+//!   share of the tolerance its length has, so the errors still add up to at most `tol`.
+//! - **MIP**: the largest scalar along the ray is the largest segment end point (the field
+//!   is linear in each cell), shown with its TF colour, opaque, as the grid MIP
+//!   ([`crate::mip`]) does.
+use glam::{DVec3, Vec3};
+use volux_core::{TetMesh, TransferFunction};
+
+use super::render::{TetRayColor, TetRayOptions};
+use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
+use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
+use crate::integrate::preintegrated::SegmentIntegrator;
+use crate::integrate::psi::{psi_fragment, CellClassifier, PsiTable};
+use crate::integrate::{hides_breakpoints, Medium, RayMedium};
+use crate::isosurface::Isovalue;
+use crate::pt::fragment::{ColorMode, FragmentShader};
+use crate::shading::BlinnPhong;
+
+/// What one pixel produced.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct PixelOut {
+    /// Premultiplied RGBA.
+    pub rgba: [f32; 4],
+    /// Estimated absolute error (adaptive rule), 0 otherwise.
+    pub error: f32,
+    /// Scalar values evaluated.
+    pub samples: u64,
+    /// Whether the adaptive rule accepted a step over its tolerance.
+    pub missed: bool,
+}
+
+/// How the pixels of a frame are coloured.
+enum Mode {
+    Segments,
+    Adaptive(AdaptiveParams),
+    Mip,
+}
+
+/// Everything a pixel needs, shared by all pixels of a frame.
+pub(crate) struct PixelContext<'a> {
+    mesh: &'a TetMesh,
+    mode: Mode,
+    psi_mode: bool,
+    exact: SegmentIntegrator,
+    classifier: CellClassifier,
+    psi: PsiTable,
+    isosurfaces: &'a [Isovalue],
+    shading: BlinnPhong,
+    /// The TF resolved against the mesh's range.
+    tf: TransferFunction,
+    breakpoints: Vec<f64>,
+    gradients: &'a [Vec3],
+    early: Option<f64>,
+}
+
+impl<'a> PixelContext<'a> {
+    /// The context of a frame; `tf` is resolved against `range`, `gradients` are the vertex
+    /// gradients (may be empty when there are no isosurfaces).
+    pub fn new(
+        mesh: &'a TetMesh,
+        opts: &'a TetRayOptions,
+        tf: &TransferFunction,
+        range: [f64; 2],
+        gradients: &'a [Vec3],
+    ) -> Self {
+        let mode = match (opts.mip, opts.color) {
+            (true, _) => Mode::Mip,
+            (false, TetRayColor::AdaptiveSimpson(p)) => Mode::Adaptive(p),
+            _ => Mode::Segments,
+        };
+        let psi_mode = matches!(mode, Mode::Segments) && opts.color == TetRayColor::Psi;
+        Self {
+            mesh,
+            mode,
+            psi_mode,
+            exact: SegmentIntegrator::new(tf),
+            classifier: CellClassifier::new(tf, range),
+            psi: if psi_mode {
+                PsiTable::new()
+            } else {
+                PsiTable::with_size(2)
+            },
+            isosurfaces: opts.isosurfaces.as_slice(),
+            shading: opts.shading,
+            tf: tf.clone(),
+            breakpoints: tf.breakpoints(),
+            gradients,
+            early: opts.early_termination.map(f64::from),
+        }
+    }
+
+    /// The projection renderer's fragment shader with this frame's tables.
+    fn shader(&self) -> FragmentShader<'_> {
+        FragmentShader {
+            mode: if self.psi_mode {
+                ColorMode::Psi
+            } else {
+                ColorMode::Exact
+            },
+            exact: &self.exact,
+            classifier: &self.classifier,
+            psi: &self.psi,
+            isosurfaces: self.isosurfaces,
+            shading: self.shading,
+        }
+    }
+
+    /// Premultiplied RGBA of one segment without isosurfaces, in `f64` (exact or ψ).
+    #[inline]
+    fn segment(&self, s: &WalkSegment) -> [f64; 4] {
+        let len = s.t_out - s.t_in;
+        if self.psi_mode {
+            psi_fragment(
+                &self.classifier,
+                &self.psi,
+                s.s_in as f32,
+                s.s_out as f32,
+                len as f32,
+            )
+            .map(f64::from)
+        } else {
+            self.exact.integrate(s.s_in, s.s_out, len)
+        }
+    }
+
+    /// The gradient at point `p` of cell `tet`: the vertex gradients interpolated with the
+    /// barycentric coordinates of `p`.
+    fn gradient_at(&self, tet: u32, p: DVec3) -> Vec3 {
+        let t = tet as usize;
+        let v = self.mesh.tets()[t];
+        let g = v.map(|i| {
+            self.gradients
+                .get(i as usize)
+                .copied()
+                .unwrap_or(Vec3::ZERO)
+        });
+        let x = self.mesh.tet_positions(t).map(|q| q.as_dvec3());
+        let (e1, e2, e3, dp) = (x[1] - x[0], x[2] - x[0], x[3] - x[0], p - x[0]);
+        let det = e1.cross(e2).dot(e3);
+        if !(det.is_finite() && det != 0.0) {
+            return (g[0] + g[1] + g[2] + g[3]) * 0.25;
+        }
+        let l1 = dp.cross(e2).dot(e3) / det;
+        let l2 = e1.cross(dp).dot(e3) / det;
+        let l3 = e1.cross(e2).dot(dp) / det;
+        let l = [1.0 - l1 - l2 - l3, l1, l2, l3].map(|l| l as f32);
+        g[0] * l[0] + g[1] * l[1] + g[2] * l[2] + g[3] * l[3]
+    }
+
+    /// The gradients at the entry and exit of a segment of the ray `o + t d`.
+    fn segment_gradients(&self, o: DVec3, d: DVec3, s: &WalkSegment) -> (Vec3, Vec3) {
+        (
+            self.gradient_at(s.tet, o + d * s.t_in),
+            self.gradient_at(s.tet, o + d * s.t_out),
+        )
+    }
+
+    /// Walks the ray `o + t d` and colours it; `segments` is scratch space.
+    pub fn pixel(
+        &self,
+        walker: &Walker<'_>,
+        o: DVec3,
+        d: DVec3,
+        scratch: &mut Scratch,
+        segments: &mut Vec<WalkSegment>,
+    ) -> (PixelOut, WalkOutcome) {
+        match self.mode {
+            Mode::Segments => {
+                let mut acc = [0.0f64; 4];
+                let shader = self.shader();
+                let view = d.as_vec3();
+                let iso = !self.isosurfaces.is_empty();
+                let outcome = walker.trace(o, d, scratch, |s| {
+                    let c = if iso {
+                        shader
+                            .fragment(
+                                s.s_in as f32,
+                                s.s_out as f32,
+                                (s.t_out - s.t_in) as f32,
+                                || self.segment_gradients(o, d, s),
+                                || view,
+                            )
+                            .map(f64::from)
+                    } else {
+                        self.segment(s)
+                    };
+                    under(&mut acc, c);
+                    self.early.is_none_or(|e| acc[3] < e)
+                });
+                let out = PixelOut {
+                    rgba: acc.map(|v| v as f32),
+                    samples: 2 * outcome.segments,
+                    ..PixelOut::default()
+                };
+                (out, outcome)
+            }
+            Mode::Mip => {
+                let mut best: Option<f64> = None;
+                let outcome = walker.trace(o, d, scratch, |s| {
+                    let m = s.s_in.max(s.s_out);
+                    if m.is_finite() {
+                        best = Some(best.map_or(m, |b| b.max(m)));
+                    }
+                    true
+                });
+                let rgba = match best {
+                    Some(v) => {
+                        let c = self.tf.color_at(v);
+                        [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]
+                    }
+                    None => [0.0; 4],
+                };
+                let out = PixelOut {
+                    rgba,
+                    samples: 2 * outcome.segments,
+                    ..PixelOut::default()
+                };
+                (out, outcome)
+            }
+            Mode::Adaptive(p) => {
+                segments.clear();
+                let outcome = walker.trace(o, d, scratch, |s| {
+                    segments.push(*s);
+                    true
+                });
+                (self.adaptive(o, d, segments, &p), outcome)
+            }
+        }
+    }
+
+    /// The isosurface crossings of the segments, in ray order: `(t, premultiplied RGBA of the
+    /// lit surface)`, with the half-open rule of the fragment shader (a value equal to the
+    /// exit scalar is left to the next segment).
+    fn crossings(&self, o: DVec3, d: DVec3, segs: &[WalkSegment]) -> Vec<(f64, [f64; 4])> {
+        let mut cuts = Vec::new();
+        if self.isosurfaces.is_empty() {
+            return cuts;
+        }
+        let view = d.as_vec3();
+        for s in segs {
+            if s.s_in == s.s_out {
+                continue;
+            }
+            let mut grads = None;
+            for iso in self.isosurfaces {
+                let f = (f64::from(iso.value) - s.s_in) / (s.s_out - s.s_in);
+                if !(0.0..1.0).contains(&f) {
+                    continue;
+                }
+                let (gf, gb) = *grads.get_or_insert_with(|| self.segment_gradients(o, d, s));
+                let normal = gf + (gb - gf) * f as f32;
+                let rgb = self
+                    .shading
+                    .shade([iso.rgba[0], iso.rgba[1], iso.rgba[2]], normal, view);
+                let a = f64::from(iso.rgba[3]);
+                cuts.push((
+                    s.t_in + f * (s.t_out - s.t_in),
+                    [
+                        f64::from(rgb[0]) * a,
+                        f64::from(rgb[1]) * a,
+                        f64::from(rgb[2]) * a,
+                        a,
+                    ],
+                ));
+            }
+        }
+        cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        cuts
+    }
+
+    /// Adaptive Simpson over the whole ray (seed `001` ch. 4), cut at isosurface crossings.
+    fn adaptive(&self, o: DVec3, d: DVec3, segs: &[WalkSegment], p: &AdaptiveParams) -> PixelOut {
+        let mut out = PixelOut::default();
+        if segs.is_empty() {
+            return out;
+        }
+        // Contiguous runs of segments: the intervals; the gaps between them are empty.
+        let mut runs: Vec<(f64, f64)> = Vec::new();
+        for s in segs {
+            match runs.last_mut() {
+                Some(last) if s.t_in <= last.1 => last.1 = last.1.max(s.t_out),
+                _ => runs.push((s.t_in, s.t_out)),
+            }
+        }
+        let total: f64 = runs.iter().map(|r| r.1 - r.0).sum();
+        if total.is_nan() || total <= 0.0 {
+            return out;
+        }
+        let cuts = self.crossings(o, d, segs);
+        let mut medium = SegmentMedium {
+            segs,
+            cursor: 0,
+            tf: &self.tf,
+            breakpoints: &self.breakpoints,
+        };
+        let mut acc = [0.0f64; 4];
+        let (mut error, mut samples, mut missed) = (0.0f64, 0u64, false);
+        let mut t_lo = f64::NEG_INFINITY;
+        let mut pieces: Vec<(f64, f64)> = Vec::with_capacity(runs.len());
+        let ends = cuts
+            .iter()
+            .map(|&(t, c)| (t, Some(c)))
+            .chain(std::iter::once((f64::INFINITY, None)));
+        for (t_hi, surface) in ends {
+            pieces.clear();
+            pieces.extend(
+                runs.iter()
+                    .map(|&(a, b)| (a.max(t_lo), b.min(t_hi)))
+                    .filter(|(a, b)| b > a),
+            );
+            let len: f64 = pieces.iter().map(|r| r.1 - r.0).sum();
+            if len > 0.0 {
+                let early = self.early.map(|e| {
+                    if acc[3] < 1.0 {
+                        (e - acc[3]) / (1.0 - acc[3])
+                    } else {
+                        0.0
+                    }
+                });
+                let params = AdaptiveParams {
+                    tol: p.tol * len / total,
+                    early_termination: early,
+                    ..*p
+                };
+                let r = adaptive_simpson_intervals(&mut medium, &pieces, &params);
+                error += (1.0 - acc[3]) * r.error;
+                samples += r.samples;
+                missed |= r.tolerance_missed;
+                under(&mut acc, r.rgba);
+            }
+            if let Some(c) = surface {
+                under(&mut acc, c);
+            }
+            t_lo = t_hi;
+            if self.early.is_some_and(|e| acc[3] >= e) {
+                break;
+            }
+        }
+        out.rgba = acc.map(|v| v as f32);
+        out.error = error as f32;
+        out.samples = samples;
+        out.missed = missed;
+        out
+    }
+}
+
+/// Composites `c` (premultiplied) behind `acc`.
+#[inline]
+fn under(acc: &mut [f64; 4], c: [f64; 4]) {
+    let tr = 1.0 - acc[3];
+    for k in 0..4 {
+        acc[k] += tr * c[k];
+    }
+}
+
+/// The classified medium along one ray, as the adaptive integrator sees it (seed `001`
+/// ch. 4): the scalar linear within each walked segment, classified exactly by the resolved
+/// TF; zero extinction between segments. Samples arrive nearly in order, so a cursor finds
+/// the segment of `t` in amortized constant time.
+pub(crate) struct SegmentMedium<'s> {
+    /// The walked segments, front to back.
+    pub segs: &'s [WalkSegment],
+    /// The segment of the last sample.
+    pub cursor: usize,
+    /// The TF, resolved against the mesh's range.
+    pub tf: &'s TransferFunction,
+    /// The TF's breakpoints, sorted ([`TransferFunction::breakpoints`]).
+    pub breakpoints: &'s [f64],
+}
+
+impl SegmentMedium<'_> {
+    /// The scalar at `t`, `None` outside the segments (rounding at a run's ends forgiven).
+    pub fn value(&mut self, t: f64) -> Option<f64> {
+        let segs = self.segs;
+        if segs.is_empty() {
+            return None;
+        }
+        let mut i = self.cursor.min(segs.len() - 1);
+        while i > 0 && t < segs[i].t_in {
+            i -= 1;
+        }
+        while i + 1 < segs.len() && t > segs[i].t_out {
+            i += 1;
+        }
+        self.cursor = i;
+        let s = &segs[i];
+        let len = s.t_out - s.t_in;
+        let slack = 1e-9 * (len + t.abs());
+        if t < s.t_in - slack || t > s.t_out + slack {
+            return None;
+        }
+        let f = ((t - s.t_in) / len).clamp(0.0, 1.0);
+        Some(s.s_in + (s.s_out - s.s_in) * f)
+    }
+}
+
+impl RayMedium for SegmentMedium<'_> {
+    fn at(&mut self, t: f64) -> Medium {
+        match self.value(t) {
+            Some(v) => Medium {
+                rgb: self.tf.color_at(v),
+                tau: self.tf.tau_per_world(v),
+                value: v,
+            },
+            None => Medium::default(),
+        }
+    }
+
+    fn hides_features(&self, a: f64, b: f64) -> bool {
+        hides_breakpoints(self.breakpoints, a, b)
+    }
+}
