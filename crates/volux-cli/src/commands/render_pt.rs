@@ -69,7 +69,12 @@ pub fn run(
     Ok(())
 }
 
-/// Renders `mesh` with the tetrahedral ray caster (`--method raycast`) and writes the PNG.
+/// Renders `mesh` with the tetrahedral ray caster (`--method raycast`) and writes the PNG:
+/// `--integrator exact|psi|adaptive-simpson` (other integrators take the colour of
+/// `--color`; the adaptive steps `--h0`, `--hmin`, `--hmax` are in units of the mesh's
+/// diagonal / 256, as the TF presets), `--iso` with the lighting options, `--mip`,
+/// `--error-map` (the adaptive rule's per-pixel estimate, black to white at `--tol`, magenta
+/// above).
 pub fn run_raycast(
     mesh: &TetMesh,
     args: &RenderArgs,
@@ -77,17 +82,34 @@ pub fn run_raycast(
     (w, h): (usize, usize),
     png: &PngOptions,
 ) -> Result<(), CmdError> {
+    use volux_render::integrate::{AdaptiveParams, Integrator};
     let bounds = mesh.bounds();
+    let unit = bounds.diagonal() / 256.0;
     let hist = Histogram::from_values(mesh.scalars(), mesh.range(), 256);
-    let tf = transfer_function(&args.tf, &hist, bounds.diagonal() / 256.0)?
-        .with_opacity_scale(args.opacity_scale);
+    let tf = transfer_function(&args.tf, &hist, unit)?.with_opacity_scale(args.opacity_scale);
     let mut opts = TetRayOptions::new(spec.resolve(&bounds)?, tf);
     (opts.width, opts.height) = (w, h);
     let colour = match args.integrator.as_str() {
         "exact" | "psi" => args.integrator.as_str(),
+        "adaptive-simpson" | "adaptive" => "adaptive-simpson",
         _ => args.color.as_str(),
     };
-    opts.color = TetRayColor::parse(colour)?;
+    opts.color = if colour == "adaptive-simpson" {
+        let Integrator::AdaptiveSimpson(p) = super::render::integrator(args)? else {
+            unreachable!("adaptive-simpson parses as the adaptive integrator")
+        };
+        TetRayColor::AdaptiveSimpson(AdaptiveParams {
+            h0: p.h0 * unit,
+            hmin: p.hmin * unit,
+            hmax: p.hmax * unit,
+            ..p
+        })
+    } else {
+        TetRayColor::parse(colour)?
+    };
+    opts.isosurfaces = isosurfaces(args)?;
+    opts.shading = blinn_phong(args)?;
+    opts.mip = args.mip;
     if args.no_early_termination {
         opts.early_termination = None;
     }
@@ -96,7 +118,29 @@ pub fn run_raycast(
     out.image
         .write_png(&args.output, png)
         .map_err(|e| format!("{}: {e}", args.output.display()))?;
+    if let Some(path) = &args.error_map {
+        let tol = args.tol;
+        let pixels = out
+            .error_map
+            .iter()
+            .map(|&e| {
+                if e as f64 > tol {
+                    [1.0, 0.0, 1.0, 1.0]
+                } else {
+                    let v = (e as f64 / tol) as f32;
+                    [v, v, v, 1.0]
+                }
+            })
+            .collect();
+        volux_core::Image::from_pixels(w, h, pixels)?
+            .write_png(path, &PngOptions::default())
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
     let s = &out.stats;
+    let mode = if args.mip { "mip" } else { colour };
+    let max_error = out.error_map.iter().copied().fold(0.0f32, f32::max);
+    let mean_error =
+        out.error_map.iter().map(|&e| e as f64).sum::<f64>() / out.error_map.len().max(1) as f64;
     if args.stats && args.json {
         let v = serde_json::json!({
             "method": "raycast",
@@ -107,12 +151,19 @@ pub fn run_raycast(
             "tets_per_s": mesh.tets().len() as f64 / s.seconds.max(1e-9),
             "rays": s.rays,
             "segments": s.segments,
+            "samples": s.samples,
+            "rays_over_tolerance": s.rays_over_tolerance,
+            "max_error": max_error,
+            "mean_error": mean_error,
             "reentries": s.reentries,
             "reentries_per_ray": s.reentries as f64 / (s.rays.max(1)) as f64,
             "recovered": s.recovered,
             "abandoned": s.abandoned,
             "bytes_per_tet": caster.bytes_per_tet(),
             "color": colour,
+            "integrator": mode,
+            "isosurfaces": opts.isosurfaces.len(),
+            "mip": args.mip,
             "threads": rayon::current_num_threads(),
         });
         println!("{v}");
@@ -120,13 +171,16 @@ pub fn run_raycast(
     }
     if args.stats {
         eprintln!(
-            "{w}x{h} tet ray casting: {:.1} ms, {} rays, {} segments, {:.3} re-entries per ray, \
-             {} abandoned, {:.0} bytes/tet of acceleration structures",
+            "{w}x{h} tet ray casting ({mode}): {:.1} ms, {} rays, {} segments, {} samples, \
+             {:.3} re-entries per ray, {} abandoned, {} rays over tolerance (max estimated \
+             error {max_error:.2e}), {:.0} bytes/tet of acceleration structures",
             s.seconds * 1e3,
             s.rays,
             s.segments,
+            s.samples,
             s.reentries as f64 / (s.rays.max(1)) as f64,
             s.abandoned,
+            s.rays_over_tolerance,
             caster.bytes_per_tet()
         );
     }
