@@ -81,7 +81,11 @@ fn check(name: &str, rel: &str, extra: &[&str]) {
     eprintln!("{name}: mean |diff| {mean:.3}/255, {:.2} % pixels off by > 16, {lit} lit pixels in the baseline", far * 100.0);
     assert!(lit > 100, "{name}: the baseline must show the data");
     assert!(mean <= 1.0, "{name}: mean difference {mean:.3}/255");
-    assert!(far <= 0.01, "{name}: {:.2} % of pixels differ by more than 16", far * 100.0);
+    assert!(
+        far <= 0.01,
+        "{name}: {:.2} % of pixels differ by more than 16",
+        far * 100.0
+    );
 }
 
 #[test]

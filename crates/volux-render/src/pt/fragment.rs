@@ -69,6 +69,8 @@ pub struct FragmentShader<'a> {
     pub classifier: &'a CellClassifier,
     /// The ψ table.
     pub psi: &'a PsiTable,
+    /// The TF's breakpoints (value space, sorted): the ψ model cuts segments there.
+    pub knots: &'a [f32],
     /// Isovalues, sorted by value.
     pub isosurfaces: &'a [Isovalue],
     /// Lighting of the isosurfaces.
@@ -106,11 +108,51 @@ impl ColorModel for AverageModel {
     }
 }
 
+/// Partial pre-integration is exact for colour and extinction linear along the segment, i.e.
+/// for a TF linear between `s_f` and `s_b`. Moreland and Angel, and the seeds, apply it to the
+/// whole segment whatever the TF does in between, which on a TF with kinks inside the
+/// segment's value range is off by up to 0.7 in a channel (measured in `integrate::psi`).
+/// Here a segment whose value range contains breakpoints is cut there, each piece (on which
+/// the TF is linear) gets its own ψ colour, and the pieces are composited front to back: the
+/// result is then exact up to the table's interpolation error, at the cost of one binary
+/// search per fragment and one ψ lookup per piece.
 impl ColorModel for PsiModel {
     #[inline(always)]
     fn segment(shader: &FragmentShader<'_>, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
-        psi::psi_fragment(shader.classifier, shader.psi, s_f, s_b, l)
+        let knots = shader.knots;
+        let (lo, hi) = if s_f <= s_b { (s_f, s_b) } else { (s_b, s_f) };
+        let first = knots.partition_point(|&k| k <= lo);
+        let last = knots.partition_point(|&k| k < hi);
+        if first >= last || s_f.is_nan() || s_b.is_nan() {
+            return psi::psi_fragment(shader.classifier, shader.psi, s_f, s_b, l);
+        }
+        psi_pieces(shader, &knots[first..last], s_f, s_b, l)
     }
+}
+
+/// ψ colour of a segment cut at `inner` (the breakpoints strictly inside its value range).
+#[inline(never)]
+fn psi_pieces(shader: &FragmentShader<'_>, inner: &[f32], s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
+    let per_value = l / (s_b - s_f).abs();
+    let mut acc = [0.0f32; 4];
+    let mut s0 = s_f;
+    let mut piece = |s1: f32, acc: &mut [f32; 4]| {
+        let len = (s1 - s0).abs() * per_value;
+        if len > 0.0 {
+            under(
+                acc,
+                psi::psi_fragment(shader.classifier, shader.psi, s0, s1, len),
+            );
+        }
+        s0 = s1;
+    };
+    if s_f < s_b {
+        inner.iter().for_each(|&k| piece(k, &mut acc));
+    } else {
+        inner.iter().rev().for_each(|&k| piece(k, &mut acc));
+    }
+    piece(s_b, &mut acc);
+    acc
 }
 
 impl ColorModel for ExactModel {

@@ -260,11 +260,13 @@ impl<'m> PtRenderer<'m> {
                 &tiny
             }
         };
+        let knots: Vec<f32> = tf.breakpoints().iter().map(|&k| k as f32).collect();
         let shader = FragmentShader {
             mode: opts.color,
             exact: &exact,
             classifier: &classifier,
             psi: psi_table,
+            knots: &knots,
             isosurfaces: opts.isosurfaces.as_slice(),
             shading: opts.shading,
         };

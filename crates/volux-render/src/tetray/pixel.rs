@@ -23,7 +23,7 @@ use super::render::{TetRayColor, TetRayOptions};
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
 use crate::integrate::preintegrated::SegmentIntegrator;
-use crate::integrate::psi::{psi_fragment, CellClassifier, PsiTable};
+use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::integrate::{hides_breakpoints, Medium, RayMedium};
 use crate::isosurface::Isovalue;
 use crate::pt::fragment::{ColorMode, FragmentShader};
@@ -62,6 +62,8 @@ pub(crate) struct PixelContext<'a> {
     /// The TF resolved against the mesh's range.
     tf: TransferFunction,
     breakpoints: Vec<f64>,
+    /// The breakpoints in `f32`, for the ψ model's cuts.
+    knots: Vec<f32>,
     gradients: &'a [Vec3],
     early: Option<f64>,
 }
@@ -97,6 +99,7 @@ impl<'a> PixelContext<'a> {
             shading: opts.shading,
             tf: tf.clone(),
             breakpoints: tf.breakpoints(),
+            knots: tf.breakpoints().iter().map(|&k| k as f32).collect(),
             gradients,
             early: opts.early_termination.map(f64::from),
         }
@@ -113,6 +116,7 @@ impl<'a> PixelContext<'a> {
             exact: &self.exact,
             classifier: &self.classifier,
             psi: &self.psi,
+            knots: &self.knots,
             isosurfaces: self.isosurfaces,
             shading: self.shading,
         }
@@ -123,14 +127,9 @@ impl<'a> PixelContext<'a> {
     fn segment(&self, s: &WalkSegment) -> [f64; 4] {
         let len = s.t_out - s.t_in;
         if self.psi_mode {
-            psi_fragment(
-                &self.classifier,
-                &self.psi,
-                s.s_in as f32,
-                s.s_out as f32,
-                len as f32,
-            )
-            .map(f64::from)
+            self.shader()
+                .segment(s.s_in as f32, s.s_out as f32, len as f32)
+                .map(f64::from)
         } else {
             self.exact.integrate(s.s_in, s.s_out, len)
         }
