@@ -112,7 +112,8 @@ pub enum Command {
         /// Print a JSON list.
         #[arg(long)]
         json: bool,
-        /// Which renderers: `grid` (ray casting), `pt` (Projected Tetrahedra) or `all`.
+        /// Which renderers: `grid` (ray casting), `pt` (Projected Tetrahedra), `tetray`
+        /// (tetrahedral ray casting) or `all`.
         #[arg(long, default_value = "all")]
         suite: String,
     },

@@ -98,11 +98,12 @@ pub fn run(
     as_json: bool,
     suite: &str,
 ) -> Result<(), CmdError> {
-    let (grid, pt) = match suite {
-        "all" => (true, true),
-        "grid" => (true, false),
-        "pt" => (false, true),
-        other => return Err(format!("unknown suite '{other}' (all, grid, pt)").into()),
+    let (grid, pt, tetray) = match suite {
+        "all" => (true, true, true),
+        "grid" => (true, false, false),
+        "pt" => (false, true, false),
+        "tetray" => (false, false, true),
+        other => return Err(format!("unknown suite '{other}' (all, grid, pt, tetray)").into()),
     };
     let mut rows = if grid {
         run_grid(quick, frames, n, as_json)?
@@ -111,6 +112,9 @@ pub fn run(
     };
     if pt {
         rows.extend(super::bench_pt::run(quick, frames, as_json)?);
+    }
+    if tetray {
+        rows.extend(super::bench_pt::run_tetray(quick, frames, as_json)?);
     }
     if as_json {
         println!("{}", serde_json::Value::Array(rows));

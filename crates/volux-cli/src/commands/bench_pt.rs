@@ -15,6 +15,7 @@ use volux_io::{Dataset, LoadOptions};
 use volux_render::isosurface::{Isosurfaces, Isovalue};
 use volux_render::pt::reference::{render_mesh_reference, ReferenceOptions};
 use volux_render::pt::{ColorMode, PtOptions, PtRenderer, SortMode};
+use volux_render::tetray::{TetRayCaster, TetRayColor, TetRayOptions};
 
 use super::CmdError;
 
@@ -235,6 +236,81 @@ fn accuracy(as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
                     "max_abs_error": max, "sort_violations": r.stats.sort_violations,
                 }));
             }
+        }
+    }
+    Ok(rows)
+}
+
+/// The tetrahedral ray caster on the same meshes: ms/frame at 512x512 for exact and ψ colour,
+/// automatic TF, early termination at 0.999, and the bytes per tet of its acceleration
+/// structures (boundary BVH, face planes, adjacency).
+pub fn run_tetray(
+    quick: bool,
+    frames: usize,
+    as_json: bool,
+) -> Result<Vec<serde_json::Value>, CmdError> {
+    let frames = if quick { 1 } else { frames.max(1) };
+    let threads = rayon::current_num_threads();
+    let mut rows = Vec::new();
+    if !as_json {
+        println!("\nTet ray casting, 512x512, automatic TF; threads: {threads}; frames per case: {frames} (median)");
+        println!(
+            "{:<14} {:>9} {:<8} {:>9} {:>9} {:>11} {:>10} {:>10} {:>9}",
+            "mesh",
+            "tets",
+            "colour",
+            "ms/frame",
+            "M tets/s",
+            "segments",
+            "reentries",
+            "abandoned",
+            "bytes/tet"
+        );
+    }
+    for (name, mesh) in meshes(quick)? {
+        let hist = Histogram::from_values(mesh.scalars(), mesh.range(), 256);
+        let tf = TransferFunction::preset("auto", &hist)?
+            .with_unit_length(mesh.bounds().diagonal() / 256.0);
+        let caster = TetRayCaster::new(&mesh);
+        let spec = CameraSpec {
+            azimuth: Some(30.0),
+            elevation: Some(20.0),
+            ..Default::default()
+        };
+        for (label, color) in [("exact", TetRayColor::Exact), ("psi", TetRayColor::Psi)] {
+            let mut opts = TetRayOptions::new(spec.resolve(&mesh.bounds())?, tf.clone());
+            opts.color = color;
+            let mut times = Vec::new();
+            let mut last = None;
+            for _ in 0..frames {
+                let r = caster.render(&opts)?;
+                times.push(r.stats.seconds);
+                last = Some(r.stats);
+            }
+            let stats = last.expect("one frame");
+            times.sort_by(f64::total_cmp);
+            let s = times[times.len() / 2];
+            let tets = mesh.tets().len();
+            if !as_json {
+                println!(
+                    "{:<14} {:>9} {:<8} {:>9.1} {:>9.2} {:>11} {:>10} {:>10} {:>9.1}",
+                    name,
+                    tets,
+                    label,
+                    s * 1e3,
+                    tets as f64 / s / 1e6,
+                    stats.segments,
+                    stats.reentries,
+                    stats.abandoned,
+                    caster.bytes_per_tet()
+                );
+            }
+            rows.push(json!({
+                "suite": "tetray", "dataset": name, "width": 512, "height": 512, "color": label,
+                "tets": tets, "ms": s * 1e3, "tets_per_s": tets as f64 / s,
+                "segments": stats.segments, "reentries": stats.reentries,
+                "abandoned": stats.abandoned, "bytes_per_tet": caster.bytes_per_tet(),
+            }));
         }
     }
     Ok(rows)
