@@ -181,7 +181,14 @@ fn accuracy(as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
             "mesh", "sort", "colour", "mean |err|", "max |err|", "violations"
         );
     }
-    for (name, mesh) in meshes(true)? {
+    let mut all = meshes(true)?;
+    let post = Path::new("../shared/data/vtk_post_tets/post.vtk");
+    if post.exists() {
+        if let (Dataset::Mesh(m), _) = volux_io::load(post, &LoadOptions::default())? {
+            all.push(("post-vtk".to_string(), m));
+        }
+    }
+    for (name, mesh) in all {
         let hist = Histogram::from_values(mesh.scalars(), mesh.range(), 256);
         let tf = TransferFunction::preset("auto", &hist)?
             .with_unit_length(mesh.bounds().diagonal() / 256.0);
