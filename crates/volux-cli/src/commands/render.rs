@@ -274,8 +274,12 @@ fn render_dataset(
 /// The estimated error per pixel as an image: black (0) to white (`tol`), pixels above the
 /// tolerance in magenta (as the seed's figures 5.3 to 5.13).
 fn error_map_image(out: &Rendered, tol: f64, w: usize, h: usize) -> Image {
-    let pixels = out
-        .error_map
+    error_image(&out.error_map, tol, w, h).expect("one error per pixel")
+}
+
+/// Per-pixel estimated errors as an image: black (0) to white (`tol`), above `tol` magenta.
+pub fn error_image(errors: &[f32], tol: f64, w: usize, h: usize) -> Result<Image, CmdError> {
+    let pixels = errors
         .iter()
         .map(|&e| {
             if e as f64 > tol {
@@ -286,7 +290,7 @@ fn error_map_image(out: &Rendered, tol: f64, w: usize, h: usize) -> Image {
             }
         })
         .collect();
-    Image::from_pixels(w, h, pixels).expect("one error per pixel")
+    Ok(Image::from_pixels(w, h, pixels)?)
 }
 
 fn report(args: &RenderArgs, s: &RenderStats, w: usize, h: usize) {

@@ -119,20 +119,7 @@ pub fn run_raycast(
         .write_png(&args.output, png)
         .map_err(|e| format!("{}: {e}", args.output.display()))?;
     if let Some(path) = &args.error_map {
-        let tol = args.tol;
-        let pixels = out
-            .error_map
-            .iter()
-            .map(|&e| {
-                if e as f64 > tol {
-                    [1.0, 0.0, 1.0, 1.0]
-                } else {
-                    let v = (e as f64 / tol) as f32;
-                    [v, v, v, 1.0]
-                }
-            })
-            .collect();
-        volux_core::Image::from_pixels(w, h, pixels)?
+        super::render::error_image(&out.error_map, args.tol, w, h)?
             .write_png(path, &PngOptions::default())
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
