@@ -124,10 +124,11 @@ impl StepTable {
     #[inline]
     pub fn lookup(&self, s: f32) -> [f32; 4] {
         let last = self.entries.len() - 1;
-        let x = ((s - self.lo) * self.scale).clamp(0.0, last as f32);
-        let i = (x as usize).min(last - 1);
+        // max/min rather than clamp: no panic branch; a NaN value reads entry 0.
+        let x = ((s - self.lo) * self.scale).max(0.0).min(last as f32);
+        let i = (x as u32 as usize).min(last - 1);
         let f = x - i as f32;
-        let (a, b) = (self.entries[i], self.entries[i + 1]);
+        let [a, b] = [self.entries[i], self.entries[i + 1]];
         [
             a[0] + (b[0] - a[0]) * f,
             a[1] + (b[1] - a[1]) * f,

@@ -27,7 +27,7 @@ pub struct Trilinear<'a, T> {
     step: [usize; 3],
     /// Largest coordinate and largest cell index per axis.
     hi: [f32; 3],
-    cell_max: [usize; 3],
+    cell_max: [u32; 3],
 }
 
 impl<'a, T: Scalar> Trilinear<'a, T> {
@@ -40,8 +40,47 @@ impl<'a, T: Scalar> Trilinear<'a, T> {
             dims,
             step: std::array::from_fn(|a| if dims[a] > 1 { stride[a] } else { 0 }),
             hi: dims.map(|n| n.saturating_sub(1) as f32),
-            cell_max: dims.map(|n| n.saturating_sub(2)),
+            cell_max: dims.map(|n| u32::try_from(n.saturating_sub(2)).unwrap_or(u32::MAX)),
         }
+    }
+}
+
+impl<T: Scalar> Trilinear<'_, T> {
+    /// The trilinear value at `p` (clamped to the grid), NaN or infinite where a corner is.
+    ///
+    /// The hot path of every grid integrator: clamping by `max`/`min` (no panic branch),
+    /// 32-bit cell indices (cheap float conversion), and plain loads (the clamped cell and its
+    /// +1 neighbours are always inside the slice).
+    #[inline(always)]
+    pub fn sample_raw(&self, p: Vec3) -> f32 {
+        let x = p.x.max(0.0).min(self.hi[0]);
+        let y = p.y.max(0.0).min(self.hi[1]);
+        let z = p.z.max(0.0).min(self.hi[2]);
+        let [ci, cj, ck] = self.cell_max;
+        let (i, j, k) = ((x as u32).min(ci), (y as u32).min(cj), (z as u32).min(ck));
+        let (fx, fy, fz) = (x - i as f32, y - j as f32, z - k as f32);
+        let [dx, sy, sz] = self.step;
+        let b = i as usize + self.dims[0] * (j as usize + self.dims[1] * k as usize);
+        // The x neighbours as one two-element slice: one bounds check per pair.
+        let pair = |o: usize| -> (f32, f32) {
+            if dx == 1 {
+                match self.values[b + o..b + o + 2] {
+                    [a, c] => (a.to_f32(), c.to_f32()),
+                    _ => (f32::NAN, f32::NAN),
+                }
+            } else {
+                let a = self.values[b + o].to_f32();
+                (a, a)
+            }
+        };
+        let lerp = |(a, c): (f32, f32)| a + (c - a) * fx;
+        let c00 = lerp(pair(0));
+        let c10 = lerp(pair(sy));
+        let c01 = lerp(pair(sz));
+        let c11 = lerp(pair(sz + sy));
+        let c0 = c00 + (c10 - c00) * fy;
+        let c1 = c01 + (c11 - c01) * fy;
+        c0 + (c1 - c0) * fz
     }
 }
 
@@ -63,26 +102,7 @@ impl<T: Scalar> Field for Trilinear<'_, T> {
 
     #[inline(always)]
     fn sample(&self, p: Vec3) -> Option<f32> {
-        // Branch-free in the common case: clamp, cell index, fraction per axis.
-        let x = p.x.clamp(0.0, self.hi[0]);
-        let y = p.y.clamp(0.0, self.hi[1]);
-        let z = p.z.clamp(0.0, self.hi[2]);
-        let (i, j, k) = (
-            (x as usize).min(self.cell_max[0]),
-            (y as usize).min(self.cell_max[1]),
-            (z as usize).min(self.cell_max[2]),
-        );
-        let (fx, fy, fz) = (x - i as f32, y - j as f32, z - k as f32);
-        let [dx, sy, sz] = self.step;
-        let b = i + self.dims[0] * (j + self.dims[1] * k);
-        let v = |o: usize| self.values.get(b + o).map_or(f32::NAN, |v| v.to_f32());
-        let c00 = v(0) + (v(dx) - v(0)) * fx;
-        let c10 = v(sy) + (v(sy + dx) - v(sy)) * fx;
-        let c01 = v(sz) + (v(sz + dx) - v(sz)) * fx;
-        let c11 = v(sz + sy) + (v(sz + sy + dx) - v(sz + sy)) * fx;
-        let c0 = c00 + (c10 - c00) * fy;
-        let c1 = c01 + (c11 - c01) * fy;
-        let r = c0 + (c1 - c0) * fz;
+        let r = self.sample_raw(p);
         r.is_finite().then_some(r)
     }
 
