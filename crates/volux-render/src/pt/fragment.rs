@@ -20,7 +20,7 @@
 use glam::Vec3;
 
 use crate::integrate::preintegrated::SegmentIntegrator;
-use crate::integrate::psi::{self, CellClassifier, PsiTable};
+use crate::integrate::psi::{self, CellClassifier, LinearPiece, PsiTable};
 use crate::isosurface::Isovalue;
 use crate::shading::BlinnPhong;
 
@@ -92,6 +92,16 @@ pub fn under(acc: &mut [f32; 4], rgba: [f32; 4]) {
 pub trait ColorModel {
     /// Premultiplied RGBA of the volume along a segment of positive finite length.
     fn segment(shader: &FragmentShader<'_>, s_f: f32, s_b: f32, l: f32) -> [f32; 4];
+
+    /// [`ColorModel::segment`] when the TF is `piece` (linear) between `s_f` and `s_b`: no
+    /// table lookup and no breakpoint search.
+    fn linear(
+        shader: &FragmentShader<'_>,
+        piece: &LinearPiece,
+        s_f: f32,
+        s_b: f32,
+        l: f32,
+    ) -> [f32; 4];
 }
 
 /// [`ColorMode::Average`] as a type.
@@ -105,6 +115,17 @@ impl ColorModel for AverageModel {
     #[inline(always)]
     fn segment(shader: &FragmentShader<'_>, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
         psi::average_fragment(shader.classifier, s_f, s_b, l)
+    }
+
+    /// The mean of the front and back samples of a linear TF is its value at the mean
+    /// scalar: one evaluation.
+    #[inline(always)]
+    fn linear(_: &FragmentShader<'_>, piece: &LinearPiece, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
+        if !(s_f.is_finite() && s_b.is_finite() && l.is_finite()) {
+            return [0.0; 4];
+        }
+        let mid = piece.at(0.5 * (s_f + s_b));
+        psi::average_rgba(mid, mid, l)
     }
 }
 
@@ -127,6 +148,20 @@ impl ColorModel for PsiModel {
             return psi::psi_fragment(shader.classifier, shader.psi, s_f, s_b, l);
         }
         psi_pieces(shader, &knots[first..last], s_f, s_b, l)
+    }
+
+    #[inline(always)]
+    fn linear(
+        shader: &FragmentShader<'_>,
+        piece: &LinearPiece,
+        s_f: f32,
+        s_b: f32,
+        l: f32,
+    ) -> [f32; 4] {
+        if !(s_f.is_finite() && s_b.is_finite() && l.is_finite()) {
+            return [0.0; 4];
+        }
+        psi::psi_rgba(shader.psi, piece.at(s_f), piece.at(s_b), l)
     }
 }
 
@@ -163,6 +198,17 @@ impl ColorModel for ExactModel {
             .integrate(f64::from(s_f), f64::from(s_b), f64::from(l))
             .map(|v| v as f32)
     }
+
+    #[inline(always)]
+    fn linear(
+        shader: &FragmentShader<'_>,
+        _: &LinearPiece,
+        s_f: f32,
+        s_b: f32,
+        l: f32,
+    ) -> [f32; 4] {
+        Self::segment(shader, s_f, s_b, l)
+    }
 }
 
 impl FragmentShader<'_> {
@@ -183,6 +229,35 @@ impl FragmentShader<'_> {
             return [0.0; 4];
         }
         M::segment(self, s_f, s_b, l)
+    }
+
+    /// [`FragmentShader::segment_with`] for a segment whose values lie in a range on which
+    /// the TF is `piece` (from [`CellClassifier::linear_on`]).
+    #[inline(always)]
+    pub fn segment_linear<M: ColorModel>(
+        &self,
+        piece: &LinearPiece,
+        s_f: f32,
+        s_b: f32,
+        l: f32,
+    ) -> [f32; 4] {
+        if l.is_nan() || l <= 0.0 {
+            return [0.0; 4];
+        }
+        M::linear(self, piece, s_f, s_b, l)
+    }
+
+    /// The TF on `[lo, hi]` as one linear piece, when it is linear there and no isosurface
+    /// lies in `[lo, hi]`: fragments whose values stay in that range (those of a cell whose
+    /// vertex values span it) can then use [`FragmentShader::segment_linear`] in place of
+    /// [`FragmentShader::fragment_with`].
+    #[inline]
+    pub fn linear_on(&self, lo: f32, hi: f32) -> Option<&LinearPiece> {
+        let i = self.isosurfaces.partition_point(|i| i.value < lo);
+        if self.isosurfaces.get(i).is_some_and(|i| i.value <= hi) {
+            return None;
+        }
+        self.classifier.linear_on(lo, hi)
     }
 
     /// Premultiplied RGBA of a fragment, isosurfaces included. `gradients` gives the front

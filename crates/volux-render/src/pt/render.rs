@@ -672,6 +672,16 @@ impl TileContext<'_> {
                     continue;
                 };
                 let pos = [q[0], q[1], q[2], q[3], fixed(fan[4].xy)];
+                // Every fragment's values lie in the cell's vertex range: where the TF is
+                // linear over it, the colour needs no table lookup or breakpoint search.
+                let [v0, v1, v2, v3] = g.scalars;
+                let (lo, hi) = (v0.min(v1).min(v2.min(v3)), v0.max(v1).max(v2.max(v3)));
+                let finite = g.scalars.iter().all(|v| v.is_finite());
+                let piece = if finite {
+                    shader.linear_on(lo, hi)
+                } else {
+                    None
+                };
                 // Per fan point `1 / z_f` and `1 / z_b` (perspective) or 1, computed once.
                 let kf = fan.map(|v| if PERSP { 1.0 / v.z_f } else { 1.0 });
                 let kb = fan.map(|v| if PERSP { 1.0 / v.z_b } else { 1.0 });
@@ -699,13 +709,16 @@ impl TileContext<'_> {
                         count += 1;
                         let (z_f, s_f, z_b, s_b) = interp.at::<PERSP>(l);
                         let len = ((z_b - z_f) * secant[p]).max(0.0);
-                        let rgba = shader.fragment_with::<M>(
-                            s_f,
-                            s_b,
-                            len,
-                            || interp.gradients(l),
-                            || view_dir(x, y),
-                        );
+                        let rgba = match piece {
+                            Some(piece) => shader.segment_linear::<M>(piece, s_f, s_b, len),
+                            None => shader.fragment_with::<M>(
+                                s_f,
+                                s_b,
+                                len,
+                                || interp.gradients(l),
+                                || view_dir(x, y),
+                            ),
+                        };
                         if per_pixel {
                             frags.push(Fragment {
                                 pixel: p as u32,

@@ -589,6 +589,72 @@ fn classifier_error_is_bounded_by_the_kinks() {
 }
 
 #[test]
+fn linear_pieces_are_exact_between_breakpoints() {
+    // On a value range without breakpoints inside, `linear_on` gives the TF exactly (to f32),
+    // including next to the breakpoints where the table blends; with one inside, nothing.
+    let mut rng = Lcg(11);
+    let (mut worst, mut some, mut none) = (0.0f64, 0, 0);
+    for _ in 0..200 {
+        // Breakpoints exact in f32 (otherwise their rounding shows next to steep kinks).
+        let mut t = random_tf(&mut rng);
+        let snap = |x: f64| (x * 64.0).round() / 64.0;
+        t.color.iter_mut().for_each(|p| p[0] = snap(p[0]));
+        t.extinction.iter_mut().for_each(|p| p[0] = snap(p[0]));
+        let cls = CellClassifier::new(&t, [0.0, 100.0]);
+        let bp = t.breakpoints();
+        for _ in 0..50 {
+            let (a, b) = (rng.next() * 120.0 - 10.0, rng.next() * 120.0 - 10.0);
+            let (lo, hi) = if rng.next() < 0.5 {
+                (a.min(b), a.max(b))
+            } else {
+                // Short ranges, often ending next to a breakpoint.
+                let k = bp[(rng.next() * bp.len() as f64) as usize];
+                let w = 1e-3 + rng.next() * 2.0;
+                if rng.next() < 0.5 {
+                    (k, k + w)
+                } else {
+                    (k - w, k)
+                }
+            };
+            let (lo32, hi32) = (lo as f32, hi as f32);
+            let inside = bp.iter().any(|&k| (k as f32) > lo32 && (k as f32) < hi32);
+            let Some(piece) = cls.linear_on(lo32, hi32) else {
+                assert!(inside, "{lo} {hi} {bp:?}");
+                none += 1;
+                continue;
+            };
+            assert!(!inside, "{lo} {hi} {bp:?}");
+            some += 1;
+            // Inside the range (the TF may jump at a breakpoint at its end).
+            for j in 0..9 {
+                let s = lo32 + (hi32 - lo32) * (j as f32 + 0.5) / 9.0;
+                let got = piece.at(s);
+                let c = t.color_at(f64::from(s));
+                let want = [c[0], c[1], c[2], t.tau_per_world(f64::from(s))];
+                for ch in 0..4 {
+                    worst = worst.max((f64::from(got[ch]) - want[ch]).abs());
+                }
+            }
+        }
+    }
+    eprintln!("linear pieces: {some} ranges linear, {none} not; max |error| {worst:.2e}");
+    assert!(worst < 1e-6, "{worst}");
+    assert!(some > 1000 && none > 1000, "{some} {none}");
+    let t = tf(r#"{"color": [[0,1,0.5,0.2]], "extinction": [[0,1],[1,3]]}"#);
+    let cls = CellClassifier::new(&t, [0.0, 1.0]);
+    assert!(cls.linear_on(f32::NAN, 1.0).is_none());
+    assert!(cls.linear_on(0.8, 0.2).is_none());
+    assert_eq!(
+        cls.linear_on(-5.0, -1.0).map(|p| p.at(-3.0)),
+        Some(cls.lookup(0.0))
+    );
+    assert_eq!(
+        cls.linear_on(0.0, 1.0).map(|p| p.at(0.5)),
+        Some(cls.lookup(0.5))
+    );
+}
+
+#[test]
 fn bad_inputs_give_transparent_black() {
     let t = tf(r#"{"color": [[0,1,0.5,0.2]], "extinction": [[0,1],[1,3]]}"#);
     let cls = CellClassifier::new(&t, [0.0, 1.0]);
