@@ -1015,7 +1015,17 @@ fn unit_or_half(x: f64) -> f64 {
 }
 
 fn thick_vertex(v: &[DVec2; 4], entry: &TableEntry) -> Option<ThickVertex> {
-    let n = normalized(v);
+    thick_vertex_scaled(v, &normalized(v), entry)
+}
+
+/// The thick vertex of `entry` for the points `v`, with its parameters computed on `n`, the
+/// same points scaled by a power of two (bit-identical parameters; `n = v` is fine when the
+/// coordinates neither overflow nor underflow, as on the rasterizer's sub-pixel grid).
+pub(crate) fn thick_vertex_scaled(
+    v: &[DVec2; 4],
+    n: &[DVec2; 4],
+    entry: &TableEntry,
+) -> Option<ThickVertex> {
     let p = |i: u8| v[usize::from(i) % 4];
     let q = |i: u8| n[usize::from(i) % 4];
     let tests = [

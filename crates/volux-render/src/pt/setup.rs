@@ -13,8 +13,8 @@
 use glam::DVec2;
 
 use super::classify::{
-    classify, projection_tests, ternary_code, Classification, Sign, ThickKind, ThickTopology,
-    ThickVertex, TERNARY_TABLE,
+    classify, projection_tests, ternary_code, thick_vertex_scaled, Classification, Sign,
+    TERNARY_TABLE,
 };
 use super::project::SUBPIXEL;
 use super::raster::fixed;
@@ -27,29 +27,6 @@ const MAX_FIXED: i64 = 1 << 29;
 fn orient(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> Sign {
     let d = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
     Sign::from_i8(d.signum() as i8)
-}
-
-/// Twice the signed area of `a b c`, in floating point (as [`classify`] computes it).
-#[inline(always)]
-fn area2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
-    (b - a).perp_dot(c - a)
-}
-
-#[inline(always)]
-fn unit_or_half(x: f64) -> f64 {
-    if x.is_finite() {
-        x.clamp(0.0, 1.0)
-    } else {
-        0.5
-    }
-}
-
-/// Parameter along `a → b` of its crossing with the line `c d`.
-#[inline(always)]
-fn crossing_param(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> f64 {
-    let na = area2(c, d, a);
-    let nb = area2(c, d, b);
-    unit_or_half(na / (na - nb))
 }
 
 /// Whether `q` is exactly `SUBPIXEL * projected`, within the range of exact `i64` tests.
@@ -98,73 +75,7 @@ pub fn classify_fixed(projected: [DVec2; 4], q: [[i64; 2]; 4]) -> Classification
     let tests = tests_fixed(&q);
     let code = ternary_code(tests);
     let entry = &TERNARY_TABLE[usize::from(code) % TERNARY_TABLE.len()];
-    let p = |i: u8| projected[usize::from(i) % 4];
-    let qi = |i: u8| q[usize::from(i) % 4];
-    let thick = match entry.thick {
-        ThickTopology::None => None,
-        ThickTopology::Interior { vertex: k, face } => {
-            let [i, j, l] = face;
-            // The sign of the (exactly evaluated) face orientation.
-            let s = f64::from(orient(qi(i), qi(j), qi(l)).as_i8());
-            let raw = [
-                s * area2(p(k), p(j), p(l)),
-                s * area2(p(i), p(k), p(l)),
-                s * area2(p(i), p(j), p(k)),
-            ]
-            .map(|w| if w > 0.0 { w } else { 0.0 });
-            let sum = raw[0] + raw[1] + raw[2];
-            let barycentric = if sum > 0.0 && sum.is_finite() {
-                raw.map(|w| w / sum)
-            } else {
-                [1.0 / 3.0; 3]
-            };
-            Some(ThickVertex {
-                position: p(k),
-                kind: ThickKind::Interior {
-                    vertex: k,
-                    face,
-                    barycentric,
-                },
-            })
-        }
-        ThickTopology::Crossing { edges } => {
-            let [[a, b], [c, d]] = edges;
-            let u = crossing_param(p(a), p(b), p(c), p(d));
-            let w = crossing_param(p(c), p(d), p(a), p(b));
-            let lo = projected
-                .iter()
-                .fold(DVec2::splat(f64::INFINITY), |m, x| m.min(*x));
-            let hi = projected
-                .iter()
-                .fold(DVec2::splat(f64::NEG_INFINITY), |m, x| m.max(*x));
-            let position = (p(a) * (1.0 - u) + p(b) * u).max(lo).min(hi);
-            Some(ThickVertex {
-                position,
-                kind: ThickKind::Crossing {
-                    edges,
-                    params: [u, w],
-                },
-            })
-        }
-        ThickTopology::OnEdge { vertex, edge, apex } => {
-            let [e, f] = edge;
-            let d = p(f) - p(e);
-            let t = unit_or_half((p(vertex) - p(e)).dot(d) / d.length_squared());
-            Some(ThickVertex {
-                position: p(vertex),
-                kind: ThickKind::OnEdge {
-                    vertex,
-                    edge,
-                    apex,
-                    t,
-                },
-            })
-        }
-        ThickTopology::Coincident { pair } => Some(ThickVertex {
-            position: p(pair[0]),
-            kind: ThickKind::Coincident { pair },
-        }),
-    };
+    let thick = thick_vertex_scaled(&projected, &projected, entry);
     Classification {
         code: Some(code),
         class: entry.class,
