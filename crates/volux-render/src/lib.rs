@@ -42,3 +42,16 @@ pub enum RenderError {
     #[error("{0}")]
     Data(#[from] volux_core::Error),
 }
+
+/// Largest image side accepted by the renderers.
+pub const MAX_IMAGE_SIDE: usize = 1 << 15;
+
+/// Checks an image size: both sides between 1 and [`MAX_IMAGE_SIDE`].
+pub fn check_image_size(width: usize, height: usize) -> Result<(), RenderError> {
+    if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        return Err(RenderError::InvalidOptions(format!(
+            "image size {width}x{height} must be between 1 and {MAX_IMAGE_SIDE}"
+        )));
+    }
+    Ok(())
+}

@@ -89,12 +89,7 @@ impl RenderOptions {
     }
 
     fn validate(&self) -> Result<(), RenderError> {
-        if self.width == 0 || self.height == 0 || self.width > 1 << 15 || self.height > 1 << 15 {
-            return Err(RenderError::InvalidOptions(format!(
-                "image size {}x{} must be between 1 and 32768",
-                self.width, self.height
-            )));
-        }
+        crate::check_image_size(self.width, self.height)?;
         self.integrator
             .validate()
             .map_err(RenderError::InvalidOptions)?;

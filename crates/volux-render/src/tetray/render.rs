@@ -102,12 +102,7 @@ impl TetRayOptions {
     }
 
     fn validate(&self) -> Result<(), RenderError> {
-        if self.width == 0 || self.height == 0 || self.width > 1 << 15 || self.height > 1 << 15 {
-            return Err(RenderError::InvalidOptions(format!(
-                "image size {}x{} must be between 1 and 32768",
-                self.width, self.height
-            )));
-        }
+        crate::check_image_size(self.width, self.height)?;
         if let Some(e) = self.early_termination {
             if !(e > 0.0 && e.is_finite()) {
                 return Err(RenderError::InvalidOptions(format!(
