@@ -137,7 +137,9 @@ struct TetPlanes {
     s: [f64; 4],
 }
 
-fn lex_cmp(a: &DVec3, b: &DVec3) -> std::cmp::Ordering {
+/// Lexicographic order of points (how a face's vertices are sorted before its plane is
+/// computed, so that neighbouring cells compute the bit-identical plane).
+pub(crate) fn lex_cmp(a: &DVec3, b: &DVec3) -> std::cmp::Ordering {
     a.x.total_cmp(&b.x)
         .then(a.y.total_cmp(&b.y))
         .then(a.z.total_cmp(&b.z))
@@ -145,7 +147,7 @@ fn lex_cmp(a: &DVec3, b: &DVec3) -> std::cmp::Ordering {
 
 /// Whether the first non-zero component of `n` is negative: the sign of `n . (1, d, d^2)`
 /// for an infinitesimal `d > 0`.
-fn lex_negative(n: DVec3) -> bool {
+pub(crate) fn lex_negative(n: DVec3) -> bool {
     if n.x != 0.0 {
         n.x < 0.0
     } else if n.y != 0.0 {
@@ -155,23 +157,28 @@ fn lex_negative(n: DVec3) -> bool {
     }
 }
 
+/// Six times the signed volume of the cell `p`, or `None` when the cell is degenerate (volume
+/// at most [`DEGENERATE_VOLUME`] times the cube of its longest edge) or not finite. One test
+/// for the reference and the tet ray caster, so both skip the same cells.
+pub(crate) fn cell_volume6(p: [DVec3; 4]) -> Option<f64> {
+    let vol6 = (p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]);
+    let mut edge2 = 0.0f64;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            edge2 = edge2.max(p[i].distance_squared(p[j]));
+        }
+    }
+    let bound = DEGENERATE_VOLUME * edge2 * edge2.sqrt();
+    (vol6.is_finite() && bound.is_finite() && vol6.abs() > bound).then_some(vol6)
+}
+
 impl TetPlanes {
     /// `None` for a degenerate cell or non-finite input.
     fn new(p: [DVec3; 4], s: [f64; 4]) -> Option<Self> {
         if !(p.iter().all(|v| v.is_finite()) && s.iter().all(|v| v.is_finite())) {
             return None;
         }
-        let vol6 = (p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]);
-        let mut edge2 = 0.0f64;
-        for i in 0..4 {
-            for j in i + 1..4 {
-                edge2 = edge2.max(p[i].distance_squared(p[j]));
-            }
-        }
-        let bound = DEGENERATE_VOLUME * edge2 * edge2.sqrt();
-        if !(vol6.is_finite() && bound.is_finite()) || vol6.abs() <= bound {
-            return None;
-        }
+        cell_volume6(p)?;
         let mut planes = Self {
             n: [DVec3::ZERO; 4],
             a: [DVec3::ZERO; 4],

@@ -18,10 +18,6 @@ use volux_core::TetMesh;
 /// Marks a tet-face whose outward normal is the negated canonical normal.
 pub(crate) const FLIP: u32 = 1 << 31;
 
-/// A cell whose `6 V` is at most this times the cube of its longest edge is skipped (the
-/// reference's threshold).
-const DEGENERATE_VOLUME: f64 = 1e-12;
-
 /// A canonical face plane: normal of the lexicographically sorted vertices and the smallest
 /// of them.
 #[derive(Clone, Copy, Debug)]
@@ -54,23 +50,7 @@ pub(crate) struct Geometry {
     pub scale: f64,
 }
 
-fn lex_cmp(a: &DVec3, b: &DVec3) -> std::cmp::Ordering {
-    a.x.total_cmp(&b.x)
-        .then(a.y.total_cmp(&b.y))
-        .then(a.z.total_cmp(&b.z))
-}
-
-/// Whether the first non-zero component of `n` is negative (the reference's tie rule).
-#[inline]
-pub(crate) fn lex_negative(n: DVec3) -> bool {
-    if n.x != 0.0 {
-        n.x < 0.0
-    } else if n.y != 0.0 {
-        n.y < 0.0
-    } else {
-        n.z < 0.0
-    }
-}
+pub(crate) use crate::pt::reference::{cell_volume6, lex_cmp, lex_negative};
 
 /// The linear field through four points, or `None` for a degenerate or non-finite cell.
 fn cell_field(p: [DVec3; 4], s: [f64; 4]) -> Option<[f64; 4]> {
@@ -78,17 +58,7 @@ fn cell_field(p: [DVec3; 4], s: [f64; 4]) -> Option<[f64; 4]> {
         return None;
     }
     let (e1, e2, e3) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
-    let vol6 = e1.cross(e2).dot(e3);
-    let mut edge2 = 0.0f64;
-    for i in 0..4 {
-        for j in i + 1..4 {
-            edge2 = edge2.max(p[i].distance_squared(p[j]));
-        }
-    }
-    let bound = DEGENERATE_VOLUME * edge2 * edge2.sqrt();
-    if !(vol6.is_finite() && bound.is_finite()) || vol6.abs() <= bound {
-        return None;
-    }
+    let vol6 = cell_volume6(p)?;
     // Solve [e1; e2; e3] g = ds by Cramer's rule (rows e_i): g = (ds1 (e2 x e3) + ds2 (e3 x
     // e1) + ds3 (e1 x e2)) / vol6.
     let (d1, d2, d3) = (s[1] - s[0], s[2] - s[0], s[3] - s[0]);
