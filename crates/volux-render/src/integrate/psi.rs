@@ -120,6 +120,8 @@
 use rayon::prelude::*;
 use volux_core::TransferFunction;
 
+use super::preintegrated::{GL_W, GL_X};
+
 /// Default [`PsiTable`] resolution (nodes per axis).
 pub const PSI_TABLE_SIZE: usize = 512;
 
@@ -148,21 +150,6 @@ const MAX_F32_DEPTH: f32 = 1e30;
 /// Below this sum of the end thicknesses `a + b` the fragment's `1 - psi` comes from its
 /// Taylor series ([`one_minus_psi_series`]) instead of the table.
 const THIN: f32 = 0.125;
-
-/// 8-point Gauss-Legendre nodes (positive half) on `[-1, 1]`.
-const GL_X: [f64; 4] = [
-    0.183_434_642_495_649_8,
-    0.525_532_409_916_329,
-    0.796_666_477_413_626_7,
-    0.960_289_856_497_536_3,
-];
-/// 8-point Gauss-Legendre weights matching [`GL_X`].
-const GL_W: [f64; 4] = [
-    0.362_683_783_378_362,
-    0.313_706_645_877_887_3,
-    0.222_381_034_453_374_5,
-    0.101_228_536_290_376_3,
-];
 
 /// The length `h` over which the depth `d h + k h^2` grows by `delta` (infinite when it
 /// never does), the smaller positive root computed without cancellation.
