@@ -1,27 +1,9 @@
 //! End-to-end tests of the `volux` binary: the demo, rendering of the shared datasets, JSON
 //! output, and clear one-line errors with no output file on bad input.
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
-fn volux(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_volux"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the volux binary runs")
-}
-
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} is absent", p.display());
-        None
-    }
-}
+mod common;
+use common::{shared, volux};
 
 /// Decodes an 8-bit RGB(A) PNG and returns (width, height, fraction of pixels that are not
 /// the background colour of the top-left corner, mean luminance of those).

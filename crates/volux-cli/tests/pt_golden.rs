@@ -8,20 +8,11 @@
 //! wrong thick vertex or a wrong TF shows far above it. Missing datasets skip their case.
 //! Regenerate the baselines with `VOLUX_UPDATE_GOLDEN=1 cargo test -p volux-cli --test
 //! pt_golden` after a deliberate change, and look at them.
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} is absent", p.display());
-        None
-    }
-}
+mod common;
+use common::shared;
 
 fn decode(path: &Path) -> (u32, u32, Vec<u8>) {
     let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));

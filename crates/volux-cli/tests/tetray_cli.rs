@@ -2,15 +2,10 @@
 //! (exact, ψ, adaptive Simpson with its error map), isosurfaces, MIP and the `--stats --json`
 //! figures, on a generated torus (a non-convex mesh: rays re-enter it).
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn volux(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_volux"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the volux binary runs")
-}
+mod common;
+use common::volux;
 
 fn ok(out: &Output) {
     assert!(

@@ -1,28 +1,10 @@
 //! The tet ray caster on the shared meshes (Blunt Fin, LOx Post, post.vtk): no ray abandoned,
 //! re-entries on the non-convex LOx Post, and agreement with PT (exact order, exact colour)
 //! within 1/255 mean per channel, measured with `volux compare`. Absent datasets are skipped.
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn volux(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_volux"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the volux binary runs")
-}
-
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} is absent", p.display());
-        None
-    }
-}
+mod common;
+use common::{shared, volux};
 
 fn json(out: &Output) -> serde_json::Value {
     assert!(
