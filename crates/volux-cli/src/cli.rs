@@ -116,6 +116,10 @@ pub enum Command {
         /// (tetrahedral ray casting) or `all`.
         #[arg(long, default_value = "all")]
         suite: String,
+        /// Grid suite: run only the cases whose "dataset integrator parameter" contains this
+        /// text (e.g. `marschner riemann h=0.5`, matched word by word).
+        #[arg(long)]
+        only: Option<String>,
     },
 }
 

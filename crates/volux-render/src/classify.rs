@@ -94,27 +94,39 @@ impl ClassifyTable {
     /// The table for a fixed Riemann step `h` (world units): per entry the premultiplied
     /// colour and opacity `1 - exp(-tau h)` of one slab, so the hot loop needs no `exp`.
     pub fn for_step(&self, h: f32) -> StepTable {
-        let entries = self
-            .entries
-            .iter()
-            .map(|c| {
+        let n = STEP_TABLE_SIZE;
+        let last = (self.entries.len() - 1) as f32;
+        let entries: Vec<[f32; 4]> = (0..n)
+            .map(|k| {
+                let c = if self.entries.len() == n {
+                    self.entries[k]
+                } else {
+                    self.lookup(self.lo + k as f32 * last / ((n - 1) as f32 * self.scale))
+                };
                 let a = 1.0 - (-c.tau * h).exp();
                 [c.rgb[0] * a, c.rgb[1] * a, c.rgb[2] * a, a]
             })
             .collect();
         StepTable {
-            entries,
+            entries: entries
+                .into_boxed_slice()
+                .try_into()
+                .unwrap_or_else(|_| Box::new([[0.0; 4]; STEP_TABLE_SIZE])),
             lo: self.lo,
-            scale: self.scale,
+            scale: self.scale * (n - 1) as f32 / last,
         }
     }
 }
 
+/// Entries of a [`StepTable`]: a power of two, so that masked indices need no bounds check.
+pub const STEP_TABLE_SIZE: usize = 4096;
+
 /// Premultiplied colour and opacity of one fixed-length slab per value (see
-/// [`ClassifyTable::for_step`]); lookups interpolate linearly between entries.
+/// [`ClassifyTable::for_step`]), at [`STEP_TABLE_SIZE`] values over the classification
+/// table's domain; lookups interpolate linearly between entries.
 #[derive(Clone, Debug)]
 pub struct StepTable {
-    entries: Vec<[f32; 4]>,
+    entries: Box<[[f32; 4]; STEP_TABLE_SIZE]>,
     lo: f32,
     scale: f32,
 }
@@ -123,12 +135,34 @@ impl StepTable {
     /// Premultiplied RGBA of a slab of value `s`.
     #[inline]
     pub fn lookup(&self, s: f32) -> [f32; 4] {
-        let last = self.entries.len() - 1;
-        // max/min rather than clamp: no panic branch; a NaN value reads entry 0.
-        let x = ((s - self.lo) * self.scale).max(0.0).min(last as f32);
-        let i = (x as u32 as usize).min(last - 1);
-        let f = x - i as f32;
-        let [a, b] = [self.entries[i], self.entries[i + 1]];
+        let (i, f) = self.position(s);
+        self.at(i, f)
+    }
+
+    /// The entry below `s` and the fraction towards the next, clamped to the domain (a NaN
+    /// value reads entry 0). Branch-free, so lanes of values compute it together.
+    #[inline(always)]
+    pub fn position(&self, s: f32) -> (u32, f32) {
+        const LAST: f32 = (STEP_TABLE_SIZE - 1) as f32;
+        let x = (s - self.lo) * self.scale;
+        // Selects rather than max/min: one instruction each, NaN going to 0.
+        let x = if x > 0.0 { x } else { 0.0 };
+        let x = if x < LAST { x } else { LAST };
+        // The floor without a cast (see `floor_small`); `x <= LAST`, so the entry is clamped
+        // by subtracting one where it passes the last pair.
+        let i = crate::sampling::floor_small(x);
+        let i = i - i32::from(i > STEP_TABLE_SIZE as i32 - 2);
+        (i as u32, x - i as f32)
+    }
+
+    /// The entries `i` and `i + 1` interpolated at fraction `f`.
+    #[inline(always)]
+    pub fn at(&self, i: u32, f: f32) -> [f32; 4] {
+        let mask = STEP_TABLE_SIZE - 1;
+        let (a, b) = (
+            self.entries[i as usize & mask],
+            self.entries[(i as usize + 1) & mask],
+        );
         [
             a[0] + (b[0] - a[0]) * f,
             a[1] + (b[1] - a[1]) * f,

@@ -96,7 +96,9 @@ impl<'a> Occupancy<'a> {
     }
 
     /// The parts of the voxel-space ray `o + t d`, `t` in `[t0, t1]`, that cross non-empty
-    /// macrocells, merged into maximal intervals, in order. Found by a 3D DDA.
+    /// macrocells, merged into maximal intervals, in order. Found by a 3D DDA (Amanatides and
+    /// Woo): per macrocell, one comparison chain to pick the axis crossed first and one add
+    /// to advance it; a run of non-empty macrocells becomes one interval.
     pub fn occupied(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, out: &mut Vec<(f64, f64)>) {
         out.clear();
         let b = MacrocellGrid::BLOCK as f64;
@@ -105,37 +107,56 @@ impl<'a> Occupancy<'a> {
         let mut cell: [i64; 3] =
             std::array::from_fn(|a| (p[a].floor() as i64).clamp(0, counts[a] as i64 - 1));
         let step: [i64; 3] = std::array::from_fn(|a| if d[a] > 0.0 { 1 } else { -1 });
-        let next_t = |a: usize, c: i64| -> f64 {
+        let stride = [1, counts[0] as i64, (counts[0] * counts[1]) as i64];
+        // Distance between crossings of macrocell planes, and the next crossing, per axis.
+        let delta: [f64; 3] = std::array::from_fn(|a| {
+            if d[a] == 0.0 {
+                f64::INFINITY
+            } else {
+                b / d[a].abs()
+            }
+        });
+        let mut t_next: [f64; 3] = std::array::from_fn(|a| {
             if d[a] == 0.0 {
                 return f64::INFINITY;
             }
-            let boundary = if d[a] > 0.0 { (c + 1) as f64 } else { c as f64 } * b;
+            let boundary = if d[a] > 0.0 { cell[a] + 1 } else { cell[a] } as f64 * b;
             (boundary - o[a]) / d[a]
-        };
-        let mut t_next: [f64; 3] = std::array::from_fn(|a| next_t(a, cell[a]));
+        });
+        let mut idx = cell[0] + stride[1] * cell[1] + stride[2] * cell[2];
+        let mut run: Option<f64> = None;
         let mut t = t0;
         while t < t1 {
-            let axis = (0..3)
-                .min_by(|&x, &y| t_next[x].total_cmp(&t_next[y]))
-                .unwrap_or(0);
-            let exit = t_next[axis].min(t1).max(t);
-            let idx =
-                cell[0] as usize + counts[0] * (cell[1] as usize + counts[1] * cell[2] as usize);
-            if !self.empty[idx] {
-                match out.last_mut() {
-                    Some(last) if (last.1 - t).abs() <= 1e-9 * (1.0 + t.abs()) => last.1 = exit,
-                    _ => out.push((t, exit)),
+            let axis = if t_next[0] < t_next[1] {
+                if t_next[0] < t_next[2] {
+                    0
+                } else {
+                    2
                 }
+            } else if t_next[1] < t_next[2] {
+                1
+            } else {
+                2
+            };
+            let empty = self.empty.get(idx as usize).copied().unwrap_or(true);
+            match (empty, run) {
+                (false, None) => run = Some(t),
+                (true, Some(start)) => {
+                    out.push((start, t));
+                    run = None;
+                }
+                _ => {}
             }
-            t = exit;
+            t = t_next[axis].min(t1).max(t);
             cell[axis] += step[axis];
             if cell[axis] < 0 || cell[axis] >= counts[axis] as i64 {
                 break;
             }
-            t_next[axis] = next_t(axis, cell[axis]);
+            idx += step[axis] * stride[axis];
+            t_next[axis] += delta[axis];
         }
-        if let Some(last) = out.last_mut() {
-            last.1 = last.1.min(t1);
+        if let Some(start) = run {
+            out.push((start, t.min(t1)));
         }
     }
 }

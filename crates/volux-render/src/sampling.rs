@@ -5,6 +5,9 @@
 use glam::{DVec3, Vec3};
 use volux_core::grid::Scalar;
 
+/// Samples computed together by [`Field::sample_lanes`].
+pub const LANES: usize = 8;
+
 /// A regular scalar field that can be sampled in voxel coordinates.
 pub trait Field: Sync {
     /// Samples per axis.
@@ -12,11 +15,15 @@ pub trait Field: Sync {
     /// Trilinear value at voxel coordinates `p` (each in `[0, dims - 1]`), or `None` where the
     /// field is undefined (e.g. outside a resampled mesh).
     fn sample(&self, p: Vec3) -> Option<f32>;
-    /// Four samples at once, lane `l` at (`x[l]`, `y[l]`, `z[l]`), NaN where undefined; each
-    /// lane equals [`Field::sample`] exactly. Fields override it to compute the lanes together.
+    /// [`LANES`] samples at once, lane `l` at (`p[0][l]`, `p[1][l]`, `p[2][l]`), NaN where
+    /// undefined; each lane equals [`Field::sample`] exactly. Fields override it to compute
+    /// the lanes together (the ray casters' lane streams call it once per step).
     #[inline]
-    fn sample4(&self, x: [f32; 4], y: [f32; 4], z: [f32; 4]) -> [f32; 4] {
-        std::array::from_fn(|l| self.sample(Vec3::new(x[l], y[l], z[l])).unwrap_or(f32::NAN))
+    fn sample_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
+        std::array::from_fn(|l| {
+            self.sample(Vec3::new(p[0][l], p[1][l], p[2][l]))
+                .unwrap_or(f32::NAN)
+        })
     }
     /// The same in f64 (the reference path); defaults to the f32 sample.
     fn sample64(&self, p: DVec3) -> Option<f64> {
@@ -34,6 +41,8 @@ pub struct Trilinear<'a, T> {
     /// Largest coordinate and largest cell index per axis.
     hi: [f32; 3],
     cell_max: [u32; 3],
+    /// Offsets of the eight corners of a cell from its first, x fastest.
+    corners: [usize; 8],
 }
 
 impl<'a, T: Scalar> Trilinear<'a, T> {
@@ -41,10 +50,16 @@ impl<'a, T: Scalar> Trilinear<'a, T> {
     pub fn new(values: &'a [T], dims: [usize; 3]) -> Self {
         debug_assert_eq!(values.len(), dims[0] * dims[1] * dims[2]);
         let stride = [1, dims[0], dims[0] * dims[1]];
+        let step: [usize; 3] = std::array::from_fn(|a| if dims[a] > 1 { stride[a] } else { 0 });
         Self {
             values,
             dims,
-            step: std::array::from_fn(|a| if dims[a] > 1 { stride[a] } else { 0 }),
+            step,
+            corners: std::array::from_fn(|q| {
+                (0..3)
+                    .map(|a| if q >> a & 1 == 1 { step[a] } else { 0 })
+                    .sum()
+            }),
             hi: dims.map(|n| n.saturating_sub(1) as f32),
             cell_max: dims.map(|n| u32::try_from(n.saturating_sub(2)).unwrap_or(u32::MAX)),
         }
@@ -91,46 +106,74 @@ impl<T: Scalar> Trilinear<'_, T> {
 }
 
 impl<T: Scalar> Trilinear<'_, T> {
-    /// [`Self::sample_raw`] of four points, the arithmetic done lane-wise (SIMD) and only the
-    /// loads per lane; each lane is bit-identical to `sample_raw`.
+    /// [`Self::sample_raw`] of [`LANES`] points; each lane is bit-identical to `sample_raw`.
+    ///
+    /// The clamping, cell indices and fractions are computed lane-wise (SIMD); the corner
+    /// loads and the interpolation per lane, in registers: assembling vectors from scalar
+    /// loads would go through the stack, where wide loads of narrow stores stall.
     #[inline(always)]
-    pub fn sample_raw4(&self, x: [f32; 4], y: [f32; 4], z: [f32; 4]) -> [f32; 4] {
-        let [ci, cj, ck] = self.cell_max.map(|c| c.min(i32::MAX as u32) as i32);
-        let axis = |v: [f32; 4], hi: f32, cmax: i32| -> ([i32; 4], [f32; 4]) {
-            let v = v.map(|v| v.max(0.0).min(hi));
-            let i: [i32; 4] = std::array::from_fn(|l| (v[l] as i32).min(cmax));
-            (i, std::array::from_fn(|l| v[l] - i[l] as f32))
-        };
-        let (i, fx) = axis(x, self.hi[0], ci);
-        let (j, fy) = axis(y, self.hi[1], cj);
-        let (k, fz) = axis(z, self.hi[2], ck);
-        let [dx, sy, sz] = self.step;
-        let [nx, ny, _] = self.dims;
-        let mut c = [[0.0f32; 4]; 4];
-        for l in 0..4 {
-            let b = i[l] as usize + nx * (j[l] as usize + ny * k[l] as usize);
-            let pair = |o: usize| -> (f32, f32) {
-                if dx == 1 {
-                    match self.values[b + o..b + o + 2] {
-                        [a, c] => (a.to_f32(), c.to_f32()),
-                        _ => (f32::NAN, f32::NAN),
-                    }
-                } else {
-                    let a = self.values[b + o].to_f32();
-                    (a, a)
-                }
-            };
-            for (q, o) in [0, sy, sz, sz + sy].into_iter().enumerate() {
-                let (a, e) = pair(o);
-                c[q][l] = a + (e - a) * fx[l];
+    pub fn sample_raw_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
+        if self.hi.iter().any(|&h| h >= FLOOR_SMALL_LIMIT) {
+            return std::array::from_fn(|l| self.sample_raw(Vec3::new(p[0][l], p[1][l], p[2][l])));
+        }
+        let mut cell = [[0i32; LANES]; 3];
+        let mut frac = [[0.0f32; LANES]; 3];
+        for a in 0..3 {
+            let (hi, cmax) = (self.hi[a], self.cell_max[a].min(i32::MAX as u32) as i32);
+            for l in 0..LANES {
+                // Selects (one maxps/minps each), NaN going to 0 as in `sample_raw`; the floor
+                // without a float-to-int cast; `v <= hi = cmax + 1`, so the cell index is
+                // clamped by subtracting one where it passes `cmax`.
+                let v = p[a][l];
+                let v = if v > 0.0 { v } else { 0.0 };
+                let v = if v < hi { v } else { hi };
+                let i = floor_small(v);
+                let i = i - i32::from(i > cmax);
+                cell[a][l] = i;
+                frac[a][l] = v - i as f32;
             }
         }
-        std::array::from_fn(|l| {
-            let c0 = c[0][l] + (c[1][l] - c[0][l]) * fy[l];
-            let c1 = c[2][l] + (c[3][l] - c[2][l]) * fy[l];
-            c0 + (c1 - c0) * fz[l]
-        })
+        let mut out = [0.0f32; LANES];
+        for l in 0..LANES {
+            out[l] = self.interpolate_cell([cell[0][l], cell[1][l], cell[2][l]], frac, l);
+        }
+        out
     }
+
+    /// The trilinear interpolation in `cell` at the fractions of lane `l`.
+    #[inline(always)]
+    fn interpolate_cell(&self, cell: [i32; 3], frac: [[f32; LANES]; 3], l: usize) -> f32 {
+        let [nx, ny, _] = self.dims;
+        let b = cell[0] as usize + nx * (cell[1] as usize + ny * cell[2] as usize);
+        let mut c = [0.0f32; 8];
+        for (q, c) in c.iter_mut().enumerate() {
+            *c = self.values[b + self.corners[q]].to_f32();
+        }
+        let (fx, fy, fz) = (frac[0][l], frac[1][l], frac[2][l]);
+        let c00 = c[0] + (c[1] - c[0]) * fx;
+        let c10 = c[2] + (c[3] - c[2]) * fx;
+        let c01 = c[4] + (c[5] - c[4]) * fx;
+        let c11 = c[6] + (c[7] - c[6]) * fx;
+        let c0 = c00 + (c10 - c00) * fy;
+        let c1 = c01 + (c11 - c01) * fy;
+        c0 + (c1 - c0) * fz
+    }
+}
+
+/// Values below which [`floor_small`] is exact.
+pub(crate) const FLOOR_SMALL_LIMIT: f32 = 4_194_304.0;
+
+/// `floor(v)` for `0 <= v < 2^22`, computed without a float-to-int cast: Rust's casts
+/// saturate, which x86-64's baseline SIMD cannot do lane-wise, so a loop of casts is
+/// scalarized, while these adds, compares and bit moves stay in vector registers. Adding
+/// `2^23` rounds `v` to the nearest integer (in the default rounding mode), whose value is
+/// then in the low mantissa bits; one is taken off where rounding went up.
+#[inline(always)]
+pub(crate) fn floor_small(v: f32) -> i32 {
+    const MAGIC: f32 = 8_388_608.0;
+    let m = v + MAGIC;
+    let rounded = m - MAGIC;
+    (m.to_bits() as i32 - MAGIC.to_bits() as i32) - i32::from(rounded > v)
 }
 
 /// Cell index and fraction along one axis, clamped to the grid.
@@ -156,9 +199,14 @@ impl<T: Scalar> Field for Trilinear<'_, T> {
     }
 
     #[inline(always)]
-    fn sample4(&self, x: [f32; 4], y: [f32; 4], z: [f32; 4]) -> [f32; 4] {
-        let r = self.sample_raw4(x, y, z);
-        r.map(|v| if v.is_finite() { v } else { f32::NAN })
+    fn sample_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
+        let mut r = self.sample_raw_lanes(p);
+        for v in r.iter_mut() {
+            if !v.is_finite() {
+                *v = f32::NAN;
+            }
+        }
+        r
     }
 
     fn sample64(&self, p: DVec3) -> Option<f64> {
@@ -219,19 +267,51 @@ mod tests {
     }
 
     #[test]
-    fn four_lanes_equal_single_samples() {
+    fn lanes_equal_single_samples() {
         let dims = [5, 4, 3];
         let v: Vec<u16> = (0..60).map(|i| (i * 37 % 101) as u16).collect();
         let s = Trilinear::new(&v, dims);
-        let (x, y, z) = (
-            [0.3, 4.0, -1.0, 2.7],
-            [1.1, 3.0, 0.5, 9.0],
-            [0.0, 2.0, 1.9, 0.4],
-        );
-        let four = s.sample4(x, y, z);
-        for l in 0..4 {
-            let one = s.sample(Vec3::new(x[l], y[l], z[l])).unwrap();
-            assert_eq!(four[l].to_bits(), one.to_bits(), "lane {l}");
+        let p = [
+            [0.3, 4.0, -1.0, 2.7, 3.999, 0.0, 1.5, f32::NAN],
+            [1.1, 3.0, 0.5, 9.0, 2.5, 0.0, 1e9, 1.0],
+            [0.0, 2.0, 1.9, 0.4, 1.999, 2.0, 1.0, 1.0],
+        ];
+        let lanes = s.sample_lanes(&p);
+        for l in 0..LANES {
+            let one = s.sample(Vec3::new(p[0][l], p[1][l], p[2][l])).unwrap();
+            assert_eq!(lanes[l].to_bits(), one.to_bits(), "lane {l}");
+        }
+        // Flat axes (one sample) read the same corner twice.
+        let flat = Trilinear::new(&v[..20], [5, 4, 1]);
+        let p = [[1.5; LANES], [2.25; LANES], [0.7; LANES]];
+        let one = flat.sample(Vec3::new(1.5, 2.25, 0.7)).unwrap();
+        assert!(flat
+            .sample_lanes(&p)
+            .iter()
+            .all(|x| x.to_bits() == one.to_bits()));
+    }
+
+    #[test]
+    fn floor_small_is_the_floor() {
+        for v in [
+            0.0f32,
+            0.25,
+            0.5,
+            0.75,
+            1.0,
+            1.5,
+            2.5,
+            3.49,
+            254.999,
+            255.0,
+            4_194_303.5,
+        ] {
+            assert_eq!(floor_small(v), v.floor() as i32, "{v}");
+        }
+        let mut v = 0.0f32;
+        while v < 600.0 {
+            assert_eq!(floor_small(v), v.floor() as i32, "{v}");
+            v += 0.013;
         }
     }
 

@@ -97,6 +97,7 @@ pub fn run(
     n: usize,
     as_json: bool,
     suite: &str,
+    only: Option<&str>,
 ) -> Result<(), CmdError> {
     let (grid, pt, tetray) = match suite {
         "all" => (true, true, true),
@@ -106,7 +107,7 @@ pub fn run(
         other => return Err(format!("unknown suite '{other}' (all, grid, pt, tetray)").into()),
     };
     let mut rows = if grid {
-        run_grid(quick, frames, n, as_json)?
+        run_grid(quick, frames, n, as_json, only)?
     } else {
         Vec::new()
     };
@@ -127,6 +128,7 @@ fn run_grid(
     frames: usize,
     n: usize,
     as_json: bool,
+    only: Option<&str>,
 ) -> Result<Vec<serde_json::Value>, CmdError> {
     let frames = if quick { 1 } else { frames.max(1) };
     let sizes: &[(usize, usize)] = if quick {
@@ -153,6 +155,10 @@ fn run_grid(
         };
         for &(w, h) in sizes {
             for integrator in integrators() {
+                let case = format!("{name} {} {}", integrator.name(), param(&integrator));
+                if !selected(&case, only) {
+                    continue;
+                }
                 let mut opts = RenderOptions::new(spec.resolve(&grid.bounds())?, tf.clone());
                 (opts.width, opts.height, opts.integrator) = (w, h, integrator);
                 let mut times = Vec::new();
@@ -187,4 +193,9 @@ fn run_grid(
         }
     }
     Ok(rows)
+}
+
+/// Whether a case named `case` is selected by `only` (every word of it appears in the name).
+fn selected(case: &str, only: Option<&str>) -> bool {
+    only.is_none_or(|o| o.split_whitespace().all(|w| case.contains(w)))
 }

@@ -70,7 +70,8 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             grid_size,
             json,
             suite,
-        } => bench::run(quick, frames, grid_size, json, &suite),
+            only,
+        } => bench::run(quick, frames, grid_size, json, &suite, only.as_deref()),
     }
 }
 

@@ -1,0 +1,335 @@
+//! The fast Riemann path (emission only, no isosurfaces, no MIP): the rays of a tile flow
+//! through [`LANES`] lanes that advance together, one sample per lane per step.
+//!
+//! Lanes hold different rays, so the front-to-back compositing of one ray (a chain of
+//! dependent multiply-adds, `001_...txt` eq. 2.14) overlaps with the other lanes' chains, and
+//! the position, reconstruction and classification arithmetic is done lane-wise. A lane whose
+//! ray reaches the end of an occupied span or becomes opaque takes the next span or the next
+//! ray of the tile (in 4 x 4 pixel blocks, so that lanes read neighbouring voxels); that
+//! bookkeeping runs once per span, not per sample.
+//!
+//! Sample `i` of a ray sits at `base + i step`, `base` being the ray's first lattice point
+//! `t0 + jitter h` and `step` its voxel-space displacement per step `h`: a function of the
+//! ray and `i` only, so skipping empty space never moves a sample.
+use glam::DVec3;
+
+use super::{pixel_hash, PixelOut, RayContext, TILE};
+use crate::classify::StepTable;
+use crate::integrate::{riemann_step, Integrator, RayAccumulator};
+use crate::sampling::{Field, LANES};
+
+/// Side of the pixel blocks in which a tile's rays enter the lanes.
+const BLOCK: usize = 4;
+
+/// Per-lane bookkeeping, touched once per span.
+#[derive(Default)]
+struct LaneRay {
+    /// Index of the ray's pixel in its tile.
+    pixel: usize,
+    /// Voxel-space position of sample 0 (f64, for the partial last slab) and step.
+    base: DVec3,
+    step: DVec3,
+    /// Distance of sample 0 and step length (world units), and the ray's exit distance.
+    start: f64,
+    h: f64,
+    t1: f64,
+    spans: Vec<(f64, f64)>,
+    /// The next span to enter.
+    span: usize,
+    /// First sample of the current span, and its first sample at or beyond the span's end.
+    i_first: i32,
+    i_after: i32,
+    samples: u64,
+}
+
+impl LaneRay {
+    /// The first sample index `i` with `start + i h >= b` (0 at least).
+    fn first_at_or_after(&self, b: f64) -> i32 {
+        let t = |i: i32| self.start + self.h * f64::from(i);
+        let mut k = ((b - self.start) / self.h)
+            .ceil()
+            .clamp(0.0, i32::MAX as f64 / 2.0) as i32;
+        while k > 0 && t(k - 1) >= b {
+            k -= 1;
+        }
+        while t(k) < b {
+            k += 1;
+        }
+        k
+    }
+
+    /// The first sample whose slab `[t, t + h]` reaches beyond the ray's exit: it and the
+    /// samples after it take a shortened step.
+    fn first_partial(&self) -> i32 {
+        let mut k = self.first_at_or_after(self.t1 - self.h);
+        while k > 0 && self.start + self.h * f64::from(k - 1) + self.h > self.t1 {
+            k -= 1;
+        }
+        while self.start + self.h * f64::from(k) + self.h <= self.t1 {
+            k += 1;
+        }
+        k
+    }
+}
+
+/// The lanes: hot per-sample state laid out lane-wise, and each lane's ray.
+struct Lanes {
+    base: [[f32; LANES]; 3],
+    step: [[f32; LANES]; 3],
+    /// Next sample index and the end (exclusive) of the full slabs of the current span.
+    i: [i32; LANES],
+    end: [i32; LANES],
+    acc: [[f32; 4]; LANES],
+    /// Opacity at which the lane's ray stops; infinite for an idle lane.
+    stop: [f32; LANES],
+    rays: [LaneRay; LANES],
+    live: [bool; LANES],
+}
+
+impl Lanes {
+    fn new() -> Self {
+        Self {
+            base: [[0.0; LANES]; 3],
+            step: [[0.0; LANES]; 3],
+            i: [0; LANES],
+            end: [i32::MAX; LANES],
+            acc: [[0.0; 4]; LANES],
+            stop: [f32::INFINITY; LANES],
+            rays: std::array::from_fn(|_| LaneRay::default()),
+            live: [false; LANES],
+        }
+    }
+
+    /// Lane `l` now samples its current span's full slabs from `i` on.
+    fn enter(&mut self, l: usize, i: i32, end: i32) {
+        self.i[l] = i;
+        self.end[l] = end;
+    }
+
+    /// Makes lane `l` idle (it keeps stepping in place, its results unused).
+    fn idle(&mut self, l: usize) {
+        self.live[l] = false;
+        self.stop[l] = f32::INFINITY;
+        self.end[l] = i32::MAX;
+        self.i[l] = 0;
+        for a in 0..3 {
+            self.step[a][l] = 0.0;
+        }
+    }
+}
+
+impl<F: Field> RayContext<'_, F> {
+    /// Renders the tile at (`x0`, `y0`) with the lane stream (see the module docs).
+    pub(super) fn riemann_stream(&self, st: &StepTable, x0: usize, y0: usize) -> Vec<PixelOut> {
+        let (w, h) = (self.opts.width, self.opts.height);
+        let (tw, th) = ((x0 + TILE).min(w) - x0, (y0 + TILE).min(h) - y0);
+        let mut px = vec![PixelOut::default(); tw * th];
+        let mut queue = block_order(tw, th).into_iter();
+        let mut lanes = Lanes::new();
+        for l in 0..LANES {
+            self.refill(&mut lanes, l, &mut queue, &mut px, (x0, y0, tw));
+        }
+        while lanes.live.iter().any(|&b| b) {
+            let cold = self.steps(&mut lanes, st);
+            for l in 0..LANES {
+                if cold & (1 << l) != 0 {
+                    self.lane_event(&mut lanes, l, &mut queue, &mut px, (x0, y0, tw));
+                }
+            }
+        }
+        px
+    }
+
+    /// Advances every lane by one sample until some live lane needs attention; returns the
+    /// bit mask of those lanes.
+    // Lane loops index several per-lane arrays at once: that is what vectorizes.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn steps(&self, lanes: &mut Lanes, st: &StepTable) -> u32 {
+        loop {
+            let f: [f32; LANES] = lanes.i.map(|i| i as f32);
+            let pos: [[f32; LANES]; 3] = std::array::from_fn(|a| {
+                std::array::from_fn(|l| lanes.base[a][l] + lanes.step[a][l] * f[l])
+            });
+            let v = self.field.sample_lanes(&pos);
+            let mut at = [(0u32, 0.0f32); LANES];
+            for l in 0..LANES {
+                at[l] = st.position(v[l]);
+            }
+            let mut alpha = [0.0f32; LANES];
+            for l in 0..LANES {
+                let e = st.at(at[l].0, at[l].1);
+                let acc = &mut lanes.acc[l];
+                // An undefined (NaN) sample adds nothing.
+                let wgt = if v[l].is_nan() { 0.0 } else { 1.0 - acc[3] };
+                for c in 0..4 {
+                    acc[c] += wgt * e[c];
+                }
+                alpha[l] = acc[3];
+            }
+            let mut cold = 0u32;
+            for l in 0..LANES {
+                lanes.i[l] += 1;
+                let event = (lanes.i[l] >= lanes.end[l]) | (alpha[l] >= lanes.stop[l]);
+                cold |= u32::from(event) << l;
+            }
+            if cold != 0 {
+                return cold;
+            }
+        }
+    }
+
+    /// Handles lane `l` after its last sample: early termination, the end of its span (with
+    /// the partial last slab of the ray), or a new ray.
+    fn lane_event(
+        &self,
+        lanes: &mut Lanes,
+        l: usize,
+        queue: &mut impl Iterator<Item = usize>,
+        px: &mut [PixelOut],
+        tile: (usize, usize, usize),
+    ) {
+        if !lanes.live[l] {
+            return;
+        }
+        let done = lanes.i[l];
+        let r = &mut lanes.rays[l];
+        r.samples += (done - r.i_first).max(0) as u64;
+        if lanes.acc[l][3] < lanes.stop[l] && self.continue_ray(lanes, l, done) {
+            return;
+        }
+        self.finish(lanes, l, px);
+        self.refill(lanes, l, queue, px, tile);
+    }
+
+    /// Lane `l`'s ray has composited its current span's samples before `done`: composites the
+    /// span's remaining samples (shortened slabs at the ray's end), then enters the next span
+    /// that has full slabs. False when the ray is finished (no span left, or opaque).
+    fn continue_ray(&self, lanes: &mut Lanes, l: usize, mut done: i32) -> bool {
+        loop {
+            if !self.shortened_samples(lanes, l, done) {
+                return false;
+            }
+            let r = &mut lanes.rays[l];
+            let Some(&(a, b)) = r.spans.get(r.span) else {
+                return false;
+            };
+            r.span += 1;
+            let first = ((a - r.start) / r.h)
+                .ceil()
+                .clamp(0.0, i32::MAX as f64 / 2.0) as i32;
+            let after = r.first_at_or_after(b).max(first);
+            (r.i_first, r.i_after) = (first, after);
+            let end = after.min(r.first_partial()).max(first);
+            if end > first {
+                lanes.enter(l, first, end);
+                return true;
+            }
+            done = first;
+        }
+    }
+
+    /// Composites samples `done..i_after` of lane `l`'s current span one by one, each with the
+    /// part of its slab inside the ray; false if the ray became opaque.
+    fn shortened_samples(&self, lanes: &mut Lanes, l: usize, done: i32) -> bool {
+        let r = &mut lanes.rays[l];
+        let mut acc = RayAccumulator { rgba: lanes.acc[l] };
+        let stop = lanes.stop[l];
+        for i in done..r.i_after {
+            let t = r.start + r.h * f64::from(i);
+            let p = (r.base + r.step * f64::from(i)).as_vec3();
+            if let Some(v) = self.field.sample(p) {
+                riemann_step(&mut acc, self.table.lookup(v), (r.t1 - t).min(r.h) as f32);
+            }
+            r.samples += 1;
+            if acc.alpha() >= stop {
+                lanes.acc[l] = acc.rgba;
+                return false;
+            }
+        }
+        lanes.acc[l] = acc.rgba;
+        true
+    }
+
+    /// Writes lane `l`'s pixel.
+    fn finish(&self, lanes: &mut Lanes, l: usize, px: &mut [PixelOut]) {
+        let r = &lanes.rays[l];
+        let acc = RayAccumulator { rgba: lanes.acc[l] };
+        px[r.pixel] = PixelOut::composited(&acc, r.samples);
+        lanes.idle(l);
+    }
+
+    /// Loads the next ray of the tile that hits the volume into lane `l` (rays that miss are
+    /// written as they are met); leaves the lane idle when the tile is done.
+    fn refill(
+        &self,
+        lanes: &mut Lanes,
+        l: usize,
+        queue: &mut impl Iterator<Item = usize>,
+        px: &mut [PixelOut],
+        (x0, y0, tw): (usize, usize, usize),
+    ) {
+        let (w, h) = (self.opts.width, self.opts.height);
+        let Integrator::Riemann { step } = self.opts.integrator else {
+            return;
+        };
+        for pixel in queue.by_ref() {
+            let (gx, gy) = (x0 + pixel % tw, y0 + pixel / tw);
+            let ray = self.opts.camera.ray(gx as f64 + 0.5, gy as f64 + 0.5, w, h);
+            let jitter = if self.opts.jitter {
+                pixel_hash(gx, gy)
+            } else {
+                0.0
+            };
+            let mut spans = std::mem::take(&mut lanes.rays[l].spans);
+            let Some((o_v, d_v, t0, t1, unit)) = self.setup(ray.origin, ray.dir, &mut spans) else {
+                lanes.rays[l].spans = spans;
+                continue;
+            };
+            let hh = step * unit;
+            let start = t0 + jitter * hh;
+            let (base, stp) = (o_v + d_v * start, d_v * hh);
+            lanes.rays[l] = LaneRay {
+                pixel,
+                base,
+                step: stp,
+                start,
+                h: hh,
+                t1,
+                spans,
+                span: 0,
+                i_first: 0,
+                i_after: 0,
+                samples: 0,
+            };
+            lanes.acc[l] = [0.0; 4];
+            for a in 0..3 {
+                lanes.base[a][l] = base[a] as f32;
+                lanes.step[a][l] = stp[a] as f32;
+            }
+            lanes.live[l] = true;
+            lanes.stop[l] = self.opts.early_termination.unwrap_or(2.0);
+            if self.continue_ray(lanes, l, 0) {
+                return;
+            }
+            self.finish(lanes, l, px);
+        }
+        lanes.idle(l);
+    }
+}
+
+/// Pixel indices of a `tw` x `th` tile in [`BLOCK`] x [`BLOCK`] blocks, row-major within
+/// and across blocks.
+fn block_order(tw: usize, th: usize) -> Vec<usize> {
+    let mut out = Vec::with_capacity(tw * th);
+    for by in (0..th).step_by(BLOCK) {
+        for bx in (0..tw).step_by(BLOCK) {
+            for y in by..(by + BLOCK).min(th) {
+                for x in bx..(bx + BLOCK).min(tw) {
+                    out.push(y * tw + x);
+                }
+            }
+        }
+    }
+    out
+}
