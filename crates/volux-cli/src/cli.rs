@@ -91,6 +91,9 @@ pub enum Command {
         /// Error threshold for the Riemann rows.
         #[arg(long, default_value_t = 0.01)]
         eps: f64,
+        /// Largest step of the adaptive rows (voxels).
+        #[arg(long, default_value_t = 0.5)]
+        hmax: f64,
         /// Print a JSON list.
         #[arg(long)]
         json: bool,

@@ -21,6 +21,7 @@ pub struct Args {
     pub tf: String,
     pub size: String,
     pub eps: f64,
+    pub hmax: f64,
     pub json: bool,
     pub load: LoadArgs,
 }
@@ -96,9 +97,9 @@ pub fn run(args: &Args, show: bool) -> Result<(), CmdError> {
         for tol in [0.01, 0.005, 0.001] {
             let p = AdaptiveParams {
                 tol,
-                h0: 0.5,
+                h0: 0.5_f64.min(args.hmax),
                 hmin: 0.001,
-                hmax: 0.5,
+                hmax: args.hmax,
                 control,
                 early_termination: None,
             };

@@ -53,12 +53,14 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             eps,
             json,
             load,
+            hmax,
         } => accuracy::run(
             &accuracy::Args {
                 file,
                 tf,
                 size,
                 eps,
+                hmax,
                 json,
                 load,
             },

@@ -55,7 +55,9 @@ pub struct AdaptiveParams {
 struct Probe {
     t: f64,
     h: f64,
-    s: [Option<Medium>; 5],
+    s: [Medium; 5],
+    /// Bit `k` set: sample `k` is known.
+    known: u8,
 }
 
 impl Probe {
@@ -63,25 +65,29 @@ impl Probe {
         Self {
             t,
             h,
-            s: [Some(first), None, None, None, None],
+            s: [first; 5],
+            known: 1,
         }
     }
 
     /// Samples the missing points; returns all five and counts new samples into `n`.
+    #[inline]
     fn fill(&mut self, m: &mut impl RayMedium, n: &mut u64) -> [Medium; 5] {
         for k in 1..5 {
-            if self.s[k].is_none() {
-                self.s[k] = Some(m.at(self.t + self.h * k as f64 / 4.0));
+            if self.known & (1 << k) == 0 {
+                self.s[k] = m.at(self.t + self.h * k as f64 / 4.0);
                 *n += 1;
             }
         }
-        self.s.map(|s| s.unwrap_or_default())
+        self.known = 0x1f;
+        self.s
     }
 
     /// Halves the step, keeping the samples of the first half.
     fn halve(&mut self) {
         self.h *= 0.5;
-        self.s = [self.s[0], None, self.s[1], None, self.s[2]];
+        self.s = [self.s[0], self.s[0], self.s[1], self.s[1], self.s[2]];
+        self.known = 0b10101;
     }
 }
 
@@ -354,7 +360,7 @@ fn outer_interval(
     let start_h = outer.h.clamp(p.hmin, p.hmax).min(h_int);
     let mut probe = Probe::new(u, start_h, s[0]);
     if start_h == h_int {
-        probe.s = s.map(Some);
+        (probe.s, probe.known) = (s, 0x1f);
     }
     while end - u > 1e-12 * len {
         let q = probe.fill(m, &mut ray.samples);
