@@ -46,6 +46,47 @@ pub struct Ray {
     pub dir: DVec3,
 }
 
+/// The rays of one image size for one camera (see [`Camera::rays`]).
+#[derive(Clone, Copy, Debug)]
+pub struct RayGenerator {
+    eye: DVec3,
+    basis: (DVec3, DVec3, DVec3),
+    size: (f64, f64),
+    projection: RayProjection,
+}
+
+/// The projection with its constants precomputed.
+#[derive(Clone, Copy, Debug)]
+enum RayProjection {
+    /// Tangent of half the vertical field of view.
+    Perspective(f64),
+    /// View height in world units.
+    Orthographic(f64),
+}
+
+impl RayGenerator {
+    /// The ray through continuous pixel coordinates (`px`, `py`) (pixel centres at +0.5, row
+    /// 0 at the top).
+    #[inline]
+    pub fn ray(&self, px: f64, py: f64) -> Ray {
+        let (r, u, f) = self.basis;
+        let (w, h) = self.size;
+        let aspect = w / h;
+        let nx = (2.0 * px / w - 1.0) * aspect;
+        let ny = 1.0 - 2.0 * py / h;
+        match self.projection {
+            RayProjection::Perspective(t) => Ray {
+                origin: self.eye,
+                dir: (f + r * (nx * t) + u * (ny * t)).normalize(),
+            },
+            RayProjection::Orthographic(height) => Ray {
+                origin: self.eye + (r * nx + u * ny) * (height * 0.5),
+                dir: f,
+            },
+        }
+    }
+}
+
 /// The JSON form of a camera: either `eye`/`target` (look-at) or orbit angles around the
 /// data's centre. Missing fields take defaults that fit the data's bounding box.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -201,21 +242,22 @@ impl Camera {
     /// The ray through continuous pixel coordinates (`px`, `py`) of a `w` x `h` image
     /// (pixel centres at +0.5, row 0 at the top).
     pub fn ray(&self, px: f64, py: f64, w: usize, h: usize) -> Ray {
+        self.rays(w, h).ray(px, py)
+    }
+
+    /// The rays of a `w` x `h` image, with the camera basis computed once (renderers cast
+    /// one ray per pixel); [`Camera::ray`] gives the same rays.
+    pub fn rays(&self, w: usize, h: usize) -> RayGenerator {
         let (r, u, f) = self.basis();
-        let aspect = w as f64 / h as f64;
-        let nx = (2.0 * px / w as f64 - 1.0) * aspect;
-        let ny = 1.0 - 2.0 * py / h as f64;
-        match self.projection {
-            Projection::Perspective { fov_y_deg } => {
-                let t = (fov_y_deg.to_radians() * 0.5).tan();
-                Ray {
-                    origin: self.eye,
-                    dir: (f + r * (nx * t) + u * (ny * t)).normalize(),
+        RayGenerator {
+            eye: self.eye,
+            basis: (r, u, f),
+            size: (w as f64, h as f64),
+            projection: match self.projection {
+                Projection::Perspective { fov_y_deg } => {
+                    RayProjection::Perspective((fov_y_deg.to_radians() * 0.5).tan())
                 }
-            }
-            Projection::Orthographic { height } => Ray {
-                origin: self.eye + (r * nx + u * ny) * (height * 0.5),
-                dir: f,
+                Projection::Orthographic { height } => RayProjection::Orthographic(height),
             },
         }
     }

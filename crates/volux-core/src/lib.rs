@@ -25,7 +25,7 @@ pub mod synth;
 pub mod tetrahedralize;
 pub mod transfer;
 
-pub use camera::{Camera, CameraSpec, Projection};
+pub use camera::{Camera, CameraSpec, Projection, RayGenerator};
 pub use error::{Error, Result};
 pub use grid::{Buffer, Grid, Samples, ScalarType};
 pub use image::Image;

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
-use volux_core::{Camera, Grid, Image, TransferFunction};
+use volux_core::{Camera, Grid, Image, RayGenerator, TransferFunction};
 
 use crate::classify::{Classified, ClassifyTable, StepTable};
 use crate::integrate::preintegrated::PreintegrationTable;
@@ -394,6 +394,7 @@ fn render_with<F: Field>(
         },
         tf: opts.tf.resolved(range),
         breakpoints: opts.tf.resolved(range).breakpoints(),
+        rays: opts.camera.rays(opts.width, opts.height),
         opts,
     };
     let (w, h) = (opts.width, opts.height);
@@ -420,7 +421,7 @@ fn render_with<F: Field>(
             let mut spans = Vec::new();
             for y in y0..(y0 + TILE).min(h) {
                 for x in x0..(x0 + TILE).min(w) {
-                    let ray = opts.camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                    let ray = ctx.rays.ray(x as f64 + 0.5, y as f64 + 0.5);
                     let jitter = if opts.jitter { pixel_hash(x, y) } else { 0.0 };
                     px.push(if opts.mip {
                         ctx.mip(ray.origin, ray.dir)
@@ -483,6 +484,8 @@ struct RayContext<'a, F> {
     step_table: Option<StepTable>,
     tf: TransferFunction,
     breakpoints: Vec<f64>,
+    /// The camera's rays for this image size.
+    rays: RayGenerator,
     opts: &'a RenderOptions,
 }
 
@@ -823,11 +826,7 @@ impl<F: Field> RayContext<'_, F> {
         };
         let stop = self.opts.early_termination.unwrap_or(2.0);
         let start = (t0 + jitter * h - h).max(t0 - h);
-        let value = |t: f64| {
-            self.field
-                .sample64(o_v + d_v * t.clamp(t0, t1))
-                .map(|v| v as f32)
-        };
+        let value = |t: f64| self.field.sample((o_v + d_v * t.clamp(t0, t1)).as_vec3());
         let mut acc = RayAccumulator::default();
         let (mut n, mut next) = (0u64, 0u64);
         'spans: for &(a, b) in spans {

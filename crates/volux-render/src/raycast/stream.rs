@@ -269,13 +269,12 @@ impl<F: Field> RayContext<'_, F> {
         px: &mut [PixelOut],
         (x0, y0, tw): (usize, usize, usize),
     ) {
-        let (w, h) = (self.opts.width, self.opts.height);
         let Integrator::Riemann { step } = self.opts.integrator else {
             return;
         };
         for pixel in queue.by_ref() {
             let (gx, gy) = (x0 + pixel % tw, y0 + pixel / tw);
-            let ray = self.opts.camera.ray(gx as f64 + 0.5, gy as f64 + 0.5, w, h);
+            let ray = self.rays.ray(gx as f64 + 0.5, gy as f64 + 0.5);
             let jitter = if self.opts.jitter {
                 pixel_hash(gx, gy)
             } else {
