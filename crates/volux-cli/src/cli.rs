@@ -94,6 +94,9 @@ pub enum Command {
         /// Largest step of the adaptive rows (voxels).
         #[arg(long, default_value_t = 0.5)]
         hmax: f64,
+        /// Smallest step of the adaptive rows (voxels).
+        #[arg(long, default_value_t = 0.001)]
+        hmin: f64,
         /// Print a JSON list.
         #[arg(long)]
         json: bool,

@@ -72,10 +72,20 @@ impl ClassifyTable {
     }
 
     /// Colour and extinction at value `s` (clamped to the table's domain).
-    #[inline]
+    #[inline(always)]
     pub fn lookup(&self, s: f32) -> Classified {
-        let x = ((s - self.lo) * self.scale).clamp(0.0, (self.entries.len() - 1) as f32);
-        let i = (x as usize).min(self.entries.len() - 2);
+        let last = (self.entries.len() - 1) as f32;
+        let x = (s - self.lo) * self.scale;
+        // Selects rather than clamp (NaN goes to 0), and the floor without a saturating cast
+        // for tables under 2^22 entries (see `floor_small`).
+        let x = if x > 0.0 { x } else { 0.0 };
+        let x = if x < last { x } else { last };
+        let i = if last < crate::sampling::FLOOR_SMALL_LIMIT {
+            crate::sampling::floor_small(x) as usize
+        } else {
+            x as usize
+        };
+        let i = i.min(self.entries.len() - 2);
         let f = x - i as f32;
         let (a, b) = (self.entries[i], self.entries[i + 1]);
         let l = |u: f32, v: f32| u + (v - u) * f;

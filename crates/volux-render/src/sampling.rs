@@ -25,6 +25,15 @@ pub trait Field: Sync {
                 .unwrap_or(f32::NAN)
         })
     }
+    /// Four samples at once, as [`Field::sample_lanes`] (for integrators that sample a ray at
+    /// four points together).
+    #[inline]
+    fn sample4(&self, p: &[[f32; 4]; 3]) -> [f32; 4] {
+        std::array::from_fn(|l| {
+            self.sample(Vec3::new(p[0][l], p[1][l], p[2][l]))
+                .unwrap_or(f32::NAN)
+        })
+    }
     /// The same in f64 (the reference path); defaults to the f32 sample.
     fn sample64(&self, p: DVec3) -> Option<f64> {
         self.sample(p.as_vec3()).map(f64::from)
@@ -106,21 +115,21 @@ impl<T: Scalar> Trilinear<'_, T> {
 }
 
 impl<T: Scalar> Trilinear<'_, T> {
-    /// [`Self::sample_raw`] of [`LANES`] points; each lane is bit-identical to `sample_raw`.
+    /// [`Self::sample_raw`] of `N` points; each lane is bit-identical to `sample_raw`.
     ///
     /// The clamping, cell indices and fractions are computed lane-wise (SIMD); the corner
     /// loads and the interpolation per lane, in registers: assembling vectors from scalar
     /// loads would go through the stack, where wide loads of narrow stores stall.
     #[inline(always)]
-    pub fn sample_raw_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
+    pub fn sample_raw_lanes<const N: usize>(&self, p: &[[f32; N]; 3]) -> [f32; N] {
         if self.hi.iter().any(|&h| h >= FLOOR_SMALL_LIMIT) {
             return std::array::from_fn(|l| self.sample_raw(Vec3::new(p[0][l], p[1][l], p[2][l])));
         }
-        let mut cell = [[0i32; LANES]; 3];
-        let mut frac = [[0.0f32; LANES]; 3];
+        let mut cell = [[0i32; N]; 3];
+        let mut frac = [[0.0f32; N]; 3];
         for a in 0..3 {
             let (hi, cmax) = (self.hi[a], self.cell_max[a].min(i32::MAX as u32) as i32);
-            for l in 0..LANES {
+            for l in 0..N {
                 // Selects (one maxps/minps each), NaN going to 0 as in `sample_raw`; the floor
                 // without a float-to-int cast; `v <= hi = cmax + 1`, so the cell index is
                 // clamped by subtracting one where it passes `cmax`.
@@ -133,16 +142,67 @@ impl<T: Scalar> Trilinear<'_, T> {
                 frac[a][l] = v - i as f32;
             }
         }
-        let mut out = [0.0f32; LANES];
-        for l in 0..LANES {
+        let mut out = [0.0f32; N];
+        let mut g = 0;
+        while g + 4 <= N {
+            let lanes = |a: &[f32; N]| -> [f32; 4] { [a[g], a[g + 1], a[g + 2], a[g + 3]] };
+            let b: [usize; 4] = std::array::from_fn(|k| {
+                let l = g + k;
+                cell[0][l] as usize
+                    + self.dims[0] * (cell[1][l] as usize + self.dims[1] * cell[2][l] as usize)
+            });
+            out[g..g + 4].copy_from_slice(&self.interpolate4(
+                b,
+                lanes(&frac[0]),
+                lanes(&frac[1]),
+                lanes(&frac[2]),
+            ));
+            g += 4;
+        }
+        for l in g..N {
             out[l] = self.interpolate_cell([cell[0][l], cell[1][l], cell[2][l]], frac, l);
         }
         out
     }
 
+    /// Trilinear interpolation in four cells (first samples `b`) at fractions `fx`, `fy`,
+    /// `fz`: each corner is gathered into a four-lane array and the lerps run lane-wise.
+    #[inline(always)]
+    fn interpolate4(&self, b: [usize; 4], fx: [f32; 4], fy: [f32; 4], fz: [f32; 4]) -> [f32; 4] {
+        let corner = |q: usize| -> [f32; 4] {
+            let o = self.corners[q];
+            [
+                self.values[b[0] + o].to_f32(),
+                self.values[b[1] + o].to_f32(),
+                self.values[b[2] + o].to_f32(),
+                self.values[b[3] + o].to_f32(),
+            ]
+        };
+        let lerp = |a: [f32; 4], c: [f32; 4], f: [f32; 4]| -> [f32; 4] {
+            [
+                a[0] + (c[0] - a[0]) * f[0],
+                a[1] + (c[1] - a[1]) * f[1],
+                a[2] + (c[2] - a[2]) * f[2],
+                a[3] + (c[3] - a[3]) * f[3],
+            ]
+        };
+        let c00 = lerp(corner(0), corner(1), fx);
+        let c10 = lerp(corner(2), corner(3), fx);
+        let c01 = lerp(corner(4), corner(5), fx);
+        let c11 = lerp(corner(6), corner(7), fx);
+        let c0 = lerp(c00, c10, fy);
+        let c1 = lerp(c01, c11, fy);
+        lerp(c0, c1, fz)
+    }
+
     /// The trilinear interpolation in `cell` at the fractions of lane `l`.
     #[inline(always)]
-    fn interpolate_cell(&self, cell: [i32; 3], frac: [[f32; LANES]; 3], l: usize) -> f32 {
+    fn interpolate_cell<const N: usize>(
+        &self,
+        cell: [i32; 3],
+        frac: [[f32; N]; 3],
+        l: usize,
+    ) -> f32 {
         let [nx, ny, _] = self.dims;
         let b = cell[0] as usize + nx * (cell[1] as usize + ny * cell[2] as usize);
         let mut c = [0.0f32; 8];
@@ -158,6 +218,17 @@ impl<T: Scalar> Trilinear<'_, T> {
         let c1 = c01 + (c11 - c01) * fy;
         c0 + (c1 - c0) * fz
     }
+}
+
+/// NaN for every non-finite value (undefined samples).
+#[inline(always)]
+fn undefined_to_nan<const N: usize>(mut r: [f32; N]) -> [f32; N] {
+    for v in r.iter_mut() {
+        if !v.is_finite() {
+            *v = f32::NAN;
+        }
+    }
+    r
 }
 
 /// Values below which [`floor_small`] is exact.
@@ -200,13 +271,12 @@ impl<T: Scalar> Field for Trilinear<'_, T> {
 
     #[inline(always)]
     fn sample_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
-        let mut r = self.sample_raw_lanes(p);
-        for v in r.iter_mut() {
-            if !v.is_finite() {
-                *v = f32::NAN;
-            }
-        }
-        r
+        undefined_to_nan(self.sample_raw_lanes(p))
+    }
+
+    #[inline(always)]
+    fn sample4(&self, p: &[[f32; 4]; 3]) -> [f32; 4] {
+        undefined_to_nan(self.sample_raw_lanes(p))
     }
 
     fn sample64(&self, p: DVec3) -> Option<f64> {
@@ -277,6 +347,16 @@ mod tests {
             [0.0, 2.0, 1.9, 0.4, 1.999, 2.0, 1.0, 1.0],
         ];
         let lanes = s.sample_lanes(&p);
+        let four = s.sample4(&std::array::from_fn(|a| {
+            std::array::from_fn(|l| p[a][l + 4])
+        }));
+        for l in 0..4 {
+            assert_eq!(
+                four[l].to_bits(),
+                lanes[l + 4].to_bits(),
+                "lane {l} of four"
+            );
+        }
         for l in 0..LANES {
             let one = s.sample(Vec3::new(p[0][l], p[1][l], p[2][l])).unwrap();
             assert_eq!(lanes[l].to_bits(), one.to_bits(), "lane {l}");

@@ -22,6 +22,7 @@ pub struct Args {
     pub size: String,
     pub eps: f64,
     pub hmax: f64,
+    pub hmin: f64,
     pub json: bool,
     pub load: LoadArgs,
 }
@@ -98,7 +99,7 @@ pub fn run(args: &Args, show: bool) -> Result<(), CmdError> {
             let p = AdaptiveParams {
                 tol,
                 h0: 0.5_f64.min(args.hmax),
-                hmin: 0.001,
+                hmin: args.hmin.min(args.hmax),
                 hmax: args.hmax,
                 control,
                 early_termination: None,

@@ -59,11 +59,11 @@ fn datasets(n: usize) -> Result<Vec<(String, Grid, TransferFunction)>, CmdError>
 }
 
 fn integrators() -> Vec<Integrator> {
-    let adaptive = |control, hmax| {
+    let adaptive = |control, hmin, hmax| {
         Integrator::AdaptiveSimpson(AdaptiveParams {
             tol: 0.01,
             h0: 0.5,
-            hmin: 0.001,
+            hmin,
             hmax,
             control,
             early_termination: None,
@@ -75,11 +75,11 @@ fn integrators() -> Vec<Integrator> {
         Integrator::Trapezoid { step: 0.5 },
         Integrator::Simpson { step: 0.5 },
         Integrator::Preintegrated { step: 0.5 },
-        adaptive(StepControl::Coupled, 0.5),
-        adaptive(StepControl::Decoupled, 0.5),
-        // Steps up to 2 voxels where the integrand is smooth: as accurate (`volux accuracy
-        // --hmax 2`), a third of the samples.
-        adaptive(StepControl::Coupled, 2.0),
+        // The seed's settings (`001_...txt` fig. 5.1 and table 5.5: h0 0.5, hmin 0.1, hmax 2
+        // voxels), and those of its Bonsai tables 5.4 and 5.6 (hmin 0.4, hmax 4).
+        adaptive(StepControl::Coupled, 0.1, 2.0),
+        adaptive(StepControl::Decoupled, 0.1, 2.0),
+        adaptive(StepControl::Coupled, 0.4, 4.0),
     ]
 }
 
@@ -89,10 +89,7 @@ fn param(i: &Integrator) -> String {
         | Integrator::Trapezoid { step }
         | Integrator::Simpson { step }
         | Integrator::Preintegrated { step } => format!("h={step}"),
-        Integrator::AdaptiveSimpson(p) if p.hmax != 0.5 => {
-            format!("tol={} hmax={}", p.tol, p.hmax)
-        }
-        Integrator::AdaptiveSimpson(p) => format!("tol={}", p.tol),
+        Integrator::AdaptiveSimpson(p) => format!("tol={} hmax={}", p.tol, p.hmax),
         _ => String::new(),
     }
 }

@@ -54,6 +54,7 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             json,
             load,
             hmax,
+            hmin,
         } => accuracy::run(
             &accuracy::Args {
                 file,
@@ -61,6 +62,7 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
                 size,
                 eps,
                 hmax,
+                hmin,
                 json,
                 load,
             },

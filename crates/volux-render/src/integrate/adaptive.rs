@@ -21,7 +21,6 @@
 //!   integral then crosses that interval with its own step, which persists from interval to
 //!   interval, evaluating the inner integral inside by plain Simpson (any step shorter than
 //!   an accepted one is accepted too, as the seed argues).
-use super::fixed::integrand;
 use super::{Medium, RayIntegral, RayMedium};
 
 /// How the steps of the inner and outer integrals are controlled (`001_...txt` sec. 4).
@@ -70,9 +69,19 @@ impl Probe {
         }
     }
 
-    /// Samples the missing points; returns all five and counts new samples into `n`.
+    /// Samples the missing points (all five are then in `s`), counting new samples into `n`.
     #[inline]
-    fn fill(&mut self, m: &mut impl RayMedium, n: &mut u64) -> [Medium; 5] {
+    fn fill(&mut self, m: &mut impl RayMedium, n: &mut u64) {
+        if self.known == 1 {
+            // A fresh step: its four new samples together.
+            let [a, b, c, d] = m.at4(std::array::from_fn(|k| {
+                self.t + self.h * (k + 1) as f64 / 4.0
+            }));
+            self.s = [self.s[0], a, b, c, d];
+            self.known = 0x1f;
+            *n += 4;
+            return;
+        }
         for k in 1..5 {
             if self.known & (1 << k) == 0 {
                 self.s[k] = m.at(self.t + self.h * k as f64 / 4.0);
@@ -80,7 +89,13 @@ impl Probe {
             }
         }
         self.known = 0x1f;
-        self.s
+    }
+
+    /// Starts the step `[t, t + h]` from the known sample `first` (in place: no copy of the
+    /// five samples).
+    #[inline]
+    fn restart(&mut self, t: f64, h: f64, first: Medium) {
+        (self.t, self.h, self.s[0], self.known) = (t, h, first, 1);
     }
 
     /// Halves the step, keeping the samples of the first half.
@@ -93,8 +108,9 @@ impl Probe {
 
 /// The rules evaluated over one five-point step.
 struct StepEval {
-    /// Optical depth at the end (with the error estimate added).
+    /// Optical depth at the end (with the error estimate added), and the transmittance there.
     depth_end: f64,
+    trans_end: f64,
     /// Error estimate of the optical depth over the step.
     err_depth: f64,
     /// Colour over the step (with the error estimate added).
@@ -103,7 +119,10 @@ struct StepEval {
     err_color: [f64; 3],
 }
 
-fn eval_step(depth0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
+/// The rules over one step from optical depth `depth0`, transmittance `trans0 = exp(-depth0)`
+/// (carried from the previous step: one `exp` fewer per step).
+#[inline]
+fn eval_step(depth0: f64, trans0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
     let tau = s.map(|s| s.tau);
     let s1 = h / 6.0 * (tau[0] + 4.0 * tau[2] + tau[4]);
     let s2 = h / 12.0 * (tau[0] + 4.0 * tau[1] + 2.0 * tau[2] + 4.0 * tau[3] + tau[4]);
@@ -116,7 +135,14 @@ fn eval_step(depth0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
         d2 + h / 48.0 * (5.0 * tau[2] + 8.0 * tau[3] - tau[4]),
         depth0 + s2 + err_depth,
     ];
-    let g: [[f64; 3]; 5] = std::array::from_fn(|k| integrand(&s[k], depths[k]));
+    let mut trans = [trans0; 5];
+    for k in 1..5 {
+        trans[k] = (-depths[k]).exp();
+    }
+    let g: [[f64; 3]; 5] = std::array::from_fn(|k| {
+        let w = s[k].tau * trans[k];
+        [s[k].rgb[0] * w, s[k].rgb[1] * w, s[k].rgb[2] * w]
+    });
     let mut color = [0.0; 3];
     let mut err_color = [0.0; 3];
     for c in 0..3 {
@@ -127,6 +153,7 @@ fn eval_step(depth0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
     }
     StepEval {
         depth_end: depths[4],
+        trans_end: trans[4],
         err_depth,
         color,
         err_color,
@@ -140,9 +167,9 @@ fn hidden(m: &impl RayMedium, s: &[Medium; 5]) -> bool {
         .any(|w| m.hides_features(w[0].value, w[1].value))
 }
 
-/// Largest estimated error of R, G, B and A over a step starting at optical depth `depth0`.
-fn outer_error(ev: &StepEval, depth0: f64) -> f64 {
-    let alpha = (-depth0).exp() * ev.err_depth.abs();
+/// Largest estimated error of R, G, B and A over a step starting at transmittance `trans0`.
+fn outer_error(ev: &StepEval, trans0: f64) -> f64 {
+    let alpha = trans0 * ev.err_depth.abs();
     ev.err_color.iter().fold(alpha, |m, e| m.max(e.abs()))
 }
 
@@ -169,6 +196,10 @@ impl StepSize {
 struct Ray {
     color: [f64; 3],
     depth: f64,
+    /// `exp(-depth)`.
+    trans: f64,
+    /// The depth at which the opacity reaches the early-termination threshold.
+    depth_stop: f64,
     samples: u64,
     error: f64,
     missed: bool,
@@ -180,12 +211,26 @@ impl Ray {
             self.color[c] += ev.color[c];
         }
         self.depth = ev.depth_end;
+        self.trans = ev.trans_end;
         self.error += err;
         self.missed |= err > tol_h;
     }
-    fn done(&self, p: &AdaptiveParams) -> bool {
-        p.early_termination
-            .is_some_and(|a| 1.0 - (-self.depth).exp() >= a)
+    fn new(p: &AdaptiveParams) -> Self {
+        Self {
+            color: [0.0; 3],
+            depth: 0.0,
+            trans: 1.0,
+            // 1 - exp(-depth) >= a  <=>  depth >= -ln(1 - a).
+            depth_stop: p
+                .early_termination
+                .map_or(f64::INFINITY, |a| -(1.0 - a.min(1.0)).ln()),
+            samples: 0,
+            error: 0.0,
+            missed: false,
+        }
+    }
+    fn done(&self) -> bool {
+        self.depth >= self.depth_stop
     }
 }
 
@@ -207,15 +252,9 @@ pub fn adaptive_simpson_intervals(
     p: &AdaptiveParams,
 ) -> RayIntegral {
     let len: f64 = intervals.iter().map(|(a, b)| (b - a).max(0.0)).sum();
-    let mut ray = Ray {
-        color: [0.0; 3],
-        depth: 0.0,
-        samples: 0,
-        error: 0.0,
-        missed: false,
-    };
+    let mut ray = Ray::new(p);
     for &(t0, t1) in intervals {
-        if t1 <= t0 || ray.done(p) {
+        if t1 <= t0 || ray.done() {
             continue;
         }
         let first = m.at(t0);
@@ -239,13 +278,7 @@ pub fn adaptive_simpson_pieces(
     breaks: &[f64],
     p: &AdaptiveParams,
 ) -> RayIntegral {
-    let mut ray = Ray {
-        color: [0.0; 3],
-        depth: 0.0,
-        samples: 0,
-        error: 0.0,
-        missed: false,
-    };
+    let mut ray = Ray::new(p);
     if let (Some(&t0), Some(&t1)) = (breaks.first(), breaks.last()) {
         let len = t1 - t0;
         let mut first = m.at(t0);
@@ -284,17 +317,19 @@ fn coupled_scaled(
     };
     let mut t = t0;
     let mut probe = Probe::new(t, clamp_step(step.h, p, t1 - t), first);
-    while t1 - t > 1e-12 * (t1 - t0) && !ray.done(p) {
-        let s = probe.fill(m, &mut ray.samples);
-        let ev = eval_step(ray.depth, probe.h, &s);
-        let err = outer_error(&ev, ray.depth);
-        let blind = hidden(m, &s);
+    while t1 - t > 1e-12 * (t1 - t0) && !ray.done() {
+        probe.fill(m, &mut ray.samples);
+        let s = &probe.s;
+        let ev = eval_step(ray.depth, ray.trans, probe.h, s);
+        let err = outer_error(&ev, ray.trans);
+        let blind = hidden(m, s);
+        let last = s[4];
         let tol_h = SAFETY * p.tol * probe.h / len;
         if (err <= tol_h && !blind) || probe.h <= p.hmin * (1.0 + 1e-9) {
             ray.accept(&ev, err, tol_h);
             t += probe.h;
             step.success(probe.h, p.hmax);
-            probe = Probe::new(t, clamp_step(step.h, p, t1 - t), s[4]);
+            probe.restart(t, clamp_step(step.h, p, t1 - t), last);
         } else {
             step.failure(probe.h);
             probe.halve();
@@ -322,10 +357,11 @@ fn decoupled(
     };
     let mut t = t0;
     let mut probe = Probe::new(t, clamp_step(inner.h, p, t1 - t), first);
-    while t1 - t > 1e-12 * len && !ray.done(p) {
-        let s = probe.fill(m, &mut ray.samples);
-        let ev = eval_step(ray.depth, probe.h, &s);
-        let err = (-ray.depth).exp() * ev.err_depth.abs();
+    while t1 - t > 1e-12 * len && !ray.done() {
+        probe.fill(m, &mut ray.samples);
+        let s = probe.s;
+        let ev = eval_step(ray.depth, ray.trans, probe.h, &s);
+        let err = ray.trans * ev.err_depth.abs();
         let blind = hidden(m, &s);
         if (err > SAFETY * p.tol * probe.h / len || blind) && probe.h > p.hmin * (1.0 + 1e-9) {
             inner.failure(probe.h);
@@ -338,7 +374,7 @@ fn decoupled(
         }
         t += h_int;
         inner.success(h_int, p.hmax);
-        probe = Probe::new(t, clamp_step(inner.h, p, t1 - t), s[4]);
+        probe.restart(t, clamp_step(inner.h, p, t1 - t), s[4]);
     }
 }
 
@@ -363,16 +399,18 @@ fn outer_interval(
         (probe.s, probe.known) = (s, 0x1f);
     }
     while end - u > 1e-12 * len {
-        let q = probe.fill(m, &mut ray.samples);
-        let ev = eval_step(ray.depth, probe.h, &q);
-        let err = outer_error(&ev, ray.depth);
-        let blind = hidden(m, &q);
+        probe.fill(m, &mut ray.samples);
+        let q = &probe.s;
+        let ev = eval_step(ray.depth, ray.trans, probe.h, q);
+        let err = outer_error(&ev, ray.trans);
+        let blind = hidden(m, q);
+        let last = q[4];
         let tol_h = SAFETY * p.tol * probe.h / len;
         if (err <= tol_h && !blind) || probe.h <= p.hmin * (1.0 + 1e-9) {
             ray.accept(&ev, err, tol_h);
             u += probe.h;
             outer.success(probe.h, p.hmax);
-            probe = Probe::new(u, outer.h.clamp(p.hmin, p.hmax).min(end - u), q[4]);
+            probe.restart(u, outer.h.clamp(p.hmin, p.hmax).min(end - u), last);
         } else {
             outer.failure(probe.h);
             probe.halve();

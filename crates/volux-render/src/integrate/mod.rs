@@ -159,6 +159,12 @@ pub trait RayMedium {
     /// Colour (linear RGB) and extinction per world unit at distance `t` along the ray.
     fn at(&mut self, t: f64) -> Medium;
 
+    /// The medium at four distances; media that can compute them together (lane-wise
+    /// reconstruction) override it.
+    fn at4(&mut self, t: [f64; 4]) -> [Medium; 4] {
+        t.map(|t| self.at(t))
+    }
+
     /// Whether the classification may vary in a way samples at scalar values `a` and `b`
     /// cannot see (e.g. a transfer-function peak lies strictly between them). Adaptive
     /// integration refines such steps down to `hmin` instead of trusting its error estimate.
@@ -171,8 +177,18 @@ pub trait RayMedium {
 /// piecewise-linear classification then has a peak or valley no sample shows.
 pub fn hides_breakpoints(breakpoints: &[f64], a: f64, b: f64) -> bool {
     let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-    let first = breakpoints.partition_point(|&x| x <= lo);
-    let last = breakpoints.partition_point(|&x| x < hi);
+    // Adaptive integration asks this for every pair of neighbouring samples: for the few
+    // breakpoints of a usual TF, branch-free counts beat a binary search's mispredictions.
+    let (first, last) = if breakpoints.len() <= 32 {
+        breakpoints.iter().fold((0, 0), |(f, l), &x| {
+            (f + usize::from(x <= lo), l + usize::from(x < hi))
+        })
+    } else {
+        (
+            breakpoints.partition_point(|&x| x <= lo),
+            breakpoints.partition_point(|&x| x < hi),
+        )
+    };
     last >= first + 2
 }
 

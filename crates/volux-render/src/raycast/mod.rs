@@ -529,6 +529,25 @@ impl<F: Field> RayMedium for GridRay<'_, F> {
         m
     }
 
+    fn at4(&mut self, t: [f64; 4]) -> [Medium; 4] {
+        if self.exact.is_some() || self.shade.is_some() {
+            return t.map(|t| self.at(t));
+        }
+        let mut p = [[0.0f32; 4]; 3];
+        for (k, &t) in t.iter().enumerate() {
+            let q = self.o_v + self.d_v * t;
+            (p[0][k], p[1][k], p[2][k]) = (q.x as f32, q.y as f32, q.z as f32);
+        }
+        let v = self.field.sample4(&p);
+        let mut out = [Medium::default(); 4];
+        for (o, &v) in out.iter_mut().zip(&v) {
+            if !v.is_nan() {
+                *o = self.classify(f64::from(v));
+            }
+        }
+        out
+    }
+
     fn hides_features(&self, a: f64, b: f64) -> bool {
         hides_breakpoints(self.breakpoints, a, b)
     }
@@ -543,13 +562,10 @@ struct RayShading<'a> {
 }
 
 impl<F: Field> GridRay<'_, F> {
+    #[inline(always)]
     fn classify(&self, v: f64) -> Medium {
         match self.exact {
-            Some(tf) => Medium {
-                rgb: tf.color_at(v),
-                tau: tf.tau_per_world(v),
-                value: v,
-            },
+            Some(tf) => classify_exact(tf, v),
             None => {
                 let c = self.table.lookup(v as f32);
                 Medium {
@@ -881,6 +897,16 @@ impl<F: Field> RayContext<'_, F> {
             }
         }
         PixelOut::composited(&acc, n)
+    }
+}
+
+/// The reference's classification: the TF evaluated exactly, in f64.
+#[inline(never)]
+fn classify_exact(tf: &TransferFunction, v: f64) -> Medium {
+    Medium {
+        rgb: tf.color_at(v),
+        tau: tf.tau_per_world(v),
+        value: v,
     }
 }
 
