@@ -123,16 +123,22 @@ struct StepEval {
 /// (carried from the previous step: one `exp` fewer per step).
 #[inline]
 fn eval_step(depth0: f64, trans0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
+    // Reciprocals instead of divisions (a division costs a dozen multiplications).
+    const SIXTH: f64 = 1.0 / 6.0;
+    const TWELFTH: f64 = 1.0 / 12.0;
+    const FORTY_EIGHTH: f64 = 1.0 / 48.0;
+    const FIFTEENTH: f64 = 1.0 / 15.0;
+    let (h6, h12, h48) = (h * SIXTH, h * TWELFTH, h * FORTY_EIGHTH);
     let tau = s.map(|s| s.tau);
-    let s1 = h / 6.0 * (tau[0] + 4.0 * tau[2] + tau[4]);
-    let s2 = h / 12.0 * (tau[0] + 4.0 * tau[1] + 2.0 * tau[2] + 4.0 * tau[3] + tau[4]);
-    let err_depth = (s2 - s1) / 15.0;
-    let d2 = depth0 + h / 12.0 * (tau[0] + 4.0 * tau[1] + tau[2]);
+    let s1 = h6 * (tau[0] + 4.0 * tau[2] + tau[4]);
+    let s2 = h12 * (tau[0] + 4.0 * tau[1] + 2.0 * tau[2] + 4.0 * tau[3] + tau[4]);
+    let err_depth = (s2 - s1) * FIFTEENTH;
+    let d2 = depth0 + h12 * (tau[0] + 4.0 * tau[1] + tau[2]);
     let depths = [
         depth0,
-        depth0 + h / 48.0 * (5.0 * tau[0] + 8.0 * tau[1] - tau[2]),
+        depth0 + h48 * (5.0 * tau[0] + 8.0 * tau[1] - tau[2]),
         d2,
-        d2 + h / 48.0 * (5.0 * tau[2] + 8.0 * tau[3] - tau[4]),
+        d2 + h48 * (5.0 * tau[2] + 8.0 * tau[3] - tau[4]),
         depth0 + s2 + err_depth,
     ];
     let mut trans = [trans0; 5];
@@ -146,9 +152,9 @@ fn eval_step(depth0: f64, trans0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
     let mut color = [0.0; 3];
     let mut err_color = [0.0; 3];
     for c in 0..3 {
-        let c1 = h / 6.0 * (g[0][c] + 4.0 * g[2][c] + g[4][c]);
-        let c2 = h / 12.0 * (g[0][c] + 4.0 * g[1][c] + 2.0 * g[2][c] + 4.0 * g[3][c] + g[4][c]);
-        err_color[c] = (c2 - c1) / 15.0;
+        let c1 = h6 * (g[0][c] + 4.0 * g[2][c] + g[4][c]);
+        let c2 = h12 * (g[0][c] + 4.0 * g[1][c] + 2.0 * g[2][c] + 4.0 * g[3][c] + g[4][c]);
+        err_color[c] = (c2 - c1) * FIFTEENTH;
         color[c] = c2 + err_color[c];
     }
     StepEval {
@@ -316,6 +322,7 @@ fn coupled_scaled(
         successes: 0,
     };
     let mut t = t0;
+    let tol_per_length = SAFETY * p.tol / len;
     let mut probe = Probe::new(t, clamp_step(step.h, p, t1 - t), first);
     while t1 - t > 1e-12 * (t1 - t0) && !ray.done() {
         probe.fill(m, &mut ray.samples);
@@ -324,7 +331,7 @@ fn coupled_scaled(
         let err = outer_error(&ev, ray.trans);
         let blind = hidden(m, s);
         let last = s[4];
-        let tol_h = SAFETY * p.tol * probe.h / len;
+        let tol_h = tol_per_length * probe.h;
         if (err <= tol_h && !blind) || probe.h <= p.hmin * (1.0 + 1e-9) {
             ray.accept(&ev, err, tol_h);
             t += probe.h;
