@@ -127,17 +127,10 @@ impl<'a> Occupancy<'a> {
         let mut run: Option<f64> = None;
         let mut t = t0;
         while t < t1 {
-            let axis = if t_next[0] < t_next[1] {
-                if t_next[0] < t_next[2] {
-                    0
-                } else {
-                    2
-                }
-            } else if t_next[1] < t_next[2] {
-                1
-            } else {
-                2
-            };
+            // The axis crossed first, by selects: which axis comes next is unpredictable,
+            // so branches on it would mispredict about every other step.
+            let a01 = usize::from(t_next[1] <= t_next[0]);
+            let axis = a01 + usize::from(t_next[2] < t_next[a01]) * (2 - a01);
             let empty = self.empty.get(idx as usize).copied().unwrap_or(true);
             match (empty, run) {
                 (false, None) => run = Some(t),
@@ -147,7 +140,9 @@ impl<'a> Occupancy<'a> {
                 }
                 _ => {}
             }
-            t = t_next[axis].min(t1).max(t);
+            let exit = t_next[axis];
+            let exit = if exit < t1 { exit } else { t1 };
+            t = if exit > t { exit } else { t };
             cell[axis] += step[axis];
             if cell[axis] < 0 || cell[axis] >= counts[axis] as i64 {
                 break;

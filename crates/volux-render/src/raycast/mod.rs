@@ -297,6 +297,12 @@ impl<'g> GridRenderer<'g> {
     }
 }
 
+/// Empty-space skipping is used when at least this fraction of the macrocells is empty for
+/// the TF: below it, a ray's walk through the macrocells costs more than the samples it saves
+/// (Marschner-Lobb with the bench's TF: 3 % empty macrocells, 5 % fewer samples, 8 % slower
+/// frames with skipping). Skipping never changes the image, so this only decides speed.
+const MIN_EMPTY_FRACTION: f64 = 0.1;
+
 /// Side of the square image tiles rendered in parallel.
 const TILE: usize = 16;
 
@@ -378,7 +384,8 @@ fn render_with<F: Field>(
     let occupancy = derived
         .macrocells
         .filter(|_| !opts.mip)
-        .map(|m| Occupancy::new(m, &table, &isovalues));
+        .map(|m| Occupancy::new(m, &table, &isovalues))
+        .filter(|o| o.empty_fraction() >= MIN_EMPTY_FRACTION);
     let ctx = RayContext {
         field,
         place,

@@ -46,9 +46,7 @@ impl LaneRay {
     /// The first sample index `i` with `start + i h >= b` (0 at least).
     fn first_at_or_after(&self, b: f64) -> i32 {
         let t = |i: i32| self.start + self.h * f64::from(i);
-        let mut k = ((b - self.start) / self.h)
-            .ceil()
-            .clamp(0.0, i32::MAX as f64 / 2.0) as i32;
+        let mut k = ceil_index((b - self.start) / self.h);
         while k > 0 && t(k - 1) >= b {
             k -= 1;
         }
@@ -215,9 +213,7 @@ impl<F: Field> RayContext<'_, F> {
                 return false;
             };
             r.span += 1;
-            let first = ((a - r.start) / r.h)
-                .ceil()
-                .clamp(0.0, i32::MAX as f64 / 2.0) as i32;
+            let first = ceil_index((a - r.start) / r.h);
             let after = r.first_at_or_after(b).max(first);
             (r.i_first, r.i_after) = (first, after);
             let end = after.min(r.first_partial()).max(first);
@@ -315,6 +311,14 @@ impl<F: Field> RayContext<'_, F> {
         }
         lanes.idle(l);
     }
+}
+
+/// `ceil(x)` clamped to `[0, i32::MAX / 2]`, without `f64::ceil` (a library call on
+/// baseline x86-64, paid per ray and span).
+fn ceil_index(x: f64) -> i32 {
+    let x = x.clamp(0.0, f64::from(i32::MAX / 2));
+    let c = x as i32;
+    c + i32::from(f64::from(c) < x)
 }
 
 /// Pixel indices of a `tw` x `th` tile in [`BLOCK`] x [`BLOCK`] blocks, row-major within
