@@ -142,8 +142,10 @@ fn eval_step(depth0: f64, trans0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
         depth0 + s2 + err_depth,
     ];
     let mut trans = [trans0; 5];
-    for k in 1..5 {
-        trans[k] = (-depths[k]).exp();
+    if tau.iter().any(|&t| t != 0.0) {
+        for k in 1..5 {
+            trans[k] = (-depths[k]).exp();
+        }
     }
     let g: [[f64; 3]; 5] = std::array::from_fn(|k| {
         let w = s[k].tau * trans[k];

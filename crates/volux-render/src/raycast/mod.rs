@@ -46,7 +46,8 @@ pub struct RenderOptions {
     /// Stop a ray once its opacity reaches this value; `None` integrates to the end
     /// (reference mode).
     pub early_termination: Option<f32>,
-    /// Skip macrocells whose extinction is zero (never changes the image).
+    /// Skip macrocells whose extinction is zero, when enough of them are empty for it to pay
+    /// (never changes the image).
     pub empty_space_skipping: bool,
     /// Offset each ray's first Riemann sample by a per-pixel pseudo-random fraction of the
     /// step, trading wood-grain artifacts for fine noise (deterministic per pixel).
