@@ -187,6 +187,34 @@ mod tests {
     use super::*;
 
     #[test]
+    fn step_table_is_the_slab_opacity_of_each_entry() {
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[0,0,0,0],[100,1,0.5,0.25]], "extinction": [[0,0],[40,0.2],[100,1]]}"#,
+        )
+        .unwrap();
+        let h = 0.7f32;
+        for size in [ClassifyTable::DEFAULT_SIZE, 1001] {
+            let t = ClassifyTable::new(&tf, [0.0, 100.0], size);
+            let st = t.for_step(h);
+            for s in [0.0f32, 13.7, 40.0, 77.3, 99.99, 100.0] {
+                let c = t.lookup(s);
+                let a = 1.0 - (-c.tau * h).exp();
+                let e = st.lookup(s);
+                let want = [c.rgb[0] * a, c.rgb[1] * a, c.rgb[2] * a, a];
+                for k in 0..4 {
+                    // Both interpolate linearly between entries; premultiplication and the
+                    // exponential make them differ to second order in the entry spacing.
+                    assert!((e[k] - want[k]).abs() < 1e-4, "size {size} s {s} k {k}");
+                }
+            }
+            // Out of range values clamp; NaN reads the first entry.
+            assert_eq!(st.lookup(-50.0), st.lookup(0.0));
+            assert_eq!(st.lookup(500.0), st.lookup(100.0));
+            assert_eq!(st.lookup(f32::NAN), st.lookup(0.0));
+        }
+    }
+
+    #[test]
     fn table_matches_tf() {
         let tf = TransferFunction::from_json(
             r#"{"color": [[0,0,0,0],[100,1,0.5,0.25]], "extinction": [[0,0],[40,0.2],[100,1]]}"#,

@@ -336,3 +336,31 @@ fn block_order(tw: usize, th: usize) -> Vec<usize> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ceil_index_is_the_clamped_ceiling() {
+        for x in [0.0, 0.2, 1.0, 1.000_000_1, 2.5, 7.999_999, 1e6 + 0.5] {
+            assert_eq!(ceil_index(x), x.ceil() as i32, "{x}");
+        }
+        assert_eq!(ceil_index(-3.5), 0);
+        assert_eq!(ceil_index(f64::NAN), 0);
+        assert_eq!(ceil_index(1e300), i32::MAX / 2);
+    }
+
+    #[test]
+    fn block_order_visits_every_pixel_once() {
+        for (tw, th) in [(16, 16), (7, 5), (1, 9), (4, 4)] {
+            let mut seen = block_order(tw, th);
+            assert_eq!(seen.len(), tw * th);
+            seen.sort_unstable();
+            assert!(seen.iter().enumerate().all(|(k, &p)| k == p), "{tw}x{th}");
+        }
+        // The first block of a 16-wide tile is its top-left 4 x 4 pixels.
+        let order = block_order(16, 16);
+        assert_eq!(&order[..5], &[0, 1, 2, 3, 16]);
+    }
+}

@@ -504,3 +504,14 @@ mod surface_tests {
         assert!(img.get(40, 32)[0] < c[0]);
     }
 }
+
+#[test]
+fn skipping_is_used_where_it_saves_samples() {
+    let r = |step| Integrator::Riemann { step };
+    // Marschner-Lobb with the bench's TF: 3.3 % of the macrocells empty.
+    assert!(!worth_skipping(0.033, &r(0.5)));
+    assert!(worth_skipping(0.033, &r(0.2)));
+    // The phantom: 86 % empty; nothing empty: never.
+    assert!(worth_skipping(0.86, &r(2.0)));
+    assert!(!worth_skipping(0.0, &r(0.01)));
+}
