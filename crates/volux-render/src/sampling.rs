@@ -5,8 +5,11 @@
 use glam::{DVec3, Vec3};
 use volux_core::grid::Scalar;
 
-/// Samples computed together by [`Field::sample_lanes`].
-pub const LANES: usize = 8;
+/// Samples computed together by [`Field::sample_lanes`]: the rays the grid ray caster's lane
+/// stream advances together. Sixteen hide the latency of one lane's compositing chain and
+/// corner loads behind the others' work: Marschner-Lobb 256^3 at 512x512, Riemann 0.5, took
+/// 290 ms with 4 lanes, 210 with 8, 186 with 16, 190-200 with 24 or 32.
+pub const LANES: usize = 16;
 
 /// A regular scalar field that can be sampled in voxel coordinates.
 pub trait Field: Sync {
@@ -341,11 +344,15 @@ mod tests {
         let dims = [5, 4, 3];
         let v: Vec<u16> = (0..60).map(|i| (i * 37 % 101) as u16).collect();
         let s = Trilinear::new(&v, dims);
-        let p = [
+        let points = [
             [0.3, 4.0, -1.0, 2.7, 3.999, 0.0, 1.5, f32::NAN],
             [1.1, 3.0, 0.5, 9.0, 2.5, 0.0, 1e9, 1.0],
             [0.0, 2.0, 1.9, 0.4, 1.999, 2.0, 1.0, 1.0],
         ];
+        // Every lane count: the points repeat, shifted by a third of a voxel each round.
+        let p: [[f32; LANES]; 3] = std::array::from_fn(|a| {
+            std::array::from_fn(|l| points[a][l % 8] + (l / 8) as f32 / 3.0)
+        });
         let lanes = s.sample_lanes(&p);
         let four = s.sample4(&std::array::from_fn(|a| {
             std::array::from_fn(|l| p[a][l + 4])
