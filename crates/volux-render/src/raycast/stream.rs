@@ -145,10 +145,12 @@ impl<F: Field> RayContext<'_, F> {
     #[inline(always)]
     fn steps(&self, lanes: &mut Lanes, st: &StepTable) -> u32 {
         loop {
-            let f: [f32; LANES] = lanes.i.map(|i| i as f32);
-            let pos: [[f32; LANES]; 3] = std::array::from_fn(|a| {
-                std::array::from_fn(|l| lanes.base[a][l] + lanes.step[a][l] * f[l])
-            });
+            let mut pos = [[0.0f32; LANES]; 3];
+            for a in 0..3 {
+                for l in 0..LANES {
+                    pos[a][l] = lanes.base[a][l] + lanes.step[a][l] * lanes.i[l] as f32;
+                }
+            }
             let v = self.field.sample_lanes(&pos);
             let mut at = [(0u32, 0.0f32); LANES];
             for l in 0..LANES {
