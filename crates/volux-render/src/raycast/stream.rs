@@ -39,6 +39,8 @@ struct LaneRay {
     /// First sample of the current span, and its first sample at or beyond the span's end.
     i_first: i32,
     i_after: i32,
+    /// The ray's first sample with a shortened slab ([`LaneRay::first_partial`]).
+    partial: i32,
     samples: u64,
 }
 
@@ -218,7 +220,7 @@ impl<F: Field> RayContext<'_, F> {
             let first = ceil_index((a - r.start) / r.h);
             let after = r.first_at_or_after(b).max(first);
             (r.i_first, r.i_after) = (first, after);
-            let end = after.min(r.first_partial()).max(first);
+            let end = after.min(r.partial).max(first);
             if end > first {
                 lanes.enter(l, first, end);
                 return true;
@@ -297,8 +299,10 @@ impl<F: Field> RayContext<'_, F> {
                 span: 0,
                 i_first: 0,
                 i_after: 0,
+                partial: 0,
                 samples: 0,
             };
+            lanes.rays[l].partial = lanes.rays[l].first_partial();
             lanes.acc[l] = [0.0; 4];
             for a in 0..3 {
                 lanes.base[a][l] = base[a] as f32;
