@@ -91,6 +91,31 @@ impl Probe {
         self.known = 0x1f;
     }
 
+    /// The distances of the samples the probe lacks, in order, into `out`; their number.
+    fn missing(&self, out: &mut [f64; 4]) -> usize {
+        let mut n = 0;
+        for k in 1..5 {
+            if self.known & (1 << k) == 0 {
+                out[n] = self.t + self.h * k as f64 / 4.0;
+                n += 1;
+            }
+        }
+        n
+    }
+
+    /// Takes the samples at the distances of [`Probe::missing`], in the same order.
+    fn supply(&mut self, samples: &[Medium]) {
+        let mut next = samples.iter();
+        for k in 1..5 {
+            if self.known & (1 << k) == 0 {
+                if let Some(&m) = next.next() {
+                    self.s[k] = m;
+                }
+            }
+        }
+        self.known = 0x1f;
+    }
+
     /// Starts the step `[t, t + h]` from the known sample `first` (in place: no copy of the
     /// five samples).
     #[inline]
@@ -319,30 +344,133 @@ fn coupled_scaled(
     p: &AdaptiveParams,
     ray: &mut Ray,
 ) {
-    let mut step = StepSize {
-        h: p.h0,
-        successes: 0,
-    };
-    let mut t = t0;
-    let tol_per_length = SAFETY * p.tol / len;
-    let mut probe = Probe::new(t, clamp_step(step.h, p, t1 - t), first);
-    while t1 - t > 1e-12 * (t1 - t0) && !ray.done() {
-        probe.fill(m, &mut ray.samples);
+    let mut span = CoupledSpan::new((t0, t1), len, first, p);
+    while !span.finished(ray) {
+        span.probe.fill(m, &mut ray.samples);
+        span.step(m, ray, p);
+    }
+}
+
+/// Coupled control over one interval `[t0, t1]`, advanced one probe at a time: fill the probe,
+/// then [`CoupledSpan::step`] accepts it (and moves on) or halves it.
+struct CoupledSpan {
+    t0: f64,
+    t1: f64,
+    t: f64,
+    tol_per_length: f64,
+    step: StepSize,
+    probe: Probe,
+}
+
+impl CoupledSpan {
+    fn new((t0, t1): (f64, f64), len: f64, first: Medium, p: &AdaptiveParams) -> Self {
+        let step = StepSize {
+            h: p.h0,
+            successes: 0,
+        };
+        Self {
+            t0,
+            t1,
+            t: t0,
+            tol_per_length: SAFETY * p.tol / len,
+            probe: Probe::new(t0, clamp_step(step.h, p, t1 - t0), first),
+            step,
+        }
+    }
+
+    fn finished(&self, ray: &Ray) -> bool {
+        self.t1 - self.t <= 1e-12 * (self.t1 - self.t0) || ray.done()
+    }
+
+    /// Evaluates the filled probe: accepts the step and starts the next, or halves it.
+    fn step(&mut self, m: &impl RayMedium, ray: &mut Ray, p: &AdaptiveParams) {
+        let probe = &mut self.probe;
         let s = &probe.s;
         let ev = eval_step(ray.depth, ray.trans, probe.h, s);
         let err = outer_error(&ev, ray.trans);
         let blind = hidden(m, s);
         let last = s[4];
-        let tol_h = tol_per_length * probe.h;
+        let tol_h = self.tol_per_length * probe.h;
         if (err <= tol_h && !blind) || probe.h <= p.hmin * (1.0 + 1e-9) {
             ray.accept(&ev, err, tol_h);
-            t += probe.h;
-            step.success(probe.h, p.hmax);
-            probe.restart(t, clamp_step(step.h, p, t1 - t), last);
+            self.t += probe.h;
+            self.step.success(probe.h, p.hmax);
+            probe.restart(self.t, clamp_step(self.step.h, p, self.t1 - self.t), last);
         } else {
-            step.failure(probe.h);
+            self.step.failure(probe.h);
             probe.halve();
         }
+    }
+}
+
+/// One ray under coupled control over its intervals, advanced from outside one probe at a time,
+/// so that a renderer can take the samples of several rays' steps together: ask
+/// [`CoupledRay::wants`] for the distances to sample, hand the samples to
+/// [`CoupledRay::supply`], until it wants none. The same sums as
+/// [`adaptive_simpson_intervals`] with [`StepControl::Coupled`].
+pub struct CoupledRay {
+    params: AdaptiveParams,
+    ray: Ray,
+    len: f64,
+    /// The next interval to enter.
+    next: usize,
+    /// The interval whose first sample was asked for.
+    entering: Option<(f64, f64)>,
+    span: Option<CoupledSpan>,
+}
+
+impl CoupledRay {
+    /// A ray over `intervals` (disjoint and ordered; the medium is transparent between them).
+    pub fn new(intervals: &[(f64, f64)], p: &AdaptiveParams) -> Self {
+        Self {
+            params: *p,
+            ray: Ray::new(p),
+            len: intervals.iter().map(|(a, b)| (b - a).max(0.0)).sum(),
+            next: 0,
+            entering: None,
+            span: None,
+        }
+    }
+
+    /// Writes into `out` the distances at which the ray must be sampled next and returns
+    /// their number, between 1 and 4; 0 once the ray is finished. `intervals` are the ones
+    /// given to [`CoupledRay::new`].
+    pub fn wants(&mut self, intervals: &[(f64, f64)], out: &mut [f64; 4]) -> usize {
+        if let Some(span) = &self.span {
+            if !span.finished(&self.ray) {
+                return span.probe.missing(out);
+            }
+            self.span = None;
+        }
+        while let Some(&(t0, t1)) = intervals.get(self.next) {
+            self.next += 1;
+            if t1 > t0 && !self.ray.done() {
+                self.entering = Some((t0, t1));
+                out[0] = t0;
+                return 1;
+            }
+        }
+        0
+    }
+
+    /// Takes the samples at the distances of the last [`CoupledRay::wants`] and advances.
+    pub fn supply(&mut self, m: &impl RayMedium, samples: &[Medium]) {
+        self.ray.samples += samples.len() as u64;
+        if let Some(interval) = self.entering.take() {
+            let first = samples.first().copied().unwrap_or_default();
+            self.span = Some(CoupledSpan::new(interval, self.len, first, &self.params));
+        } else if let Some(span) = &mut self.span {
+            span.probe.supply(samples);
+            span.step(m, &mut self.ray, &self.params);
+        }
+    }
+
+    /// The integral so far (the result once [`CoupledRay::wants`] returns 0).
+    pub fn result(&self) -> RayIntegral {
+        let mut out = RayIntegral::from_parts(self.ray.color, self.ray.depth, self.ray.samples);
+        out.error = self.ray.error;
+        out.tolerance_missed = self.ray.missed;
+        out
     }
 }
 

@@ -22,7 +22,7 @@ pub mod psi;
 
 pub use adaptive::{
     adaptive_simpson, adaptive_simpson_intervals, adaptive_simpson_pieces, AdaptiveParams,
-    StepControl,
+    CoupledRay, StepControl,
 };
 pub use fixed::{simpson, trapezoid};
 

@@ -436,22 +436,13 @@ fn render_with<F: Field>(
                 return Err(RenderError::Cancelled);
             }
             let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
-            if let Some(st) = ctx.packet_table() {
-                return Ok(ctx.riemann_stream(st, x0, y0));
-            }
-            let mut px = Vec::with_capacity(TILE * TILE);
-            let mut spans = Vec::new();
-            for y in y0..(y0 + TILE).min(h) {
-                for x in x0..(x0 + TILE).min(w) {
-                    let ray = ctx.rays.ray(x as f64 + 0.5, y as f64 + 0.5);
-                    let jitter = if opts.jitter { pixel_hash(x, y) } else { 0.0 };
-                    px.push(if opts.mip {
-                        ctx.mip(ray.origin, ray.dir)
-                    } else {
-                        ctx.cast(ray.origin, ray.dir, jitter, &mut spans)
-                    });
-                }
-            }
+            let px = if let Some(st) = ctx.packet_table() {
+                ctx.riemann_stream(st, x0, y0)
+            } else if let Some(p) = ctx.adaptive_stream_params() {
+                ctx.adaptive_stream(&p, x0, y0)
+            } else {
+                ctx.tile_ray_by_ray(x0, y0)
+            };
             let done = tiles_done.fetch_add(1, Ordering::Relaxed) + 1;
             if let Some(p) = &opts.progress {
                 p(done as usize * h / (tx * ty), h);
@@ -695,6 +686,29 @@ impl<F: Field> RayContext<'_, F> {
             ..self.medium(o_v, d_v)
         };
         adaptive_simpson_pieces(&mut medium, &breaks, &p)
+    }
+
+    /// The tile at (`x0`, `y0`), one ray after the other.
+    fn tile_ray_by_ray(&self, x0: usize, y0: usize) -> Vec<PixelOut> {
+        let (w, h) = (self.opts.width, self.opts.height);
+        let mut px = Vec::with_capacity(TILE * TILE);
+        let mut spans = Vec::new();
+        for y in y0..(y0 + TILE).min(h) {
+            for x in x0..(x0 + TILE).min(w) {
+                let ray = self.rays.ray(x as f64 + 0.5, y as f64 + 0.5);
+                let jitter = if self.opts.jitter {
+                    pixel_hash(x, y)
+                } else {
+                    0.0
+                };
+                px.push(if self.opts.mip {
+                    self.mip(ray.origin, ray.dir)
+                } else {
+                    self.cast(ray.origin, ray.dir, jitter, &mut spans)
+                });
+            }
+        }
+        px
     }
 
     /// The step table when rays take the fast Riemann path (emission only, no isosurfaces,
@@ -980,6 +994,7 @@ pub fn to_voxel(place: &Placement, p: DVec3) -> Vec3 {
     ((p - place.origin) / place.spacing).as_vec3()
 }
 
+mod adaptive_stream;
 mod stream;
 #[cfg(test)]
 mod tests;

@@ -329,7 +329,7 @@ fn ceil_index(x: f64) -> i32 {
 
 /// Pixel indices of a `tw` x `th` tile in [`BLOCK`] x [`BLOCK`] blocks, row-major within
 /// and across blocks.
-fn block_order(tw: usize, th: usize) -> Vec<usize> {
+pub(super) fn block_order(tw: usize, th: usize) -> Vec<usize> {
     let mut out = Vec::with_capacity(tw * th);
     for by in (0..th).step_by(BLOCK) {
         for bx in (0..tw).step_by(BLOCK) {

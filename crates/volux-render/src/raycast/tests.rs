@@ -119,6 +119,47 @@ fn lane_stream_matches_the_per_sample_loop() {
     }
 }
 
+/// Adaptive Simpson several rays at a time (the batched path) against ray by ray (taken when
+/// shading is on; here a lighting model that changes nothing): the same step decisions, so
+/// the same images, sample counts and error maps, with gaps from skipping and early
+/// termination.
+#[test]
+fn batched_adaptive_rays_match_ray_by_ray() {
+    let (g, mut o) = marschner_lobb_40(r#"[[0,0],[0.45,0],[0.5,2],[0.6,0],[1,0.5]]"#, (37, 29));
+    let identity = BlinnPhong {
+        ambient: 1.0,
+        diffuse: 0.0,
+        specular: 0.0,
+        ..BlinnPhong::default()
+    };
+    for (stop, hmax) in [(None, 2.0), (Some(0.9), 0.5)] {
+        o.integrator = Integrator::AdaptiveSimpson(AdaptiveParams {
+            tol: 0.005,
+            h0: 0.5,
+            hmin: 0.05,
+            hmax,
+            control: crate::integrate::StepControl::Coupled,
+            early_termination: None,
+        });
+        o.early_termination = stop;
+        o.shading = None;
+        let batched = render_grid(&g, &o).unwrap();
+        o.shading = Some(identity);
+        let single = render_grid(&g, &o).unwrap();
+        assert_eq!(
+            batched.image.pixels(),
+            single.image.pixels(),
+            "stop {stop:?}"
+        );
+        assert_eq!(batched.stats.samples, single.stats.samples);
+        assert_eq!(
+            batched.stats.rays_over_tolerance,
+            single.stats.rays_over_tolerance
+        );
+        assert_eq!(batched.error_map, single.error_map);
+    }
+}
+
 #[test]
 fn empty_space_skipping_changes_nothing() {
     // Transparent below 0.45 and above 0.6: most macrocells are empty.
