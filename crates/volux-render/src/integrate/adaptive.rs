@@ -196,14 +196,21 @@ fn eval_step(depth0: f64, trans0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
 /// Whether the medium hides features between two adjacent samples (the step is then
 /// refined down to `hmin`, whatever its error estimate says).
 fn hidden(m: &impl RayMedium, s: &[Medium; 5]) -> bool {
-    s.windows(2)
-        .any(|w| m.hides_features(w[0].value, w[1].value))
+    m.hides_features_along(&[s[0].value, s[1].value, s[2].value, s[3].value, s[4].value])
 }
 
 /// Largest estimated error of R, G, B and A over a step starting at transmittance `trans0`.
 fn outer_error(ev: &StepEval, trans0: f64) -> f64 {
     let alpha = trans0 * ev.err_depth.abs();
-    ev.err_color.iter().fold(alpha, |m, e| m.max(e.abs()))
+    // Selects rather than `f64::max` (which must handle NaN): this runs every step.
+    ev.err_color.iter().fold(alpha, |m, e| {
+        let e = e.abs();
+        if e > m {
+            e
+        } else {
+            m
+        }
+    })
 }
 
 /// Step-size bookkeeping shared by both controls: doubling after two consecutive successes.

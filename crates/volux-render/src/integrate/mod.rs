@@ -171,6 +171,12 @@ pub trait RayMedium {
     fn hides_features(&self, _a: f64, _b: f64) -> bool {
         false
     }
+
+    /// Whether [`RayMedium::hides_features`] holds between any two neighbouring samples of
+    /// `values` (in ray order); media override it to answer for all pairs at once.
+    fn hides_features_along(&self, values: &[f64; 5]) -> bool {
+        values.windows(2).any(|w| self.hides_features(w[0], w[1]))
+    }
 }
 
 /// Whether two or more of the sorted `breakpoints` lie strictly between `a` and `b`: the
@@ -190,6 +196,35 @@ pub fn hides_breakpoints(breakpoints: &[f64], a: f64, b: f64) -> bool {
         )
     };
     last >= first + 2
+}
+
+/// [`hides_breakpoints`] for every pair of neighbouring `values`: each value's rank among
+/// the breakpoints is counted once rather than once per pair it belongs to.
+pub fn hides_breakpoints_along<const N: usize>(breakpoints: &[f64], values: &[f64; N]) -> bool {
+    if breakpoints.len() < 2 {
+        return false;
+    }
+    if breakpoints.len() > 32 {
+        return values
+            .windows(2)
+            .any(|w| hides_breakpoints(breakpoints, w[0], w[1]));
+    }
+    // Breakpoints at or below each value, and strictly below it.
+    let (mut at_or_below, mut below) = ([0usize; N], [0usize; N]);
+    for &x in breakpoints {
+        for k in 0..N {
+            at_or_below[k] += usize::from(x <= values[k]);
+            below[k] += usize::from(x < values[k]);
+        }
+    }
+    (1..N).any(|k| {
+        let (lo, hi) = if values[k - 1] <= values[k] {
+            (k - 1, k)
+        } else {
+            (k, k - 1)
+        };
+        below[hi] >= at_or_below[lo] + 2
+    })
 }
 
 /// Colour and extinction at one point of a ray, in f64 for the accurate integrators.

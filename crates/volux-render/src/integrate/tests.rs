@@ -238,3 +238,23 @@ fn coupled_ray_driven_from_outside_is_the_coupled_integrator() {
         assert_eq!(got.tolerance_missed, want.tolerance_missed);
     }
 }
+
+#[test]
+fn breakpoints_along_samples_agree_with_each_pair() {
+    let bp = [0.1, 0.2, 0.2, 0.45, 0.5, 0.55, 0.9];
+    let mut seed = 7u32;
+    let mut next = || {
+        seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        // Values on a coarse grid, so that some fall exactly on breakpoints.
+        f64::from(seed >> 28) / 20.0
+    };
+    let mut hidden = 0;
+    for _ in 0..4000 {
+        let v: [f64; 5] = std::array::from_fn(|_| next());
+        let pairwise = v.windows(2).any(|w| hides_breakpoints(&bp, w[0], w[1]));
+        assert_eq!(hides_breakpoints_along(&bp, &v), pairwise, "{v:?}");
+        hidden += usize::from(pairwise);
+    }
+    assert!((100..3900).contains(&hidden), "{hidden}");
+    assert!(!hides_breakpoints_along(&[0.5], &[0.0, 1.0, 0.0, 1.0, 0.0]));
+}

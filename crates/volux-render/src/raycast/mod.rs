@@ -17,8 +17,9 @@ use volux_core::{Camera, Grid, Image, RayGenerator, TransferFunction};
 use crate::classify::{Classified, ClassifyTable, StepTable};
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{
-    adaptive_simpson_intervals, adaptive_simpson_pieces, hides_breakpoints, riemann_step, simpson,
-    trapezoid, AdaptiveParams, Integrator, Medium, RayAccumulator, RayIntegral, RayMedium,
+    adaptive_simpson_intervals, adaptive_simpson_pieces, hides_breakpoints,
+    hides_breakpoints_along, riemann_step, simpson, trapezoid, AdaptiveParams, Integrator, Medium,
+    RayAccumulator, RayIntegral, RayMedium,
 };
 use crate::isosurface::{Crossing, Isosurfaces};
 use crate::macrocell::{MacrocellGrid, Occupancy};
@@ -563,6 +564,10 @@ impl<F: Field> RayMedium for GridRay<'_, F> {
 
     fn hides_features(&self, a: f64, b: f64) -> bool {
         hides_breakpoints(self.breakpoints, a, b)
+    }
+
+    fn hides_features_along(&self, values: &[f64; 5]) -> bool {
+        hides_breakpoints_along(self.breakpoints, values)
     }
 }
 

@@ -24,7 +24,7 @@ use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
 use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{CellClassifier, PsiTable};
-use crate::integrate::{hides_breakpoints, Medium, RayMedium};
+use crate::integrate::{hides_breakpoints, hides_breakpoints_along, Medium, RayMedium};
 use crate::isosurface::Isovalue;
 use crate::pt::fragment::{ColorMode, FragmentShader};
 use crate::shading::BlinnPhong;
@@ -420,5 +420,9 @@ impl RayMedium for SegmentMedium<'_> {
 
     fn hides_features(&self, a: f64, b: f64) -> bool {
         hides_breakpoints(self.breakpoints, a, b)
+    }
+
+    fn hides_features_along(&self, values: &[f64; 5]) -> bool {
+        hides_breakpoints_along(self.breakpoints, values)
     }
 }
