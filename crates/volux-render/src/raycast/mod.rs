@@ -1,11 +1,18 @@
 //! Image-order traversal of regular grids: one ray per pixel, exact ray/box entry and exit,
-//! front-to-back compositing with early ray termination, parallel over image rows.
+//! front-to-back compositing with early ray termination, parallel over square image tiles.
 //!
 //! Each ray is handed to one of the [`Integrator`]s of [`crate::integrate`] as a
 //! [`RayMedium`] (trilinear reconstruction of [`crate::sampling`], classification of
 //! [`crate::classify`]); steps are given in voxel units (the smallest spacing), as in the seed
-//! `001_...txt`. Output does not depend on the number of threads: every pixel is computed
-//! independently.
+//! `001_...txt`. A tile takes one of three paths:
+//!
+//! - emission-only Riemann sums: the lane stream of [`stream`], 16 rays advanced together;
+//! - adaptive Simpson with coupled control, unshaded: [`adaptive_stream`], four rays' steps
+//!   sampled together;
+//! - everything else (shading, isosurfaces, MIP, the other integrators): ray by ray.
+//!
+//! The paths compute the same sums (tested). Output does not depend on the number of threads:
+//! every pixel is computed independently.
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
