@@ -6,9 +6,10 @@
 //! [`crate::classify`]); steps are given in voxel units (the smallest spacing), as in the seed
 //! `001_...txt`. A tile takes one of three paths:
 //!
-//! - emission-only Riemann sums: the lane stream of [`stream`], 16 rays advanced together;
-//! - adaptive Simpson with coupled control, unshaded: [`adaptive_stream`], four rays' steps
-//!   sampled together;
+//! - emission-only Riemann sums: the lane stream (`raycast/stream.rs`), 16 rays advanced
+//!   together;
+//! - adaptive Simpson with coupled control, unshaded: `raycast/adaptive_stream.rs`, four
+//!   rays' steps sampled together;
 //! - everything else (shading, isosurfaces, MIP, the other integrators): ray by ray.
 //!
 //! The paths compute the same sums (tested). Output does not depend on the number of threads:
@@ -724,7 +725,7 @@ impl<F: Field> RayContext<'_, F> {
     }
 
     /// The step table when rays take the fast Riemann path (emission only, no isosurfaces,
-    /// no MIP): tiles are then rendered by the lane stream of [`stream`].
+    /// no MIP): tiles are then rendered by the lane stream (`stream.rs`).
     fn packet_table(&self) -> Option<&StepTable> {
         let lit = self.opts.shading.is_some() || !self.opts.isosurfaces.is_empty();
         match self.opts.integrator {
