@@ -59,8 +59,8 @@ impl<F: Field> RayContext<'_, F> {
         let (tw, th) = ((x0 + TILE).min(w) - x0, (y0 + TILE).min(h) - y0);
         let mut px = vec![PixelOut::default(); tw * th];
         let mut queue = block_order(tw, th).into_iter();
-        let mut next = || self.next_adaptive_ray(p, &mut queue, (x0, y0, tw));
-        let mut slots: Vec<Slot<'_, F>> = (0..RAYS).map_while(|_| next()).collect();
+        let mut next = |spans| self.next_adaptive_ray(p, &mut queue, (x0, y0, tw), spans);
+        let mut slots: Vec<Slot<'_, F>> = (0..RAYS).map_while(|_| next(Vec::new())).collect();
         while !slots.is_empty() {
             let mut pos = [[0.0f32; LANES]; 3];
             let mut k = 0;
@@ -69,7 +69,7 @@ impl<F: Field> RayContext<'_, F> {
                 s.wants = s.ray.wants(&s.spans, &mut s.ts);
                 if s.wants == 0 {
                     px[s.pixel] = pixel(&s.ray.result());
-                    match next() {
+                    match next(std::mem::take(&mut s.spans)) {
                         Some(fresh) => slots[k] = fresh,
                         None => {
                             slots.swap_remove(k);
@@ -101,17 +101,17 @@ impl<F: Field> RayContext<'_, F> {
     }
 
     /// The next ray of the tile that hits the volume (rays that miss keep their default
-    /// pixel), ready to integrate.
+    /// pixel), ready to integrate; `spans` is a finished ray's, reused.
     fn next_adaptive_ray(
         &self,
         p: &AdaptiveParams,
         queue: &mut impl Iterator<Item = usize>,
         (x0, y0, tw): (usize, usize, usize),
+        mut spans: Vec<(f64, f64)>,
     ) -> Option<Slot<'_, F>> {
         for pixel in queue.by_ref() {
             let (gx, gy) = (x0 + pixel % tw, y0 + pixel / tw);
             let ray = self.rays.ray(gx as f64 + 0.5, gy as f64 + 0.5);
-            let mut spans = Vec::new();
             if let Some((o_v, d_v, ..)) = self.setup(ray.origin, ray.dir, &mut spans) {
                 return Some(Slot {
                     ray: CoupledRay::new(&spans, p),
