@@ -185,7 +185,8 @@ impl<T: Scalar> std::ops::Deref for Buffer<T> {
     }
 }
 
-/// Grid samples in their native type (exhaustive: [`with_samples!`] matches every variant).
+/// Grid samples in their native type (exhaustive: [`with_samples!`](crate::with_samples)
+/// matches every variant).
 #[derive(Clone, Debug)]
 pub enum Samples {
     /// Unsigned 8-bit values.

@@ -3,7 +3,7 @@
 //!
 //! * `DATASET STRUCTURED_POINTS` (DIMENSIONS, SPACING or ASPECT_RATIO, ORIGIN) → a [`Grid`];
 //! * `DATASET UNSTRUCTURED_GRID` (POINTS, CELLS in the classic `n id...` layout or the
-//!   VTK 5.1 `OFFSETS`/`CONNECTIVITY` layout, CELL_TYPES) → a [`TetMesh`], cells split into
+//!   VTK 5.1 `OFFSETS`/`CONNECTIVITY` layout, CELL_TYPES) → a [`TetMesh`](volux_core::TetMesh), cells split into
 //!   tets by [`crate::cells`];
 //! * `DATASET STRUCTURED_GRID` (DIMENSIONS, POINTS) → 5 tets per cell.
 //!

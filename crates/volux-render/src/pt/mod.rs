@@ -44,7 +44,7 @@
 //! - [`fragment`]: the colour of a fragment (average, ψ, exact) with isosurfaces;
 //! - [`render`]: [`PtRenderer`], the stages wired together with the caches of the update step
 //!   (discard, per-tetrahedron pass, order, bins), parallel over tiles and deterministic;
-//! - [`reference`]: a brute-force per-pixel ray/tetrahedron integrator, the independent
+//! - [`reference`](mod@reference): a brute-force per-pixel ray/tetrahedron integrator, the independent
 //!   reference of the tests.
 
 pub mod classify;

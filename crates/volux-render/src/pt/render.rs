@@ -16,8 +16,8 @@
 //! 4. **binning** of the ordered tetrahedra into screen tiles;
 //! 5. **rasterization and compositing**, tiles in parallel, each compositing its own
 //!    fragments front to back in the global order (so the image does not depend on the
-//!    number of threads): classification and thick vertex ([`classify`],
-//!    [`fan_vertices`]), scanline rasterization with the top-left rule, perspective-correct
+//!    number of threads): classification and thick vertex ([`super::classify`],
+//!    `fan_vertices`), scanline rasterization with the top-left rule, perspective-correct
 //!    `(s_f, s_b, l)` and gradients, the fragment colour of [`FragmentShader`].
 //!
 //! A TF change that keeps the zero set re-runs only step 5 (recolouring without

@@ -6,7 +6,7 @@
 //!
 //! # Robustness
 //!
-//! Each cell's interval is the reference's clip ([`Geometry::clip`]): shared faces give
+//! Each cell's interval is the reference's clip (`Geometry::clip`): shared faces give
 //! bit-identical crossing parameters in both cells, and a ray in a face plane is claimed by
 //! exactly one of them. Every emitted segment has positive length and starts where the
 //! previous one ended (or later), so the current parameter `t` strictly increases and no cell
@@ -14,7 +14,7 @@
 //! continue the ray (it left through an edge or a vertex, so the chosen exit face was one of
 //! several; or it runs in a face plane the tie rule gives to another cell), a **local
 //! search** visits the cells around the exit point (breadth first across faces, only cells
-//! containing the point up to a tolerance, at most [`LOCAL_SEARCH`] of them) and continues in
+//! containing the point up to a tolerance, at most `LOCAL_SEARCH` of them) and continues in
 //! the one whose clip starts first past `t`. Only when that finds nothing is the boundary
 //! hierarchy queried from `t`: a true exit from the mesh (counted as a re-entry when the
 //! hierarchy finds more of the mesh), or, on a non-manifold mesh, a lost walk (counted as a
