@@ -38,14 +38,7 @@ impl<F: Field> RayContext<'_, F> {
         if p.control != StepControl::Coupled || self.opts.shading.is_some() || self.opts.mip {
             return None;
         }
-        let unit = self.place.spacing.min_element();
-        Some(AdaptiveParams {
-            h0: p.h0 * unit,
-            hmin: p.hmin * unit,
-            hmax: p.hmax * unit,
-            early_termination: self.opts.early_termination.map(f64::from),
-            ..p
-        })
+        Some(self.adaptive_in_world(&p))
     }
 
     /// Renders the tile at (`x0`, `y0`) with adaptive Simpson, [`RAYS`] rays at a time.

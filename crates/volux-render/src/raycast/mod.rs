@@ -627,16 +627,11 @@ impl<F: Field> RayContext<'_, F> {
             Integrator::Simpson { step } => {
                 simpson(&mut self.medium(o_v, d_v), t0, t1, step * unit)
             }
-            Integrator::AdaptiveSimpson(p) => {
-                let p = AdaptiveParams {
-                    h0: p.h0 * unit,
-                    hmin: p.hmin * unit,
-                    hmax: p.hmax * unit,
-                    early_termination: self.opts.early_termination.map(f64::from),
-                    ..p
-                };
-                adaptive_simpson_intervals(&mut self.medium(o_v, d_v), spans, &p)
-            }
+            Integrator::AdaptiveSimpson(p) => adaptive_simpson_intervals(
+                &mut self.medium(o_v, d_v),
+                spans,
+                &self.adaptive_in_world(&p),
+            ),
             Integrator::Preintegrated { step } => {
                 return self.preintegrated(o_v, d_v, (t0, t1), spans, step * unit, jitter)
             }
@@ -699,6 +694,18 @@ impl<F: Field> RayContext<'_, F> {
             ..self.medium(o_v, d_v)
         };
         adaptive_simpson_pieces(&mut medium, &breaks, &p)
+    }
+
+    /// Adaptive parameters with the steps in world units and the render's early termination.
+    fn adaptive_in_world(&self, p: &AdaptiveParams) -> AdaptiveParams {
+        let unit = self.place.spacing.min_element();
+        AdaptiveParams {
+            h0: p.h0 * unit,
+            hmin: p.hmin * unit,
+            hmax: p.hmax * unit,
+            early_termination: self.opts.early_termination.map(f64::from),
+            ..*p
+        }
     }
 
     /// The tile at (`x0`, `y0`), one ray after the other.
