@@ -741,9 +741,10 @@ impl<F: Field> RayContext<'_, F> {
         }
     }
 
-    /// The fast f32 path: left Riemann sum (eq. 2.14) with early ray termination. Samples sit
-    /// on the lattice `t0 + (i + jitter) h` whatever the skipped spans, so skipping empty
-    /// space changes nothing in the image.
+    /// The left Riemann sum (eq. 2.14) of lit rays (shading or isosurfaces), one sample at a
+    /// time with early ray termination; emission-only rays take the lane stream (`stream.rs`),
+    /// which computes the same sums. Samples sit on the lattice `t0 + (i + jitter) h` whatever
+    /// the skipped spans, so skipping empty space changes nothing in the image.
     fn riemann(
         &self,
         o_v: DVec3,
@@ -755,7 +756,6 @@ impl<F: Field> RayContext<'_, F> {
     ) -> PixelOut {
         let (o_v, d_v) = (o_v.as_vec3(), d_v.as_vec3());
         let stop = self.opts.early_termination.unwrap_or(2.0);
-        let lit = self.opts.shading.is_some() || !self.opts.isosurfaces.is_empty();
         let view = (d_v * self.place.spacing.as_vec3()).normalize_or_zero();
         let mut acc = RayAccumulator::default();
         let mut n = 0u64;
@@ -771,7 +771,7 @@ impl<F: Field> RayContext<'_, F> {
                 }
                 let p = o_v + d_v * t as f32;
                 match self.field.sample(p) {
-                    Some(v) if lit => {
+                    Some(v) => {
                         self.isosurfaces_between(
                             prev,
                             (t, v),
@@ -786,16 +786,6 @@ impl<F: Field> RayContext<'_, F> {
                         riemann_step(&mut acc, c, h.min(t1 - t) as f32);
                         prev = Some((t, v));
                     }
-                    Some(v) => match &self.step_table {
-                        Some(st) if t + h <= t1 => {
-                            let e = st.lookup(v);
-                            let w = 1.0 - acc.rgba[3];
-                            for (a, ec) in acc.rgba.iter_mut().zip(e) {
-                                *a += w * ec;
-                            }
-                        }
-                        _ => riemann_step(&mut acc, self.table.lookup(v), (t1 - t).min(h) as f32),
-                    },
                     None => prev = None,
                 }
                 n += 1;

@@ -82,6 +82,17 @@ fn marschner_lobb_40(extinction: &str, size: (usize, usize)) -> (Grid, RenderOpt
     (g, o)
 }
 
+/// A lighting model that leaves every colour as it is (ambient 1, no diffuse, no specular):
+/// it sends rays down the per-sample paths of lit renders without changing their sums.
+fn identity_lighting() -> BlinnPhong {
+    BlinnPhong {
+        ambient: 1.0,
+        diffuse: 0.0,
+        specular: 0.0,
+        ..BlinnPhong::default()
+    }
+}
+
 /// The lane stream of the emission-only Riemann sum against the per-sample loop that lit
 /// renders take (here with a lighting model that changes nothing): the same sums, so equal to
 /// rounding, including the shortened last slabs of rays grazing the volume's edges and rays
@@ -89,12 +100,7 @@ fn marschner_lobb_40(extinction: &str, size: (usize, usize)) -> (Grid, RenderOpt
 #[test]
 fn lane_stream_matches_the_per_sample_loop() {
     let (g, mut o) = marschner_lobb_40(r#"[[0,0],[0.2,0],[0.5,3],[1,1]]"#, (61, 47));
-    let identity = BlinnPhong {
-        ambient: 1.0,
-        diffuse: 0.0,
-        specular: 0.0,
-        ..BlinnPhong::default()
-    };
+    let identity = identity_lighting();
     for (step, jitter, stop) in [
         (0.5, false, Some(0.99)),
         (0.7, true, None),
@@ -126,12 +132,7 @@ fn lane_stream_matches_the_per_sample_loop() {
 #[test]
 fn batched_adaptive_rays_match_ray_by_ray() {
     let (g, mut o) = marschner_lobb_40(r#"[[0,0],[0.45,0],[0.5,2],[0.6,0],[1,0.5]]"#, (37, 29));
-    let identity = BlinnPhong {
-        ambient: 1.0,
-        diffuse: 0.0,
-        specular: 0.0,
-        ..BlinnPhong::default()
-    };
+    let identity = identity_lighting();
     for (stop, hmax) in [(None, 2.0), (Some(0.9), 0.5)] {
         o.integrator = Integrator::AdaptiveSimpson(AdaptiveParams {
             tol: 0.005,
