@@ -103,46 +103,60 @@ impl ClassifyTable {
 impl ClassifyTable {
     /// The table for a fixed Riemann step `h` (world units): per entry the premultiplied
     /// colour and opacity `1 - exp(-tau h)` of one slab, so the hot loop needs no `exp`.
-    pub fn for_step(&self, h: f32) -> StepTable {
-        let n = STEP_TABLE_SIZE;
+    pub fn for_step(&self, h: f32) -> LaneTable {
+        self.resampled(|c| {
+            let a = 1.0 - (-c.tau * h).exp();
+            [c.rgb[0] * a, c.rgb[1] * a, c.rgb[2] * a, a]
+        })
+    }
+
+    /// The table itself (colour and extinction, `[r, g, b, tau]` per entry) for lane-wise
+    /// lookups.
+    pub fn for_lanes(&self) -> LaneTable {
+        self.resampled(|c| [c.rgb[0], c.rgb[1], c.rgb[2], c.tau])
+    }
+
+    /// `entry` of the classification at each of the [`LANE_TABLE_SIZE`] entries of a
+    /// [`LaneTable`] over the same domain.
+    fn resampled(&self, entry: impl Fn(Classified) -> [f32; 4]) -> LaneTable {
+        let n = LANE_TABLE_SIZE;
         let last = (self.entries.len() - 1) as f32;
         let entries: Vec<[f32; 4]> = (0..n)
             .map(|k| {
-                let c = if self.entries.len() == n {
+                entry(if self.entries.len() == n {
                     self.entries[k]
                 } else {
                     self.lookup(self.lo + k as f32 * last / ((n - 1) as f32 * self.scale))
-                };
-                let a = 1.0 - (-c.tau * h).exp();
-                [c.rgb[0] * a, c.rgb[1] * a, c.rgb[2] * a, a]
+                })
             })
             .collect();
-        StepTable {
+        LaneTable {
             entries: entries
                 .into_boxed_slice()
                 .try_into()
-                .unwrap_or_else(|_| Box::new([[0.0; 4]; STEP_TABLE_SIZE])),
+                .unwrap_or_else(|_| Box::new([[0.0; 4]; LANE_TABLE_SIZE])),
             lo: self.lo,
             scale: self.scale * (n - 1) as f32 / last,
         }
     }
 }
 
-/// Entries of a [`StepTable`]: a power of two, so that masked indices need no bounds check.
-pub const STEP_TABLE_SIZE: usize = 4096;
+/// Entries of a [`LaneTable`]: a power of two, so that masked indices need no bounds check.
+pub const LANE_TABLE_SIZE: usize = 4096;
 
-/// Premultiplied colour and opacity of one fixed-length slab per value (see
-/// [`ClassifyTable::for_step`]), at [`STEP_TABLE_SIZE`] values over the classification
-/// table's domain; lookups interpolate linearly between entries.
+/// Four channels per value at [`LANE_TABLE_SIZE`] values over the classification table's
+/// domain, lookups interpolating linearly between entries, for lane-wise classification:
+/// the premultiplied colour and opacity of one fixed-length slab ([`ClassifyTable::for_step`])
+/// or colour and extinction ([`ClassifyTable::for_lanes`]).
 #[derive(Clone, Debug)]
-pub struct StepTable {
-    entries: Box<[[f32; 4]; STEP_TABLE_SIZE]>,
+pub struct LaneTable {
+    entries: Box<[[f32; 4]; LANE_TABLE_SIZE]>,
     lo: f32,
     scale: f32,
 }
 
-impl StepTable {
-    /// Premultiplied RGBA of a slab of value `s`.
+impl LaneTable {
+    /// The four channels at value `s`.
     #[inline]
     pub fn lookup(&self, s: f32) -> [f32; 4] {
         let (i, f) = self.position(s);
@@ -153,7 +167,7 @@ impl StepTable {
     /// value reads entry 0). Branch-free, so lanes of values compute it together.
     #[inline(always)]
     pub fn position(&self, s: f32) -> (u32, f32) {
-        const LAST: f32 = (STEP_TABLE_SIZE - 1) as f32;
+        const LAST: f32 = (LANE_TABLE_SIZE - 1) as f32;
         let x = (s - self.lo) * self.scale;
         // Selects rather than max/min: one instruction each, NaN going to 0.
         let x = if x > 0.0 { x } else { 0.0 };
@@ -161,14 +175,14 @@ impl StepTable {
         // The floor without a cast (see `floor_small`); `x <= LAST`, so the entry is clamped
         // by subtracting one where it passes the last pair.
         let i = crate::sampling::floor_small(x);
-        let i = i - i32::from(i > STEP_TABLE_SIZE as i32 - 2);
+        let i = i - i32::from(i > LANE_TABLE_SIZE as i32 - 2);
         (i as u32, x - i as f32)
     }
 
     /// The entries `i` and `i + 1` interpolated at fraction `f`.
     #[inline(always)]
     pub fn at(&self, i: u32, f: f32) -> [f32; 4] {
-        let mask = STEP_TABLE_SIZE - 1;
+        let mask = LANE_TABLE_SIZE - 1;
         let (a, b) = (
             self.entries[i as usize & mask],
             self.entries[(i as usize + 1) & mask],
@@ -179,6 +193,52 @@ impl StepTable {
             a[2] + (b[2] - a[2]) * f,
             a[3] + (b[3] - a[3]) * f,
         ]
+    }
+}
+
+impl LaneTable {
+    /// Bounds on the number of `breakpoints` (sorted scalar values) at or below and strictly
+    /// below each value, per entry: for the hidden-peak test of adaptive integration, read with
+    /// the entry index that classification already computes.
+    pub fn breakpoint_ranks(&self, breakpoints: &[f64]) -> BreakpointRanks {
+        // Entry k's value, and half an entry of margin for the f32 rounding of `position`.
+        let x = |k: usize| f64::from(self.lo) + k as f64 / f64::from(self.scale);
+        let margin = 0.5 / f64::from(self.scale);
+        let below = |v: f64| breakpoints.iter().filter(|&&b| b < v).count() as f32;
+        let at_or_below = |v: f64| breakpoints.iter().filter(|&&b| b <= v).count() as f32;
+        let ranks: Vec<[f32; 2]> = (0..LANE_TABLE_SIZE)
+            .map(|k| match k {
+                // Values below the domain clamp to the first entry, above it to the last pair.
+                0 => [0.0, at_or_below(x(1) + margin)],
+                k if k >= LANE_TABLE_SIZE - 2 => [below(x(k) - margin), breakpoints.len() as f32],
+                k => [below(x(k) - margin), at_or_below(x(k + 1) + margin)],
+            })
+            .collect();
+        BreakpointRanks {
+            ranks: ranks
+                .into_boxed_slice()
+                .try_into()
+                .unwrap_or_else(|_| Box::new([[0.0; 2]; LANE_TABLE_SIZE])),
+        }
+    }
+}
+
+/// Per [`LaneTable`] entry `i`, a lower bound of the number of breakpoints at or below any
+/// value in `[x_i, x_(i+1)]` (those below `x_i`, less half an entry for rounding) and an upper
+/// bound of the number strictly below it (those at or below `x_(i+1)`, plus half an entry).
+/// Bounds rather than counts: a test built on them may flag a step whose values come within
+/// two entries of a breakpoint, and never misses one.
+#[derive(Clone, Debug)]
+pub struct BreakpointRanks {
+    ranks: Box<[[f32; 2]; LANE_TABLE_SIZE]>,
+}
+
+impl BreakpointRanks {
+    /// The bounds `[at or below, below]` for a value at entry `i` (from
+    /// [`LaneTable::position`]).
+    #[inline(always)]
+    pub fn at(&self, i: u32) -> [f32; 2] {
+        self.ranks[i as usize & (LANE_TABLE_SIZE - 1)]
     }
 }
 
@@ -212,6 +272,37 @@ mod tests {
             assert_eq!(st.lookup(500.0), st.lookup(100.0));
             assert_eq!(st.lookup(f32::NAN), st.lookup(0.0));
         }
+    }
+
+    /// The rank bounds hold for every value, and are exact within the domain away from the
+    /// breakpoints.
+    #[test]
+    fn breakpoint_ranks_bound_the_counts() {
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[0,0,0,0],[100,1,0.5,0.25]], "extinction": [[0,0],[40,0.2],[41,3],[42.5,0],[100,1]]}"#,
+        )
+        .unwrap();
+        let bp = tf.resolved([0.0, 100.0]).breakpoints();
+        let table = ClassifyTable::new(&tf, [0.0, 100.0], ClassifyTable::DEFAULT_SIZE).for_lanes();
+        let ranks = table.breakpoint_ranks(&bp);
+        let entry = 100.0 / (LANE_TABLE_SIZE - 1) as f64;
+        let mut exact = 0;
+        for i in 0..=20_000 {
+            let v = -5.0 + 110.0 * f64::from(i) / 20_000.0;
+            let [at_or_below, below] = ranks.at(table.position(v as f32).0);
+            let le = bp.iter().filter(|&&b| b <= v).count() as f32;
+            let lt = bp.iter().filter(|&&b| b < v).count() as f32;
+            assert!(
+                at_or_below <= le && below >= lt,
+                "{v}: {at_or_below} {below} {le} {lt}"
+            );
+            let inside = (0.0..=100.0).contains(&v);
+            if inside && bp.iter().all(|b| (b - v).abs() > 3.0 * entry) {
+                assert_eq!((at_or_below, below), (le, lt), "{v}");
+                exact += 1;
+            }
+        }
+        assert!(exact > 17_000, "{exact}");
     }
 
     #[test]

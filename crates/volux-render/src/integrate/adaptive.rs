@@ -91,31 +91,6 @@ impl Probe {
         self.known = 0x1f;
     }
 
-    /// The distances of the samples the probe lacks, in order, into `out`; their number.
-    fn missing(&self, out: &mut [f64; 4]) -> usize {
-        let mut n = 0;
-        for k in 1..5 {
-            if self.known & (1 << k) == 0 {
-                out[n] = self.t + self.h * k as f64 / 4.0;
-                n += 1;
-            }
-        }
-        n
-    }
-
-    /// Takes the samples at the distances of [`Probe::missing`], in the same order.
-    fn supply(&mut self, samples: &[Medium]) {
-        let mut next = samples.iter();
-        for k in 1..5 {
-            if self.known & (1 << k) == 0 {
-                if let Some(&m) = next.next() {
-                    self.s[k] = m;
-                }
-            }
-        }
-        self.known = 0x1f;
-    }
-
     /// Starts the step `[t, t + h]` from the known sample `first` (in place: no copy of the
     /// five samples).
     #[inline]
@@ -410,77 +385,6 @@ impl CoupledSpan {
     }
 }
 
-/// One ray under coupled control over its intervals, advanced from outside one probe at a time,
-/// so that a renderer can take the samples of several rays' steps together: ask
-/// [`CoupledRay::wants`] for the distances to sample, hand the samples to
-/// [`CoupledRay::supply`], until it wants none. The same sums as
-/// [`adaptive_simpson_intervals`] with [`StepControl::Coupled`].
-pub struct CoupledRay {
-    params: AdaptiveParams,
-    ray: Ray,
-    len: f64,
-    /// The next interval to enter.
-    next: usize,
-    /// The interval whose first sample was asked for.
-    entering: Option<(f64, f64)>,
-    span: Option<CoupledSpan>,
-}
-
-impl CoupledRay {
-    /// A ray over `intervals` (disjoint and ordered; the medium is transparent between them).
-    pub fn new(intervals: &[(f64, f64)], p: &AdaptiveParams) -> Self {
-        Self {
-            params: *p,
-            ray: Ray::new(p),
-            len: intervals.iter().map(|(a, b)| (b - a).max(0.0)).sum(),
-            next: 0,
-            entering: None,
-            span: None,
-        }
-    }
-
-    /// Writes into `out` the distances at which the ray must be sampled next and returns
-    /// their number, between 1 and 4; 0 once the ray is finished. `intervals` are the ones
-    /// given to [`CoupledRay::new`].
-    pub fn wants(&mut self, intervals: &[(f64, f64)], out: &mut [f64; 4]) -> usize {
-        if let Some(span) = &self.span {
-            if !span.finished(&self.ray) {
-                return span.probe.missing(out);
-            }
-            self.span = None;
-        }
-        while let Some(&(t0, t1)) = intervals.get(self.next) {
-            self.next += 1;
-            if t1 > t0 && !self.ray.done() {
-                self.entering = Some((t0, t1));
-                out[0] = t0;
-                return 1;
-            }
-        }
-        0
-    }
-
-    /// Takes the samples at the distances of the last [`CoupledRay::wants`] and advances.
-    pub fn supply(&mut self, m: &impl RayMedium, samples: &[Medium]) {
-        self.ray.samples += samples.len() as u64;
-        if let Some(interval) = self.entering.take() {
-            let first = samples.first().copied().unwrap_or_default();
-            self.span = Some(CoupledSpan::new(interval, self.len, first, &self.params));
-        } else if let Some(span) = &mut self.span {
-            span.probe.supply(samples);
-            span.step(m, &mut self.ray, &self.params);
-        }
-    }
-
-    /// The integral so far (the result once [`CoupledRay::wants`] returns 0).
-    pub fn result(&self) -> RayIntegral {
-        let mut out = RayIntegral::from_parts(self.ray.color, self.ray.depth, self.ray.samples);
-        out.error = self.ray.error;
-        out.tolerance_missed = self.ray.missed;
-        out
-    }
-}
-
 #[allow(clippy::too_many_arguments)]
 fn decoupled(
     m: &mut impl RayMedium,
@@ -567,4 +471,4 @@ fn outer_interval(
 /// boundaries and piecewise-linear TFs at their breakpoints, where it underestimates. Measured
 /// on Marschner-Lobb and the phantom against the reference, a factor of 1/2 keeps 99.9 % of
 /// rays within the requested tolerance.
-const SAFETY: f64 = 0.5;
+pub(crate) const SAFETY: f64 = 0.5;

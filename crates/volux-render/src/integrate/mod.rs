@@ -12,17 +12,20 @@
 //! - [`riemann`]: left Riemann sum with step-corrected opacity (eq. 2.14), order 1;
 //! - [`fixed::trapezoid`], [`fixed::simpson`]: fixed-step rules, orders 2 and 4;
 //! - [`adaptive::adaptive_simpson`]: the iterative adaptive Simpson of Algorithms 3 and 4,
-//!   coupled or decoupled step control, error estimated per channel R, G, B, A.
+//!   coupled or decoupled step control, error estimated per channel R, G, B, A, in f64;
+//! - [`adaptive_lanes::AdaptiveLanes`]: the same coupled control for four rays at once in f32
+//!   lanes, the fast path of renderers that sample several rays together.
 use crate::classify::Classified;
 
 pub mod adaptive;
+pub mod adaptive_lanes;
 pub mod fixed;
 pub mod preintegrated;
 pub mod psi;
 
 pub use adaptive::{
     adaptive_simpson, adaptive_simpson_intervals, adaptive_simpson_pieces, AdaptiveParams,
-    CoupledRay, StepControl,
+    StepControl,
 };
 pub use fixed::{simpson, trapezoid};
 

@@ -201,44 +201,6 @@ fn adaptive_refines_across_hidden_tf_peaks() {
     );
 }
 
-/// A ray advanced from outside, one probe at a time, gives exactly the sums of the adaptive
-/// integrator's own loop: over gaps, with early termination, and across a hidden TF peak.
-#[test]
-fn coupled_ray_driven_from_outside_is_the_coupled_integrator() {
-    struct Peaked;
-    impl RayMedium for Peaked {
-        fn at(&mut self, t: f64) -> Medium {
-            let mut m = medium(t);
-            m.tau += (1.0 - ((t - 1.3) / 0.02).abs()).max(0.0) * 40.0;
-            m
-        }
-        fn hides_features(&self, a: f64, b: f64) -> bool {
-            hides_breakpoints(&[1.28, 1.3, 1.32], a, b)
-        }
-    }
-    let intervals = [(0.0, 0.4), (0.4, 0.4), (0.7, 1.6), (1.9, L)];
-    for stop in [None, Some(0.6)] {
-        let mut p = params(1e-3, StepControl::Coupled);
-        p.early_termination = stop;
-        let want = adaptive_simpson_intervals(&mut Peaked, &intervals, &p);
-        let mut ray = CoupledRay::new(&intervals, &p);
-        let mut ts = [0.0; 4];
-        loop {
-            let n = ray.wants(&intervals, &mut ts);
-            if n == 0 {
-                break;
-            }
-            let samples: Vec<Medium> = ts[..n].iter().map(|&t| Peaked.at(t)).collect();
-            ray.supply(&Peaked, &samples);
-        }
-        let got = ray.result();
-        assert_eq!(got.rgba, want.rgba, "stop {stop:?}");
-        assert_eq!(got.samples, want.samples);
-        assert_eq!(got.error, want.error);
-        assert_eq!(got.tolerance_missed, want.tolerance_missed);
-    }
-}
-
 #[test]
 fn breakpoints_along_samples_agree_with_each_pair() {
     let bp = [0.1, 0.2, 0.2, 0.45, 0.5, 0.55, 0.9];

@@ -1,50 +1,67 @@
 //! Adaptive Simpson with coupled control (`001_...txt` Algorithm 3) over the rays of a tile,
-//! [`RAYS`] rays at a time: each round asks every ray for the samples of its next step (the
-//! up to four points its probe lacks, or the first point of its next interval) and takes them
-//! all in one call of the [`LANES`]-lane sampler, then lets each ray judge its step.
+//! [`RAYS`] rays at a time, in f32 lanes ([`AdaptiveLanes`]): each round samples the four
+//! new points of every ray's step in one call of the [`LANES`]-lane sampler, classifies them
+//! lane-wise, and lets the integrator judge all the steps together.
 //!
 //! One ray's steps form a serial chain (sample, estimate the error, accept or halve), so a ray
-//! alone keeps the processor waiting; several rays' samples taken together fill the lanes. The
-//! step control itself is [`CoupledRay`], the integrator's own: images are the ones
-//! [`adaptive_simpson_intervals`](crate::integrate::adaptive_simpson_intervals) gives ray by
-//! ray.
+//! alone keeps the processor waiting; several rays' steps taken together fill the lanes, and
+//! their rules, error estimates and `exp` run lane-wise. Rays enter the slots in 4 x 4 pixel
+//! blocks, so that a round's points lie close together in the volume.
+use glam::Vec3;
+
 use super::stream::block_order;
-use super::{pixel, GridRay, PixelOut, RayContext, TILE};
-use crate::integrate::{AdaptiveParams, CoupledRay, Integrator, Medium, StepControl};
+use super::{pixel, PixelOut, RayContext, TILE};
+use crate::classify::{BreakpointRanks, LaneTable};
+use crate::integrate::adaptive_lanes::{AdaptiveLanes, LaneMedia, RAYS};
+use crate::integrate::{AdaptiveParams, Integrator, StepControl};
 use crate::sampling::{Field, LANES};
 
-/// Rays advanced together: each may ask for up to four samples per round.
-const RAYS: usize = LANES / 4;
-
-/// One ray of the round.
-struct Slot<'a, F> {
-    ray: CoupledRay,
-    medium: GridRay<'a, F>,
-    spans: Vec<(f64, f64)>,
-    /// Index of the ray's pixel in its tile.
+/// The ray in one slot: its pixel, the intervals to integrate and the next one to enter.
+#[derive(Default)]
+struct Slot {
     pixel: usize,
-    /// The distances to sample this round, and how many.
-    ts: [f64; 4],
-    wants: usize,
+    spans: Vec<(f64, f64)>,
+    next: usize,
+}
+
+/// What the lane path needs beyond the ray context.
+pub(super) struct LanePath<'a> {
+    params: AdaptiveParams,
+    table: &'a LaneTable,
+    ranks: &'a BreakpointRanks,
+}
+
+/// The tile's rays in flight: slots and their voxel-space origins and directions, lane-wise.
+struct Flight {
+    lanes: AdaptiveLanes,
+    slots: [Option<Slot>; RAYS],
+    origin: [[f32; RAYS]; 3],
+    dir: [[f32; RAYS]; 3],
 }
 
 impl<F: Field> RayContext<'_, F> {
-    /// The adaptive parameters in world units when tiles take the batched path: coupled
-    /// control, table classification, no shading (its gradients are taken per sample).
-    pub(super) fn adaptive_stream_params(&self) -> Option<AdaptiveParams> {
+    /// The adaptive parameters in world units and the classification tables when tiles take
+    /// the lane path: coupled control, no shading (its gradients are taken per sample), no
+    /// MIP, and a tolerance the f32 lanes resolve.
+    pub(super) fn adaptive_stream_params(&self) -> Option<LanePath<'_>> {
         let Integrator::AdaptiveSimpson(p) = self.opts.integrator else {
             return None;
         };
-        if p.control != StepControl::Coupled || self.opts.shading.is_some() || self.opts.mip {
-            return None;
-        }
-        Some(self.adaptive_in_world(&p))
+        let lane_path = p.control == StepControl::Coupled
+            && p.tol >= AdaptiveLanes::MIN_TOL
+            && self.opts.shading.is_none()
+            && !self.opts.mip;
+        Some(LanePath {
+            params: self.adaptive_in_world(&p),
+            table: self.lane_table.as_ref().filter(|_| lane_path)?,
+            ranks: self.breakpoint_ranks.as_ref()?,
+        })
     }
 
     /// Renders the tile at (`x0`, `y0`) with adaptive Simpson, [`RAYS`] rays at a time.
     pub(super) fn adaptive_stream(
         &self,
-        p: &AdaptiveParams,
+        path: LanePath<'_>,
         x0: usize,
         y0: usize,
     ) -> Vec<PixelOut> {
@@ -52,70 +69,117 @@ impl<F: Field> RayContext<'_, F> {
         let (tw, th) = ((x0 + TILE).min(w) - x0, (y0 + TILE).min(h) - y0);
         let mut px = vec![PixelOut::default(); tw * th];
         let mut queue = block_order(tw, th).into_iter();
-        let mut next = |spans| self.next_adaptive_ray(p, &mut queue, (x0, y0, tw), spans);
-        let mut slots: Vec<Slot<'_, F>> = (0..RAYS).map_while(|_| next(Vec::new())).collect();
-        while !slots.is_empty() {
-            let mut pos = [[0.0f32; LANES]; 3];
-            let mut k = 0;
-            while k < slots.len() {
-                let s = &mut slots[k];
-                s.wants = s.ray.wants(&s.spans, &mut s.ts);
-                if s.wants == 0 {
-                    px[s.pixel] = pixel(&s.ray.result());
-                    match next(std::mem::take(&mut s.spans)) {
-                        Some(fresh) => slots[k] = fresh,
-                        None => {
-                            slots.swap_remove(k);
-                        }
-                    }
-                    continue;
-                }
-                for (j, &t) in s.ts[..s.wants].iter().enumerate() {
-                    let q = s.medium.o_v + s.medium.d_v * t;
-                    for a in 0..3 {
-                        pos[a][4 * k + j] = q[a] as f32;
-                    }
-                }
-                k += 1;
-            }
-            let v = self.field.sample_lanes(&pos);
-            for (k, s) in slots.iter_mut().enumerate() {
-                let mut media = [Medium::default(); 4];
-                for (j, m) in media[..s.wants].iter_mut().enumerate() {
-                    let x = v[4 * k + j];
-                    if !x.is_nan() {
-                        *m = s.medium.classify(f64::from(x));
-                    }
-                }
-                s.ray.supply(&s.medium, &media[..s.wants]);
+        let mut f = Flight {
+            lanes: AdaptiveLanes::new(&path.params),
+            slots: Default::default(),
+            origin: [[0.0; RAYS]; 3],
+            dir: [[0.0; RAYS]; 3],
+        };
+        for r in 0..RAYS {
+            self.load_ray(&mut f, r, Vec::new(), &mut queue, (x0, y0, tw));
+            self.advance(&mut f, r, &mut px, &mut queue, (x0, y0, tw));
+        }
+        while f.lanes.is_busy() {
+            let media = self.round_media(&f, &path);
+            f.lanes.supply(&media);
+            for r in 0..RAYS {
+                self.advance(&mut f, r, &mut px, &mut queue, (x0, y0, tw));
             }
         }
         px
     }
 
-    /// The next ray of the tile that hits the volume (rays that miss keep their default
-    /// pixel), ready to integrate; `spans` is a finished ray's, reused.
-    fn next_adaptive_ray(
+    /// Samples and classifies the points of this round.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn round_media(&self, f: &Flight, path: &LanePath<'_>) -> LaneMedia {
+        let t = f.lanes.distances();
+        let mut pos = [[0.0f32; LANES]; 3];
+        for a in 0..3 {
+            for l in 0..LANES {
+                pos[a][l] = f.origin[a][l % RAYS] + f.dir[a][l % RAYS] * t[l];
+            }
+        }
+        let v = self.field.sample_lanes(&pos);
+        let mut m = LaneMedia::default();
+        for l in 0..LANES {
+            let (i, frac) = path.table.position(v[l]);
+            let e = path.table.at(i, frac);
+            let ranks = path.ranks.at(i);
+            // An undefined (NaN) sample is empty, of value 0.
+            let defined = !v[l].is_nan();
+            for c in 0..3 {
+                m.rgb[c][l] = if defined { e[c] } else { 0.0 };
+            }
+            m.tau[l] = if defined { e[3] } else { 0.0 };
+            m.value[l] = if defined { v[l] } else { 0.0 };
+            // No peak is looked for next to an undefined sample (the medium there is empty):
+            // counts that never meet the test.
+            m.breakpoints_at_or_below[l] = if defined { ranks[0] } else { 1e9 };
+            m.breakpoints_below[l] = if defined { ranks[1] } else { -1e9 };
+        }
+        m
+    }
+
+    /// Enters slot `r`'s next interval while its ray needs one; a finished ray writes its
+    /// pixel and the slot takes the tile's next ray.
+    fn advance(
         &self,
-        p: &AdaptiveParams,
+        f: &mut Flight,
+        r: usize,
+        px: &mut [PixelOut],
+        queue: &mut impl Iterator<Item = usize>,
+        tile: (usize, usize, usize),
+    ) {
+        while f.lanes.needs_span(r) {
+            let Some(slot) = f.slots[r].as_mut() else {
+                f.lanes.idle(r);
+                return;
+            };
+            let span = slot.spans.get(slot.next).copied();
+            slot.next += 1;
+            match span {
+                Some(s) if !f.lanes.is_opaque(r) => {
+                    f.lanes.enter(r, s);
+                }
+                _ => {
+                    px[slot.pixel] = pixel(&f.lanes.result(r));
+                    let spans = std::mem::take(&mut slot.spans);
+                    self.load_ray(f, r, spans, queue, tile);
+                }
+            }
+        }
+    }
+
+    /// Loads the tile's next ray that hits the volume into slot `r` (rays that miss keep their
+    /// default pixel), or empties the slot; `spans` is a finished ray's, reused.
+    fn load_ray(
+        &self,
+        f: &mut Flight,
+        r: usize,
+        mut spans: Vec<(f64, f64)>,
         queue: &mut impl Iterator<Item = usize>,
         (x0, y0, tw): (usize, usize, usize),
-        mut spans: Vec<(f64, f64)>,
-    ) -> Option<Slot<'_, F>> {
+    ) {
         for pixel in queue.by_ref() {
             let (gx, gy) = (x0 + pixel % tw, y0 + pixel / tw);
             let ray = self.rays.ray(gx as f64 + 0.5, gy as f64 + 0.5);
             if let Some((o_v, d_v, ..)) = self.setup(ray.origin, ray.dir, &mut spans) {
-                return Some(Slot {
-                    ray: CoupledRay::new(&spans, p),
-                    medium: self.medium(o_v, d_v),
-                    spans,
+                let (o, d): (Vec3, Vec3) = (o_v.as_vec3(), d_v.as_vec3());
+                for a in 0..3 {
+                    (f.origin[a][r], f.dir[a][r]) = (o[a], d[a]);
+                }
+                f.lanes
+                    .start(r, spans.iter().map(|(a, b)| (b - a).max(0.0)).sum());
+                f.slots[r] = Some(Slot {
                     pixel,
-                    ts: [0.0; 4],
-                    wants: 0,
+                    spans,
+                    next: 0,
                 });
+                return;
             }
         }
-        None
+        f.slots[r] = None;
+        f.lanes.idle(r);
     }
 }

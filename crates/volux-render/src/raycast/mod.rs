@@ -9,7 +9,7 @@
 //! - emission-only Riemann sums: the lane stream (`raycast/stream.rs`), 16 rays advanced
 //!   together;
 //! - adaptive Simpson with coupled control, unshaded: `raycast/adaptive_stream.rs`, four
-//!   rays' steps sampled together;
+//!   rays' steps sampled and judged together in f32 lanes;
 //! - everything else (shading, isosurfaces, MIP, the other integrators): ray by ray.
 //!
 //! The paths compute the same sums (tested). Output does not depend on the number of threads:
@@ -22,7 +22,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::{Camera, Grid, Image, RayGenerator, TransferFunction};
 
-use crate::classify::{Classified, ClassifyTable, StepTable};
+use crate::classify::{BreakpointRanks, Classified, ClassifyTable, LaneTable};
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{
     adaptive_simpson_intervals, adaptive_simpson_pieces, hides_breakpoints,
@@ -410,6 +410,19 @@ fn render_with<F: Field>(
         .filter(|_| !opts.mip)
         .map(|m| Occupancy::new(m, &table, &isovalues))
         .filter(|o| worth_skipping(o.empty_fraction(), &opts.integrator));
+    let breakpoints = opts.tf.resolved(range).breakpoints();
+    let (lane_table, breakpoint_ranks) = match opts.integrator {
+        Integrator::Riemann { step } => (
+            Some(table.for_step((step * place.spacing.min_element()) as f32)),
+            None,
+        ),
+        Integrator::AdaptiveSimpson(_) => {
+            let lanes = table.for_lanes();
+            let ranks = lanes.breakpoint_ranks(&breakpoints);
+            (Some(lanes), Some(ranks))
+        }
+        _ => (None, None),
+    };
     let ctx = RayContext {
         field,
         place,
@@ -417,14 +430,10 @@ fn render_with<F: Field>(
         occupancy: occupancy.as_ref(),
         preintegration: derived.preintegration,
         gradients: derived.gradients,
-        step_table: match opts.integrator {
-            Integrator::Riemann { step } => {
-                Some(table.for_step((step * place.spacing.min_element()) as f32))
-            }
-            _ => None,
-        },
+        lane_table,
+        breakpoint_ranks,
         tf: opts.tf.resolved(range),
-        breakpoints: opts.tf.resolved(range).breakpoints(),
+        breakpoints,
         rays: opts.camera.rays(opts.width, opts.height),
         opts,
     };
@@ -448,7 +457,7 @@ fn render_with<F: Field>(
             let px = if let Some(st) = ctx.packet_table() {
                 ctx.riemann_stream(st, x0, y0)
             } else if let Some(p) = ctx.adaptive_stream_params() {
-                ctx.adaptive_stream(&p, x0, y0)
+                ctx.adaptive_stream(p, x0, y0)
             } else {
                 ctx.tile_ray_by_ray(x0, y0)
             };
@@ -502,8 +511,11 @@ struct RayContext<'a, F> {
     occupancy: Option<&'a Occupancy<'a>>,
     preintegration: Option<&'a PreintegrationTable>,
     gradients: Option<&'a GradientVolume>,
-    /// Per-slab colour and opacity for the Riemann step (no `exp` per sample).
-    step_table: Option<StepTable>,
+    /// The classification for the lane-wise paths: per-slab colour and opacity for the
+    /// Riemann step (no `exp` per sample), colour and extinction for adaptive Simpson.
+    lane_table: Option<LaneTable>,
+    /// Breakpoint counts per lane-table entry, for adaptive Simpson's hidden-peak test.
+    breakpoint_ranks: Option<BreakpointRanks>,
     tf: TransferFunction,
     breakpoints: Vec<f64>,
     /// The camera's rays for this image size.
@@ -733,10 +745,10 @@ impl<F: Field> RayContext<'_, F> {
 
     /// The step table when rays take the fast Riemann path (emission only, no isosurfaces,
     /// no MIP): tiles are then rendered by the lane stream (`stream.rs`).
-    fn packet_table(&self) -> Option<&StepTable> {
+    fn packet_table(&self) -> Option<&LaneTable> {
         let lit = self.opts.shading.is_some() || !self.opts.isosurfaces.is_empty();
         match self.opts.integrator {
-            Integrator::Riemann { .. } if !lit && !self.opts.mip => self.step_table.as_ref(),
+            Integrator::Riemann { .. } if !lit && !self.opts.mip => self.lane_table.as_ref(),
             _ => None,
         }
     }

@@ -14,7 +14,7 @@
 use glam::DVec3;
 
 use super::{pixel_hash, PixelOut, RayContext, TILE};
-use crate::classify::StepTable;
+use crate::classify::LaneTable;
 use crate::integrate::{riemann_step, Integrator, RayAccumulator};
 use crate::sampling::{Field, LANES};
 
@@ -120,7 +120,7 @@ impl Lanes {
 
 impl<F: Field> RayContext<'_, F> {
     /// Renders the tile at (`x0`, `y0`) with the lane stream (see the module docs).
-    pub(super) fn riemann_stream(&self, st: &StepTable, x0: usize, y0: usize) -> Vec<PixelOut> {
+    pub(super) fn riemann_stream(&self, st: &LaneTable, x0: usize, y0: usize) -> Vec<PixelOut> {
         let (w, h) = (self.opts.width, self.opts.height);
         let (tw, th) = ((x0 + TILE).min(w) - x0, (y0 + TILE).min(h) - y0);
         let mut px = vec![PixelOut::default(); tw * th];
@@ -145,7 +145,7 @@ impl<F: Field> RayContext<'_, F> {
     // Lane loops index several per-lane arrays at once: that is what vectorizes.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn steps(&self, lanes: &mut Lanes, st: &StepTable) -> u32 {
+    fn steps(&self, lanes: &mut Lanes, st: &LaneTable) -> u32 {
         loop {
             let mut pos = [[0.0f32; LANES]; 3];
             for a in 0..3 {

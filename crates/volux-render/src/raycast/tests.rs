@@ -125,17 +125,19 @@ fn lane_stream_matches_the_per_sample_loop() {
     }
 }
 
-/// Adaptive Simpson several rays at a time (the batched path) against ray by ray (taken when
-/// shading is on; here a lighting model that changes nothing): the same step decisions, so
-/// the same images, sample counts and error maps, with gaps from skipping and early
-/// termination.
+/// Adaptive Simpson in f32 lanes, four rays at a time, against the f64 integrator ray by ray
+/// (taken when shading is on; here a lighting model that changes nothing), with gaps from
+/// skipping and early termination: the same step decisions but where an error estimate sits
+/// at the tolerance within f32 rounding, so images within a small fraction of the tolerance
+/// and sample counts within 0.1 %.
 #[test]
-fn batched_adaptive_rays_match_ray_by_ray() {
+fn lane_adaptive_rays_match_the_f64_integrator() {
     let (g, mut o) = marschner_lobb_40(r#"[[0,0],[0.45,0],[0.5,2],[0.6,0],[1,0.5]]"#, (37, 29));
     let identity = identity_lighting();
+    let tol = 0.005;
     for (stop, hmax) in [(None, 2.0), (Some(0.9), 0.5)] {
         o.integrator = Integrator::AdaptiveSimpson(AdaptiveParams {
-            tol: 0.005,
+            tol,
             h0: 0.5,
             hmin: 0.05,
             hmax,
@@ -144,20 +146,28 @@ fn batched_adaptive_rays_match_ray_by_ray() {
         });
         o.early_termination = stop;
         o.shading = None;
-        let batched = render_grid(&g, &o).unwrap();
+        let lanes = render_grid(&g, &o).unwrap();
         o.shading = Some(identity);
         let single = render_grid(&g, &o).unwrap();
-        assert_eq!(
-            batched.image.pixels(),
-            single.image.pixels(),
-            "stop {stop:?}"
+        let (mut worst, mut sum) = (0.0f32, 0.0f64);
+        for (a, b) in lanes.image.pixels().iter().zip(single.image.pixels()) {
+            for c in 0..4 {
+                worst = worst.max((a[c] - b[c]).abs());
+                sum += f64::from((a[c] - b[c]).abs());
+            }
+        }
+        let mean = sum / (4 * lanes.image.pixels().len()) as f64;
+        // Measured: worst 2.2e-5, mean 2e-7.
+        assert!(worst < 0.02 * tol as f32, "stop {stop:?}: worst {worst}");
+        assert!(mean < 1e-6, "stop {stop:?}: mean {mean}");
+        let (nl, ns) = (lanes.stats.samples as f64, single.stats.samples as f64);
+        assert!((nl - ns).abs() <= 1e-3 * ns, "samples {nl} vs {ns}");
+        let (ol, os) = (
+            lanes.stats.rays_over_tolerance as f64,
+            single.stats.rays_over_tolerance as f64,
         );
-        assert_eq!(batched.stats.samples, single.stats.samples);
-        assert_eq!(
-            batched.stats.rays_over_tolerance,
-            single.stats.rays_over_tolerance
-        );
-        assert_eq!(batched.error_map, single.error_map);
+        assert!((ol - os).abs() <= 0.01 * os + 1.0, "over {ol} vs {os}");
+        assert!(lanes.image.coverage(0.05) > 0.2);
     }
 }
 
