@@ -205,6 +205,24 @@ impl StepSize {
         self.h = taken * 0.5;
         self.successes = 0;
     }
+
+    /// The control at the start of an interval: `h0` on the ray's first; `hmax` after a gap
+    /// of empty space (skipped), as if the gap's steps had been taken (they all succeed, and
+    /// grow to `hmax`), so that skipping changes the steps taken in occupied space as little
+    /// as possible and does not restart the growth from `h0` at every occupied span.
+    fn start(p: &AdaptiveParams, after_gap: bool) -> Self {
+        if after_gap {
+            Self {
+                h: p.hmax,
+                successes: 2,
+            }
+        } else {
+            Self {
+                h: p.h0,
+                successes: 0,
+            }
+        }
+    }
 }
 
 /// Running state of one ray.
@@ -218,6 +236,8 @@ struct Ray {
     samples: u64,
     error: f64,
     missed: bool,
+    /// Whether an interval was integrated and a gap of skipped space follows it.
+    after_gap: bool,
 }
 
 impl Ray {
@@ -242,6 +262,7 @@ impl Ray {
             samples: 0,
             error: 0.0,
             missed: false,
+            after_gap: false,
         }
     }
     fn done(&self) -> bool {
@@ -278,6 +299,7 @@ pub fn adaptive_simpson_intervals(
             StepControl::Coupled => coupled_scaled(m, t0, t1, len, first, p, &mut ray),
             StepControl::Decoupled => decoupled(m, t0, t1, len, first, p, &mut ray),
         }
+        ray.after_gap = true;
     }
     let mut out = RayIntegral::from_parts(ray.color, ray.depth, ray.samples);
     out.error = ray.error;
@@ -326,7 +348,7 @@ fn coupled_scaled(
     p: &AdaptiveParams,
     ray: &mut Ray,
 ) {
-    let mut span = CoupledSpan::new((t0, t1), len, first, p);
+    let mut span = CoupledSpan::new((t0, t1), len, first, p, ray);
     while !span.finished(ray) {
         span.probe.fill(m, &mut ray.samples);
         span.step(m, ray, p);
@@ -345,11 +367,8 @@ struct CoupledSpan {
 }
 
 impl CoupledSpan {
-    fn new((t0, t1): (f64, f64), len: f64, first: Medium, p: &AdaptiveParams) -> Self {
-        let step = StepSize {
-            h: p.h0,
-            successes: 0,
-        };
+    fn new((t0, t1): (f64, f64), len: f64, first: Medium, p: &AdaptiveParams, ray: &Ray) -> Self {
+        let step = StepSize::start(p, ray.after_gap);
         Self {
             t0,
             t1,
@@ -395,14 +414,8 @@ fn decoupled(
     p: &AdaptiveParams,
     ray: &mut Ray,
 ) {
-    let mut inner = StepSize {
-        h: p.h0,
-        successes: 0,
-    };
-    let mut outer = StepSize {
-        h: p.h0,
-        successes: 0,
-    };
+    let mut inner = StepSize::start(p, ray.after_gap);
+    let mut outer = StepSize::start(p, ray.after_gap);
     let mut t = t0;
     let mut probe = Probe::new(t, clamp_step(inner.h, p, t1 - t), first);
     while t1 - t > 1e-12 * len && !ray.done() {

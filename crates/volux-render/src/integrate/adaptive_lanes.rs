@@ -98,6 +98,8 @@ pub struct AdaptiveLanes {
     successes: [u32; RAYS],
     /// Whether the current step's four points are all new (else two are known).
     fresh: [bool; RAYS],
+    /// Whether the ray has integrated an interval (the next one follows a gap).
+    after_gap: [bool; RAYS],
     /// Allowed error per unit length.
     tol_per_length: [f32; RAYS],
     /// The sample at the start of the step, and its breakpoint counts.
@@ -150,6 +152,7 @@ impl AdaptiveLanes {
             step_h: [0.0; RAYS],
             successes: [0; RAYS],
             fresh: [true; RAYS],
+            after_gap: [false; RAYS],
             tol_per_length: [0.0; RAYS],
             rgb0: [[0.0; RAYS]; 3],
             tau0: [0.0; RAYS],
@@ -169,6 +172,7 @@ impl AdaptiveLanes {
     /// shared over it); it then needs its first interval.
     pub fn start(&mut self, r: usize, len: f64) {
         self.phase[r] = Phase::NeedsSpan;
+        self.after_gap[r] = false;
         self.tol_per_length[r] = if len > 0.0 {
             (f64::from(self.tol) / len) as f32
         } else {
@@ -214,7 +218,13 @@ impl AdaptiveLanes {
             return false;
         }
         (self.phase[r], self.t[r], self.t_end[r]) = (Phase::Entering, a, b);
-        (self.step_h[r], self.successes[r]) = (self.h0, 0);
+        // As the f64 integrator: `h0` on the first interval, `hmax` after a skipped gap.
+        (self.step_h[r], self.successes[r]) = if self.after_gap[r] {
+            (self.hmax, 2)
+        } else {
+            (self.h0, 0)
+        };
+        self.after_gap[r] = true;
         true
     }
 
