@@ -24,6 +24,9 @@ struct Slot {
     next: usize,
 }
 
+// A round's points fill one call of the sampler.
+const _: () = assert!(crate::integrate::adaptive_lanes::LANES == LANES);
+
 /// What the lane path needs beyond the ray context.
 pub(super) struct LanePath<'a> {
     params: AdaptiveParams,
