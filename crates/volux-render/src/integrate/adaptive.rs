@@ -281,7 +281,9 @@ pub fn adaptive_simpson(
 }
 
 /// Adaptive Simpson over disjoint, ordered intervals of one ray, the medium being transparent
-/// in the gaps (empty-space skipping); the tolerance is shared over their total length.
+/// in the gaps (empty-space skipping); the tolerance is shared over their total length. The
+/// first interval starts with the step `h0`, each later one with `hmax`, the step the control
+/// would have reached across the empty gap.
 pub fn adaptive_simpson_intervals(
     m: &mut impl RayMedium,
     intervals: &[(f64, f64)],
