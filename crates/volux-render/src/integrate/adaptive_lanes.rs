@@ -38,23 +38,12 @@ pub struct LaneMedia {
     pub tau: [f32; LANES],
     /// The scalar value classified (0 where undefined), for the hidden-peak test.
     pub value: [f32; LANES],
-    /// The number of transfer-function breakpoints at or below the value, or a lower bound.
+    /// The number of transfer-function breakpoints at or below the value, or a lower bound
+    /// (a table-based traversal reads bounds from
+    /// [`BreakpointRanks`](crate::classify::BreakpointRanks)).
     pub breakpoints_at_or_below: [f32; LANES],
     /// The number of breakpoints strictly below the value, or an upper bound.
     pub breakpoints_below: [f32; LANES],
-}
-
-impl LaneMedia {
-    /// Counts the sorted `breakpoints` at or below and below each lane's value exactly (a
-    /// traversal with a table may fill in bounds instead, see
-    /// [`BreakpointRanks`](crate::classify::BreakpointRanks)).
-    pub fn count_breakpoints(&mut self, breakpoints: &[f64]) {
-        for l in 0..LANES {
-            let v = f64::from(self.value[l]);
-            self.breakpoints_at_or_below[l] = breakpoints.partition_point(|&b| b <= v) as f32;
-            self.breakpoints_below[l] = breakpoints.partition_point(|&b| b < v) as f32;
-        }
-    }
 }
 
 /// Where a ray stands.

@@ -52,6 +52,16 @@ impl RayMedium for Peaked {
     }
 }
 
+/// The exact breakpoint counts of each lane's value.
+fn count_breakpoints(m: &mut LaneMedia) {
+    let bp = breakpoints();
+    for l in 0..LANES {
+        let v = f64::from(m.value[l]);
+        m.breakpoints_at_or_below[l] = bp.partition_point(|&b| b <= v) as f32;
+        m.breakpoints_below[l] = bp.partition_point(|&b| b < v) as f32;
+    }
+}
+
 /// Integrates `rays` (intervals each) with the lanes, more rays than slots so slots are
 /// refilled.
 fn lanes(rays: &[Vec<(f64, f64)>], p: &AdaptiveParams) -> Vec<RayIntegral> {
@@ -104,7 +114,7 @@ fn lanes(rays: &[Vec<(f64, f64)>], p: &AdaptiveParams) -> Vec<RayIntegral> {
             }
             (m.tau[l], m.value[l]) = (s.tau as f32, s.value as f32);
         }
-        m.count_breakpoints(&breakpoints());
+        count_breakpoints(&mut m);
         lanes.supply(&m);
     }
     assert!(queue.next().is_none() && slots.iter().all(Option::is_none));
