@@ -81,6 +81,8 @@
 use rayon::prelude::*;
 use volux_core::TransferFunction;
 
+use crate::sampling::floor_small;
+
 /// Default table resolution (entries per axis).
 pub const DEFAULT_TABLE_SIZE: usize = 256;
 
@@ -384,6 +386,9 @@ pub struct PreintegrationTable {
     lo: f64,
     hi: f64,
     scale: f64,
+    /// `lo` and `scale` in f32, for [`PreintegrationTable::lookup_lanes`].
+    lo32: f32,
+    scale32: f32,
     d: f64,
     source: TransferFunction,
     range: [f64; 2],
@@ -447,6 +452,8 @@ impl PreintegrationTable {
             lo,
             hi,
             scale,
+            lo32: lo as f32,
+            scale32: scale as f32,
             d,
             source: tf.clone(),
             range,
@@ -511,6 +518,37 @@ impl PreintegrationTable {
             out[k] = a + (b - a) * fi;
         }
         out
+    }
+
+    /// [`PreintegrationTable::lookup`] in f32 and without branches, for the lane stream,
+    /// whose lanes compute it together.
+    #[inline(always)]
+    pub fn lookup_lanes(&self, s_f: f32, s_b: f32) -> [f32; 4] {
+        let ((i, fi), (j, fj)) = (self.position_f32(s_f), self.position_f32(s_b));
+        let row0 = i * self.n + j;
+        let row1 = row0 + self.n;
+        let (e00, e01) = (self.entries[row0], self.entries[row0 + 1]);
+        let (e10, e11) = (self.entries[row1], self.entries[row1 + 1]);
+        let mut out = [0.0f32; 4];
+        for k in 0..4 {
+            let a = e00[k] + (e01[k] - e00[k]) * fj;
+            let b = e10[k] + (e11[k] - e10[k]) * fj;
+            out[k] = a + (b - a) * fi;
+        }
+        out
+    }
+
+    /// The grid index below `s` and the fraction towards the next, clamped (NaN reads index
+    /// 0): selects and [`floor_small`] rather than casts, which stay lane-wise.
+    #[inline(always)]
+    fn position_f32(&self, s: f32) -> (usize, f32) {
+        let last = (self.n - 1) as f32;
+        let x = (s - self.lo32) * self.scale32;
+        let x = if x > 0.0 { x } else { 0.0 };
+        let x = if x < last { x } else { last };
+        let i = floor_small(x);
+        let i = i - i32::from(i > self.n as i32 - 2);
+        (i as usize, x - i as f32)
     }
 }
 
@@ -762,6 +800,29 @@ mod tests {
             assert!(grid < 1e-6, "{grid}");
             assert!(between < 3e-3 * 64.0 / n as f64, "{between}");
         }
+    }
+
+    #[test]
+    fn lane_lookup_matches_the_f64_lookup() {
+        let t = tf(r#"{"color": [[0,0,0,0],[30,0.9,0.4,0.1],[100,1,1,1]],
+                "extinction": [[0,0],[20,0],[60,0.8],[100,2]]}"#);
+        let table = PreintegrationTable::with_size(&t, [-1000.0, 3000.0], 0.5, 64).unwrap();
+        let mut rng = Lcg(5);
+        // Inside and outside the domain, at its ends, and NaN (read as the low end).
+        let mut values: Vec<f32> = (0..200)
+            .map(|_| (-1500.0 + 5000.0 * rng.next()) as f32)
+            .collect();
+        values.extend([-1000.0, 3000.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY]);
+        let mut worst = 0.0f32;
+        for &a in &values {
+            for &b in values.iter().step_by(7) {
+                let (x, y) = (table.lookup(a, b), table.lookup_lanes(a, b));
+                for c in 0..4 {
+                    worst = worst.max((x[c] - y[c]).abs());
+                }
+            }
+        }
+        assert!(worst < 1e-5, "lane lookup differs by {worst}");
     }
 
     #[test]

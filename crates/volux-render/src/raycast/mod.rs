@@ -6,11 +6,12 @@
 //! [`crate::classify`]); steps are given in voxel units (the smallest spacing), as in the seed
 //! `001_...txt`. A tile takes one of three paths:
 //!
-//! - emission-only Riemann sums: the lane stream (`raycast/stream.rs`), 16 rays advanced
-//!   together;
+//! - emission-only Riemann sums and pre-integration: the lane stream (`raycast/stream.rs`),
+//!   16 rays advanced together;
 //! - adaptive Simpson with coupled control, unshaded: `raycast/adaptive_stream.rs`, four
 //!   rays' steps sampled and judged together in f32 lanes;
-//! - everything else (shading, isosurfaces, MIP, the other integrators): ray by ray.
+//! - everything else (shading, isosurfaces, MIP, trapezoid, Simpson, the reference): ray by
+//!   ray.
 //!
 //! The paths compute the same sums (tested). Output does not depend on the number of threads:
 //! every pixel is computed independently.
@@ -455,7 +456,9 @@ fn render_with<F: Field>(
             }
             let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
             let px = if let Some(st) = ctx.packet_table() {
-                ctx.riemann_stream(st, x0, y0)
+                ctx.lane_stream(st, x0, y0)
+            } else if let Some(pt) = ctx.preintegrated_stream_table() {
+                ctx.lane_stream(pt, x0, y0)
             } else if let Some(p) = ctx.adaptive_stream_params() {
                 ctx.adaptive_stream(p, x0, y0)
             } else {
@@ -753,6 +756,16 @@ impl<F: Field> RayContext<'_, F> {
         }
     }
 
+    /// The pre-integration table when rays take the lane stream (emission only, no MIP).
+    fn preintegrated_stream_table(&self) -> Option<&PreintegrationTable> {
+        match self.opts.integrator {
+            Integrator::Preintegrated { .. } if self.opts.shading.is_none() && !self.opts.mip => {
+                self.preintegration
+            }
+            _ => None,
+        }
+    }
+
     /// The left Riemann sum (eq. 2.14) of lit rays (shading or isosurfaces), one sample at a
     /// time with early ray termination; emission-only rays take the lane stream (`stream.rs`),
     /// which computes the same sums. Samples sit on the lattice `t0 + (i + jitter) h` whatever
@@ -914,6 +927,11 @@ impl<F: Field> RayContext<'_, F> {
                 if ta >= b || ta >= t1 {
                     break;
                 }
+                if tb <= ta {
+                    // Rounding put the lattice point before `t0` on it: nothing to integrate.
+                    i += 1;
+                    continue;
+                }
                 let f = match front {
                     Some(f) => f,
                     None => {
@@ -933,18 +951,7 @@ impl<F: Field> RayContext<'_, F> {
                         let lit = model.shade(c, self.gradient(mid), view);
                         e = [lit[0] * e[3], lit[1] * e[3], lit[2] * e[3], e[3]];
                     }
-                    let frac = ((tb - ta) / h) as f32;
-                    let alpha = if frac < 0.999_999 {
-                        1.0 - (1.0 - e[3]).max(0.0).powf(frac)
-                    } else {
-                        e[3]
-                    };
-                    let scale = if e[3] > 0.0 { alpha / e[3] } else { frac };
-                    let w = 1.0 - acc.rgba[3];
-                    for (a, ec) in acc.rgba.iter_mut().zip(&e[..3]) {
-                        *a += w * ec * scale;
-                    }
-                    acc.rgba[3] += w * alpha;
+                    composite_segment(&mut acc, e, ((tb - ta) / h) as f32);
                 }
                 front = Some(back);
                 i += 1;
@@ -956,6 +963,23 @@ impl<F: Field> RayContext<'_, F> {
         }
         PixelOut::composited(&acc, n)
     }
+}
+
+/// Composites under `acc` a pre-integrated segment of premultiplied RGBA `e` (for the table's
+/// length) that covers the fraction `frac` of that length: the opacity of a shortened segment
+/// is `1 - (1 - alpha)^frac` (its optical depth scaled), its colour scaled with it.
+fn composite_segment(acc: &mut RayAccumulator, e: [f32; 4], frac: f32) {
+    let alpha = if frac < 0.999_999 {
+        1.0 - (1.0 - e[3]).max(0.0).powf(frac)
+    } else {
+        e[3]
+    };
+    let scale = if e[3] > 0.0 { alpha / e[3] } else { frac };
+    let w = 1.0 - acc.rgba[3];
+    for (a, ec) in acc.rgba.iter_mut().zip(&e[..3]) {
+        *a += w * ec * scale;
+    }
+    acc.rgba[3] += w * alpha;
 }
 
 /// The reference's classification: the TF evaluated exactly, in f64.

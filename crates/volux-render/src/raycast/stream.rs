@@ -1,5 +1,7 @@
-//! The fast Riemann path (emission only, no isosurfaces, no MIP): the rays of a tile flow
-//! through [`LANES`] lanes that advance together, one sample per lane per step.
+//! The fast fixed-step paths (emission only, no isosurfaces, no MIP): the rays of a tile flow
+//! through [`LANES`] lanes that advance together, one sample per lane per step. Two rules
+//! share the stream ([`SlabRule`]): the Riemann sum composites each sample's slab, and
+//! pre-integration each segment between consecutive samples, classified by the pair.
 //!
 //! Lanes hold different rays, so the front-to-back compositing of one ray (a chain of
 //! dependent multiply-adds, `001_...txt` eq. 2.14) overlaps with the other lanes' chains, and
@@ -8,15 +10,81 @@
 //! ray of the tile (in 4 x 4 pixel blocks, so that lanes read neighbouring voxels); that
 //! bookkeeping runs once per span, not per sample.
 //!
-//! Sample `i` of a ray sits at `base + i step`, `base` being the ray's first lattice point
-//! `t0 + jitter h` and `step` its voxel-space displacement per step `h`: a function of the
-//! ray and `i` only, so skipping empty space never moves a sample.
+//! Sample `i` of a ray sits at `t_i = start + i h`, `start = t0 + jitter h` (voxel space:
+//! `base + i step`): a function of the ray and `i` only, so skipping empty space never moves a
+//! sample. The Riemann slab `i` is `[t_i, t_i + h]`; the pre-integrated segment `i` is
+//! `[t_(i-1), t_i]`, clipped to the ray, as in [`RayContext::preintegrated`].
 use glam::DVec3;
 
-use super::{pixel_hash, PixelOut, RayContext, TILE};
+use super::{composite_segment, pixel_hash, PixelOut, RayContext, TILE};
 use crate::classify::LaneTable;
+use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{riemann_step, Integrator, RayAccumulator};
 use crate::sampling::{Field, LANES};
+
+/// How the stream composites: what one lane step adds, from the sample before it (`front`)
+/// and the new one (`back`).
+pub(super) trait SlabRule {
+    /// Whether a step composites the segment between two samples (else the slab of `back`).
+    const SEGMENTS: bool;
+
+    /// Composites each lane's full slab or segment under its accumulated colour `acc`. An
+    /// undefined (NaN) sample adds nothing, nor does a segment that ends at one.
+    fn composite(&self, front: &[f32; LANES], back: &[f32; LANES], acc: &mut [[f32; 4]; LANES]);
+
+    /// One full segment's entry, as the ray-by-ray path computes it (segments only).
+    fn segment(&self, front: f32, back: f32) -> [f32; 4];
+}
+
+/// The Riemann sum: each sample's colour and slab opacity from the step table.
+impl SlabRule for LaneTable {
+    const SEGMENTS: bool = false;
+
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn composite(&self, _front: &[f32; LANES], v: &[f32; LANES], acc: &mut [[f32; 4]; LANES]) {
+        let mut at = [(0u32, 0.0f32); LANES];
+        for l in 0..LANES {
+            at[l] = self.position(v[l]);
+        }
+        for l in 0..LANES {
+            let e = self.at(at[l].0, at[l].1);
+            let acc = &mut acc[l];
+            let wgt = if v[l].is_nan() { 0.0 } else { 1.0 - acc[3] };
+            for c in 0..4 {
+                acc[c] += wgt * e[c];
+            }
+        }
+    }
+
+    fn segment(&self, _front: f32, back: f32) -> [f32; 4] {
+        let (i, f) = self.position(back);
+        self.at(i, f)
+    }
+}
+
+/// Pre-integration: each segment from the table entry of its front and back values.
+impl SlabRule for PreintegrationTable {
+    const SEGMENTS: bool = true;
+
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn composite(&self, front: &[f32; LANES], back: &[f32; LANES], acc: &mut [[f32; 4]; LANES]) {
+        for l in 0..LANES {
+            let e = self.lookup_lanes(front[l], back[l]);
+            let acc = &mut acc[l];
+            let undefined = front[l].is_nan() | back[l].is_nan();
+            let wgt = if undefined { 0.0 } else { 1.0 - acc[3] };
+            for c in 0..4 {
+                acc[c] += wgt * e[c];
+            }
+        }
+    }
+
+    fn segment(&self, front: f32, back: f32) -> [f32; 4] {
+        self.lookup(front, back)
+    }
+}
 
 /// Side of the pixel blocks in which a tile's rays enter the lanes.
 const BLOCK: usize = 4;
@@ -29,18 +97,22 @@ struct LaneRay {
     /// Voxel-space position of sample 0 (f64, for the partial last slab) and step.
     base: DVec3,
     step: DVec3,
-    /// Distance of sample 0 and step length (world units), and the ray's exit distance.
+    /// Distance of sample 0 and step length (world units), and the ray's entry and exit
+    /// distances.
     start: f64,
     h: f64,
+    t0: f64,
     t1: f64,
     spans: Vec<(f64, f64)>,
     /// The next span to enter.
     span: usize,
-    /// First sample of the current span, and its first sample at or beyond the span's end.
+    /// First lane step of the current span, and the end (exclusive) of the span's slabs.
     i_first: i32,
     i_after: i32,
-    /// The ray's first sample with a shortened slab ([`LaneRay::first_partial`]).
+    /// The ray's first shortened slab or segment ([`LaneRay::first_partial`]).
     partial: i32,
+    /// Segments before this one are composited (a segment may straddle two spans).
+    next: i32,
     samples: u64,
 }
 
@@ -58,9 +130,21 @@ impl LaneRay {
         k
     }
 
-    /// The first sample whose slab `[t, t + h]` reaches beyond the ray's exit: it and the
-    /// samples after it take a shortened step.
-    fn first_partial(&self) -> i32 {
+    /// The first sample index `i` with `start + i h > a`.
+    fn first_after(&self, a: f64) -> i32 {
+        let mut k = self.first_at_or_after(a);
+        while self.start + self.h * f64::from(k) <= a {
+            k += 1;
+        }
+        k
+    }
+
+    /// The first slab (Riemann: `[t_i, t_i + h]`; segments: `[t_(i-1), t_i]`) reaching
+    /// beyond the ray's exit: it and those after it are shortened.
+    fn first_partial(&self, segments: bool) -> i32 {
+        if segments {
+            return self.first_after(self.t1);
+        }
         let mut k = self.first_at_or_after(self.t1 - self.h);
         while k > 0 && self.start + self.h * f64::from(k - 1) + self.h > self.t1 {
             k -= 1;
@@ -69,6 +153,12 @@ impl LaneRay {
             k += 1;
         }
         k
+    }
+
+    /// The voxel-space position of sample `i`, clamped to the ray's extent.
+    fn position(&self, i: i32) -> glam::Vec3 {
+        let t = (self.start + self.h * f64::from(i)).clamp(self.t0, self.t1);
+        (self.base + self.step * ((t - self.start) / self.h)).as_vec3()
     }
 }
 
@@ -80,6 +170,8 @@ struct Lanes {
     i: [i32; LANES],
     end: [i32; LANES],
     acc: [[f32; 4]; LANES],
+    /// The last sample taken (the front of the next segment; NaN where undefined).
+    front: [f32; LANES],
     /// Opacity at which the lane's ray stops; infinite for an idle lane.
     stop: [f32; LANES],
     rays: [LaneRay; LANES],
@@ -94,6 +186,7 @@ impl Lanes {
             i: [0; LANES],
             end: [i32::MAX; LANES],
             acc: [[0.0; 4]; LANES],
+            front: [0.0; LANES],
             stop: [f32::INFINITY; LANES],
             rays: std::array::from_fn(|_| LaneRay::default()),
             live: [false; LANES],
@@ -120,20 +213,20 @@ impl Lanes {
 
 impl<F: Field> RayContext<'_, F> {
     /// Renders the tile at (`x0`, `y0`) with the lane stream (see the module docs).
-    pub(super) fn riemann_stream(&self, st: &LaneTable, x0: usize, y0: usize) -> Vec<PixelOut> {
+    pub(super) fn lane_stream<R: SlabRule>(&self, rule: &R, x0: usize, y0: usize) -> Vec<PixelOut> {
         let (w, h) = (self.opts.width, self.opts.height);
         let (tw, th) = ((x0 + TILE).min(w) - x0, (y0 + TILE).min(h) - y0);
         let mut px = vec![PixelOut::default(); tw * th];
         let mut queue = block_order(tw, th).into_iter();
         let mut lanes = Lanes::new();
         for l in 0..LANES {
-            self.refill(&mut lanes, l, &mut queue, &mut px, (x0, y0, tw));
+            self.refill(rule, &mut lanes, l, &mut queue, &mut px, (x0, y0, tw));
         }
         while lanes.live.iter().any(|&b| b) {
-            let cold = self.steps(&mut lanes, st);
+            let cold = self.steps(&mut lanes, rule);
             for l in 0..LANES {
                 if cold & (1 << l) != 0 {
-                    self.lane_event(&mut lanes, l, &mut queue, &mut px, (x0, y0, tw));
+                    self.lane_event(rule, &mut lanes, l, &mut queue, &mut px, (x0, y0, tw));
                 }
             }
         }
@@ -145,7 +238,7 @@ impl<F: Field> RayContext<'_, F> {
     // Lane loops index several per-lane arrays at once: that is what vectorizes.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn steps(&self, lanes: &mut Lanes, st: &LaneTable) -> u32 {
+    fn steps<R: SlabRule>(&self, lanes: &mut Lanes, rule: &R) -> u32 {
         loop {
             let mut pos = [[0.0f32; LANES]; 3];
             for a in 0..3 {
@@ -154,25 +247,14 @@ impl<F: Field> RayContext<'_, F> {
                 }
             }
             let v = self.field.sample_lanes(&pos);
-            let mut at = [(0u32, 0.0f32); LANES];
-            for l in 0..LANES {
-                at[l] = st.position(v[l]);
-            }
-            let mut alpha = [0.0f32; LANES];
-            for l in 0..LANES {
-                let e = st.at(at[l].0, at[l].1);
-                let acc = &mut lanes.acc[l];
-                // An undefined (NaN) sample adds nothing.
-                let wgt = if v[l].is_nan() { 0.0 } else { 1.0 - acc[3] };
-                for c in 0..4 {
-                    acc[c] += wgt * e[c];
-                }
-                alpha[l] = acc[3];
+            rule.composite(&lanes.front, &v, &mut lanes.acc);
+            if R::SEGMENTS {
+                lanes.front = v;
             }
             let mut cold = 0u32;
             for l in 0..LANES {
                 lanes.i[l] += 1;
-                let event = (lanes.i[l] >= lanes.end[l]) | (alpha[l] >= lanes.stop[l]);
+                let event = (lanes.i[l] >= lanes.end[l]) | (lanes.acc[l][3] >= lanes.stop[l]);
                 cold |= u32::from(event) << l;
             }
             if cold != 0 {
@@ -183,8 +265,9 @@ impl<F: Field> RayContext<'_, F> {
 
     /// Handles lane `l` after its last sample: early termination, the end of its span (with
     /// the partial last slab of the ray), or a new ray.
-    fn lane_event(
+    fn lane_event<R: SlabRule>(
         &self,
+        rule: &R,
         lanes: &mut Lanes,
         l: usize,
         queue: &mut impl Iterator<Item = usize>,
@@ -197,19 +280,20 @@ impl<F: Field> RayContext<'_, F> {
         let done = lanes.i[l];
         let r = &mut lanes.rays[l];
         r.samples += (done - r.i_first).max(0) as u64;
-        if lanes.acc[l][3] < lanes.stop[l] && self.continue_ray(lanes, l, done) {
+        if lanes.acc[l][3] < lanes.stop[l] && self.continue_ray(rule, lanes, l, done) {
             return;
         }
         self.finish(lanes, l, px);
-        self.refill(lanes, l, queue, px, tile);
+        self.refill(rule, lanes, l, queue, px, tile);
     }
 
-    /// Lane `l`'s ray has composited its current span's samples before `done`: composites the
-    /// span's remaining samples (shortened slabs at the ray's end), then enters the next span
-    /// that has full slabs. False when the ray is finished (no span left, or opaque).
-    fn continue_ray(&self, lanes: &mut Lanes, l: usize, mut done: i32) -> bool {
+    /// Lane `l`'s ray has composited its current span's slabs before `done`: composites the
+    /// span's remaining ones (shortened at the ray's end), then enters the next span that
+    /// has full slabs. False when the ray is finished (no span left, or opaque).
+    fn continue_ray<R: SlabRule>(&self, rule: &R, lanes: &mut Lanes, l: usize, done: i32) -> bool {
+        let mut range = (done, lanes.rays[l].i_after);
         loop {
-            if !self.shortened_samples(lanes, l, done) {
+            if !self.shortened(rule, lanes, l, range) {
                 return false;
             }
             let r = &mut lanes.rays[l];
@@ -217,31 +301,64 @@ impl<F: Field> RayContext<'_, F> {
                 return false;
             };
             r.span += 1;
-            let first = ceil_index((a - r.start) / r.h);
-            let after = r.first_at_or_after(b).max(first);
-            (r.i_first, r.i_after) = (first, after);
-            let end = after.min(r.partial).max(first);
-            if end > first {
-                lanes.enter(l, first, end);
+            let (first, after, lane_first) = if R::SEGMENTS {
+                // The segments that overlap `[a, b]` and are not composited yet; segment 0
+                // (before `t_0`) is shortened.
+                let first = r.first_after(a).max(r.next);
+                let after = (r.first_at_or_after(b) + 1).max(first);
+                r.next = after;
+                (first, after, first.max(1).min(after))
+            } else {
+                let first = ceil_index((a - r.start) / r.h);
+                (first, r.first_at_or_after(b).max(first), first)
+            };
+            if R::SEGMENTS && first < after {
+                // The span's first segment starts from a fresh sample, as ray by ray.
+                lanes.front[l] = self.field.sample(r.position(first - 1)).unwrap_or(f32::NAN);
+                r.samples += 1;
+                if !self.shortened(rule, lanes, l, (first, lane_first)) {
+                    return false;
+                }
+            }
+            let r = &mut lanes.rays[l];
+            let end = after.min(r.partial).max(lane_first);
+            (r.i_first, r.i_after) = (lane_first, after);
+            if end > lane_first {
+                lanes.enter(l, lane_first, end);
                 return true;
             }
-            done = first;
+            range = (lane_first, after);
         }
     }
 
-    /// Composites samples `done..i_after` of lane `l`'s current span one by one, each with the
-    /// part of its slab inside the ray; false if the ray became opaque.
-    fn shortened_samples(&self, lanes: &mut Lanes, l: usize, done: i32) -> bool {
+    /// Composites lane `l`'s slabs or segments `from..to` one by one, each with the part of
+    /// it inside the ray; false if the ray became opaque.
+    fn shortened<R: SlabRule>(
+        &self,
+        rule: &R,
+        lanes: &mut Lanes,
+        l: usize,
+        (from, to): (i32, i32),
+    ) -> bool {
         let r = &mut lanes.rays[l];
         let mut acc = RayAccumulator { rgba: lanes.acc[l] };
         let stop = lanes.stop[l];
-        for i in done..r.i_after {
+        for i in from..to {
             let t = r.start + r.h * f64::from(i);
-            let p = (r.base + r.step * f64::from(i)).as_vec3();
-            if let Some(v) = self.field.sample(p) {
+            let v = self.field.sample(r.position(i));
+            r.samples += 1;
+            if R::SEGMENTS {
+                let front = lanes.front[l];
+                let back = v.unwrap_or(f32::NAN);
+                lanes.front[l] = back;
+                if front.is_nan() || back.is_nan() {
+                    continue;
+                }
+                let len = t.min(r.t1) - (t - r.h).max(r.t0);
+                composite_segment(&mut acc, rule.segment(front, back), (len / r.h) as f32);
+            } else if let Some(v) = v {
                 riemann_step(&mut acc, self.table.lookup(v), (r.t1 - t).min(r.h) as f32);
             }
-            r.samples += 1;
             if acc.alpha() >= stop {
                 lanes.acc[l] = acc.rgba;
                 return false;
@@ -261,15 +378,18 @@ impl<F: Field> RayContext<'_, F> {
 
     /// Loads the next ray of the tile that hits the volume into lane `l` (rays that miss are
     /// written as they are met); leaves the lane idle when the tile is done.
-    fn refill(
+    fn refill<R: SlabRule>(
         &self,
+        rule: &R,
         lanes: &mut Lanes,
         l: usize,
         queue: &mut impl Iterator<Item = usize>,
         px: &mut [PixelOut],
         (x0, y0, tw): (usize, usize, usize),
     ) {
-        let Integrator::Riemann { step } = self.opts.integrator else {
+        let (Integrator::Riemann { step } | Integrator::Preintegrated { step }) =
+            self.opts.integrator
+        else {
             return;
         };
         for pixel in queue.by_ref() {
@@ -294,15 +414,12 @@ impl<F: Field> RayContext<'_, F> {
                 step: stp,
                 start,
                 h: hh,
+                t0,
                 t1,
                 spans,
-                span: 0,
-                i_first: 0,
-                i_after: 0,
-                partial: 0,
-                samples: 0,
+                ..LaneRay::default()
             };
-            lanes.rays[l].partial = lanes.rays[l].first_partial();
+            lanes.rays[l].partial = lanes.rays[l].first_partial(R::SEGMENTS);
             lanes.acc[l] = [0.0; 4];
             for a in 0..3 {
                 lanes.base[a][l] = base[a] as f32;
@@ -310,7 +427,7 @@ impl<F: Field> RayContext<'_, F> {
             }
             lanes.live[l] = true;
             lanes.stop[l] = self.opts.early_termination.unwrap_or(2.0);
-            if self.continue_ray(lanes, l, 0) {
+            if self.continue_ray(rule, lanes, l, 0) {
                 return;
             }
             self.finish(lanes, l, px);

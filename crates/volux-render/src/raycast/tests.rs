@@ -93,21 +93,27 @@ fn identity_lighting() -> BlinnPhong {
     }
 }
 
-/// The lane stream of the emission-only Riemann sum against the per-sample loop that lit
-/// renders take (here with a lighting model that changes nothing): the same sums, so equal to
-/// rounding, including the shortened last slabs of rays grazing the volume's edges and rays
-/// shorter than one step.
+/// The lane stream of the emission-only Riemann sum and pre-integration against the
+/// per-sample loops that lit renders take (here with a lighting model that changes nothing):
+/// the same sums, so equal to rounding, including the shortened first and last slabs of rays
+/// grazing the volume's edges, rays shorter than one step, and spans left by skipping.
 #[test]
 fn lane_stream_matches_the_per_sample_loop() {
     let (g, mut o) = marschner_lobb_40(r#"[[0,0],[0.2,0],[0.5,3],[1,1]]"#, (61, 47));
     let identity = identity_lighting();
-    for (step, jitter, stop) in [
+    let cases = [
         (0.5, false, Some(0.99)),
         (0.7, true, None),
         (1.3, false, None),
-    ] {
-        (o.integrator, o.jitter, o.early_termination) =
-            (Integrator::Riemann { step }, jitter, stop);
+        (2.1, true, Some(0.9)),
+    ];
+    for ((step, jitter, stop), pre) in cases.into_iter().flat_map(|c| [(c, false), (c, true)]) {
+        o.integrator = if pre {
+            Integrator::Preintegrated { step }
+        } else {
+            Integrator::Riemann { step }
+        };
+        (o.jitter, o.early_termination) = (jitter, stop);
         o.shading = None;
         let stream = render_grid(&g, &o).unwrap();
         o.shading = Some(identity);
@@ -118,9 +124,15 @@ fn lane_stream_matches_the_per_sample_loop() {
                 worst = worst.max((a[c] - b[c]).abs());
             }
         }
-        assert!(worst < 1e-4, "step {step} jitter {jitter}: {worst}");
+        assert!(
+            worst < 1e-4,
+            "pre {pre} step {step} jitter {jitter}: {worst}"
+        );
         let (ns, nl) = (stream.stats.samples as f64, loop_.stats.samples as f64);
-        assert!((ns - nl).abs() <= 1e-3 * nl, "samples {ns} vs {nl}");
+        assert!(
+            (ns - nl).abs() <= 1e-3 * nl,
+            "pre {pre} step {step}: samples {ns} vs {nl}"
+        );
         assert_eq!(stream.stats.rays, loop_.stats.rays);
     }
 }
@@ -185,6 +197,7 @@ fn empty_space_skipping_changes_nothing() {
     };
     for integrator in [
         Integrator::Riemann { step: 0.5 },
+        Integrator::Preintegrated { step: 0.5 },
         Integrator::AdaptiveSimpson(p),
     ] {
         for jitter in [false, true] {
@@ -200,7 +213,10 @@ fn empty_space_skipping_changes_nothing() {
                 .zip(skip.image.pixels())
                 .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
                 .fold(0.0, f32::max);
-            let tol = if matches!(integrator, Integrator::Riemann { .. }) {
+            let tol = if matches!(
+                integrator,
+                Integrator::Riemann { .. } | Integrator::Preintegrated { .. }
+            ) {
                 1e-6
             } else {
                 0.01
