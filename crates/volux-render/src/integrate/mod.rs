@@ -27,7 +27,7 @@ pub use adaptive::{
     adaptive_simpson, adaptive_simpson_intervals, adaptive_simpson_pieces, AdaptiveParams,
     StepControl,
 };
-pub use fixed::{simpson, trapezoid};
+pub use fixed::{fixed_intervals, simpson, trapezoid, FixedRule};
 
 /// How rays are integrated; lengths are in voxel units (of the smallest grid spacing), as in
 /// the seed, and converted to world units by the traversal.

@@ -26,8 +26,8 @@ use volux_core::{Camera, Grid, Image, RayGenerator, TransferFunction};
 use crate::classify::{BreakpointRanks, Classified, ClassifyTable, LaneTable};
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{
-    adaptive_simpson_intervals, adaptive_simpson_pieces, hides_breakpoints,
-    hides_breakpoints_along, riemann_step, simpson, trapezoid, AdaptiveParams, Integrator, Medium,
+    adaptive_simpson_intervals, adaptive_simpson_pieces, fixed_intervals, hides_breakpoints,
+    hides_breakpoints_along, riemann_step, AdaptiveParams, FixedRule, Integrator, Medium,
     RayAccumulator, RayIntegral, RayMedium,
 };
 use crate::isosurface::{Crossing, Isosurfaces};
@@ -637,10 +637,10 @@ impl<F: Field> RayContext<'_, F> {
                 return self.riemann(o_v, d_v, (t0, t1), spans, step * unit, jitter)
             }
             Integrator::Trapezoid { step } => {
-                trapezoid(&mut self.medium(o_v, d_v), t0, t1, step * unit)
+                self.fixed(o_v, d_v, (t0, t1), spans, step * unit, FixedRule::Trapezoid)
             }
             Integrator::Simpson { step } => {
-                simpson(&mut self.medium(o_v, d_v), t0, t1, step * unit)
+                self.fixed(o_v, d_v, (t0, t1), spans, step * unit, FixedRule::Simpson)
             }
             Integrator::AdaptiveSimpson(p) => adaptive_simpson_intervals(
                 &mut self.medium(o_v, d_v),
@@ -709,6 +709,24 @@ impl<F: Field> RayContext<'_, F> {
             ..self.medium(o_v, d_v)
         };
         adaptive_simpson_pieces(&mut medium, &breaks, &p)
+    }
+
+    /// A fixed-step rule over the ray's occupied spans, stopping at the early-termination
+    /// opacity.
+    fn fixed(
+        &self,
+        o_v: DVec3,
+        d_v: DVec3,
+        ends: (f64, f64),
+        spans: &[(f64, f64)],
+        h: f64,
+        rule: FixedRule,
+    ) -> RayIntegral {
+        let stop_depth = match self.opts.early_termination {
+            Some(a) if a < 1.0 => -(1.0 - f64::from(a)).ln(),
+            _ => f64::INFINITY,
+        };
+        fixed_intervals(&mut self.medium(o_v, d_v), spans, ends, h, rule, stop_depth)
     }
 
     /// Adaptive parameters with the steps in world units and the render's early termination.
