@@ -5,7 +5,8 @@
 //! normal. This module holds the pieces a traversal needs for that:
 //!
 //! - [`gradient`]: central differences on any [`Field`] (on the fly, no extra memory);
-//! - [`GradientVolume`]: the same gradients precomputed once per volume (3 x `i16` per voxel)
+//! - [`GradientVolume`]: the same gradients precomputed once per volume (3 x `i16` per voxel,
+//!   padded to 8 bytes)
 //!   with trilinear lookup, for renderers that shade every sample and can spare the memory;
 //! - [`BlinnPhong`] and [`Light`]: the two-sided lighting model with a gradient-magnitude
 //!   threshold, so homogeneous (noisy, flat) regions stay unlit and keep their emission only.
@@ -19,6 +20,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::sampling::Field;
 use crate::RenderError;
+
+mod lanes;
+pub use lanes::{ln_lanes, pow_lanes, Lanes3, RayLight};
 
 /// Clamps `p` into the grid box `[0, dims - 1]` per axis (NaN becomes 0; never panics).
 #[inline]
@@ -108,7 +112,8 @@ pub struct GradientKey {
 }
 
 /// Gradients precomputed at every grid sample, stored as 3 x `i16` per voxel with one scale
-/// for the whole volume (6 bytes per voxel: 100 MB for 256^3), looked up trilinearly.
+/// for the whole volume, padded to 8 bytes so that a corner is one load (134 MB for 256^3),
+/// looked up trilinearly.
 ///
 /// Grid-point gradients are the central differences of [`gradient`] (one-sided at the
 /// borders), so in the interior a lookup equals [`gradient`] up to the quantization step,
@@ -117,7 +122,7 @@ pub struct GradientKey {
 /// volume interpolates one-sided and central differences, [`gradient`] shortens its stencil.
 ///
 /// Build cost: one field sample per voxel into a temporary `f32` copy, then two cheap passes
-/// over it (largest component, then quantization); peak memory 10 bytes per voxel; parallel
+/// over it (largest component, then quantization); peak memory 12 bytes per voxel; parallel
 /// over z slices with rayon. Measured for a 256^3 `u16` volume in the test profile
 /// (opt-level 2) on the shared 2-core development machine while other builds ran: 1.3 s best
 /// of 5 (up to 2.3 s), of which about 0.75 s is the field sampling (test
@@ -131,7 +136,8 @@ pub struct GradientKey {
 #[derive(Clone, Debug)]
 pub struct GradientVolume {
     key: GradientKey,
-    data: Vec<[i16; 3]>,
+    /// Gradients x, y, z and a zero pad: one aligned 8-byte load per voxel.
+    data: Vec<[i16; 4]>,
     /// World-unit gradient per quantization count, per axis (`scale / spacing`).
     to_world: Vec3,
 }
@@ -158,8 +164,8 @@ impl GradientVolume {
             .iter()
             .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64))
             .unwrap_or(u64::MAX);
-        // The i16 gradients and the temporary f32 copy of the samples.
-        volux_core::limits::check_alloc("gradient volume", count, 10)?;
+        // The i16 gradients (with their pad) and the temporary f32 copy of the samples.
+        volux_core::limits::check_alloc("gradient volume", count, 12)?;
         let n = count as usize;
         let [nx, ny, nz] = dims;
         let slice = nx * ny;
@@ -196,14 +202,15 @@ impl GradientVolume {
         let inv = if scale > 0.0 { 1.0 / scale } else { 0.0 };
 
         // Pass 3: quantize.
-        let mut data = vec![[0i16; 3]; n];
+        let mut data = vec![[0i16; 4]; n];
         data.par_chunks_mut(slice).enumerate().for_each(|(k, s)| {
             let mut row = vec![Vec3::ZERO; nx];
             for (j, out) in s.chunks_mut(nx).enumerate() {
                 row_gradients(&values, dims, j, k, &mut row);
                 for (o, g) in out.iter_mut().zip(&row) {
                     let q = (*g * inv).round();
-                    *o = [q.x, q.y, q.z].map(|c| c.clamp(-32767.0, 32767.0) as i16);
+                    let [x, y, z] = [q.x, q.y, q.z].map(|c| c.clamp(-32767.0, 32767.0) as i16);
+                    *o = [x, y, z, 0];
                 }
             }
         });
@@ -227,7 +234,7 @@ impl GradientVolume {
 
     /// Memory held, in bytes.
     pub fn bytes(&self) -> usize {
-        self.data.len() * std::mem::size_of::<[i16; 3]>()
+        self.data.len() * std::mem::size_of::<[i16; 4]>()
     }
 
     /// The gradient at voxel position `p_voxel` (clamped to the grid), in world units, by
@@ -243,7 +250,7 @@ impl GradientVolume {
         let sz = if nz > 1 { nx * ny } else { 0 };
         let b = i + nx * (j + ny * k);
         let v = |o: usize| {
-            let q = self.data.get(b + o).copied().unwrap_or([0; 3]);
+            let q = self.data.get(b + o).copied().unwrap_or([0; 4]);
             Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32)
         };
         let c00 = v(0).lerp(v(dx), fx);
@@ -558,7 +565,7 @@ mod tests {
         assert!(gv.is_current(dims, 7));
         assert!(!gv.is_current(dims, 8));
         assert!(!gv.is_current([9, 8, 11], 7));
-        assert_eq!(gv.bytes(), 9 * 8 * 10 * 6);
+        assert_eq!(gv.bytes(), 9 * 8 * 10 * 8);
         // Bound on the largest world-unit gradient component of this field.
         let max = 40.0 * 0.7 / 0.8 + 2.0 * 7.0;
         for p in [

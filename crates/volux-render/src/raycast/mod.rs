@@ -6,12 +6,12 @@
 //! [`crate::classify`]); steps are given in voxel units (the smallest spacing), as in the seed
 //! `001_...txt`. A tile takes one of three paths:
 //!
-//! - emission-only Riemann sums and pre-integration: the lane stream (`raycast/stream.rs`),
-//!   16 rays advanced together;
+//! - Riemann sums and pre-integration, emission only or shaded with the cached gradient
+//!   volume: the lane stream (`raycast/stream.rs`), 16 rays advanced together;
 //! - adaptive Simpson with coupled control, unshaded: `raycast/adaptive_stream.rs`, four
 //!   rays' steps sampled and judged together in f32 lanes;
-//! - everything else (shading, isosurfaces, MIP, trapezoid, Simpson, the reference): ray by
-//!   ray.
+//! - everything else (isosurfaces, MIP, shaded adaptive Simpson, trapezoid, Simpson, the
+//!   reference): ray by ray.
 //!
 //! The paths compute the same sums (tested). Output does not depend on the number of threads:
 //! every pixel is computed independently.
@@ -189,6 +189,9 @@ pub struct GridRenderer<'g> {
     macrocells: OnceLock<MacrocellGrid>,
     preintegration: Mutex<Option<Arc<PreintegrationTable>>>,
     gradients: OnceLock<Option<GradientVolume>>,
+    /// Whether tiles may take the lane paths; tests turn it off to compare them with the
+    /// ray-by-ray paths, which compute the same sums.
+    lanes: bool,
 }
 
 impl<'g> GridRenderer<'g> {
@@ -199,6 +202,7 @@ impl<'g> GridRenderer<'g> {
             macrocells: OnceLock::new(),
             preintegration: Mutex::new(None),
             gradients: OnceLock::new(),
+            lanes: true,
         }
     }
 
@@ -278,6 +282,7 @@ impl<'g> GridRenderer<'g> {
             macrocells: cells,
             preintegration: pre.as_deref(),
             gradients,
+            lanes: self.lanes,
         };
         let (place, range) = (Placement::of(g), g.range());
         match opts.reconstruction {
@@ -378,6 +383,7 @@ pub fn render_field<F: Field>(
             macrocells: None,
             preintegration: pre.as_ref(),
             gradients: None,
+            lanes: true,
         },
     )
 }
@@ -388,6 +394,8 @@ struct Derived<'a> {
     macrocells: Option<&'a MacrocellGrid>,
     preintegration: Option<&'a PreintegrationTable>,
     gradients: Option<&'a GradientVolume>,
+    /// Whether tiles may take the lane paths.
+    lanes: bool,
 }
 
 fn render_with<F: Field>(
@@ -455,7 +463,9 @@ fn render_with<F: Field>(
                 return Err(RenderError::Cancelled);
             }
             let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
-            let px = if let Some(st) = ctx.packet_table() {
+            let px = if !derived.lanes {
+                ctx.tile_ray_by_ray(x0, y0)
+            } else if let Some(st) = ctx.packet_table() {
                 ctx.lane_stream(st, x0, y0)
             } else if let Some(pt) = ctx.preintegrated_stream_table() {
                 ctx.lane_stream(pt, x0, y0)
@@ -764,24 +774,29 @@ impl<F: Field> RayContext<'_, F> {
         px
     }
 
-    /// The step table when rays take the fast Riemann path (emission only, no isosurfaces,
-    /// no MIP): tiles are then rendered by the lane stream (`stream.rs`).
+    /// The step table when rays take the fast Riemann path: tiles are then rendered by the
+    /// lane stream (`stream.rs`).
     fn packet_table(&self) -> Option<&LaneTable> {
-        let lit = self.opts.shading.is_some() || !self.opts.isosurfaces.is_empty();
         match self.opts.integrator {
-            Integrator::Riemann { .. } if !lit && !self.opts.mip => self.lane_table.as_ref(),
+            Integrator::Riemann { .. } if self.streams() => self.lane_table.as_ref(),
             _ => None,
         }
     }
 
-    /// The pre-integration table when rays take the lane stream (emission only, no MIP).
+    /// The pre-integration table when rays take the lane stream.
     fn preintegrated_stream_table(&self) -> Option<&PreintegrationTable> {
         match self.opts.integrator {
-            Integrator::Preintegrated { .. } if self.opts.shading.is_none() && !self.opts.mip => {
-                self.preintegration
-            }
+            Integrator::Preintegrated { .. } if self.streams() => self.preintegration,
             _ => None,
         }
+    }
+
+    /// Whether fixed-step rays can take the lane stream: no isosurfaces, no MIP, and shading
+    /// only with the cached gradient volume (on-the-fly gradients are taken ray by ray).
+    fn streams(&self) -> bool {
+        self.opts.isosurfaces.is_empty()
+            && !self.opts.mip
+            && (self.opts.shading.is_none() || self.gradients.is_some())
     }
 
     /// The left Riemann sum (eq. 2.14) of lit rays (shading or isosurfaces), one sample at a
@@ -822,10 +837,7 @@ impl<F: Field> RayContext<'_, F> {
                             &mut crossings,
                             &mut acc,
                         );
-                        let mut c: Classified = self.table.lookup(v);
-                        if let (Some(sh), true) = (&self.opts.shading, c.tau > 0.0) {
-                            c.rgb = sh.shade(c.rgb, self.gradient(p), view);
-                        }
+                        let c = self.lit_sample(self.table.lookup(v), p, view);
                         riemann_step(&mut acc, c, h.min(t1 - t) as f32);
                         prev = Some((t, v));
                     }
@@ -839,6 +851,28 @@ impl<F: Field> RayContext<'_, F> {
             }
         }
         PixelOut::composited(&acc, n)
+    }
+
+    /// A classified sample at voxel position `p` on a ray of world direction `view`, lit when
+    /// shading is on and the sample is not transparent.
+    fn lit_sample(&self, mut c: Classified, p: Vec3, view: Vec3) -> Classified {
+        if let (Some(sh), true) = (&self.opts.shading, c.tau > 0.0) {
+            c.rgb = sh.shade(c.rgb, self.gradient(p), view);
+        }
+        c
+    }
+
+    /// A pre-integrated segment's premultiplied RGBA `e`, its average colour lit with the
+    /// gradient at its middle `mid` when shading is on.
+    fn lit_segment(&self, e: [f32; 4], mid: Vec3, view: Vec3) -> [f32; 4] {
+        match (&self.opts.shading, e[3] > 0.0) {
+            (Some(model), true) => {
+                let c = [e[0] / e[3], e[1] / e[3], e[2] / e[3]];
+                let lit = model.shade(c, self.gradient(mid), view);
+                [lit[0] * e[3], lit[1] * e[3], lit[2] * e[3], e[3]]
+            }
+            _ => e,
+        }
     }
 
     /// The world-space gradient at voxel position `p`.
@@ -960,15 +994,9 @@ impl<F: Field> RayContext<'_, F> {
                 let back = value(tb);
                 n += 1;
                 if let (Some(sf), Some(sb)) = (f, back) {
-                    let mut e = table.lookup(sf, sb);
-                    if let (Some(model), true) = (&self.opts.shading, e[3] > 0.0) {
-                        // Light the segment's average colour with the gradient at its middle.
-                        let mid = (o_v + d_v * (0.5 * (ta + tb))).as_vec3();
-                        let view = (d_v * self.place.spacing).normalize_or_zero().as_vec3();
-                        let c = [e[0] / e[3], e[1] / e[3], e[2] / e[3]];
-                        let lit = model.shade(c, self.gradient(mid), view);
-                        e = [lit[0] * e[3], lit[1] * e[3], lit[2] * e[3], e[3]];
-                    }
+                    let mid = (o_v + d_v * (0.5 * (ta + tb))).as_vec3();
+                    let view = (d_v * self.place.spacing).normalize_or_zero().as_vec3();
+                    let e = self.lit_segment(table.lookup(sf, sb), mid, view);
                     composite_segment(&mut acc, e, ((tb - ta) / h) as f32);
                 }
                 front = Some(back);

@@ -1,7 +1,10 @@
-//! The fast fixed-step paths (emission only, no isosurfaces, no MIP): the rays of a tile flow
-//! through [`LANES`] lanes that advance together, one sample per lane per step. Two rules
-//! share the stream ([`SlabRule`]): the Riemann sum composites each sample's slab, and
-//! pre-integration each segment between consecutive samples, classified by the pair.
+//! The fast fixed-step paths (no isosurfaces, no MIP): the rays of a tile flow through
+//! [`LANES`] lanes that advance together, one sample per lane per step. Two rules share the
+//! stream ([`SlabRule`]): the Riemann sum composites each sample's slab, and pre-integration
+//! each segment between consecutive samples, classified by the pair. With Blinn-Phong
+//! shading (and a gradient volume), each step's colours are lit lane-wise
+//! ([`BlinnPhong::light_lanes`]), at the sample for Riemann, at the segment's middle for
+//! pre-integration, as ray by ray.
 //!
 //! Lanes hold different rays, so the front-to-back compositing of one ray (a chain of
 //! dependent multiply-adds, `001_...txt` eq. 2.14) overlaps with the other lanes' chains, and
@@ -14,13 +17,21 @@
 //! `base + i step`): a function of the ray and `i` only, so skipping empty space never moves a
 //! sample. The Riemann slab `i` is `[t_i, t_i + h]`; the pre-integrated segment `i` is
 //! `[t_(i-1), t_i]`, clipped to the ray, as in [`RayContext::preintegrated`].
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
 use super::{composite_segment, pixel_hash, PixelOut, RayContext, TILE};
 use crate::classify::LaneTable;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{riemann_step, Integrator, RayAccumulator};
 use crate::sampling::{Field, LANES};
+use crate::shading::{BlinnPhong, GradientVolume, Lanes3};
+
+/// Shading in the stream: the model and the gradients it lights with.
+#[derive(Clone, Copy)]
+pub(super) struct StreamShading<'a> {
+    pub(super) model: &'a BlinnPhong,
+    pub(super) gradients: &'a GradientVolume,
+}
 
 /// How the stream composites: what one lane step adds, from the sample before it (`front`)
 /// and the new one (`back`).
@@ -28,9 +39,13 @@ pub(super) trait SlabRule {
     /// Whether a step composites the segment between two samples (else the slab of `back`).
     const SEGMENTS: bool;
 
-    /// Composites each lane's full slab or segment under its accumulated colour `acc`. An
-    /// undefined (NaN) sample adds nothing, nor does a segment that ends at one.
+    /// Composites each lane's full slab or segment under its accumulated colour `acc`
+    /// (emission only). An undefined (NaN) sample adds nothing, nor does a segment that ends
+    /// at one.
     fn composite(&self, front: &[f32; LANES], back: &[f32; LANES], acc: &mut [[f32; 4]; LANES]);
+
+    /// The premultiplied colour and opacity of each lane's full slab or segment (to be lit).
+    fn entries(&self, front: &[f32; LANES], back: &[f32; LANES]) -> [[f32; 4]; LANES];
 
     /// One full segment's entry, as the ray-by-ray path computes it (segments only).
     fn segment(&self, front: f32, back: f32) -> [f32; 4];
@@ -57,6 +72,20 @@ impl SlabRule for LaneTable {
         }
     }
 
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn entries(&self, _front: &[f32; LANES], v: &[f32; LANES]) -> [[f32; 4]; LANES] {
+        let mut at = [(0u32, 0.0f32); LANES];
+        for l in 0..LANES {
+            at[l] = self.position(v[l]);
+        }
+        let mut e = [[0.0f32; 4]; LANES];
+        for l in 0..LANES {
+            e[l] = self.at(at[l].0, at[l].1);
+        }
+        e
+    }
+
     fn segment(&self, _front: f32, back: f32) -> [f32; 4] {
         let (i, f) = self.position(back);
         self.at(i, f)
@@ -67,18 +96,19 @@ impl SlabRule for LaneTable {
 impl SlabRule for PreintegrationTable {
     const SEGMENTS: bool = true;
 
-    #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn composite(&self, front: &[f32; LANES], back: &[f32; LANES], acc: &mut [[f32; 4]; LANES]) {
+        composite_entries::<Self>(&self.entries(front, back), front, back, acc);
+    }
+
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn entries(&self, front: &[f32; LANES], back: &[f32; LANES]) -> [[f32; 4]; LANES] {
+        let mut e = [[0.0f32; 4]; LANES];
         for l in 0..LANES {
-            let e = self.lookup_lanes(front[l], back[l]);
-            let acc = &mut acc[l];
-            let undefined = front[l].is_nan() | back[l].is_nan();
-            let wgt = if undefined { 0.0 } else { 1.0 - acc[3] };
-            for c in 0..4 {
-                acc[c] += wgt * e[c];
-            }
+            e[l] = self.lookup_lanes(front[l], back[l]);
         }
+        e
     }
 
     fn segment(&self, front: f32, back: f32) -> [f32; 4] {
@@ -86,8 +116,43 @@ impl SlabRule for PreintegrationTable {
     }
 }
 
+/// Composites the entries `e` of each lane's slab or segment under `acc` (see
+/// [`SlabRule::composite`]).
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn composite_entries<R: SlabRule>(
+    e: &[[f32; 4]; LANES],
+    front: &[f32; LANES],
+    back: &[f32; LANES],
+    acc: &mut [[f32; 4]; LANES],
+) {
+    for l in 0..LANES {
+        let acc = &mut acc[l];
+        let undefined = back[l].is_nan() | (R::SEGMENTS & front[l].is_nan());
+        let wgt = if undefined { 0.0 } else { 1.0 - acc[3] };
+        for c in 0..4 {
+            acc[c] += wgt * e[l][c];
+        }
+    }
+}
+
 /// Side of the pixel blocks in which a tile's rays enter the lanes.
 const BLOCK: usize = 4;
+
+/// The lighting of one step's lanes: the lit colour is `rgb k + s`.
+struct LaneLight {
+    k: [f32; LANES],
+    s: [f32; LANES],
+}
+
+impl LaneLight {
+    /// The premultiplied entry `e` of lane `l`, lit: `rgb a k + s a`.
+    #[inline(always)]
+    fn apply(&self, e: [f32; 4], l: usize) -> [f32; 4] {
+        let (k, s) = (self.k[l], self.s[l] * e[3]);
+        [e[0] * k + s, e[1] * k + s, e[2] * k + s, e[3]]
+    }
+}
 
 /// Per-lane bookkeeping, touched once per span.
 #[derive(Default)]
@@ -104,6 +169,8 @@ struct LaneRay {
     t0: f64,
     t1: f64,
     spans: Vec<(f64, f64)>,
+    /// The ray's world direction, for lighting.
+    view: Vec3,
     /// The next span to enter.
     span: usize,
     /// First lane step of the current span, and the end (exclusive) of the span's slabs.
@@ -156,8 +223,13 @@ impl LaneRay {
     }
 
     /// The voxel-space position of sample `i`, clamped to the ray's extent.
-    fn position(&self, i: i32) -> glam::Vec3 {
-        let t = (self.start + self.h * f64::from(i)).clamp(self.t0, self.t1);
+    fn position(&self, i: i32) -> Vec3 {
+        self.position_at(self.start + self.h * f64::from(i))
+    }
+
+    /// The voxel-space position at distance `t`, clamped to the ray's extent.
+    fn position_at(&self, t: f64) -> Vec3 {
+        let t = t.clamp(self.t0, self.t1);
         (self.base + self.step * ((t - self.start) / self.h)).as_vec3()
     }
 }
@@ -174,6 +246,12 @@ struct Lanes {
     front: [f32; LANES],
     /// Opacity at which the lane's ray stops; infinite for an idle lane.
     stop: [f32; LANES],
+    /// Lighting directions of the lane's ray (towards the eye, the light, their half vector)
+    /// and whether it is lit.
+    to_eye: Lanes3,
+    light: Lanes3,
+    half: Lanes3,
+    lit: [bool; LANES],
     rays: [LaneRay; LANES],
     live: [bool; LANES],
 }
@@ -188,6 +266,10 @@ impl Lanes {
             acc: [[0.0; 4]; LANES],
             front: [0.0; LANES],
             stop: [f32::INFINITY; LANES],
+            to_eye: [[0.0; LANES]; 3],
+            light: [[0.0; LANES]; 3],
+            half: [[0.0; LANES]; 3],
+            lit: [false; LANES],
             rays: std::array::from_fn(|_| LaneRay::default()),
             live: [false; LANES],
         }
@@ -222,8 +304,12 @@ impl<F: Field> RayContext<'_, F> {
         for l in 0..LANES {
             self.refill(rule, &mut lanes, l, &mut queue, &mut px, (x0, y0, tw));
         }
+        let shading = self.stream_shading();
         while lanes.live.iter().any(|&b| b) {
-            let cold = self.steps(&mut lanes, rule);
+            let cold = match shading {
+                Some(sh) => self.steps::<R, true>(&mut lanes, rule, Some(sh)),
+                None => self.steps::<R, false>(&mut lanes, rule, None),
+            };
             for l in 0..LANES {
                 if cold & (1 << l) != 0 {
                     self.lane_event(rule, &mut lanes, l, &mut queue, &mut px, (x0, y0, tw));
@@ -238,7 +324,12 @@ impl<F: Field> RayContext<'_, F> {
     // Lane loops index several per-lane arrays at once: that is what vectorizes.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn steps<R: SlabRule>(&self, lanes: &mut Lanes, rule: &R) -> u32 {
+    fn steps<R: SlabRule, const LIT: bool>(
+        &self,
+        lanes: &mut Lanes,
+        rule: &R,
+        shading: Option<StreamShading<'_>>,
+    ) -> u32 {
         loop {
             let mut pos = [[0.0f32; LANES]; 3];
             for a in 0..3 {
@@ -247,7 +338,20 @@ impl<F: Field> RayContext<'_, F> {
                 }
             }
             let v = self.field.sample_lanes(&pos);
-            rule.composite(&lanes.front, &v, &mut lanes.acc);
+            match shading {
+                Some(sh) if LIT => {
+                    let mut e = rule.entries(&lanes.front, &v);
+                    // Light only steps where some lane is not transparent.
+                    if e.iter().any(|e| e[3] > 0.0) {
+                        let light = Self::light_step::<R>(sh, lanes, &pos);
+                        for (l, e) in e.iter_mut().enumerate() {
+                            *e = light.apply(*e, l);
+                        }
+                    }
+                    composite_entries::<R>(&e, &lanes.front, &v, &mut lanes.acc);
+                }
+                _ => rule.composite(&lanes.front, &v, &mut lanes.acc),
+            }
             if R::SEGMENTS {
                 lanes.front = v;
             }
@@ -261,6 +365,25 @@ impl<F: Field> RayContext<'_, F> {
                 return cold;
             }
         }
+    }
+
+    /// The lighting of this step's lanes at their sample positions `pos` (Riemann) or at the
+    /// middle of their segments (pre-integration).
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn light_step<R: SlabRule>(sh: StreamShading<'_>, lanes: &Lanes, pos: &Lanes3) -> LaneLight {
+        let mut p = *pos;
+        if R::SEGMENTS {
+            for a in 0..3 {
+                for l in 0..LANES {
+                    p[a][l] -= 0.5 * lanes.step[a][l];
+                }
+            }
+        }
+        let g = sh.gradients.gradient_lanes(&p);
+        let dirs = (&lanes.to_eye, &lanes.light, &lanes.half);
+        let (k, s) = sh.model.light_lanes(&g, dirs, &lanes.lit);
+        LaneLight { k, s }
     }
 
     /// Handles lane `l` after its last sample: early termination, the end of its span (with
@@ -354,10 +477,13 @@ impl<F: Field> RayContext<'_, F> {
                 if front.is_nan() || back.is_nan() {
                     continue;
                 }
-                let len = t.min(r.t1) - (t - r.h).max(r.t0);
-                composite_segment(&mut acc, rule.segment(front, back), (len / r.h) as f32);
+                let (ta, tb) = ((t - r.h).max(r.t0), t.min(r.t1));
+                let mid = r.position_at(0.5 * (ta + tb));
+                let e = self.lit_segment(rule.segment(front, back), mid, r.view);
+                composite_segment(&mut acc, e, ((tb - ta) / r.h) as f32);
             } else if let Some(v) = v {
-                riemann_step(&mut acc, self.table.lookup(v), (r.t1 - t).min(r.h) as f32);
+                let c = self.lit_sample(self.table.lookup(v), r.position(i), r.view);
+                riemann_step(&mut acc, c, (r.t1 - t).min(r.h) as f32);
             }
             if acc.alpha() >= stop {
                 lanes.acc[l] = acc.rgba;
@@ -408,6 +534,7 @@ impl<F: Field> RayContext<'_, F> {
             let hh = step * unit;
             let start = t0 + jitter * hh;
             let (base, stp) = (o_v + d_v * start, d_v * hh);
+            let view = (d_v * self.place.spacing).normalize_or_zero().as_vec3();
             lanes.rays[l] = LaneRay {
                 pixel,
                 base,
@@ -417,8 +544,19 @@ impl<F: Field> RayContext<'_, F> {
                 t0,
                 t1,
                 spans,
+                view,
                 ..LaneRay::default()
             };
+            if let Some(sh) = self.stream_shading() {
+                let ray = sh.model.ray_light(view);
+                let r = ray.unwrap_or_default();
+                for a in 0..3 {
+                    lanes.to_eye[a][l] = r.to_eye[a];
+                    lanes.light[a][l] = r.light[a];
+                    lanes.half[a][l] = r.half[a];
+                }
+                lanes.lit[l] = ray.is_some();
+            }
             lanes.rays[l].partial = lanes.rays[l].first_partial(R::SEGMENTS);
             lanes.acc[l] = [0.0; 4];
             for a in 0..3 {
@@ -433,6 +571,17 @@ impl<F: Field> RayContext<'_, F> {
             self.finish(lanes, l, px);
         }
         lanes.idle(l);
+    }
+}
+
+impl<F: Field> RayContext<'_, F> {
+    /// The shading of the lane stream: the model and the cached gradient volume, if shading
+    /// is on.
+    pub(super) fn stream_shading(&self) -> Option<StreamShading<'_>> {
+        Some(StreamShading {
+            model: self.opts.shading.as_ref()?,
+            gradients: self.gradients?,
+        })
     }
 }
 
