@@ -8,6 +8,7 @@ use volux_core::{synth, CameraSpec, Grid, TransferFunction};
 use volux_io::{Dataset, LoadOptions};
 use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
 use volux_render::raycast::GridRenderer;
+use volux_render::shading::BlinnPhong;
 use volux_render::RenderOptions;
 
 use super::CmdError;
@@ -58,7 +59,8 @@ fn datasets(n: usize) -> Result<Vec<(String, Grid, TransferFunction)>, CmdError>
     Ok(out)
 }
 
-fn integrators() -> Vec<Integrator> {
+/// The grid cases: an integrator, and whether it is shaded (Blinn-Phong, default settings).
+fn integrators() -> Vec<(Integrator, bool)> {
     let adaptive = |control, hmin, hmax| {
         Integrator::AdaptiveSimpson(AdaptiveParams {
             tol: 0.01,
@@ -69,7 +71,7 @@ fn integrators() -> Vec<Integrator> {
             early_termination: None,
         })
     };
-    vec![
+    let unlit = [
         Integrator::Riemann { step: 0.5 },
         Integrator::Riemann { step: 0.2 },
         Integrator::Trapezoid { step: 0.5 },
@@ -80,17 +82,29 @@ fn integrators() -> Vec<Integrator> {
         adaptive(StepControl::Coupled, 0.1, 2.0),
         adaptive(StepControl::Decoupled, 0.1, 2.0),
         adaptive(StepControl::Coupled, 0.4, 4.0),
-    ]
+    ];
+    let shaded = [
+        Integrator::Riemann { step: 0.5 },
+        Integrator::Preintegrated { step: 0.5 },
+        adaptive(StepControl::Coupled, 0.4, 4.0),
+    ];
+    let unlit = unlit.into_iter().map(|i| (i, false));
+    unlit.chain(shaded.into_iter().map(|i| (i, true))).collect()
 }
 
-fn param(i: &Integrator) -> String {
-    match i {
+fn param(i: &Integrator, shaded: bool) -> String {
+    let p = match i {
         Integrator::Riemann { step }
         | Integrator::Trapezoid { step }
         | Integrator::Simpson { step }
         | Integrator::Preintegrated { step } => format!("h={step}"),
         Integrator::AdaptiveSimpson(p) => format!("tol={} hmax={}", p.tol, p.hmax),
         _ => String::new(),
+    };
+    if shaded {
+        p + " shaded"
+    } else {
+        p
     }
 }
 
@@ -157,13 +171,19 @@ fn run_grid(
             ..Default::default()
         };
         for &(w, h) in sizes {
-            for integrator in integrators() {
-                let case = format!("{name} {} {}", integrator.name(), param(&integrator));
+            for (integrator, shaded) in integrators() {
+                let param = param(&integrator, shaded);
+                let case = format!("{name} {} {param}", integrator.name());
                 if !selected(&case, only) {
                     continue;
                 }
                 let mut opts = RenderOptions::new(spec.resolve(&grid.bounds())?, tf.clone());
                 (opts.width, opts.height, opts.integrator) = (w, h, integrator);
+                opts.shading = shaded.then(BlinnPhong::default);
+                if shaded {
+                    // Built once per volume (a viewer keeps it), not per frame.
+                    renderer.gradients();
+                }
                 let mut times = Vec::new();
                 let mut samples = 0;
                 for _ in 0..frames {
@@ -176,7 +196,7 @@ fn run_grid(
                 let rate = samples as f64 / s / 1e6;
                 let row = json!({
                     "dataset": name, "width": w, "height": h, "integrator": integrator.name(),
-                    "param": param(&integrator), "ms": s * 1e3, "samples": samples,
+                    "param": param, "ms": s * 1e3, "samples": samples,
                     "samples_per_s": rate * 1e6, "samples_per_s_per_core": rate * 1e6 / threads as f64,
                 });
                 if !as_json {
@@ -184,7 +204,7 @@ fn run_grid(
                         "{:<22} {:>8} {:<20} {:>10.1} {:>12} {:>14.1} {:>16.1}",
                         name,
                         format!("{w}x{h}"),
-                        format!("{} {}", integrator.name(), param(&integrator)),
+                        format!("{} {param}", integrator.name()),
                         s * 1e3,
                         samples,
                         rate,

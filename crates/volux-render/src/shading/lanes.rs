@@ -58,21 +58,25 @@ impl BlinnPhong {
         lit: &[bool; LANES],
     ) -> ([f32; LANES], [f32; LANES]) {
         let (to_eye, light, half) = dirs;
-        let (mut diffuse, mut n_h) = ([0.0f32; LANES], [0.0f32; LANES]);
-        let mut valid = [false; LANES];
+        // Plain f32 arithmetic and selects, no booleans kept across loops: that vectorizes.
+        let (mut diffuse, mut n_h, mut inv) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
         for l in 0..LANES {
             let len = (g[0][l] * g[0][l] + g[1][l] * g[1][l] + g[2][l] * g[2][l]).sqrt();
-            valid[l] = lit[l] & (len >= self.min_gradient) & (len > 0.0) & (len < f32::INFINITY);
-            let inv = if valid[l] { 1.0 / len } else { 0.0 };
-            let n = [g[0][l] * inv, g[1][l] * inv, g[2][l] * inv];
-            // Two-sided: the normal faces the viewer.
+            let ok = lit[l] & (len >= self.min_gradient) & (len > 0.0) & (len < f32::INFINITY);
+            // 0 marks an unlit lane.
+            inv[l] = if ok { 1.0 / len } else { 0.0 };
+        }
+        for l in 0..LANES {
+            let n = [g[0][l] * inv[l], g[1][l] * inv[l], g[2][l] * inv[l]];
+            // Two-sided: the normal faces the viewer (`copysign` and `max` keep this loop
+            // free of branches).
             let side = n[0] * to_eye[0][l] + n[1] * to_eye[1][l] + n[2] * to_eye[2][l];
-            let sign = if side < 0.0 { -1.0 } else { 1.0 };
+            let sign = 1.0f32.copysign(side);
             let n_l = sign * (n[0] * light[0][l] + n[1] * light[1][l] + n[2] * light[2][l]);
             let n_hl = sign * (n[0] * half[0][l] + n[1] * half[1][l] + n[2] * half[2][l]);
-            diffuse[l] = if n_l > 0.0 { n_l } else { 0.0 };
-            // The highlight only where the surface faces the light.
-            n_h[l] = if n_l > 0.0 && n_hl > 0.0 { n_hl } else { 0.0 };
+            diffuse[l] = n_l.max(0.0);
+            // The highlight counts only where the surface faces the light (below).
+            n_h[l] = n_hl.max(0.0);
         }
         let spec = pow_lanes(n_h, self.shininess);
         let (mut k, mut s) = ([1.0f32; LANES], [0.0f32; LANES]);
@@ -83,8 +87,8 @@ impl BlinnPhong {
             } else {
                 0.0
             };
-            k[l] = if valid[l] { kd } else { 1.0 };
-            s[l] = if valid[l] { ks } else { 0.0 };
+            k[l] = if inv[l] > 0.0 { kd } else { 1.0 };
+            s[l] = if inv[l] > 0.0 { ks } else { 0.0 };
         }
         (k, s)
     }
@@ -124,12 +128,11 @@ impl GradientVolume {
         let mut out = [[0.0f32; LANES]; 3];
         for l in 0..LANES {
             // Each corner's x, y, z (and pad) in one load; the lerps run over the components.
+            // In bounds: cells are clamped to the grid, and a corner adds at most one stride
+            // per axis that has two or more samples.
             let corner = |o: usize| -> [f32; 4] {
-                self.data
-                    .get(index[l] + o)
-                    .copied()
-                    .unwrap_or([0; 4])
-                    .map(f32::from)
+                let q = self.data[index[l] + o];
+                [q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32]
             };
             let lerp = |a: [f32; 4], b: [f32; 4], f: f32| -> [f32; 4] {
                 [
