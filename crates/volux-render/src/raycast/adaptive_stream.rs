@@ -6,15 +6,17 @@
 //! One ray's steps form a serial chain (sample, estimate the error, accept or halve), so a ray
 //! alone keeps the processor waiting; several rays' steps taken together fill the lanes, and
 //! their rules, error estimates and `exp` run lane-wise. Rays enter the slots in 4 x 4 pixel
-//! blocks, so that a round's points lie close together in the volume.
+//! blocks, so that a round's points lie close together in the volume. Shaded renders light
+//! each round's colours lane-wise with the cached gradient volume, as the stream does.
 use glam::Vec3;
 
-use super::stream::block_order;
+use super::stream::{block_order, StreamShading};
 use super::{pixel, PixelOut, RayContext, TILE};
 use crate::classify::{BreakpointRanks, LaneTable};
 use crate::integrate::adaptive_lanes::{AdaptiveLanes, LaneMedia, RAYS};
 use crate::integrate::{AdaptiveParams, Integrator, StepControl};
 use crate::sampling::{Field, LANES};
+use crate::shading::Lanes3;
 
 /// The ray in one slot: its pixel, the intervals to integrate and the next one to enter.
 #[derive(Default)]
@@ -32,32 +34,40 @@ pub(super) struct LanePath<'a> {
     params: AdaptiveParams,
     table: &'a LaneTable,
     ranks: &'a BreakpointRanks,
+    shading: Option<StreamShading<'a>>,
 }
 
-/// The tile's rays in flight: slots and their voxel-space origins and directions, lane-wise.
+/// The tile's rays in flight: slots and their voxel-space origins and directions, lane-wise,
+/// and the lighting directions of each lane's ray (towards the eye, the light, their half
+/// vector) with whether it is lit.
 struct Flight {
     lanes: AdaptiveLanes,
     slots: [Option<Slot>; RAYS],
     origin: [[f32; RAYS]; 3],
     dir: [[f32; RAYS]; 3],
+    to_eye: Lanes3,
+    light: Lanes3,
+    half: Lanes3,
+    lit: [bool; LANES],
 }
 
 impl<F: Field> RayContext<'_, F> {
     /// The adaptive parameters in world units and the classification tables when tiles take
-    /// the lane path: coupled control, no shading (its gradients are taken per sample), no
-    /// MIP, and a tolerance the f32 lanes resolve.
+    /// the lane path: coupled control, shading only with the cached gradient volume, no MIP,
+    /// and a tolerance the f32 lanes resolve.
     pub(super) fn adaptive_stream_params(&self) -> Option<LanePath<'_>> {
         let Integrator::AdaptiveSimpson(p) = self.opts.integrator else {
             return None;
         };
         let lane_path = p.control == StepControl::Coupled
             && p.tol >= AdaptiveLanes::MIN_TOL
-            && self.opts.shading.is_none()
+            && (self.opts.shading.is_none() || self.gradients.is_some())
             && !self.opts.mip;
         Some(LanePath {
             params: self.adaptive_in_world(&p),
             table: self.lane_table.as_ref().filter(|_| lane_path)?,
             ranks: self.breakpoint_ranks.as_ref()?,
+            shading: self.stream_shading(),
         })
     }
 
@@ -77,6 +87,10 @@ impl<F: Field> RayContext<'_, F> {
             slots: Default::default(),
             origin: [[0.0; RAYS]; 3],
             dir: [[0.0; RAYS]; 3],
+            to_eye: [[0.0; LANES]; 3],
+            light: [[0.0; LANES]; 3],
+            half: [[0.0; LANES]; 3],
+            lit: [false; LANES],
         };
         for r in 0..RAYS {
             self.load_ray(&mut f, r, Vec::new(), &mut queue, (x0, y0, tw));
@@ -105,14 +119,22 @@ impl<F: Field> RayContext<'_, F> {
         }
         let v = self.field.sample_lanes(&pos);
         let mut m = LaneMedia::default();
+        let light = path.shading.map(|sh| {
+            let g = sh.gradients.gradient_lanes(&pos);
+            sh.model
+                .light_lanes(&g, (&f.to_eye, &f.light, &f.half), &f.lit)
+        });
         for l in 0..LANES {
             let (i, frac) = path.table.position(v[l]);
             let e = path.table.at(i, frac);
             let ranks = path.ranks.at(i);
             // An undefined (NaN) sample is empty, of value 0.
             let defined = !v[l].is_nan();
+            // Lit colours where shading is on (only lit where extinction is not zero, as ray
+            // by ray; elsewhere the colour is multiplied by 0).
+            let (k, s) = light.as_ref().map_or((1.0, 0.0), |(k, s)| (k[l], s[l]));
             for c in 0..3 {
-                m.rgb[c][l] = if defined { e[c] } else { 0.0 };
+                m.rgb[c][l] = if defined { e[c] * k + s } else { 0.0 };
             }
             m.tau[l] = if defined { e[3] } else { 0.0 };
             m.value[l] = if defined { v[l] } else { 0.0 };
@@ -171,6 +193,20 @@ impl<F: Field> RayContext<'_, F> {
                 let (o, d): (Vec3, Vec3) = (o_v.as_vec3(), d_v.as_vec3());
                 for a in 0..3 {
                     (f.origin[a][r], f.dir[a][r]) = (o[a], d[a]);
+                }
+                if let Some(sh) = self.stream_shading() {
+                    let view = (d_v * self.place.spacing).normalize_or_zero().as_vec3();
+                    let ray = sh.model.ray_light(view);
+                    let dirs = ray.unwrap_or_default();
+                    // The ray's lanes: its point k is lane (k - 1) RAYS + r.
+                    for l in (r..LANES).step_by(RAYS) {
+                        for a in 0..3 {
+                            f.to_eye[a][l] = dirs.to_eye[a];
+                            f.light[a][l] = dirs.light[a];
+                            f.half[a][l] = dirs.half[a];
+                        }
+                        f.lit[l] = ray.is_some();
+                    }
                 }
                 f.lanes
                     .start(r, spans.iter().map(|(a, b)| (b - a).max(0.0)).sum());

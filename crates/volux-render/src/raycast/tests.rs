@@ -131,17 +131,6 @@ fn marschner_lobb_40(extinction: &str, size: (usize, usize)) -> (Grid, RenderOpt
     (g, o)
 }
 
-/// A lighting model that leaves every colour as it is (ambient 1, no diffuse, no specular):
-/// it sends rays down the per-sample paths of lit renders without changing their sums.
-fn identity_lighting() -> BlinnPhong {
-    BlinnPhong {
-        ambient: 1.0,
-        diffuse: 0.0,
-        specular: 0.0,
-        ..BlinnPhong::default()
-    }
-}
-
 /// Renders `o` ray by ray: the reference for the lane paths.
 fn render_ray_by_ray(g: &Grid, o: &RenderOptions) -> Rendered {
     let mut r = GridRenderer::new(g);
@@ -200,17 +189,23 @@ fn lane_stream_matches_the_per_sample_loop() {
     }
 }
 
-/// Adaptive Simpson in f32 lanes, four rays at a time, against the f64 integrator ray by ray
-/// (taken when shading is on; here a lighting model that changes nothing), with gaps from
-/// skipping and early termination: the same step decisions but where an error estimate sits
-/// at the tolerance within f32 rounding, so images within a small fraction of the tolerance
-/// and sample counts within 0.1 %.
+/// Adaptive Simpson in f32 lanes, four rays at a time, against the f64 integrator ray by ray,
+/// with gaps from skipping, early termination and shading: the same step decisions but where
+/// an error estimate sits at the tolerance within f32 rounding, so images within a small
+/// fraction of the tolerance and sample counts within 0.1 %.
 #[test]
 fn lane_adaptive_rays_match_the_f64_integrator() {
     let (g, mut o) = marschner_lobb_40(r#"[[0,0],[0.45,0],[0.5,2],[0.6,0],[1,0.5]]"#, (37, 29));
-    let identity = identity_lighting();
     let tol = 0.005;
-    for (stop, hmax) in [(None, 2.0), (Some(0.9), 0.5)] {
+    let shaded = Some(BlinnPhong {
+        light: crate::shading::Light::Direction(glam::Vec3::new(-1.0, 0.5, 2.0)),
+        ..BlinnPhong::default()
+    });
+    for (stop, hmax, shading) in [
+        (None, 2.0, None),
+        (Some(0.9), 0.5, None),
+        (None, 1.0, shaded),
+    ] {
         o.integrator = Integrator::AdaptiveSimpson(AdaptiveParams {
             tol,
             h0: 0.5,
@@ -220,10 +215,9 @@ fn lane_adaptive_rays_match_the_f64_integrator() {
             early_termination: None,
         });
         o.early_termination = stop;
-        o.shading = None;
+        o.shading = shading;
         let lanes = render_grid(&g, &o).unwrap();
-        o.shading = Some(identity);
-        let single = render_grid(&g, &o).unwrap();
+        let single = render_ray_by_ray(&g, &o);
         let (mut worst, mut sum) = (0.0f32, 0.0f64);
         for (a, b) in lanes.image.pixels().iter().zip(single.image.pixels()) {
             for c in 0..4 {
@@ -232,9 +226,12 @@ fn lane_adaptive_rays_match_the_f64_integrator() {
             }
         }
         let mean = sum / (4 * lanes.image.pixels().len()) as f64;
-        // Measured: worst 2.2e-5, mean 2e-7.
-        assert!(worst < 0.02 * tol as f32, "stop {stop:?}: worst {worst}");
-        assert!(mean < 1e-6, "stop {stop:?}: mean {mean}");
+        let case = format!("stop {stop:?} shaded {}", shading.is_some());
+        // Measured: worst 2.2e-5 unshaded; 3.9e-4 shaded, where lit colours vary more and a
+        // few steps sit at the tolerance (mean 7e-7).
+        let bound = if shading.is_some() { 0.1 } else { 0.02 };
+        assert!(worst < bound * tol as f32, "{case}: worst {worst}");
+        assert!(mean < 1e-6, "{case}: mean {mean}");
         let (nl, ns) = (lanes.stats.samples as f64, single.stats.samples as f64);
         assert!((nl - ns).abs() <= 1e-3 * ns, "samples {nl} vs {ns}");
         let (ol, os) = (
