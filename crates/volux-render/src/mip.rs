@@ -82,23 +82,36 @@ pub fn max_along<F: FnMut(f64) -> Option<f32>>(
         i += 1;
     }
     let (v, t, y0, y2) = best?;
+    Some(refine_peak((v, t), (y0, y2), step, sample))
+}
+
+/// The largest lattice sample `(v, t)` refined with its neighbours `y0` (at `t - step`) and
+/// `y2` (at `t + step`), where both are defined: the vertex of their parabola
+/// ([`parabolic_peak`]), polished by one more `sample` there (the second step of
+/// [`max_along`], for traversals that scan the lattice themselves).
+pub fn refine_peak<F: FnMut(f64) -> Option<f32>>(
+    (v, t): (f32, f64),
+    (y0, y2): (Option<f32>, Option<f32>),
+    step: f64,
+    mut sample: F,
+) -> (f32, f64) {
     match (y0, y2) {
         (Some(y0), Some(y2)) => {
             let (dt, peak) = parabolic_peak(y0, v, y2, step);
             if dt == 0.0 {
-                return Some((peak, t));
+                return (peak, t);
             }
             // Polish: the field at the vertex, a true value of the field near the peak (the
             // vertex is off by O(h^3), so this is off by O(h^6)); the parabola's own value
             // where the field is undefined there.
             let ts = t + dt;
             match sample(ts).filter(|s| s.is_finite()) {
-                Some(s) if s >= v => Some((s, ts)),
-                Some(_) => Some((v, t)),
-                None => Some((peak, ts)),
+                Some(s) if s >= v => (s, ts),
+                Some(_) => (v, t),
+                None => (peak, ts),
             }
         }
-        _ => Some((v, t)),
+        _ => (v, t),
     }
 }
 

@@ -4,13 +4,15 @@
 //! Each ray is handed to one of the [`Integrator`]s of [`crate::integrate`] as a
 //! [`RayMedium`] (trilinear reconstruction of [`crate::sampling`], classification of
 //! [`crate::classify`]); steps are given in voxel units (the smallest spacing), as in the seed
-//! `001_...txt`. A tile takes one of three paths:
+//! `001_...txt`. A tile takes one of these paths:
 //!
 //! - Riemann sums and pre-integration, emission only or shaded with the cached gradient
 //!   volume: the lane stream (`raycast/stream.rs`), 16 rays advanced together;
-//! - adaptive Simpson with coupled control, unshaded: `raycast/adaptive_stream.rs`, four
-//!   rays' steps sampled and judged together in f32 lanes;
-//! - everything else (isosurfaces, MIP, shaded adaptive Simpson, trapezoid, Simpson, the
+//! - adaptive Simpson with coupled control, emission only or shaded with the cached gradient
+//!   volume: `raycast/adaptive_stream.rs`, four rays' steps sampled and judged together in
+//!   f32 lanes;
+//! - maximum intensity projection: `raycast/mip_stream.rs`, 16 rays sampled together;
+//! - everything else (isosurfaces, decoupled adaptive Simpson, trapezoid, Simpson, the
 //!   reference): ray by ray.
 //!
 //! The paths compute the same sums (tested). Output does not depend on the number of threads:
@@ -465,6 +467,8 @@ fn render_with<F: Field>(
             let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
             let px = if !derived.lanes {
                 ctx.tile_ray_by_ray(x0, y0)
+            } else if opts.mip {
+                ctx.mip_stream(x0, y0)
             } else if let Some(st) = ctx.packet_table() {
                 ctx.lane_stream(st, x0, y0)
             } else if let Some(pt) = ctx.preintegrated_stream_table() {
@@ -914,36 +918,60 @@ impl<F: Field> RayContext<'_, F> {
 
     /// Maximum intensity projection along one ray: the TF colour of the largest value, opaque.
     fn mip(&self, origin: DVec3, dir: DVec3) -> PixelOut {
-        let place = &self.place;
-        let Some((t0, t1)) = ray_box(origin, dir, place.origin, place.origin + place.extent())
-        else {
+        let Some(ray) = self.mip_ray(origin, dir) else {
             return PixelOut::default();
         };
+        let mut n = 0u64;
+        let best = mip::max_along(ray.t0, ray.t1, ray.step, |t| {
+            n += 1;
+            self.field.sample64(ray.o_v + ray.d_v * t).map(|v| v as f32)
+        });
+        self.mip_pixel(best.map(|b| b.0), n)
+    }
+
+    /// A MIP ray's voxel-space origin and direction, extent and step; `None` if it misses.
+    fn mip_ray(&self, origin: DVec3, dir: DVec3) -> Option<MipRay> {
+        let place = &self.place;
+        let (t0, t1) = ray_box(origin, dir, place.origin, place.origin + place.extent())?;
         let step = match self.opts.integrator {
             Integrator::Riemann { step } | Integrator::Preintegrated { step } => step,
             _ => 0.5,
         } * place.spacing.min_element();
         let (o_v, d_v) = ((origin - place.origin) / place.spacing, dir / place.spacing);
-        let mut n = 0u64;
-        let best = mip::max_along(t0, t1, step, |t| {
-            n += 1;
-            self.field.sample64(o_v + d_v * t).map(|v| v as f32)
+        Some(MipRay {
+            o_v,
+            d_v,
+            t0,
+            t1,
+            step,
+        })
+    }
+
+    /// The pixel of a MIP ray whose maximum is `best` (`None`: no defined sample), after
+    /// `samples` samples.
+    fn mip_pixel(&self, best: Option<f32>, samples: u64) -> PixelOut {
+        let rgba = best.map_or([0.0; 4], |v| {
+            let c = self.tf.color_at(v as f64);
+            [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]
         });
-        let Some((v, _)) = best else {
-            return PixelOut {
-                samples: n,
-                hit: true,
-                ..PixelOut::default()
-            };
-        };
-        let c = self.tf.color_at(v as f64);
         PixelOut {
-            rgba: [c[0] as f32, c[1] as f32, c[2] as f32, 1.0],
-            samples: n,
+            rgba,
+            samples,
             hit: true,
             ..PixelOut::default()
         }
     }
+}
+
+/// A ray of maximum intensity projection: voxel-space origin and direction, the extent and
+/// the step of its sample lattice (world units).
+#[derive(Clone, Copy, Debug, Default)]
+struct MipRay {
+    o_v: DVec3,
+    d_v: DVec3,
+    t0: f64,
+    t1: f64,
+    step: f64,
 }
 
 impl<F: Field> RayContext<'_, F> {
@@ -1087,6 +1115,7 @@ pub fn to_voxel(place: &Placement, p: DVec3) -> Vec3 {
 }
 
 mod adaptive_stream;
+mod mip_stream;
 mod stream;
 #[cfg(test)]
 mod tests;
