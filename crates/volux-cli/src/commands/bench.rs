@@ -59,8 +59,18 @@ fn datasets(n: usize) -> Result<Vec<(String, Grid, TransferFunction)>, CmdError>
     Ok(out)
 }
 
-/// The grid cases: an integrator, and whether it is shaded (Blinn-Phong, default settings).
-fn integrators() -> Vec<(Integrator, bool)> {
+/// How a grid case renders besides its integrator.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Emission,
+    /// Blinn-Phong with the default settings.
+    Shaded,
+    /// Maximum intensity projection (the integrator gives the step).
+    Mip,
+}
+
+/// The grid cases: an integrator and a mode.
+fn integrators() -> Vec<(Integrator, Mode)> {
     let adaptive = |control, hmin, hmax| {
         Integrator::AdaptiveSimpson(AdaptiveParams {
             tol: 0.01,
@@ -88,11 +98,14 @@ fn integrators() -> Vec<(Integrator, bool)> {
         Integrator::Preintegrated { step: 0.5 },
         adaptive(StepControl::Coupled, 0.4, 4.0),
     ];
-    let unlit = unlit.into_iter().map(|i| (i, false));
-    unlit.chain(shaded.into_iter().map(|i| (i, true))).collect()
+    let unlit = unlit.into_iter().map(|i| (i, Mode::Emission));
+    unlit
+        .chain(shaded.into_iter().map(|i| (i, Mode::Shaded)))
+        .chain([(Integrator::Riemann { step: 0.5 }, Mode::Mip)])
+        .collect()
 }
 
-fn param(i: &Integrator, shaded: bool) -> String {
+fn param(i: &Integrator, mode: Mode) -> String {
     let p = match i {
         Integrator::Riemann { step }
         | Integrator::Trapezoid { step }
@@ -101,10 +114,10 @@ fn param(i: &Integrator, shaded: bool) -> String {
         Integrator::AdaptiveSimpson(p) => format!("tol={} hmax={}", p.tol, p.hmax),
         _ => String::new(),
     };
-    if shaded {
-        p + " shaded"
-    } else {
-        p
+    match mode {
+        Mode::Emission => p,
+        Mode::Shaded => p + " shaded",
+        Mode::Mip => p + " mip",
     }
 }
 
@@ -171,16 +184,17 @@ fn run_grid(
             ..Default::default()
         };
         for &(w, h) in sizes {
-            for (integrator, shaded) in integrators() {
-                let param = param(&integrator, shaded);
+            for (integrator, mode) in integrators() {
+                let param = param(&integrator, mode);
                 let case = format!("{name} {} {param}", integrator.name());
                 if !selected(&case, only) {
                     continue;
                 }
                 let mut opts = RenderOptions::new(spec.resolve(&grid.bounds())?, tf.clone());
                 (opts.width, opts.height, opts.integrator) = (w, h, integrator);
-                opts.shading = shaded.then(BlinnPhong::default);
-                if shaded {
+                opts.shading = (mode == Mode::Shaded).then(BlinnPhong::default);
+                opts.mip = mode == Mode::Mip;
+                if opts.shading.is_some() {
                     // Built once per volume (a viewer keeps it), not per frame.
                     renderer.gradients();
                 }
