@@ -97,7 +97,10 @@ impl<F: Field> RayContext<'_, F> {
             self.advance(&mut f, r, &mut px, &mut queue, (x0, y0, tw));
         }
         while f.lanes.is_busy() {
-            let media = self.round_media(&f, &path);
+            let media = match path.shading {
+                Some(sh) => self.round_media::<true>(&f, &path, Some(sh)),
+                None => self.round_media::<false>(&f, &path, None),
+            };
             f.lanes.supply(&media);
             for r in 0..RAYS {
                 self.advance(&mut f, r, &mut px, &mut queue, (x0, y0, tw));
@@ -109,7 +112,12 @@ impl<F: Field> RayContext<'_, F> {
     /// Samples and classifies the points of this round.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn round_media(&self, f: &Flight, path: &LanePath<'_>) -> LaneMedia {
+    fn round_media<const LIT: bool>(
+        &self,
+        f: &Flight,
+        path: &LanePath<'_>,
+        shading: Option<StreamShading<'_>>,
+    ) -> LaneMedia {
         let t = f.lanes.distances();
         let mut pos = [[0.0f32; LANES]; 3];
         for a in 0..3 {
@@ -119,11 +127,15 @@ impl<F: Field> RayContext<'_, F> {
         }
         let v = self.field.sample_lanes(&pos);
         let mut m = LaneMedia::default();
-        let light = path.shading.map(|sh| {
-            let g = sh.gradients.gradient_lanes(&pos);
-            sh.model
-                .light_lanes(&g, (&f.to_eye, &f.light, &f.half), &f.lit)
-        });
+        // The lighting (factor, highlight) per lane; the emission-only path has none.
+        let (k, s) = match shading {
+            Some(sh) if LIT => {
+                let g = sh.gradients.gradient_lanes(&pos);
+                sh.model
+                    .light_lanes(&g, (&f.to_eye, &f.light, &f.half), &f.lit)
+            }
+            _ => ([1.0; LANES], [0.0; LANES]),
+        };
         for l in 0..LANES {
             let (i, frac) = path.table.position(v[l]);
             let e = path.table.at(i, frac);
@@ -132,9 +144,9 @@ impl<F: Field> RayContext<'_, F> {
             let defined = !v[l].is_nan();
             // Lit colours where shading is on (only lit where extinction is not zero, as ray
             // by ray; elsewhere the colour is multiplied by 0).
-            let (k, s) = light.as_ref().map_or((1.0, 0.0), |(k, s)| (k[l], s[l]));
             for c in 0..3 {
-                m.rgb[c][l] = if defined { e[c] * k + s } else { 0.0 };
+                let lit = if LIT { e[c] * k[l] + s[l] } else { e[c] };
+                m.rgb[c][l] = if defined { lit } else { 0.0 };
             }
             m.tau[l] = if defined { e[3] } else { 0.0 };
             m.value[l] = if defined { v[l] } else { 0.0 };
