@@ -506,25 +506,20 @@ impl PreintegrationTable {
             let i = (x as usize).min(self.n - 2);
             (i, (x - i as f64) as f32)
         };
-        let ((i, fi), (j, fj)) = (pos(s_f), pos(s_b));
-        let row0 = i * self.n + j;
-        let row1 = row0 + self.n;
-        let (e00, e01) = (self.entries[row0], self.entries[row0 + 1]);
-        let (e10, e11) = (self.entries[row1], self.entries[row1 + 1]);
-        let mut out = [0.0f32; 4];
-        for k in 0..4 {
-            let a = e00[k] + (e01[k] - e00[k]) * fj;
-            let b = e10[k] + (e11[k] - e10[k]) * fj;
-            out[k] = a + (b - a) * fi;
-        }
-        out
+        self.blend(pos(s_f), pos(s_b))
     }
 
     /// [`PreintegrationTable::lookup`] in f32 and without branches, for the lane stream,
     /// whose lanes compute it together.
     #[inline(always)]
     pub fn lookup_lanes(&self, s_f: f32, s_b: f32) -> [f32; 4] {
-        let ((i, fi), (j, fj)) = (self.position_f32(s_f), self.position_f32(s_b));
+        self.blend(self.position_f32(s_f), self.position_f32(s_b))
+    }
+
+    /// The entries around grid point `(i, j)` blended bilinearly at fractions `fi`, `fj`
+    /// (`i`, `j` at most `n - 2`).
+    #[inline(always)]
+    fn blend(&self, (i, fi): (usize, f32), (j, fj): (usize, f32)) -> [f32; 4] {
         let row0 = i * self.n + j;
         let row1 = row0 + self.n;
         let (e00, e01) = (self.entries[row0], self.entries[row0 + 1]);

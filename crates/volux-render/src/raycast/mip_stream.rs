@@ -3,18 +3,15 @@
 //! around it; when a ray ends, its maximum is refined between samples as ray by ray
 //! ([`mip::refine_peak`]) and its pixel written. The same lattice, maximum and refinement as
 //! [`RayContext::mip`] (tested), with the lattice sampled in f32.
-use super::stream::block_order;
+use super::stream::{block_order, LaneLattice};
 use super::{MipRay, PixelOut, RayContext, TILE};
 use crate::mip;
 use crate::sampling::{Field, LANES};
 
 /// The lanes: per-lane lattice and running maximum, and each lane's ray.
 struct MipLanes {
-    base: [[f32; LANES]; 3],
-    step: [[f32; LANES]; 3],
-    /// Next sample index and the number of lattice samples of the ray.
-    i: [i32; LANES],
-    end: [i32; LANES],
+    /// The lattices; a lane's run is its ray's whole lattice.
+    lattice: LaneLattice,
     /// The largest sample so far (`-inf` before any), its index, the samples before and after
     /// it (NaN where undefined or not taken yet), and whether the one after is due.
     best: [f32; LANES],
@@ -31,10 +28,7 @@ struct MipLanes {
 impl MipLanes {
     fn new() -> Self {
         Self {
-            base: [[0.0; LANES]; 3],
-            step: [[0.0; LANES]; 3],
-            i: [0; LANES],
-            end: [i32::MAX; LANES],
+            lattice: LaneLattice::new(),
             best: [f32::NEG_INFINITY; LANES],
             best_i: [0; LANES],
             before: [f32::NAN; LANES],
@@ -49,11 +43,8 @@ impl MipLanes {
     /// Lane `l` starts ray `ray` of pixel `pixel` with `n` lattice samples.
     fn start(&mut self, l: usize, pixel: usize, ray: MipRay, n: i32) {
         let (base, step) = (ray.o_v + ray.d_v * ray.t0, ray.d_v * ray.step);
-        for a in 0..3 {
-            self.base[a][l] = base[a] as f32;
-            self.step[a][l] = step[a] as f32;
-        }
-        (self.i[l], self.end[l]) = (0, n);
+        self.lattice.set(l, base, step);
+        self.lattice.enter(l, 0, n);
         (self.best[l], self.best_i[l]) = (f32::NEG_INFINITY, 0);
         (self.before[l], self.after[l], self.prev[l]) = (f32::NAN, f32::NAN, f32::NAN);
         self.waiting[l] = false;
@@ -64,10 +55,7 @@ impl MipLanes {
     /// Makes lane `l` idle (it keeps sampling in place, its results unused).
     fn idle(&mut self, l: usize) {
         self.live[l] = false;
-        (self.i[l], self.end[l]) = (0, i32::MAX);
-        for a in 0..3 {
-            self.step[a][l] = 0.0;
-        }
+        self.lattice.idle(l);
     }
 }
 
@@ -100,14 +88,7 @@ impl<F: Field> RayContext<'_, F> {
     #[inline(always)]
     fn mip_steps(&self, lanes: &mut MipLanes) -> u32 {
         loop {
-            let mut pos = [[0.0f32; LANES]; 3];
-            for a in 0..3 {
-                for l in 0..LANES {
-                    pos[a][l] = lanes.base[a][l] + lanes.step[a][l] * lanes.i[l] as f32;
-                }
-            }
-            let v = self.field.sample_lanes(&pos);
-            let mut done = 0u32;
+            let v = self.field.sample_lanes(&lanes.lattice.positions());
             for l in 0..LANES {
                 // Non-finite values are undefined; NaN never compares larger.
                 let v = if v[l].is_finite() { v[l] } else { f32::NAN };
@@ -118,13 +99,12 @@ impl<F: Field> RayContext<'_, F> {
                 let better = v > lanes.best[l];
                 lanes.waiting[l] = better;
                 if better {
-                    (lanes.best[l], lanes.best_i[l]) = (v, lanes.i[l]);
+                    (lanes.best[l], lanes.best_i[l]) = (v, lanes.lattice.i[l]);
                     (lanes.before[l], lanes.after[l]) = (lanes.prev[l], f32::NAN);
                 }
                 lanes.prev[l] = v;
-                lanes.i[l] += 1;
-                done |= u32::from(lanes.i[l] >= lanes.end[l]) << l;
             }
+            let done = lanes.lattice.advance();
             if done != 0 {
                 return done;
             }
@@ -134,7 +114,7 @@ impl<F: Field> RayContext<'_, F> {
     /// The pixel of lane `l`'s finished ray: its maximum refined between samples.
     fn mip_finish(&self, lanes: &MipLanes, l: usize) -> PixelOut {
         let ray = lanes.rays[l].1;
-        let mut n = lanes.end[l] as u64;
+        let mut n = lanes.lattice.end[l] as u64;
         let best = lanes.best[l];
         if best == f32::NEG_INFINITY {
             return self.mip_pixel(None, n);

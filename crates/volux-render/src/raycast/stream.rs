@@ -234,13 +234,76 @@ impl LaneRay {
     }
 }
 
+/// Each lane's sample lattice, `base + i step` in voxel space: the next sample index `i`, and
+/// the end (exclusive) of the run of samples the lane takes before it needs attention. An
+/// idle lane steps in place and never ends. Shared by the lane traversals.
+pub(super) struct LaneLattice {
+    base: Lanes3,
+    step: Lanes3,
+    pub(super) i: [i32; LANES],
+    pub(super) end: [i32; LANES],
+}
+
+impl LaneLattice {
+    pub(super) fn new() -> Self {
+        Self {
+            base: [[0.0; LANES]; 3],
+            step: [[0.0; LANES]; 3],
+            i: [0; LANES],
+            end: [i32::MAX; LANES],
+        }
+    }
+
+    /// Lane `l` takes the lattice of sample 0 at `base` and step `step` (voxel space).
+    pub(super) fn set(&mut self, l: usize, base: DVec3, step: DVec3) {
+        for a in 0..3 {
+            self.base[a][l] = base[a] as f32;
+            self.step[a][l] = step[a] as f32;
+        }
+    }
+
+    /// Lane `l` now samples from `i` up to `end` (exclusive).
+    pub(super) fn enter(&mut self, l: usize, i: i32, end: i32) {
+        (self.i[l], self.end[l]) = (i, end);
+    }
+
+    /// Lane `l` steps in place and never ends.
+    pub(super) fn idle(&mut self, l: usize) {
+        (self.i[l], self.end[l]) = (0, i32::MAX);
+        for a in 0..3 {
+            self.step[a][l] = 0.0;
+        }
+    }
+
+    /// The voxel-space positions of every lane's next sample.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    pub(super) fn positions(&self) -> Lanes3 {
+        let mut pos = [[0.0f32; LANES]; 3];
+        for a in 0..3 {
+            for l in 0..LANES {
+                pos[a][l] = self.base[a][l] + self.step[a][l] * self.i[l] as f32;
+            }
+        }
+        pos
+    }
+
+    /// Advances every lane by one sample; the bit mask of the lanes that reached their end.
+    #[inline(always)]
+    pub(super) fn advance(&mut self) -> u32 {
+        let mut ended = 0u32;
+        for l in 0..LANES {
+            self.i[l] += 1;
+            ended |= u32::from(self.i[l] >= self.end[l]) << l;
+        }
+        ended
+    }
+}
+
 /// The lanes: hot per-sample state laid out lane-wise, and each lane's ray.
 struct Lanes {
-    base: [[f32; LANES]; 3],
-    step: [[f32; LANES]; 3],
-    /// Next sample index and the end (exclusive) of the full slabs of the current span.
-    i: [i32; LANES],
-    end: [i32; LANES],
+    /// The lattices; a lane's run ends with the full slabs of its current span.
+    lattice: LaneLattice,
     acc: [[f32; 4]; LANES],
     /// The last sample taken (the front of the next segment; NaN where undefined).
     front: [f32; LANES],
@@ -259,10 +322,7 @@ struct Lanes {
 impl Lanes {
     fn new() -> Self {
         Self {
-            base: [[0.0; LANES]; 3],
-            step: [[0.0; LANES]; 3],
-            i: [0; LANES],
-            end: [i32::MAX; LANES],
+            lattice: LaneLattice::new(),
             acc: [[0.0; 4]; LANES],
             front: [0.0; LANES],
             stop: [f32::INFINITY; LANES],
@@ -275,21 +335,11 @@ impl Lanes {
         }
     }
 
-    /// Lane `l` now samples its current span's full slabs from `i` on.
-    fn enter(&mut self, l: usize, i: i32, end: i32) {
-        self.i[l] = i;
-        self.end[l] = end;
-    }
-
     /// Makes lane `l` idle (it keeps stepping in place, its results unused).
     fn idle(&mut self, l: usize) {
         self.live[l] = false;
         self.stop[l] = f32::INFINITY;
-        self.end[l] = i32::MAX;
-        self.i[l] = 0;
-        for a in 0..3 {
-            self.step[a][l] = 0.0;
-        }
+        self.lattice.idle(l);
     }
 }
 
@@ -331,12 +381,7 @@ impl<F: Field> RayContext<'_, F> {
         shading: Option<StreamShading<'_>>,
     ) -> u32 {
         loop {
-            let mut pos = [[0.0f32; LANES]; 3];
-            for a in 0..3 {
-                for l in 0..LANES {
-                    pos[a][l] = lanes.base[a][l] + lanes.step[a][l] * lanes.i[l] as f32;
-                }
-            }
+            let pos = lanes.lattice.positions();
             let v = self.field.sample_lanes(&pos);
             match shading {
                 Some(sh) if LIT => {
@@ -355,11 +400,9 @@ impl<F: Field> RayContext<'_, F> {
             if R::SEGMENTS {
                 lanes.front = v;
             }
-            let mut cold = 0u32;
+            let mut cold = lanes.lattice.advance();
             for l in 0..LANES {
-                lanes.i[l] += 1;
-                let event = (lanes.i[l] >= lanes.end[l]) | (lanes.acc[l][3] >= lanes.stop[l]);
-                cold |= u32::from(event) << l;
+                cold |= u32::from(lanes.acc[l][3] >= lanes.stop[l]) << l;
             }
             if cold != 0 {
                 return cold;
@@ -376,7 +419,7 @@ impl<F: Field> RayContext<'_, F> {
         if R::SEGMENTS {
             for a in 0..3 {
                 for l in 0..LANES {
-                    p[a][l] -= 0.5 * lanes.step[a][l];
+                    p[a][l] -= 0.5 * lanes.lattice.step[a][l];
                 }
             }
         }
@@ -400,7 +443,7 @@ impl<F: Field> RayContext<'_, F> {
         if !lanes.live[l] {
             return;
         }
-        let done = lanes.i[l];
+        let done = lanes.lattice.i[l];
         let r = &mut lanes.rays[l];
         r.samples += (done - r.i_first).max(0) as u64;
         if lanes.acc[l][3] < lanes.stop[l] && self.continue_ray(rule, lanes, l, done) {
@@ -447,7 +490,7 @@ impl<F: Field> RayContext<'_, F> {
             let end = after.min(r.partial).max(lane_first);
             (r.i_first, r.i_after) = (lane_first, after);
             if end > lane_first {
-                lanes.enter(l, lane_first, end);
+                lanes.lattice.enter(l, lane_first, end);
                 return true;
             }
             range = (lane_first, after);
@@ -559,10 +602,7 @@ impl<F: Field> RayContext<'_, F> {
             }
             lanes.rays[l].partial = lanes.rays[l].first_partial(R::SEGMENTS);
             lanes.acc[l] = [0.0; 4];
-            for a in 0..3 {
-                lanes.base[a][l] = base[a] as f32;
-                lanes.step[a][l] = stp[a] as f32;
-            }
+            lanes.lattice.set(l, base, stp);
             lanes.live[l] = true;
             lanes.stop[l] = self.opts.early_termination.unwrap_or(2.0);
             if self.continue_ray(rule, lanes, l, 0) {
