@@ -147,16 +147,7 @@ impl<T: Scalar> Trilinear<'_, T> {
         for a in 0..3 {
             let (hi, cmax) = (self.hi[a], self.cell_max[a].min(i32::MAX as u32) as i32);
             for l in 0..N {
-                // Selects (one maxps/minps each), NaN going to 0 as in `sample_raw`; the floor
-                // without a float-to-int cast; `v <= hi = cmax + 1`, so the cell index is
-                // clamped by subtracting one where it passes `cmax`.
-                let v = p[a][l];
-                let v = if v > 0.0 { v } else { 0.0 };
-                let v = if v < hi { v } else { hi };
-                let i = floor_small(v);
-                let i = i - i32::from(i > cmax);
-                cell[a][l] = i;
-                frac[a][l] = v - i as f32;
+                (cell[a][l], frac[a][l]) = clamped_cell(p[a][l], hi, cmax);
             }
         }
         let mut out = [0.0f32; N];
@@ -262,6 +253,20 @@ fn undefined_to_nan<const N: usize>(mut r: [f32; N]) -> [f32; N] {
         }
     }
     r
+}
+
+/// The cell along one axis of voxel coordinate `v` and the fraction into it, for coordinates
+/// clamped to `[0, hi]` (NaN going to 0) and cells to `[0, last_cell]` (`hi <= last_cell + 1`,
+/// `hi < 2^22`): selects (one `maxps`/`minps` each) and [`floor_small`], no float-to-int cast,
+/// so lanes compute it together; the cell is clamped by subtracting one where it passes
+/// `last_cell`.
+#[inline(always)]
+pub(crate) fn clamped_cell(v: f32, hi: f32, last_cell: i32) -> (i32, f32) {
+    let v = if v > 0.0 { v } else { 0.0 };
+    let v = if v < hi { v } else { hi };
+    let i = floor_small(v);
+    let i = i - i32::from(i > last_cell);
+    (i, v - i as f32)
 }
 
 /// Values below which [`floor_small`] is exact.

@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use super::{BlinnPhong, GradientVolume, Light};
 use crate::integrate::adaptive_lanes::exp_lanes;
-use crate::sampling::{floor_small, LANES};
+use crate::sampling::{clamped_cell, FLOOR_SMALL_LIMIT, LANES};
 
 /// Lane-wise vectors: `[axis][lane]`.
 pub type Lanes3 = [[f32; LANES]; 3];
@@ -100,6 +100,22 @@ impl GradientVolume {
     #[inline(always)]
     pub fn gradient_lanes(&self, p: &Lanes3) -> Lanes3 {
         let [nx, ny, nz] = self.key.dims;
+        if self
+            .key
+            .dims
+            .iter()
+            .any(|&n| n as f64 >= f64::from(FLOOR_SMALL_LIMIT))
+        {
+            // Axes too long for the cast-free floor: one lane at a time.
+            let mut out = [[0.0f32; LANES]; 3];
+            for l in 0..LANES {
+                let g = self.gradient(Vec3::new(p[0][l], p[1][l], p[2][l]));
+                for a in 0..3 {
+                    out[a][l] = g[a];
+                }
+            }
+            return out;
+        }
         let mut index = [0usize; LANES];
         let mut frac = [[0.0f32; LANES]; 3];
         let strides = [1, nx, nx * ny];
@@ -112,12 +128,8 @@ impl GradientVolume {
                 ((n - 1) as f32, n as i32 - 2)
             };
             for l in 0..LANES {
-                let v = p[a][l];
-                let v = if v > 0.0 { v } else { 0.0 };
-                let v = if v < hi { v } else { hi };
-                let i = floor_small(v);
-                let i = i - i32::from(i > last_cell);
-                frac[a][l] = v - i as f32;
+                let (i, f) = clamped_cell(p[a][l], hi, last_cell);
+                frac[a][l] = f;
                 index[l] += i as usize * strides[a];
             }
         }
@@ -250,6 +262,23 @@ mod tests {
         let p = pow_lanes(edge, 32.0);
         assert_eq!((p[0], p[1]), (0.0, 1.0));
         assert_eq!(pow_lanes(edge, 0.0), [1.0; LANES]);
+    }
+
+    #[test]
+    fn gradient_lanes_handle_axes_too_long_for_the_lane_floor() {
+        let n = FLOOR_SMALL_LIMIT as usize + 3;
+        let v: Vec<u8> = (0..n).map(|i| (i % 7) as u8).collect();
+        let volume = GradientVolume::build(&Trilinear::new(&v[..], [n, 1, 1]), Vec3::ONE, 0);
+        let volume = volume.unwrap();
+        let mut p = [[0.0f32; LANES]; 3];
+        for l in 0..LANES {
+            p[0][l] = (n - 1) as f32 - 0.37 * l as f32;
+        }
+        let g = volume.gradient_lanes(&p);
+        for l in 0..LANES {
+            let want = volume.gradient(Vec3::new(p[0][l], 0.0, 0.0));
+            assert_eq!([g[0][l], g[1][l], g[2][l]], want.to_array(), "lane {l}");
+        }
     }
 
     #[test]
