@@ -271,8 +271,8 @@ mod tests {
         let volume = GradientVolume::build(&Trilinear::new(&v[..], [n, 1, 1]), Vec3::ONE, 0);
         let volume = volume.unwrap();
         let mut p = [[0.0f32; LANES]; 3];
-        for l in 0..LANES {
-            p[0][l] = (n - 1) as f32 - 0.37 * l as f32;
+        for (l, x) in p[0].iter_mut().enumerate() {
+            *x = (n - 1) as f32 - 0.37 * l as f32;
         }
         let g = volume.gradient_lanes(&p);
         for l in 0..LANES {
