@@ -55,6 +55,8 @@ pub(super) trait SlabRule {
 impl SlabRule for LaneTable {
     const SEGMENTS: bool = false;
 
+    // Fused, not `entries` then `composite_entries`: going through the array of entries made
+    // the Riemann frame 12 % slower (168 against 150 ms on Marschner-Lobb, best of 5).
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn composite(&self, _front: &[f32; LANES], v: &[f32; LANES], acc: &mut [[f32; 4]; LANES]) {
