@@ -109,7 +109,7 @@ pub enum Command {
         /// One frame per case and 512x512 only.
         #[arg(long)]
         quick: bool,
-        /// Frames per case (the median is reported).
+        /// Frames per case (the median is reported; `targets`: rounds, the fastest reported).
         #[arg(long, default_value_t = 3)]
         frames: usize,
         /// Synthetic volume size per axis.
@@ -119,7 +119,8 @@ pub enum Command {
         #[arg(long)]
         json: bool,
         /// Which renderers: `grid` (ray casting), `pt` (Projected Tetrahedra), `tetray`
-        /// (tetrahedral ray casting) or `all`.
+        /// (tetrahedral ray casting) or `all`; `targets` times the grid speed targets, the
+        /// cases of a dataset in turn, `--frames` rounds, fastest frame per case.
         #[arg(long, default_value = "all")]
         suite: String,
         /// Grid suite: run only the cases whose "dataset integrator parameter" contains this

@@ -29,7 +29,9 @@ const SHARED: [(&str, &str); 2] = [
     ),
 ];
 
-fn datasets(n: usize) -> Result<Vec<(String, Grid, TransferFunction)>, CmdError> {
+/// The grid datasets with their TFs: the `n`^3 synthetic volumes, and the shared heads when
+/// `../shared/data` holds them.
+pub(super) fn datasets(n: usize) -> Result<Vec<(String, Grid, TransferFunction)>, CmdError> {
     let synthetic = TransferFunction::from_json(SYNTHETIC_TF)?;
     let mut out = vec![
         (
@@ -129,12 +131,21 @@ pub fn run(
     suite: &str,
     only: Option<&str>,
 ) -> Result<(), CmdError> {
+    if suite == "targets" {
+        let rows = super::bench_targets::run(n, frames, as_json)?;
+        if as_json {
+            println!("{}", serde_json::Value::Array(rows));
+        }
+        return Ok(());
+    }
     let (grid, pt, tetray) = match suite {
         "all" => (true, true, true),
         "grid" => (true, false, false),
         "pt" => (false, true, false),
         "tetray" => (false, false, true),
-        other => return Err(format!("unknown suite '{other}' (all, grid, pt, tetray)").into()),
+        other => {
+            return Err(format!("unknown suite '{other}' (all, grid, pt, tetray, targets)").into())
+        }
     };
     let mut rows = if grid {
         run_grid(quick, frames, n, as_json, only)?

@@ -2,6 +2,7 @@
 mod accuracy;
 mod bench;
 mod bench_pt;
+mod bench_targets;
 mod compare;
 mod convert;
 mod info;
