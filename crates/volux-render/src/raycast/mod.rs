@@ -38,6 +38,7 @@ use crate::mip;
 use crate::sampling::{Field, Reconstruction, Tricubic, Trilinear};
 use crate::shading::{self, BlinnPhong, GradientVolume};
 use crate::RenderError;
+use stream::TrapezoidRule;
 
 /// Called with (rows done, total rows) as the render progresses.
 pub type ProgressFn = Arc<dyn Fn(usize, usize) + Send + Sync>;
@@ -427,6 +428,7 @@ fn render_with<F: Field>(
             Some(table.for_step((step * place.spacing.min_element()) as f32)),
             None,
         ),
+        Integrator::Trapezoid { .. } => (Some(table.for_lanes()), None),
         Integrator::AdaptiveSimpson(_) => {
             let lanes = table.for_lanes();
             let ranks = lanes.breakpoint_ranks(&breakpoints);
@@ -473,6 +475,8 @@ fn render_with<F: Field>(
                 ctx.lane_stream(st, x0, y0)
             } else if let Some(pt) = ctx.preintegrated_stream_table() {
                 ctx.lane_stream(pt, x0, y0)
+            } else if let Some(tr) = ctx.trapezoid_stream_rule() {
+                ctx.lane_stream(&tr, x0, y0)
             } else if let Some(p) = ctx.adaptive_stream_params() {
                 ctx.adaptive_stream(p, x0, y0)
             } else {
@@ -791,6 +795,19 @@ impl<F: Field> RayContext<'_, F> {
     fn preintegrated_stream_table(&self) -> Option<&PreintegrationTable> {
         match self.opts.integrator {
             Integrator::Preintegrated { .. } if self.streams() => self.preintegration,
+            _ => None,
+        }
+    }
+
+    /// The trapezoid rule when rays take the lane stream (emission only).
+    fn trapezoid_stream_rule(&self) -> Option<TrapezoidRule<'_>> {
+        match self.opts.integrator {
+            Integrator::Trapezoid { step } if self.streams() && self.opts.shading.is_none() => {
+                Some(TrapezoidRule {
+                    table: self.lane_table.as_ref()?,
+                    h: (step * self.place.spacing.min_element()) as f32,
+                })
+            }
             _ => None,
         }
     }

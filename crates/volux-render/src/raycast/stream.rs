@@ -1,10 +1,11 @@
 //! The fast fixed-step paths (no isosurfaces, no MIP): the rays of a tile flow through
-//! [`LANES`] lanes that advance together, one sample per lane per step. Two rules share the
-//! stream ([`SlabRule`]): the Riemann sum composites each sample's slab, and pre-integration
-//! each segment between consecutive samples, classified by the pair. With Blinn-Phong
-//! shading (and a gradient volume), each step's colours are lit lane-wise
-//! ([`BlinnPhong::light_lanes`]), at the sample for Riemann, at the segment's middle for
-//! pre-integration, as ray by ray.
+//! [`LANES`] lanes that advance together, one sample per lane per step. Three rules share the
+//! stream ([`SlabRule`]): the Riemann sum composites each sample's slab, pre-integration each
+//! segment between consecutive samples, classified by the pair, and the trapezoid rule
+//! ([`TrapezoidRule`]) each segment from its two ends. With Blinn-Phong shading (and a
+//! gradient volume), each step's colours are lit lane-wise ([`BlinnPhong::light_lanes`]), at
+//! the sample for Riemann, at the segment's middle for pre-integration, as ray by ray; shaded
+//! trapezoid rays stay ray by ray, which light each end of a segment apart.
 //!
 //! Lanes hold different rays, so the front-to-back compositing of one ray (a chain of
 //! dependent multiply-adds, `001_...txt` eq. 2.14) overlaps with the other lanes' chains, and
@@ -21,6 +22,7 @@ use glam::{DVec3, Vec3};
 
 use super::{composite_segment, pixel_hash, PixelOut, RayContext, TILE};
 use crate::classify::LaneTable;
+use crate::integrate::adaptive_lanes::exp_lanes;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{riemann_step, Integrator, RayAccumulator};
 use crate::sampling::{Field, LANES};
@@ -49,6 +51,14 @@ pub(super) trait SlabRule {
 
     /// One full segment's entry, as the ray-by-ray path computes it (segments only).
     fn segment(&self, front: f32, back: f32) -> [f32; 4];
+
+    /// The entry of a segment shortened to the fraction `frac` of a step, and the fraction
+    /// [`composite_segment`] is still to correct it for (segments only); `None` when the
+    /// segment adds nothing. By default the full segment's entry, opacity-corrected for its
+    /// length, and nothing next to an undefined (NaN) sample.
+    fn partial_segment(&self, front: f32, back: f32, frac: f32) -> Option<([f32; 4], f32)> {
+        (!front.is_nan() && !back.is_nan()).then(|| (self.segment(front, back), frac))
+    }
 }
 
 /// The Riemann sum: each sample's colour and slab opacity from the step table.
@@ -115,6 +125,96 @@ impl SlabRule for PreintegrationTable {
 
     fn segment(&self, front: f32, back: f32) -> [f32; 4] {
         self.lookup(front, back)
+    }
+}
+
+/// The fixed-step trapezoid rule (`001_...txt` eq. 2.16 for both integrals) on the segments
+/// between consecutive samples, in f32 lanes: with extinctions `tau_a`, `tau_b` and colours
+/// `c_a`, `c_b` at a segment's ends, its opacity is `1 - exp(-h (tau_a + tau_b) / 2)` and its
+/// colour, premultiplied and relative to the transmittance at its front,
+/// `h / 2 (c_a tau_a + c_b tau_b (1 - alpha))`: composited front to back, the same sums as
+/// [`fixed_intervals`](crate::integrate::fixed_intervals), whose undefined samples are empty
+/// medium (no colour, no extinction) and do not stop the segment. Emission only: shaded rays
+/// take the per-sample path, which lights each end apart.
+pub(super) struct TrapezoidRule<'a> {
+    /// Colour and extinction per world unit by value.
+    pub(super) table: &'a LaneTable,
+    /// The step in world units.
+    pub(super) h: f32,
+}
+
+impl TrapezoidRule<'_> {
+    /// Colour and extinction of each lane's value; an undefined value is empty medium.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn classify(&self, v: &[f32; LANES]) -> [[f32; 4]; LANES] {
+        let mut e = [[0.0f32; 4]; LANES];
+        for l in 0..LANES {
+            let (i, f) = self.table.position(v[l]);
+            let c = self.table.at(i, f);
+            e[l] = if v[l].is_nan() { [0.0; 4] } else { c };
+        }
+        e
+    }
+
+    /// The entries of segments of length `h` between the classified ends `a` and `b`.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn rule<const N: usize>(a: &[[f32; 4]; N], b: &[[f32; 4]; N], h: [f32; N]) -> [[f32; 4]; N] {
+        let mut trans = [0.0f32; N];
+        for l in 0..N {
+            trans[l] = -0.5 * h[l] * (a[l][3] + b[l][3]);
+        }
+        exp_lanes(&mut trans);
+        let mut e = [[0.0f32; 4]; N];
+        for l in 0..N {
+            let (wa, wb) = (0.5 * h[l] * a[l][3], 0.5 * h[l] * b[l][3] * trans[l]);
+            for c in 0..3 {
+                e[l][c] = wa * a[l][c] + wb * b[l][c];
+            }
+            e[l][3] = 1.0 - trans[l];
+        }
+        e
+    }
+}
+
+impl SlabRule for TrapezoidRule<'_> {
+    const SEGMENTS: bool = true;
+
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn composite(&self, front: &[f32; LANES], back: &[f32; LANES], acc: &mut [[f32; 4]; LANES]) {
+        let e = self.entries(front, back);
+        for l in 0..LANES {
+            let w = 1.0 - acc[l][3];
+            for c in 0..4 {
+                acc[l][c] += w * e[l][c];
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn entries(&self, front: &[f32; LANES], back: &[f32; LANES]) -> [[f32; 4]; LANES] {
+        Self::rule(&self.classify(front), &self.classify(back), [self.h; LANES])
+    }
+
+    fn segment(&self, front: f32, back: f32) -> [f32; 4] {
+        self.partial_segment(front, back, 1.0)
+            .map_or([0.0; 4], |(e, _)| e)
+    }
+
+    /// The rule on the shortened segment itself: no correction left.
+    fn partial_segment(&self, front: f32, back: f32, frac: f32) -> Option<([f32; 4], f32)> {
+        let classify = |v: f32| {
+            let (i, f) = self.table.position(v);
+            if v.is_nan() {
+                [0.0; 4]
+            } else {
+                self.table.at(i, f)
+            }
+        };
+        let e = Self::rule(&[classify(front)], &[classify(back)], [self.h * frac]);
+        Some((e[0], 1.0))
     }
 }
 
@@ -519,13 +619,13 @@ impl<F: Field> RayContext<'_, F> {
                 let front = lanes.front[l];
                 let back = v.unwrap_or(f32::NAN);
                 lanes.front[l] = back;
-                if front.is_nan() || back.is_nan() {
-                    continue;
-                }
                 let (ta, tb) = ((t - r.h).max(r.t0), t.min(r.t1));
+                let Some((e, frac)) = rule.partial_segment(front, back, ((tb - ta) / r.h) as f32)
+                else {
+                    continue;
+                };
                 let mid = r.position_at(0.5 * (ta + tb));
-                let e = self.lit_segment(rule.segment(front, back), mid, r.view);
-                composite_segment(&mut acc, e, ((tb - ta) / r.h) as f32);
+                composite_segment(&mut acc, self.lit_segment(e, mid, r.view), frac);
             } else if let Some(v) = v {
                 let c = self.lit_sample(self.table.lookup(v), r.position(i), r.view);
                 riemann_step(&mut acc, c, (r.t1 - t).min(r.h) as f32);
@@ -558,19 +658,19 @@ impl<F: Field> RayContext<'_, F> {
         px: &mut [PixelOut],
         (x0, y0, tw): (usize, usize, usize),
     ) {
-        let (Integrator::Riemann { step } | Integrator::Preintegrated { step }) =
-            self.opts.integrator
+        let (Integrator::Riemann { step }
+        | Integrator::Preintegrated { step }
+        | Integrator::Trapezoid { step }) = self.opts.integrator
         else {
             return;
         };
+        // The trapezoid rule samples `t0 + i h`, as ray by ray.
+        let jittered =
+            self.opts.jitter && !matches!(self.opts.integrator, Integrator::Trapezoid { .. });
         for pixel in queue.by_ref() {
             let (gx, gy) = (x0 + pixel % tw, y0 + pixel / tw);
             let ray = self.rays.ray(gx as f64 + 0.5, gy as f64 + 0.5);
-            let jitter = if self.opts.jitter {
-                pixel_hash(gx, gy)
-            } else {
-                0.0
-            };
+            let jitter = if jittered { pixel_hash(gx, gy) } else { 0.0 };
             let mut spans = std::mem::take(&mut lanes.rays[l].spans);
             let Some((o_v, d_v, t0, t1, unit)) = self.setup(ray.origin, ray.dir, &mut spans) else {
                 lanes.rays[l].spans = spans;
