@@ -144,15 +144,25 @@ pub(super) struct TrapezoidRule<'a> {
 }
 
 impl TrapezoidRule<'_> {
-    /// Colour and extinction of each lane's value; an undefined value is empty medium.
+    /// Colour and extinction of the value `v`; an undefined value is empty medium.
+    #[inline(always)]
+    fn classify_one(&self, v: f32) -> [f32; 4] {
+        let (i, f) = self.table.position(v);
+        let c = self.table.at(i, f);
+        if v.is_nan() {
+            [0.0; 4]
+        } else {
+            c
+        }
+    }
+
+    /// [`TrapezoidRule::classify_one`] of each lane's value.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn classify(&self, v: &[f32; LANES]) -> [[f32; 4]; LANES] {
         let mut e = [[0.0f32; 4]; LANES];
         for l in 0..LANES {
-            let (i, f) = self.table.position(v[l]);
-            let c = self.table.at(i, f);
-            e[l] = if v[l].is_nan() { [0.0; 4] } else { c };
+            e[l] = self.classify_one(v[l]);
         }
         e
     }
@@ -205,15 +215,8 @@ impl SlabRule for TrapezoidRule<'_> {
 
     /// The rule on the shortened segment itself: no correction left.
     fn partial_segment(&self, front: f32, back: f32, frac: f32) -> Option<([f32; 4], f32)> {
-        let classify = |v: f32| {
-            let (i, f) = self.table.position(v);
-            if v.is_nan() {
-                [0.0; 4]
-            } else {
-                self.table.at(i, f)
-            }
-        };
-        let e = Self::rule(&[classify(front)], &[classify(back)], [self.h * frac]);
+        let (a, b) = (self.classify_one(front), self.classify_one(back));
+        let e = Self::rule(&[a], &[b], [self.h * frac]);
         Some((e[0], 1.0))
     }
 }
