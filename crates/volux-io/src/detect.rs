@@ -17,6 +17,8 @@ pub enum Format {
     MetaImage,
     /// NIfTI-1.
     Nifti,
+    /// VolVis SLC.
+    Slc,
     /// DICOM (a folder of slices or one multi-frame file).
     Dicom,
     /// VTK legacy.
@@ -41,6 +43,7 @@ impl Format {
             Format::Nrrd => "NRRD",
             Format::MetaImage => "MetaImage",
             Format::Nifti => "NIfTI-1",
+            Format::Slc => "SLC",
             Format::Dicom => "DICOM",
             Format::VtkLegacy => "VTK legacy",
             Format::Vti => "VTK XML image data (.vti)",
@@ -104,6 +107,9 @@ pub fn detect(path: &Path) -> Result<Format> {
     if head.len() >= 348 && (&head[344..348] == b"n+1\0" || &head[344..348] == b"ni1\0") {
         return Ok(Format::Nifti);
     }
+    if crate::slc::is_slc(head) {
+        return Ok(Format::Slc);
+    }
     let text = String::from_utf8_lossy(head);
     if text.contains("<VTKFile") {
         if text.contains("UnstructuredGrid") {
@@ -126,6 +132,8 @@ pub fn detect(path: &Path) -> Result<Format> {
         Format::MetaImage
     } else if ext(".nii") {
         Format::Nifti
+    } else if ext(".slc") {
+        Format::Slc
     } else if ext(".dcm") {
         Format::Dicom
     } else if ext(".vtk") {

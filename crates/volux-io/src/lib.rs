@@ -15,6 +15,7 @@
 //! | VTK legacy `.vtk` | [`vtk_legacy`] | |
 //! | VTK XML `.vti` / `.vtu` | [`vtk_xml`] | `quick-xml`, `base64`, `flate2` |
 //! | PLOT3D xyz + q | [`plot3d`] | |
+//! | VolVis SLC `.slc` | [`slc`] | |
 //! | OFF tet meshes | [`off`] | `flate2` |
 //! | Volux binary tet mesh `.vtet` | [`vtet`] | |
 #![deny(missing_docs)]
@@ -33,6 +34,7 @@ pub mod nrrd;
 pub mod off;
 pub mod plot3d;
 pub mod raw;
+pub mod slc;
 pub mod util;
 pub mod vtet;
 pub mod vtk_legacy;
@@ -139,6 +141,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<(Dataset, Format)> {
         Format::Nrrd => Dataset::Grid(nrrd::read(path)?),
         Format::MetaImage => Dataset::Grid(metaimage::read(path)?),
         Format::Nifti => Dataset::Grid(nifti::read(path)?),
+        Format::Slc => Dataset::Grid(slc::read(path)?),
         Format::Dicom => Dataset::Grid(dicom::read(path, opts.series_uid.as_deref())?),
         Format::VtkLegacy => vtk_legacy::read(path, opts.array.as_deref())?,
         Format::Vti | Format::Vtu => vtk_xml::read(path, opts.array.as_deref())?,

@@ -112,6 +112,34 @@ fn check_mesh(path: &Path, side: &Value, opts: &LoadOptions) {
     }
 }
 
+/// An SLC file (whose sidecar gives no dims) against the raw copy decoded by `vtkSLCReader`
+/// next to it, whose sidecar names the SLC file as its source: the same voxels.
+fn check_slc(path: &Path) {
+    let (data, _) = load(path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let Dataset::Grid(g) = data else {
+        panic!("{}: expected a grid", path.display())
+    };
+    let folder = path.parent().unwrap();
+    let raw = sidecars(folder.parent().unwrap())
+        .into_iter()
+        .find(|(json, side)| json.parent() == Some(folder) && side.get("dims_xyz").is_some())
+        .unwrap_or_else(|| panic!("{}: no raw copy to compare with", path.display()));
+    let (raw, _) = load(
+        &folder.join(raw.1["file"].as_str().unwrap()),
+        &LoadOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let Dataset::Grid(raw) = raw else {
+        panic!("expected a grid")
+    };
+    assert_eq!(g.dims(), raw.dims(), "{}", path.display());
+    assert_eq!(g.spacing(), raw.spacing(), "{}", path.display());
+    let differ = (0..g.len())
+        .filter(|&i| g.samples().get_f32(i) != raw.samples().get_f32(i))
+        .count();
+    assert_eq!(differ, 0, "{}: {differ} voxels differ", path.display());
+}
+
 #[test]
 fn every_shared_dataset_matches_its_sidecar() {
     let Some(dir) = data_dir() else { return };
@@ -121,6 +149,13 @@ fn every_shared_dataset_matches_its_sidecar() {
         let file = side["file"].as_str().map(|f| folder.join(f));
         match (side["kind"].as_str().unwrap_or(""), file) {
             ("grid", Some(f)) if side.get("dims_xyz").is_some() => check_grid(&f, &side),
+            ("grid", Some(f))
+                if side["format"]
+                    .as_str()
+                    .is_some_and(|s| s.starts_with("SLC")) =>
+            {
+                check_slc(&f)
+            }
             ("tets", Some(f)) | ("tets (quadratic)", Some(f)) => {
                 check_mesh(&f, &side, &LoadOptions::default())
             }
