@@ -100,10 +100,7 @@ impl<'a> Cursor<'a> {
 /// what went wrong.
 pub fn decode_rle(mut input: &[u8], out: &mut [u8]) -> std::result::Result<(), String> {
     let mut filled = 0;
-    loop {
-        let Some((&c, rest)) = input.split_first() else {
-            break;
-        };
+    while let Some((&c, rest)) = input.split_first() {
         input = rest;
         let n = usize::from(c & 0x7f);
         if n == 0 {
