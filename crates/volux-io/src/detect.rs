@@ -107,7 +107,8 @@ pub fn detect(path: &Path) -> Result<Format> {
     if head.len() >= 348 && (&head[344..348] == b"n+1\0" || &head[344..348] == b"ni1\0") {
         return Ok(Format::Nifti);
     }
-    if crate::slc::is_slc(head) {
+    // A `.raw` file is headerless: its first bytes are data, whatever they spell.
+    if crate::slc::is_slc(head) && !ext(".raw") {
         return Ok(Format::Slc);
     }
     let text = String::from_utf8_lossy(head);

@@ -333,6 +333,16 @@ mod tests {
         }
     }
 
+    #[test]
+    fn detection_finds_slc_by_magic_but_not_in_raw_data() {
+        let bytes = slc([2, 1, 1], 0, &[vec![1, 2]]);
+        let p = write("volume.dat", &bytes);
+        assert_eq!(crate::detect(&p).unwrap(), crate::Format::Slc);
+        // Raw data that happens to start with the magic number stays raw.
+        let p = write("data.raw", &bytes);
+        assert_eq!(crate::detect(&p).unwrap(), crate::Format::RawJson);
+    }
+
     trait ReplaceFirst {
         fn replace_first(self, from: &[u8], to: &[u8]) -> Vec<u8>;
     }
