@@ -3,23 +3,18 @@
 use std::path::Path;
 
 mod common;
-use common::{shared, volux};
+use common::{png_pixels, shared, volux};
 
 /// Decodes an 8-bit RGB(A) PNG and returns (width, height, fraction of pixels that are not
 /// the background colour of the top-left corner, mean luminance of those).
 fn png_stats(path: &Path) -> (u32, u32, f64) {
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let mut reader = dec.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let ch = info.color_type.samples();
-    let px: Vec<&[u8]> = buf[..info.buffer_size()].chunks(ch).collect();
-    let bg = px[0];
+    let (w, h, px) = png_pixels(path);
+    let bg = &px[0];
     let differ = px
         .iter()
         .filter(|p| p.iter().zip(bg).any(|(a, b)| a.abs_diff(*b) > 8))
         .count();
-    (info.width, info.height, differ as f64 / px.len() as f64)
+    (w, h, differ as f64 / px.len() as f64)
 }
 
 #[test]

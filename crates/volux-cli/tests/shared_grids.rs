@@ -7,18 +7,13 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::volux;
+use common::{png_pixels, volux};
 
 /// The fraction of pixels that differ from the top-left corner's colour, and the standard
 /// deviation of those pixels' luminance (0-255).
 fn coverage_and_contrast(path: &Path) -> (f64, f64) {
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let mut reader = dec.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let ch = info.color_type.samples();
-    let px: Vec<&[u8]> = buf[..info.buffer_size()].chunks(ch).collect();
-    let bg = px[0];
+    let (_, _, px) = png_pixels(path);
+    let bg = &px[0];
     let lum: Vec<f64> = px
         .iter()
         .filter(|p| p.iter().zip(bg).any(|(a, b)| a.abs_diff(*b) > 8))

@@ -25,3 +25,17 @@ pub fn shared(rel: &str) -> Option<PathBuf> {
         None
     }
 }
+
+/// The pixels of an 8-bit PNG, one slice of channel values per pixel, and its size.
+pub fn png_pixels(path: &Path) -> (u32, u32, Vec<Vec<u8>>) {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let ch = info.color_type.samples();
+    let px = buf[..info.buffer_size()]
+        .chunks(ch)
+        .map(<[u8]>::to_vec)
+        .collect();
+    (info.width, info.height, px)
+}
