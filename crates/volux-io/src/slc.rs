@@ -208,6 +208,19 @@ pub fn read(path: &Path) -> Result<Grid> {
     let plane = h.dims[0] * h.dims[1];
     let count = plane as u64 * h.dims[2] as u64;
     volux_core::limits::check_alloc("data", count, 1).map_err(|e| ReadError::new(path, e))?;
+    if !h.compressed {
+        // Raw slices end the file: a short one is refused before allocating.
+        let left = (bytes.len() - c.at) as u64;
+        if left < count {
+            return Err(ReadError::new(
+                path,
+                ErrorKind::Truncated {
+                    expected: count,
+                    found: left,
+                },
+            ));
+        }
+    }
     let mut voxels = vec![0u8; count as usize];
     for (z, slice) in voxels.chunks_exact_mut(plane).enumerate() {
         if h.compressed {
