@@ -3,18 +3,13 @@
 use std::path::Path;
 
 mod common;
-use common::{png_pixels, shared, volux};
+use common::{coverage, png_pixels, shared, volux};
 
 /// Decodes an 8-bit RGB(A) PNG and returns (width, height, fraction of pixels that are not
 /// the background colour of the top-left corner, mean luminance of those).
 fn png_stats(path: &Path) -> (u32, u32, f64) {
     let (w, h, px) = png_pixels(path);
-    let bg = &px[0];
-    let differ = px
-        .iter()
-        .filter(|p| p.iter().zip(bg).any(|(a, b)| a.abs_diff(*b) > 8))
-        .count();
-    (w, h, differ as f64 / px.len() as f64)
+    (w, h, coverage(&px))
 }
 
 #[test]

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::process::Output;
 
 mod common;
-use common::volux;
+use common::{coverage, png_pixels, volux};
 
 fn ok(out: &Output) {
     assert!(
@@ -13,29 +13,6 @@ fn ok(out: &Output) {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-}
-
-/// Decodes a PNG: (width, height, RGBA or RGB pixels).
-fn png_pixels(path: &Path) -> (u32, u32, Vec<Vec<u8>>) {
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let mut reader = dec.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let ch = info.color_type.samples();
-    let px = buf[..info.buffer_size()]
-        .chunks(ch)
-        .map(|p| p.to_vec())
-        .collect();
-    (info.width, info.height, px)
-}
-
-/// Fraction of pixels differing from the top-left one.
-fn coverage(px: &[Vec<u8>]) -> f64 {
-    let bg = &px[0];
-    px.iter()
-        .filter(|p| p.iter().zip(bg).any(|(a, b)| a.abs_diff(*b) > 8))
-        .count() as f64
-        / px.len() as f64
 }
 
 /// Renders the torus with `extra` options and `--stats --json`; returns the figures and the

@@ -78,8 +78,8 @@ impl<'a> Cursor<'a> {
         Ok(())
     }
 
-    /// The next `n` bytes.
-    fn take(&mut self, n: u64) -> Result<&'a [u8]> {
+    /// An error unless `n` more bytes are left.
+    fn ensure(&self, n: u64) -> Result<()> {
         let left = (self.bytes.len() - self.at) as u64;
         if n > left {
             return Err(ReadError::new(
@@ -90,6 +90,12 @@ impl<'a> Cursor<'a> {
                 },
             ));
         }
+        Ok(())
+    }
+
+    /// The next `n` bytes.
+    fn take(&mut self, n: u64) -> Result<&'a [u8]> {
+        self.ensure(n)?;
         let out = &self.bytes[self.at..self.at + n as usize];
         self.at += n as usize;
         Ok(out)
@@ -210,16 +216,7 @@ pub fn read(path: &Path) -> Result<Grid> {
     volux_core::limits::check_alloc("data", count, 1).map_err(|e| ReadError::new(path, e))?;
     if !h.compressed {
         // Raw slices end the file: a short one is refused before allocating.
-        let left = (bytes.len() - c.at) as u64;
-        if left < count {
-            return Err(ReadError::new(
-                path,
-                ErrorKind::Truncated {
-                    expected: count,
-                    found: left,
-                },
-            ));
-        }
+        c.ensure(count)?;
     }
     let mut voxels = vec![0u8; count as usize];
     for (z, slice) in voxels.chunks_exact_mut(plane).enumerate() {

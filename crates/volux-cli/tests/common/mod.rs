@@ -39,3 +39,13 @@ pub fn png_pixels(path: &Path) -> (u32, u32, Vec<Vec<u8>>) {
         .collect();
     (info.width, info.height, px)
 }
+
+/// The fraction of pixels that differ from the top-left one (the background) by more than 8
+/// in some channel.
+pub fn coverage(px: &[Vec<u8>]) -> f64 {
+    let bg = &px[0];
+    px.iter()
+        .filter(|p| p.iter().zip(bg).any(|(a, b)| a.abs_diff(*b) > 8))
+        .count() as f64
+        / px.len() as f64
+}
