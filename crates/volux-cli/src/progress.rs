@@ -21,7 +21,7 @@ pub fn spinner(show: bool, msg: String) -> ProgressBar {
 }
 
 /// A bar counting image rows, and the callback that advances it.
-pub fn rows(show: bool, total: usize) -> (ProgressBar, Option<volux_render::raycast::ProgressFn>) {
+pub fn rows(show: bool, total: usize) -> (ProgressBar, Option<volux_render::tiles::ProgressFn>) {
     if !show {
         return (ProgressBar::hidden(), None);
     }

@@ -17,6 +17,7 @@
 #![deny(unsafe_code)]
 
 pub mod classify;
+pub mod composite;
 pub mod integrate;
 pub mod isosurface;
 pub mod macrocell;
@@ -27,6 +28,7 @@ pub mod resample;
 pub mod sampling;
 pub mod shading;
 pub mod tetray;
+pub mod tiles;
 
 pub use raycast::{render_grid, RenderOptions, RenderStats};
 

@@ -257,7 +257,7 @@ fn render_dataset(
         opts.early_termination = None;
     }
     let (pb, progress) = progress::rows(show, h);
-    opts.progress = progress;
+    opts.control.progress = progress;
     let out = match data {
         Dataset::Grid(g) => render_grid(g, &opts)?,
         Dataset::Mesh(m) => {
@@ -333,7 +333,7 @@ pub fn demo(show: bool) -> Result<(), CmdError> {
     };
     let mut opts = RenderOptions::new(spec.resolve(&grid.bounds())?, tf);
     let (pb, progress) = progress::rows(show, opts.height);
-    opts.progress = progress;
+    opts.control.progress = progress;
     let Rendered { image, stats, .. } = render_grid(&grid, &opts)?;
     pb.finish_and_clear();
     let out = Path::new("demo.png");

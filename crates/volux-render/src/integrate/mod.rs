@@ -16,6 +16,7 @@
 //! - [`adaptive_lanes::AdaptiveLanes`]: the same coupled control for four rays at once in f32
 //!   lanes, the fast path of renderers that sample several rays together.
 use crate::classify::Classified;
+use crate::composite::RayAccumulator;
 
 pub mod adaptive;
 pub mod adaptive_lanes;
@@ -117,32 +118,6 @@ impl Integrator {
             }
             Integrator::Reference => Ok(()),
         }
-    }
-}
-
-/// Premultiplied RGBA accumulated front to back along a ray.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RayAccumulator {
-    /// Premultiplied colour and opacity so far.
-    pub rgba: [f32; 4],
-}
-
-impl RayAccumulator {
-    /// Composites a segment of opacity `alpha` and colour `rgb` behind what is accumulated
-    /// (front-to-back "under" operator).
-    #[inline]
-    pub fn under(&mut self, rgb: [f32; 3], alpha: f32) {
-        let w = (1.0 - self.rgba[3]) * alpha;
-        self.rgba[0] += w * rgb[0];
-        self.rgba[1] += w * rgb[1];
-        self.rgba[2] += w * rgb[2];
-        self.rgba[3] += w;
-    }
-
-    /// Accumulated opacity.
-    #[inline]
-    pub fn alpha(&self) -> f32 {
-        self.rgba[3]
     }
 }
 

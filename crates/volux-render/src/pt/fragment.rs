@@ -19,6 +19,7 @@
 //! with [`BlinnPhong`] (two-sided) and drawn with the isovalue's colour and opacity.
 use glam::Vec3;
 
+use crate::composite::under;
 use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{self, CellClassifier, LinearPiece, PsiTable};
 use crate::isosurface::Isovalue;
@@ -75,16 +76,6 @@ pub struct FragmentShader<'a> {
     pub isosurfaces: &'a [Isovalue],
     /// Lighting of the isosurfaces.
     pub shading: BlinnPhong,
-}
-
-/// Composites `rgba` (premultiplied) behind `acc` (front-to-back "under").
-#[inline]
-pub fn under(acc: &mut [f32; 4], rgba: [f32; 4]) {
-    let w = 1.0 - acc[3];
-    acc[0] += w * rgba[0];
-    acc[1] += w * rgba[1];
-    acc[2] += w * rgba[2];
-    acc[3] += w * rgba[3];
 }
 
 /// An optical model as a type, so that the per-fragment loop can be compiled once per model

@@ -20,94 +20,15 @@
 //! floor and ceiling divisions; the pixels of the span are then walked with incremental
 //! `E`s. Barycentric coordinates are `E / area`.
 use super::project::{ViewProjection, SUBPIXEL};
+use crate::tiles::{Rect, TileGrid};
 
-/// Tile edge in pixels.
+/// Tile edge in pixels of the projection renderer: a tile's bin of tetrahedra is read once
+/// per tile, so PT's tiles are larger than the ray casters' ([`crate::tiles::TILE`]).
 pub const TILE: usize = 32;
 
-/// The image cut into `TILE x TILE` tiles, row-major.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Tiles {
-    /// Image width.
-    pub width: usize,
-    /// Image height.
-    pub height: usize,
-    /// Tiles per row.
-    pub cols: usize,
-    /// Tile rows.
-    pub rows: usize,
-}
-
-/// A rectangle of pixels `[x0, x1) x [y0, y1)`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Rect {
-    /// First column.
-    pub x0: usize,
-    /// First row.
-    pub y0: usize,
-    /// One past the last column.
-    pub x1: usize,
-    /// One past the last row.
-    pub y1: usize,
-}
-
-impl Rect {
-    /// Width in pixels.
-    pub fn width(&self) -> usize {
-        self.x1 - self.x0
-    }
-
-    /// Height in pixels.
-    pub fn height(&self) -> usize {
-        self.y1 - self.y0
-    }
-}
-
-impl Tiles {
-    /// Tiles covering a `width x height` image.
-    pub fn new(width: usize, height: usize) -> Self {
-        Self {
-            width,
-            height,
-            cols: width.div_ceil(TILE),
-            rows: height.div_ceil(TILE),
-        }
-    }
-
-    /// Number of tiles.
-    pub fn count(&self) -> usize {
-        self.cols * self.rows
-    }
-
-    /// The pixels of tile `i`.
-    pub fn rect(&self, i: usize) -> Rect {
-        let (tx, ty) = (i % self.cols, i / self.cols);
-        Rect {
-            x0: tx * TILE,
-            y0: ty * TILE,
-            x1: ((tx + 1) * TILE).min(self.width),
-            y1: ((ty + 1) * TILE).min(self.height),
-        }
-    }
-
-    /// The tiles `[tx0, tx1] x [ty0, ty1]` (inclusive) that pixel centres inside the screen
-    /// box `[min, max]` can fall in; `None` when it covers no pixel centre.
-    #[inline]
-    pub fn range(&self, min: [f32; 2], max: [f32; 2]) -> Option<[usize; 4]> {
-        // Pixel x has centre x + 0.5: columns with min <= x + 0.5 <= max.
-        let lo = |v: f32| (v - 0.5).ceil().max(0.0);
-        let hi = |v: f32, n: usize| (v - 0.5).floor().min(n as f32 - 1.0);
-        let (x0, x1) = (lo(min[0]), hi(max[0], self.width));
-        let (y0, y1) = (lo(min[1]), hi(max[1], self.height));
-        if !(x0 <= x1 && y0 <= y1) {
-            return None;
-        }
-        Some([
-            x0 as usize / TILE,
-            y0 as usize / TILE,
-            x1 as usize / TILE,
-            y1 as usize / TILE,
-        ])
-    }
+/// The PT screen tiles of a `width x height` image.
+pub fn tiles(width: usize, height: usize) -> TileGrid {
+    TileGrid::new(width, height, TILE)
 }
 
 /// The screen box of a tetrahedron's projection.
@@ -148,7 +69,7 @@ impl Bins {
 /// Bins the tetrahedra of `order` (ids into `tets`) into `tiles`, keeping the order within
 /// every tile (a two-pass counting sort). Tetrahedra whose vertices could not be projected or
 /// whose box covers no pixel centre are left out.
-pub fn bin(order: &[u32], tets: &[[u32; 4]], proj: &ViewProjection, tiles: &Tiles) -> Bins {
+pub fn bin(order: &[u32], tets: &[[u32; 4]], proj: &ViewProjection, tiles: &TileGrid) -> Bins {
     use rayon::prelude::*;
     let n = tiles.count();
     // Every tetrahedron's tile range, once and in parallel (the random reads of the vertices
@@ -525,14 +446,5 @@ mod tests {
             t.scan(false, |x, y, l| b.push((x, y, l)));
             assert_eq!(a, b, "{v:?}");
         }
-    }
-
-    #[test]
-    fn tile_ranges_and_bins_keep_order() {
-        let tiles = Tiles::new(100, 70);
-        assert_eq!((tiles.cols, tiles.rows), (4, 3));
-        assert_eq!(tiles.range([0.6, 0.6], [0.7, 0.7]), None);
-        assert_eq!(tiles.range([0.0, 0.0], [40.0, 1.0]), Some([0, 0, 1, 0]));
-        assert_eq!(tiles.rect(3).x1, 100);
     }
 }

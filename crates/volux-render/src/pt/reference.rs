@@ -29,7 +29,7 @@
 //! # Acceleration
 //!
 //! Kept simple: each cell's screen bounding box (its four projected vertices through
-//! [`Camera::project`], one pixel of margin) is binned into [`TILE`] x [`TILE`] pixel tiles,
+//! [`Camera::project`], one pixel of margin) is binned into the tiles of the tile driver ([`crate::tiles`]),
 //! and each pixel tests the cells of its tile whose box contains it. A cell with a vertex on
 //! or behind the eye plane of a perspective camera (where projection is not a bounding
 //! operation) is tested by every pixel; a cell entirely behind the eye is skipped. Tiles are
@@ -46,11 +46,10 @@ use rayon::prelude::*;
 use volux_core::mesh::FACES;
 use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
+use crate::composite::composite64;
 use crate::integrate::preintegrated::SegmentIntegrator;
+use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 use crate::RenderError;
-
-/// Side of the square screen tiles the cells are binned into, in pixels.
-pub const TILE: usize = 16;
 
 /// A cell whose volume is at most this times the cube of its longest edge (times 6) counts
 /// as degenerate and is skipped.
@@ -291,15 +290,11 @@ fn sort_segments(segs: &mut [Segment]) {
 /// Integrates sorted segments with `integrator` and composites them front to back
 /// (premultiplied *under* operator, no early termination): the premultiplied RGBA of the ray.
 pub fn composite(integrator: &SegmentIntegrator, segments: &[Segment]) -> [f64; 4] {
-    let mut acc = [0.0f64; 4];
-    for seg in segments {
-        let c = integrator.integrate(seg.s_in, seg.s_out, seg.length());
-        let tr = 1.0 - acc[3];
-        for k in 0..4 {
-            acc[k] += tr * c[k];
-        }
-    }
-    acc
+    composite64(
+        segments
+            .iter()
+            .map(|seg| integrator.integrate(seg.s_in, seg.s_out, seg.length())),
+    )
 }
 
 /// Where a cell may appear on screen.
@@ -393,56 +388,40 @@ pub fn render_mesh_reference(
             })
         })
         .collect();
-    let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); tiles_x * tiles_y];
+    let grid = TileGrid::new(w, h, TILE);
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); grid.count()];
     for (i, c) in prepared.iter().enumerate() {
         let [x0, x1, y0, y1] = c.bbox;
         for ty in y0 / TILE..=y1 / TILE {
             for tx in x0 / TILE..=x1 / TILE {
-                bins[ty * tiles_x + tx].push(i as u32);
+                bins[ty * grid.cols + tx].push(i as u32);
             }
         }
     }
-    let tiles: Vec<Vec<[f32; 4]>> = bins
-        .par_iter()
-        .enumerate()
-        .map(|(ti, bin)| {
-            let (tx, ty) = (ti % tiles_x, ti / tiles_x);
-            let xs = tx * TILE..((tx + 1) * TILE).min(w);
-            let ys = ty * TILE..((ty + 1) * TILE).min(h);
-            let mut out = Vec::with_capacity(xs.len() * ys.len());
-            let mut segs = Vec::new();
-            for y in ys {
-                for x in xs.clone() {
-                    let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                    segs.clear();
-                    for &i in bin {
-                        let c = &prepared[i as usize];
-                        let [x0, x1, y0, y1] = c.bbox;
-                        if x < x0 || x > x1 || y < y0 || y > y1 {
-                            continue;
-                        }
-                        if let Some(hit) = c.planes.clip(ray.origin, ray.dir) {
-                            segs.push(Segment::new(hit, c.tet));
-                        }
+    let pixels = render_tiles(&grid, &Control::default(), |ti, r| {
+        let mut out = Vec::with_capacity(r.area());
+        let mut segs = Vec::new();
+        for y in r.y0..r.y1 {
+            for x in r.x0..r.x1 {
+                let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                segs.clear();
+                for &i in &bins[ti] {
+                    let c = &prepared[i as usize];
+                    let [x0, x1, y0, y1] = c.bbox;
+                    if x < x0 || x > x1 || y < y0 || y > y1 {
+                        continue;
                     }
-                    sort_segments(&mut segs);
-                    out.push(composite(&integrator, &segs).map(|v| v as f32));
+                    if let Some(hit) = c.planes.clip(ray.origin, ray.dir) {
+                        segs.push(Segment::new(hit, c.tet));
+                    }
                 }
+                sort_segments(&mut segs);
+                out.push(composite(&integrator, &segs).map(|v| v as f32));
             }
-            out
-        })
-        .collect();
-    let mut pixels = vec![[0.0f32; 4]; w * h];
-    for (ti, tile) in tiles.into_iter().enumerate() {
-        let (tx, ty) = (ti % tiles_x, ti / tiles_x);
-        let x0 = tx * TILE;
-        let tw = (x0 + TILE).min(w) - x0;
-        for (k, px) in tile.into_iter().enumerate() {
-            let (x, y) = (x0 + k % tw, ty * TILE + k / tw);
-            pixels[y * w + x] = px;
         }
-    }
+        (out, ())
+    })?
+    .pixels;
     Ok(Image::from_pixels(w, h, pixels)?)
 }
 

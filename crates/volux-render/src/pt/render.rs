@@ -24,8 +24,6 @@
 //! re-projecting). Compositing is front to back (the "under" operator, equivalent to the
 //! seeds' back-to-front "over" in the reverse order) so that pixels can stop early once
 //! opaque.
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -33,17 +31,20 @@ use rayon::prelude::*;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
 use super::classify::{ternary_code, TERNARY_TABLE};
-use super::fragment::{under, ColorMode, FragmentShader};
 use super::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
+use super::fragment::{ColorMode, FragmentShader};
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
-use super::raster::{bin, fixed, Bins, Rect, Tiles, Triangle};
+use super::raster::{bin, fixed, tiles, Bins, Triangle};
 use super::setup::{classify_fixed, projection_tests_screen};
 use super::sort;
+use crate::composite::under;
 use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::isosurface::Isosurfaces;
 use crate::shading::BlinnPhong;
+use crate::tiles::Rect;
+use crate::tiles::{render_tiles, Control};
 use crate::RenderError;
 
 /// Visibility order.
@@ -90,8 +91,8 @@ pub struct PtOptions {
     pub early_termination: Option<f32>,
     /// Count the centroid order's violations of the exact face order (`--stats`).
     pub count_violations: bool,
-    /// Set from another thread to stop with [`RenderError::Cancelled`].
-    pub cancel: Option<Arc<AtomicBool>>,
+    /// Cancellation and progress.
+    pub control: Control,
 }
 
 impl PtOptions {
@@ -108,7 +109,7 @@ impl PtOptions {
             shading: BlinnPhong::default(),
             early_termination: Some(0.999),
             count_violations: false,
-            cancel: None,
+            control: Control::default(),
         }
     }
 
@@ -235,9 +236,9 @@ impl<'m> PtRenderer<'m> {
         let t = Instant::now();
         self.update_kept(&tf, &opts.isosurfaces);
         stats.discard_s = t.elapsed().as_secs_f64();
-        cancelled(opts)?;
+        opts.control.check()?;
         self.update_view(opts, &mut stats)?;
-        cancelled(opts)?;
+        opts.control.check()?;
         if !opts.isosurfaces.is_empty() && self.gradients.is_none() {
             self.gradients = Some(self.mesh.vertex_gradients());
         }
@@ -281,24 +282,11 @@ impl<'m> PtRenderer<'m> {
             },
             per_pixel: view.per_pixel,
         };
-        let tiles = Tiles::new(opts.width, opts.height);
-        let results: Vec<Result<TileOutput, RenderError>> = (0..tiles.count())
-            .into_par_iter()
-            .map(|i| {
-                cancelled(opts)?;
-                Ok(ctx.render_tile(tiles.rect(i), view.bins.tile(i)))
-            })
-            .collect();
-        let mut pixels = vec![[0.0f32; 4]; opts.width * opts.height];
-        for (i, r) in results.into_iter().enumerate() {
-            let (tile, frags) = r?;
-            stats.fragments += frags;
-            let rect = tiles.rect(i);
-            for (row, y) in (rect.y0..rect.y1).enumerate() {
-                let src = &tile[row * rect.width()..(row + 1) * rect.width()];
-                pixels[y * opts.width + rect.x0..y * opts.width + rect.x1].copy_from_slice(src);
-            }
-        }
+        let tiled = render_tiles(&tiles(opts.width, opts.height), &opts.control, |i, rect| {
+            ctx.render_tile(rect, view.bins.tile(i))
+        })?;
+        stats.fragments = tiled.per_tile.iter().sum();
+        let pixels = tiled.pixels;
         stats.raster_s = t.elapsed().as_secs_f64();
         stats.tets_kept = kept.count;
         stats.tets_drawn = view.drawn;
@@ -410,7 +398,7 @@ impl<'m> PtRenderer<'m> {
         }
         drop(fates);
         stats.project_s = t.elapsed().as_secs_f64();
-        cancelled(opts)?;
+        opts.control.check()?;
         let t = Instant::now();
         let need_exact = opts.sort == SortMode::Exact || counting;
         if need_exact && self.adjacency.is_none() {
@@ -457,9 +445,9 @@ impl<'m> PtRenderer<'m> {
             SortMode::Exact => exact_order.unwrap_or_default(),
         };
         stats.sort_s = t.elapsed().as_secs_f64();
-        cancelled(opts)?;
+        opts.control.check()?;
         let t = Instant::now();
-        let tiles = Tiles::new(opts.width, opts.height);
+        let tiles = tiles(opts.width, opts.height);
         let bins = bin(&order, mesh.tets(), &proj, &tiles);
         stats.bin_s = t.elapsed().as_secs_f64();
         self.view = Some(ViewData {
@@ -475,18 +463,6 @@ impl<'m> PtRenderer<'m> {
             cycles,
             order_bytes: 4 * order.capacity(),
         });
-        Ok(())
-    }
-}
-
-fn cancelled(opts: &PtOptions) -> Result<(), RenderError> {
-    if opts
-        .cancel
-        .as_ref()
-        .is_some_and(|c| c.load(Ordering::Relaxed))
-    {
-        Err(RenderError::Cancelled)
-    } else {
         Ok(())
     }
 }
@@ -559,9 +535,6 @@ struct TileContext<'a> {
     early: Option<f32>,
     per_pixel: bool,
 }
-
-/// A tile's premultiplied pixels and its fragment count.
-type TileOutput = (Vec<[f32; 4]>, u64);
 
 /// A fragment kept for per-pixel sorting.
 #[derive(Clone, Copy)]

@@ -17,31 +17,28 @@
 //!
 //! The paths compute the same sums (tested). Output does not depend on the number of threads:
 //! every pixel is computed independently.
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 use volux_core::{Camera, Grid, Image, RayGenerator, TransferFunction};
 
 use crate::classify::{BreakpointRanks, Classified, ClassifyTable, LaneTable};
+use crate::composite::{under_partial, RayAccumulator};
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{
     adaptive_simpson_intervals, adaptive_simpson_pieces, fixed_intervals, hides_breakpoints,
     hides_breakpoints_along, riemann_step, AdaptiveParams, FixedRule, Integrator, Medium,
-    RayAccumulator, RayIntegral, RayMedium,
+    RayIntegral, RayMedium,
 };
 use crate::isosurface::{Crossing, Isosurfaces};
 use crate::macrocell::{MacrocellGrid, Occupancy};
 use crate::mip;
 use crate::sampling::{Field, Reconstruction, Tricubic, Trilinear};
 use crate::shading::{self, BlinnPhong, GradientVolume};
+use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 use crate::RenderError;
 use stream::TrapezoidRule;
-
-/// Called with (rows done, total rows) as the render progresses.
-pub type ProgressFn = Arc<dyn Fn(usize, usize) + Send + Sync>;
 
 /// What to render and how.
 #[derive(Clone)]
@@ -75,10 +72,8 @@ pub struct RenderOptions {
     /// Maximum intensity projection instead of compositing: each pixel shows the TF colour of
     /// the largest value along its ray.
     pub mip: bool,
-    /// Set to true from another thread to stop the render with [`RenderError::Cancelled`].
-    pub cancel: Option<Arc<AtomicBool>>,
-    /// Progress callback.
-    pub progress: Option<ProgressFn>,
+    /// Cancellation and progress.
+    pub control: Control,
 }
 
 impl RenderOptions {
@@ -97,8 +92,7 @@ impl RenderOptions {
             shading: None,
             isosurfaces: Isosurfaces::default(),
             mip: false,
-            cancel: None,
-            progress: None,
+            control: Control::default(),
         }
     }
 
@@ -336,9 +330,6 @@ fn worth_skipping(empty_fraction: f64, integrator: &Integrator) -> bool {
     empty_fraction * MacrocellGrid::BLOCK as f64 / spacing.max(1e-6) >= 1.0
 }
 
-/// Side of the square image tiles rendered in parallel.
-const TILE: usize = 16;
-
 /// One pixel's result.
 #[derive(Clone, Copy, Debug, Default)]
 struct PixelOut {
@@ -450,52 +441,28 @@ fn render_with<F: Field>(
         rays: opts.camera.rays(opts.width, opts.height),
         opts,
     };
+    let grid = TileGrid::new(opts.width, opts.height, TILE);
+    let out = render_tiles(&grid, &opts.control, |_, r| {
+        let (x0, y0) = (r.x0, r.y0);
+        let px = if !derived.lanes {
+            ctx.tile_ray_by_ray(x0, y0)
+        } else if opts.mip {
+            ctx.mip_stream(x0, y0)
+        } else if let Some(st) = ctx.packet_table() {
+            ctx.lane_stream(st, x0, y0)
+        } else if let Some(pt) = ctx.preintegrated_stream_table() {
+            ctx.lane_stream(pt, x0, y0)
+        } else if let Some(tr) = ctx.trapezoid_stream_rule() {
+            ctx.lane_stream(&tr, x0, y0)
+        } else if let Some(p) = ctx.adaptive_stream_params() {
+            ctx.adaptive_stream(p, x0, y0)
+        } else {
+            ctx.tile_ray_by_ray(x0, y0)
+        };
+        (px, ())
+    })?
+    .pixels;
     let (w, h) = (opts.width, opts.height);
-    let mut out = vec![PixelOut::default(); w * h];
-    let tiles_done = AtomicU64::new(0);
-    let cancelled = || {
-        opts.cancel
-            .as_ref()
-            .is_some_and(|c| c.load(Ordering::Relaxed))
-    };
-    // Square tiles keep neighbouring rays, which read the same voxels, on one core.
-    let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
-    let tiles: Vec<Vec<PixelOut>> = (0..tx * ty)
-        .into_par_iter()
-        .map(|tile| {
-            if cancelled() {
-                return Err(RenderError::Cancelled);
-            }
-            let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
-            let px = if !derived.lanes {
-                ctx.tile_ray_by_ray(x0, y0)
-            } else if opts.mip {
-                ctx.mip_stream(x0, y0)
-            } else if let Some(st) = ctx.packet_table() {
-                ctx.lane_stream(st, x0, y0)
-            } else if let Some(pt) = ctx.preintegrated_stream_table() {
-                ctx.lane_stream(pt, x0, y0)
-            } else if let Some(tr) = ctx.trapezoid_stream_rule() {
-                ctx.lane_stream(&tr, x0, y0)
-            } else if let Some(p) = ctx.adaptive_stream_params() {
-                ctx.adaptive_stream(p, x0, y0)
-            } else {
-                ctx.tile_ray_by_ray(x0, y0)
-            };
-            let done = tiles_done.fetch_add(1, Ordering::Relaxed) + 1;
-            if let Some(p) = &opts.progress {
-                p(done as usize * h / (tx * ty), h);
-            }
-            Ok(px)
-        })
-        .collect::<Result<_, _>>()?;
-    for (tile, px) in tiles.into_iter().enumerate() {
-        let (x0, y0) = ((tile % tx) * TILE, (tile / tx) * TILE);
-        let tw = (x0 + TILE).min(w) - x0;
-        for (k, p) in px.into_iter().enumerate() {
-            out[(y0 + k / tw) * w + x0 + k % tw] = p;
-        }
-    }
     let stats = RenderStats {
         rays: out.iter().filter(|p| p.hit).count() as u64,
         samples: out.iter().map(|p| p.samples).sum(),
@@ -1042,7 +1009,7 @@ impl<F: Field> RayContext<'_, F> {
                     let mid = (o_v + d_v * (0.5 * (ta + tb))).as_vec3();
                     let view = (d_v * self.place.spacing).normalize_or_zero().as_vec3();
                     let e = self.lit_segment(table.lookup(sf, sb), mid, view);
-                    composite_segment(&mut acc, e, ((tb - ta) / h) as f32);
+                    under_partial(&mut acc, e, ((tb - ta) / h) as f32);
                 }
                 front = Some(back);
                 i += 1;
@@ -1054,23 +1021,6 @@ impl<F: Field> RayContext<'_, F> {
         }
         PixelOut::composited(&acc, n)
     }
-}
-
-/// Composites under `acc` a pre-integrated segment of premultiplied RGBA `e` (for the table's
-/// length) that covers the fraction `frac` of that length: the opacity of a shortened segment
-/// is `1 - (1 - alpha)^frac` (its optical depth scaled), its colour scaled with it.
-fn composite_segment(acc: &mut RayAccumulator, e: [f32; 4], frac: f32) {
-    let alpha = if frac < 0.999_999 {
-        1.0 - (1.0 - e[3]).max(0.0).powf(frac)
-    } else {
-        e[3]
-    };
-    let scale = if e[3] > 0.0 { alpha / e[3] } else { frac };
-    let w = 1.0 - acc.rgba[3];
-    for (a, ec) in acc.rgba.iter_mut().zip(&e[..3]) {
-        *a += w * ec * scale;
-    }
-    acc.rgba[3] += w * alpha;
 }
 
 /// The reference's classification: the TF evaluated exactly, in f64.

@@ -20,11 +20,12 @@
 //! `[t_(i-1), t_i]`, clipped to the ray, as in [`RayContext::preintegrated`].
 use glam::{DVec3, Vec3};
 
-use super::{composite_segment, pixel_hash, PixelOut, RayContext, TILE};
+use super::{pixel_hash, PixelOut, RayContext, TILE};
 use crate::classify::LaneTable;
+use crate::composite::{under_if, under_partial, RayAccumulator};
 use crate::integrate::adaptive_lanes::exp_lanes;
 use crate::integrate::preintegrated::PreintegrationTable;
-use crate::integrate::{riemann_step, Integrator, RayAccumulator};
+use crate::integrate::{riemann_step, Integrator};
 use crate::sampling::{Field, LANES};
 use crate::shading::{BlinnPhong, GradientVolume, Lanes3};
 
@@ -53,7 +54,7 @@ pub(super) trait SlabRule {
     fn segment(&self, front: f32, back: f32) -> [f32; 4];
 
     /// The entry of a segment shortened to the fraction `frac` of a step, and the fraction
-    /// [`composite_segment`] is still to correct it for (segments only); `None` when the
+    /// [`under_partial`] is still to correct it for (segments only); `None` when the
     /// segment adds nothing. By default the full segment's entry, opacity-corrected for its
     /// length, and nothing next to an undefined (NaN) sample.
     fn partial_segment(&self, front: f32, back: f32, frac: f32) -> Option<([f32; 4], f32)> {
@@ -75,12 +76,7 @@ impl SlabRule for LaneTable {
             at[l] = self.position(v[l]);
         }
         for l in 0..LANES {
-            let e = self.at(at[l].0, at[l].1);
-            let acc = &mut acc[l];
-            let wgt = if v[l].is_nan() { 0.0 } else { 1.0 - acc[3] };
-            for c in 0..4 {
-                acc[c] += wgt * e[c];
-            }
+            under_if(&mut acc[l], self.at(at[l].0, at[l].1), !v[l].is_nan());
         }
     }
 
@@ -232,12 +228,8 @@ fn composite_entries<R: SlabRule>(
     acc: &mut [[f32; 4]; LANES],
 ) {
     for l in 0..LANES {
-        let acc = &mut acc[l];
         let undefined = back[l].is_nan() | (R::SEGMENTS & front[l].is_nan());
-        let wgt = if undefined { 0.0 } else { 1.0 - acc[3] };
-        for c in 0..4 {
-            acc[c] += wgt * e[l][c];
-        }
+        under_if(&mut acc[l], e[l], !undefined);
     }
 }
 
@@ -628,7 +620,7 @@ impl<F: Field> RayContext<'_, F> {
                     continue;
                 };
                 let mid = r.position_at(0.5 * (ta + tb));
-                composite_segment(&mut acc, self.lit_segment(e, mid, r.view), frac);
+                under_partial(&mut acc, self.lit_segment(e, mid, r.view), frac);
             } else if let Some(v) = v {
                 let c = self.lit_sample(self.table.lookup(v), r.position(i), r.view);
                 riemann_step(&mut acc, c, (r.t1 - t).min(r.h) as f32);

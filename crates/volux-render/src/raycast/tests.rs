@@ -1,4 +1,6 @@
 use super::*;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use volux_core::grid::{Buffer, Samples};
 use volux_core::CameraSpec;
 
@@ -377,7 +379,7 @@ fn cancellation_stops_the_render() {
     let tf =
         TransferFunction::from_json(r#"{"color": [[0,1,1,1]], "extinction": [[0,0.2]]}"#).unwrap();
     let mut o = RenderOptions::new(Camera::fit(&g.bounds()), tf);
-    o.cancel = Some(Arc::new(AtomicBool::new(true)));
+    o.control.cancel = Some(Arc::new(AtomicBool::new(true)));
     assert!(matches!(render_grid(&g, &o), Err(RenderError::Cancelled)));
 }
 

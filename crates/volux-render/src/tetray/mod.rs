@@ -21,7 +21,8 @@
 //!    non-convex mesh or a mesh with gaps). Rays through vertices and edges are continued by
 //!    a local search around the exit point; the walk provably never loops (the ray parameter
 //!    strictly increases with every segment) and a step bound backs that up;
-//! 3. tiles of [`TILE`] x [`TILE`] pixels are rendered in parallel; each pixel depends only
+//! 3. tiles of [`TILE`](crate::tiles::TILE) pixels a side are rendered in parallel by the
+//!    tile driver ([`crate::tiles`]); each pixel depends only
 //!    on its own ray, so the image is deterministic.
 //!
 //! The result equals the brute-force reference [`render_mesh_reference`] in exact colour
@@ -62,7 +63,7 @@ mod render;
 pub mod walk;
 
 pub use render::{
-    TetRayCaster, TetRayColor, TetRayOptions, TetRayRendered, TetRayStats, TracedRay, TILE,
+    TetRayCaster, TetRayColor, TetRayOptions, TetRayRendered, TetRayStats, TracedRay,
 };
 pub use walk::{WalkOutcome, WalkSegment};
 

@@ -21,6 +21,7 @@ use volux_core::{TetMesh, TransferFunction};
 
 use super::render::{TetRayColor, TetRayOptions};
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
+use crate::composite::under64;
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
 use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{CellClassifier, PsiTable};
@@ -196,7 +197,7 @@ impl<'a> PixelContext<'a> {
                     } else {
                         self.segment(s)
                     };
-                    under(&mut acc, c);
+                    under64(&mut acc, c);
                     self.early.is_none_or(|e| acc[3] < e)
                 });
                 let out = PixelOut {
@@ -338,10 +339,10 @@ impl<'a> PixelContext<'a> {
                 error += (1.0 - acc[3]) * r.error;
                 samples += r.samples;
                 missed |= r.tolerance_missed;
-                under(&mut acc, r.rgba);
+                under64(&mut acc, r.rgba);
             }
             if let Some(c) = surface {
-                under(&mut acc, c);
+                under64(&mut acc, c);
             }
             t_lo = t_hi;
             if self.early.is_some_and(|e| acc[3] >= e) {
@@ -353,15 +354,6 @@ impl<'a> PixelContext<'a> {
         out.samples = samples;
         out.missed = missed;
         out
-    }
-}
-
-/// Composites `c` (premultiplied) behind `acc`.
-#[inline]
-fn under(acc: &mut [f64; 4], c: [f64; 4]) {
-    let tr = 1.0 - acc[3];
-    for k in 0..4 {
-        acc[k] += tr * c[k];
     }
 }
 

@@ -1,7 +1,6 @@
 //! The renderer: per-pixel walks over 16 x 16 tiles in parallel, segments integrated and
 //! composited front to back (or the whole ray integrated adaptively, or its maximum taken).
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -16,10 +15,8 @@ use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::integrate::adaptive::AdaptiveParams;
 use crate::isosurface::Isosurfaces;
 use crate::shading::BlinnPhong;
+use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 use crate::RenderError;
-
-/// Side of the square tiles rendered in parallel, in pixels.
-pub const TILE: usize = 16;
 
 /// How a ray's colour is computed.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -80,8 +77,8 @@ pub struct TetRayOptions {
     pub mip: bool,
     /// Stop a ray once its opacity reaches this (`None`: never).
     pub early_termination: Option<f32>,
-    /// Set from another thread to stop with [`RenderError::Cancelled`].
-    pub cancel: Option<Arc<AtomicBool>>,
+    /// Cancellation and progress.
+    pub control: Control,
 }
 
 impl TetRayOptions {
@@ -97,7 +94,7 @@ impl TetRayOptions {
             shading: BlinnPhong::default(),
             mip: false,
             early_termination: Some(0.999),
-            cancel: None,
+            control: Control::default(),
         }
     }
 
@@ -127,13 +124,6 @@ impl TetRayOptions {
         self.tf.validate()?;
         Ok(())
     }
-
-    fn cancelled(&self) -> Result<(), RenderError> {
-        match &self.cancel {
-            Some(c) if c.load(Ordering::Relaxed) => Err(RenderError::Cancelled),
-            _ => Ok(()),
-        }
-    }
 }
 
 /// What a frame did.
@@ -162,6 +152,32 @@ pub struct TetRayStats {
     pub start_cells: usize,
     /// Seconds for the frame.
     pub seconds: f64,
+}
+
+impl TetRayStats {
+    /// Counts one ray's pixel and walk.
+    fn add_ray(&mut self, px: &PixelOut, walk: &WalkOutcome) {
+        self.rays += 1;
+        self.segments += walk.segments;
+        self.reentries += walk.reentries;
+        self.recovered += walk.recovered;
+        self.local_searches += walk.local_searches;
+        self.abandoned += u64::from(walk.abandoned);
+        self.samples += px.samples;
+        self.rays_over_tolerance += u64::from(px.missed);
+    }
+
+    /// Adds another tile's counters.
+    fn add(&mut self, s: &TetRayStats) {
+        self.rays += s.rays;
+        self.segments += s.segments;
+        self.reentries += s.reentries;
+        self.recovered += s.recovered;
+        self.local_searches += s.local_searches;
+        self.abandoned += s.abandoned;
+        self.samples += s.samples;
+        self.rays_over_tolerance += s.rays_over_tolerance;
+    }
 }
 
 /// A ray-cast image with its statistics.
@@ -350,7 +366,7 @@ impl<'m> TetRayCaster<'m> {
     /// Renders one frame: one ray per pixel centre ([`Camera::ray`]), premultiplied RGBA.
     pub fn render(&self, opts: &TetRayOptions) -> Result<TetRayRendered, RenderError> {
         opts.validate()?;
-        opts.cancelled()?;
+        opts.control.check()?;
         let start_time = Instant::now();
         let (w, h) = (opts.width, opts.height);
         let range = self.mesh.range();
@@ -369,59 +385,29 @@ impl<'m> TetRayCaster<'m> {
         };
         let ctx = PixelContext::new(self.mesh, opts, &tf, range, gradients);
         let camera = opts.camera;
-        let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
-        let results: Vec<Result<TileOutput, RenderError>> = (0..tiles_x * tiles_y)
-            .into_par_iter()
-            .map(|ti| {
-                opts.cancelled()?;
-                let (tx, ty) = (ti % tiles_x, ti / tiles_x);
-                let xs = tx * TILE..((tx + 1) * TILE).min(w);
-                let ys = ty * TILE..((ty + 1) * TILE).min(h);
-                let mut out = Vec::with_capacity(xs.len() * ys.len());
-                let mut stats = TetRayStats::default();
-                let mut scratch = Scratch::default();
-                let mut segments = Vec::new();
-                for y in ys {
-                    for x in xs.clone() {
-                        let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                        let (px, outcome) =
-                            ctx.pixel(&walker, ray.origin, ray.dir, &mut scratch, &mut segments);
-                        stats.rays += 1;
-                        stats.segments += outcome.segments;
-                        stats.reentries += outcome.reentries;
-                        stats.recovered += outcome.recovered;
-                        stats.local_searches += outcome.local_searches;
-                        stats.abandoned += u64::from(outcome.abandoned);
-                        stats.samples += px.samples;
-                        stats.rays_over_tolerance += u64::from(px.missed);
-                        out.push(px);
-                    }
+        let grid = TileGrid::new(w, h, TILE);
+        let tiled = render_tiles(&grid, &opts.control, |_, r| {
+            let mut out = Vec::with_capacity(r.area());
+            let mut stats = TetRayStats::default();
+            let mut scratch = Scratch::default();
+            let mut segments = Vec::new();
+            for y in r.y0..r.y1 {
+                for x in r.x0..r.x1 {
+                    let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                    let (px, outcome) =
+                        ctx.pixel(&walker, ray.origin, ray.dir, &mut scratch, &mut segments);
+                    stats.add_ray(&px, &outcome);
+                    out.push(px);
                 }
-                Ok((out, stats))
-            })
-            .collect();
-        let mut pixels = vec![[0.0f32; 4]; w * h];
-        let mut error_map = vec![0.0f32; w * h];
-        let mut stats = TetRayStats::default();
-        for (ti, r) in results.into_iter().enumerate() {
-            let (tile, s) = r?;
-            stats.rays += s.rays;
-            stats.segments += s.segments;
-            stats.reentries += s.reentries;
-            stats.recovered += s.recovered;
-            stats.local_searches += s.local_searches;
-            stats.abandoned += s.abandoned;
-            stats.samples += s.samples;
-            stats.rays_over_tolerance += s.rays_over_tolerance;
-            let (tx, ty) = (ti % tiles_x, ti / tiles_x);
-            let x0 = tx * TILE;
-            let tw = (x0 + TILE).min(w) - x0;
-            for (k, px) in tile.into_iter().enumerate() {
-                let i = (ty * TILE + k / tw) * w + x0 + k % tw;
-                pixels[i] = px.rgba;
-                error_map[i] = px.error;
             }
+            (out, stats)
+        })?;
+        let mut stats = TetRayStats::default();
+        for s in &tiled.per_tile {
+            stats.add(s);
         }
+        let pixels = tiled.pixels.iter().map(|p| p.rgba).collect();
+        let error_map = tiled.pixels.iter().map(|p| p.error).collect();
         stats.start_cells = start.len();
         stats.seconds = start_time.elapsed().as_secs_f64();
         Ok(TetRayRendered {
@@ -431,6 +417,3 @@ impl<'m> TetRayCaster<'m> {
         })
     }
 }
-
-/// A tile's pixels (row-major) and statistics.
-type TileOutput = (Vec<PixelOut>, TetRayStats);

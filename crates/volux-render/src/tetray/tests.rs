@@ -11,6 +11,7 @@ use crate::integrate::adaptive::{AdaptiveParams, StepControl};
 use crate::isosurface::{Isosurfaces, Isovalue};
 use crate::pt::reference::{ray_segments, render_mesh_reference, ReferenceOptions};
 use crate::shading::BlinnPhong;
+use crate::tiles::Control;
 use crate::RenderError;
 
 fn tf() -> TransferFunction {
@@ -438,7 +439,7 @@ fn renders_are_deterministic_and_options_are_checked() {
     let cancel = Arc::new(AtomicBool::new(true));
     let e = caster
         .render(&TetRayOptions {
-            cancel: Some(cancel),
+            control: Control::with_cancel(cancel),
             ..opts.clone()
         })
         .unwrap_err();

@@ -309,14 +309,7 @@ fn random_tf(rng: &mut Lcg) -> TransferFunction {
 
 /// Composites front to back `[C, A]` pieces.
 fn composite(pieces: &[[f64; 4]]) -> [f64; 4] {
-    let mut acc = [0.0; 4];
-    for p in pieces {
-        let tr = 1.0 - acc[3];
-        for k in 0..4 {
-            acc[k] += tr * p[k];
-        }
-    }
-    acc
+    crate::composite::composite64(pieces.iter().copied())
 }
 
 #[test]

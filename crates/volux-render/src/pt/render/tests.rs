@@ -351,12 +351,12 @@ fn discarded_tets_do_not_change_the_image_and_recolouring_reuses_the_view() {
 fn cancellation_and_bad_options() {
     let mesh = synth::smooth_tets(500).unwrap();
     let mut o = opts(camera(&mesh, 0.0, 0.0, false), tf(), 32);
-    o.cancel = Some(Arc::new(AtomicBool::new(true)));
+    o.control.cancel = Some(Arc::new(AtomicBool::new(true)));
     assert!(matches!(
         PtRenderer::new(&mesh).render(&o),
         Err(RenderError::Cancelled)
     ));
-    o.cancel = None;
+    o.control.cancel = None;
     o.width = 0;
     assert!(matches!(
         PtRenderer::new(&mesh).render(&o),
