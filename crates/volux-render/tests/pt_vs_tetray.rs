@@ -2,8 +2,9 @@
 //! exact colour, and the cell-by-cell ray caster with exact colour, agree within 1/255 mean per
 //! channel on a convex mesh and on the non-convex torus (issues 4 and 5).
 use volux_core::{synth, CameraSpec, Image, TetMesh, TransferFunction};
-use volux_render::pt::{ColorMode, PtOptions, PtRenderer, SortMode};
-use volux_render::tetray::{TetRayCaster, TetRayColor, TetRayOptions};
+use volux_render::integrate::SegmentRule;
+use volux_render::pt::{PtOptions, PtRenderer, SortMode};
+use volux_render::tetray::{TetRayCaster, TetRayOptions};
 
 fn tf() -> TransferFunction {
     TransferFunction::from_json(
@@ -38,11 +39,11 @@ fn agree(mesh: &TetMesh, azimuth: f64, elevation: f64, orthographic: bool) {
     .unwrap();
     let mut pt = PtOptions::new(camera, tf());
     (pt.width, pt.height) = (96, 80);
-    (pt.sort, pt.color, pt.early_termination) = (SortMode::Exact, ColorMode::Exact, None);
+    (pt.sort, pt.color, pt.early_termination) = (SortMode::Exact, SegmentRule::Exact, None);
     let a = PtRenderer::new(mesh).render(&pt).unwrap();
     let mut rc = TetRayOptions::new(camera, tf());
     (rc.width, rc.height) = (96, 80);
-    (rc.color, rc.early_termination) = (TetRayColor::Exact, None);
+    (rc.color, rc.early_termination) = (SegmentRule::Exact, None);
     let b = TetRayCaster::new(mesh).render(&rc).unwrap();
     assert_eq!(b.stats.abandoned, 0);
     assert!(a.image.coverage(0.01) > 0.1, "something is drawn");

@@ -12,10 +12,11 @@ use volux_core::histogram::Histogram;
 use volux_core::Image;
 use volux_core::{synth, CameraSpec, TetMesh, TransferFunction};
 use volux_io::{Dataset, LoadOptions};
+use volux_render::integrate::SegmentRule;
 use volux_render::isosurface::{Isosurfaces, Isovalue};
 use volux_render::pt::reference::{render_mesh_reference, ReferenceOptions};
-use volux_render::pt::{ColorMode, PtOptions, PtRenderer, SortMode};
-use volux_render::tetray::{TetRayCaster, TetRayColor, TetRayOptions};
+use volux_render::pt::{PtOptions, PtRenderer, SortMode};
+use volux_render::tetray::{TetRayCaster, TetRayOptions};
 
 use super::CmdError;
 
@@ -94,11 +95,11 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
         let dense =
             TransferFunction::from_json(DENSE_TF)?.with_unit_length(mesh.bounds().diagonal() / 2.0);
         let modes = [
-            ("average", ColorMode::Average, false, &tf),
-            ("psi", ColorMode::Psi, false, &tf),
-            ("psi+iso", ColorMode::Psi, true, &tf),
-            ("average-dense", ColorMode::Average, false, &dense),
-            ("psi-dense", ColorMode::Psi, false, &dense),
+            ("average", SegmentRule::Average, false, &tf),
+            ("psi", SegmentRule::Psi, false, &tf),
+            ("psi+iso", SegmentRule::Psi, true, &tf),
+            ("average-dense", SegmentRule::Average, false, &dense),
+            ("psi-dense", SegmentRule::Psi, false, &dense),
         ];
         for (label, color, with_iso, tf) in modes {
             let mut times = Vec::new();
@@ -209,7 +210,7 @@ fn accuracy(as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
         )?;
         let mut renderer = PtRenderer::new(&mesh);
         for sort in [SortMode::Centroid, SortMode::Exact] {
-            for color in [ColorMode::Average, ColorMode::Psi, ColorMode::Exact] {
+            for color in [SegmentRule::Average, SegmentRule::Psi, SegmentRule::Exact] {
                 let mut opts = PtOptions::new(camera, tf.clone());
                 (opts.width, opts.height) = (w, h);
                 (opts.sort, opts.color) = (sort, color);
@@ -284,7 +285,7 @@ pub fn run_tetray(
             elevation: Some(20.0),
             ..Default::default()
         };
-        for (label, color) in [("exact", TetRayColor::Exact), ("psi", TetRayColor::Psi)] {
+        for (label, color) in [("exact", SegmentRule::Exact), ("psi", SegmentRule::Psi)] {
             let mut opts = TetRayOptions::new(spec.resolve(&mesh.bounds())?, tf.clone());
             opts.color = color;
             let mut times = Vec::new();

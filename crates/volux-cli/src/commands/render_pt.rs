@@ -7,8 +7,9 @@ use volux_core::image::PngOptions;
 use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::{CameraSpec, TetMesh};
 use volux_io::Dataset;
-use volux_render::pt::{ColorMode, PtOptions, PtRenderer, PtStats, SortMode};
-use volux_render::tetray::{TetRayCaster, TetRayColor, TetRayOptions};
+use volux_render::integrate::SegmentRule;
+use volux_render::pt::{PtOptions, PtRenderer, PtStats, SortMode};
+use volux_render::tetray::{TetRayCaster, TetRayOptions};
 
 use super::render::{blinn_phong, isosurfaces, transfer_function};
 use super::CmdError;
@@ -54,7 +55,7 @@ pub fn run(
     let mut opts = PtOptions::new(spec.resolve(&bounds)?, tf);
     (opts.width, opts.height) = (w, h);
     opts.sort = SortMode::parse(&args.sort)?;
-    opts.color = ColorMode::parse(&args.color)?;
+    opts.color = segment_rule(&args.color)?;
     opts.isosurfaces = isosurfaces(args)?;
     opts.shading = blinn_phong(args)?;
     opts.count_violations = args.stats;
@@ -98,14 +99,14 @@ pub fn run_raycast(
         let Integrator::AdaptiveSimpson(p) = super::render::integrator(args)? else {
             unreachable!("adaptive-simpson parses as the adaptive integrator")
         };
-        TetRayColor::AdaptiveSimpson(AdaptiveParams {
+        SegmentRule::AdaptiveSimpson(AdaptiveParams {
             h0: p.h0 * unit,
             hmin: p.hmin * unit,
             hmax: p.hmax * unit,
             ..p
         })
     } else {
-        TetRayColor::parse(colour)?
+        segment_rule(colour)?
     };
     opts.isosurfaces = isosurfaces(args)?;
     opts.shading = blinn_phong(args)?;
@@ -233,4 +234,13 @@ fn report(args: &RenderArgs, s: &PtStats, (w, h): (usize, usize)) {
         );
     }
     eprintln!("wrote {}", args.output.display());
+}
+
+fn segment_rule(s: &str) -> Result<SegmentRule, CmdError> {
+    Ok(match s {
+        "average" => SegmentRule::Average,
+        "psi" => SegmentRule::Psi,
+        "exact" => SegmentRule::Exact,
+        other => return Err(format!("unknown colour mode '{other}' (average, psi, exact)").into()),
+    })
 }

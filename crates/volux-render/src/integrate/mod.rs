@@ -14,7 +14,12 @@
 //! - [`adaptive::adaptive_simpson`]: the iterative adaptive Simpson of Algorithms 3 and 4,
 //!   coupled or decoupled step control, error estimated per channel R, G, B, A, in f64;
 //! - [`adaptive_lanes::AdaptiveLanes`]: the same coupled control for four rays at once in f32
-//!   lanes, the fast path of renderers that sample several rays together.
+//!   lanes, the fast path of renderers that sample several rays together;
+//! - [`segment`]: the colour of a segment along which the scalar is linear ([`SegmentRule`]:
+//!   average, ψ, exact, adaptive), the one segment integrator of the tetrahedral renderers;
+//! - [`psi`]: partial pre-integration (the ψ table, the TF lookup of cells, average and ψ
+//!   fragment colours);
+//! - [`preintegrated`]: the grid's pre-integration table over (front, back) values.
 use crate::classify::Classified;
 use crate::composite::RayAccumulator;
 
@@ -23,12 +28,14 @@ pub mod adaptive_lanes;
 pub mod fixed;
 pub mod preintegrated;
 pub mod psi;
+pub mod segment;
 
 pub use adaptive::{
     adaptive_simpson, adaptive_simpson_intervals, adaptive_simpson_pieces, AdaptiveParams,
     StepControl,
 };
 pub use fixed::{fixed_intervals, simpson, trapezoid, FixedRule};
+pub use segment::{SegmentIntegrator, SegmentRule};
 
 /// How rays are integrated; lengths are in voxel units (of the smallest grid spacing), as in
 /// the seed, and converted to world units by the traversal.

@@ -6,7 +6,7 @@
 //! along the ray. Both models turn these into premultiplied RGBA for front-to-back
 //! compositing, using the transfer function only at `s_f` and `s_b`
 //! ([`CellClassifier::lookup`]: colour `c` and extinction `tau` per world unit). The exact
-//! answer, for any TF, is [`SegmentIntegrator::integrate`](super::preintegrated::SegmentIntegrator::integrate).
+//! answer, for any TF, is [`SegmentIntegrator::integrate`](super::segment::SegmentIntegrator::integrate).
 //!
 //! # Shirley-Tuchman average ([`average_fragment`])
 //!
@@ -51,7 +51,7 @@
 //! mix weighted about 2:1 towards the front. `psi` depends on the thicknesses `a`, `b` only,
 //! not on the TF, so it is tabulated once ([`PsiTable`]); it is not symmetric (`a` is the
 //! front). Checked numerically: [`psi_segment`] (this formula in f64 with [`psi_exact`])
-//! equals [`SegmentIntegrator::integrate`](super::preintegrated::SegmentIntegrator::integrate)
+//! equals [`SegmentIntegrator::integrate`](super::segment::SegmentIntegrator::integrate)
 //! to `6.7e-16` on 400 random segments of TFs linear between `s_f` and `s_b` (thicknesses up
 //! to 1000); [`psi_fragment`] (f32, tables) to `8.0e-7`.
 //!
@@ -120,7 +120,7 @@
 use rayon::prelude::*;
 use volux_core::TransferFunction;
 
-use super::preintegrated::{GL_W, GL_X};
+use super::segment::{GL_W, GL_X};
 
 /// Default [`PsiTable`] resolution (nodes per axis).
 pub const PSI_TABLE_SIZE: usize = 512;

@@ -2,7 +2,8 @@
 //! the front to `s_b` at the back over a length `l`, with the isosurfaces it crosses
 //! (seed `000` §4.3 and eqs. 2.2-2.3; seed `002` §4.3, §4.4 and §4.6).
 //!
-//! Three optical models, one per [`ColorMode`]:
+//! Three optical models, one per segment rule ([`SegmentRule`]; the adaptive rule, which
+//! integrates whole rays, colours the segments it is given exactly):
 //! - `average`: Shirley and Tuchman's averaged colour and extinction
 //!   ([`psi::average_fragment`]);
 //! - `psi`: Moreland and Angel's partial pre-integration ([`psi::psi_fragment`]);
@@ -20,51 +21,16 @@
 use glam::Vec3;
 
 use crate::composite::under;
-use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{self, CellClassifier, LinearPiece, PsiTable};
+use crate::integrate::segment::{SegmentIntegrator, SegmentRule};
 use crate::isosurface::Isovalue;
 use crate::shading::BlinnPhong;
-
-/// How a fragment's colour and opacity are computed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ColorMode {
-    /// Shirley-Tuchman averages (the seeds' basic mode).
-    Average,
-    /// Partial pre-integration with the ψ table (the seeds' accurate mode).
-    #[default]
-    Psi,
-    /// Exact integral of the linear segment (the reference).
-    Exact,
-}
-
-impl ColorMode {
-    /// Parses `average`, `psi` or `exact`.
-    pub fn parse(s: &str) -> Result<Self, String> {
-        match s {
-            "average" => Ok(Self::Average),
-            "psi" => Ok(Self::Psi),
-            "exact" => Ok(Self::Exact),
-            other => Err(format!(
-                "unknown colour mode '{other}' (average, psi, exact)"
-            )),
-        }
-    }
-
-    /// The name `parse` accepts.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::Average => "average",
-            Self::Psi => "psi",
-            Self::Exact => "exact",
-        }
-    }
-}
 
 /// Everything a fragment's colour depends on besides its own `(s_f, s_b, l)`.
 pub struct FragmentShader<'a> {
     /// The optical model.
-    pub mode: ColorMode,
-    /// The exact integrator (for [`ColorMode::Exact`]).
+    pub mode: SegmentRule,
+    /// The exact integrator (for [`SegmentRule::Exact`]).
     pub exact: &'a SegmentIntegrator,
     /// The TF lookup table (for the average and ψ modes).
     pub classifier: &'a CellClassifier,
@@ -95,11 +61,11 @@ pub trait ColorModel {
     ) -> [f32; 4];
 }
 
-/// [`ColorMode::Average`] as a type.
+/// [`SegmentRule::Average`] as a type.
 pub struct AverageModel;
-/// [`ColorMode::Psi`] as a type.
+/// [`SegmentRule::Psi`] as a type.
 pub struct PsiModel;
-/// [`ColorMode::Exact`] as a type.
+/// [`SegmentRule::Exact`] as a type.
 pub struct ExactModel;
 
 impl ColorModel for AverageModel {
@@ -207,9 +173,9 @@ impl FragmentShader<'_> {
     #[inline]
     pub fn segment(&self, s_f: f32, s_b: f32, l: f32) -> [f32; 4] {
         match self.mode {
-            ColorMode::Average => self.segment_with::<AverageModel>(s_f, s_b, l),
-            ColorMode::Psi => self.segment_with::<PsiModel>(s_f, s_b, l),
-            ColorMode::Exact => self.segment_with::<ExactModel>(s_f, s_b, l),
+            SegmentRule::Average => self.segment_with::<AverageModel>(s_f, s_b, l),
+            SegmentRule::Psi => self.segment_with::<PsiModel>(s_f, s_b, l),
+            _ => self.segment_with::<ExactModel>(s_f, s_b, l),
         }
     }
 
@@ -264,11 +230,11 @@ impl FragmentShader<'_> {
         view_dir: impl FnOnce() -> Vec3,
     ) -> [f32; 4] {
         match self.mode {
-            ColorMode::Average => {
+            SegmentRule::Average => {
                 self.fragment_with::<AverageModel>(s_f, s_b, l, gradients, view_dir)
             }
-            ColorMode::Psi => self.fragment_with::<PsiModel>(s_f, s_b, l, gradients, view_dir),
-            ColorMode::Exact => self.fragment_with::<ExactModel>(s_f, s_b, l, gradients, view_dir),
+            SegmentRule::Psi => self.fragment_with::<PsiModel>(s_f, s_b, l, gradients, view_dir),
+            _ => self.fragment_with::<ExactModel>(s_f, s_b, l, gradients, view_dir),
         }
     }
 

@@ -56,5 +56,4 @@ pub mod render;
 pub mod setup;
 pub mod sort;
 
-pub use fragment::ColorMode;
 pub use render::{PtOptions, PtRendered, PtRenderer, PtStats, SortMode};

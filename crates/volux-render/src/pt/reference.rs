@@ -47,7 +47,7 @@ use volux_core::mesh::FACES;
 use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
 use crate::composite::composite64;
-use crate::integrate::preintegrated::SegmentIntegrator;
+use crate::integrate::segment::SegmentIntegrator;
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 use crate::RenderError;
 

@@ -31,16 +31,17 @@ use rayon::prelude::*;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
 use super::classify::{ternary_code, TERNARY_TABLE};
+use super::fragment::FragmentShader;
 use super::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
-use super::fragment::{ColorMode, FragmentShader};
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
 use super::raster::{bin, fixed, tiles, Bins, Triangle};
 use super::setup::{classify_fixed, projection_tests_screen};
 use super::sort;
 use crate::composite::under;
-use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{CellClassifier, PsiTable};
+use crate::integrate::segment::SegmentIntegrator;
+use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
 use crate::shading::BlinnPhong;
 use crate::tiles::Rect;
@@ -82,7 +83,7 @@ pub struct PtOptions {
     /// Visibility order.
     pub sort: SortMode,
     /// Fragment colour.
-    pub color: ColorMode,
+    pub color: SegmentRule,
     /// Isosurfaces.
     pub isosurfaces: Isosurfaces,
     /// Lighting of the isosurfaces.
@@ -104,7 +105,7 @@ impl PtOptions {
             camera,
             tf,
             sort: SortMode::Centroid,
-            color: ColorMode::Psi,
+            color: SegmentRule::Psi,
             isosurfaces: Isosurfaces::default(),
             shading: BlinnPhong::default(),
             early_termination: Some(0.999),
@@ -120,6 +121,13 @@ impl PtOptions {
         self.shading
             .validate()
             .map_err(RenderError::InvalidOptions)?;
+        if let SegmentRule::AdaptiveSimpson(_) = self.color {
+            return Err(RenderError::InvalidOptions(
+                "Projected Tetrahedra colours fragments (average, psi, exact); adaptive \
+                 Simpson integrates whole rays (tetrahedral ray casting)"
+                    .into(),
+            ));
+        }
         Ok(())
     }
 }
@@ -242,7 +250,7 @@ impl<'m> PtRenderer<'m> {
         if !opts.isosurfaces.is_empty() && self.gradients.is_none() {
             self.gradients = Some(self.mesh.vertex_gradients());
         }
-        if opts.color == ColorMode::Psi && self.psi.is_none() {
+        if opts.color == SegmentRule::Psi && self.psi.is_none() {
             self.psi = Some(PsiTable::new());
         }
         let exact = SegmentIntegrator::new(&tf);
@@ -250,7 +258,7 @@ impl<'m> PtRenderer<'m> {
         // Only the ψ mode reads the table; the others get a trivial one (4 entries).
         let tiny;
         let psi_table = match (&self.psi, opts.color) {
-            (Some(p), ColorMode::Psi) => p,
+            (Some(p), SegmentRule::Psi) => p,
             _ => {
                 tiny = PsiTable::with_size(2);
                 &tiny
@@ -561,12 +569,14 @@ impl TileContext<'_> {
     /// number of fragments shaded.
     fn render_tile(&self, rect: Rect, list: &[u32]) -> (Vec<[f32; 4]>, u64) {
         match (self.shader.mode, self.proj.perspective) {
-            (ColorMode::Average, true) => self.render_tile_with::<AverageModel, true>(rect, list),
-            (ColorMode::Average, false) => self.render_tile_with::<AverageModel, false>(rect, list),
-            (ColorMode::Psi, true) => self.render_tile_with::<PsiModel, true>(rect, list),
-            (ColorMode::Psi, false) => self.render_tile_with::<PsiModel, false>(rect, list),
-            (ColorMode::Exact, true) => self.render_tile_with::<ExactModel, true>(rect, list),
-            (ColorMode::Exact, false) => self.render_tile_with::<ExactModel, false>(rect, list),
+            (SegmentRule::Average, true) => self.render_tile_with::<AverageModel, true>(rect, list),
+            (SegmentRule::Average, false) => {
+                self.render_tile_with::<AverageModel, false>(rect, list)
+            }
+            (SegmentRule::Psi, true) => self.render_tile_with::<PsiModel, true>(rect, list),
+            (SegmentRule::Psi, false) => self.render_tile_with::<PsiModel, false>(rect, list),
+            (_, true) => self.render_tile_with::<ExactModel, true>(rect, list),
+            (_, false) => self.render_tile_with::<ExactModel, false>(rect, list),
         }
     }
 

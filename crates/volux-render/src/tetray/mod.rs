@@ -40,7 +40,7 @@
 //! tet (face planes 40 bytes per face, cell-to-face table, adjacency, cell fields, boundary
 //! hierarchy).
 //!
-//! **Adaptive Simpson** ([`TetRayColor::AdaptiveSimpson`], seed `001` ch. 4): the walked
+//! **Adaptive Simpson** ([`SegmentRule::AdaptiveSimpson`](crate::integrate::SegmentRule::AdaptiveSimpson), seed `001` ch. 4): the walked
 //! segments of a ray form the medium (scalar linear per segment, exact TF classification,
 //! TF breakpoints inside a step reported as hidden features, gaps empty) and the whole ray
 //! is integrated across cell boundaries, with a per-pixel error estimate
@@ -62,9 +62,7 @@ mod pixel;
 mod render;
 pub mod walk;
 
-pub use render::{
-    TetRayCaster, TetRayColor, TetRayOptions, TetRayRendered, TetRayStats, TracedRay,
-};
+pub use render::{TetRayCaster, TetRayOptions, TetRayRendered, TetRayStats, TracedRay};
 pub use walk::{WalkOutcome, WalkSegment};
 
 #[cfg(test)]

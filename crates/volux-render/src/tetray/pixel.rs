@@ -19,15 +19,16 @@
 use glam::{DVec3, Vec3};
 use volux_core::{TetMesh, TransferFunction};
 
-use super::render::{TetRayColor, TetRayOptions};
+use super::render::TetRayOptions;
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::composite::under64;
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
-use crate::integrate::preintegrated::SegmentIntegrator;
 use crate::integrate::psi::{CellClassifier, PsiTable};
+use crate::integrate::segment::SegmentIntegrator;
+use crate::integrate::SegmentRule;
 use crate::integrate::{hides_breakpoints, hides_breakpoints_along, Medium, RayMedium};
 use crate::isosurface::Isovalue;
-use crate::pt::fragment::{ColorMode, FragmentShader};
+use crate::pt::fragment::FragmentShader;
 use crate::shading::BlinnPhong;
 
 /// What one pixel produced.
@@ -54,10 +55,11 @@ enum Mode {
 pub(crate) struct PixelContext<'a> {
     mesh: &'a TetMesh,
     mode: Mode,
-    psi_mode: bool,
+    /// The colour of segments (average, ψ or exact; exact for the adaptive rule's pieces).
+    rule: SegmentRule,
     exact: SegmentIntegrator,
     classifier: CellClassifier,
-    psi: PsiTable,
+    psi: &'a PsiTable,
     isosurfaces: &'a [Isovalue],
     shading: BlinnPhong,
     /// The TF resolved against the mesh's range.
@@ -71,31 +73,32 @@ pub(crate) struct PixelContext<'a> {
 
 impl<'a> PixelContext<'a> {
     /// The context of a frame; `tf` is resolved against `range`, `gradients` are the vertex
-    /// gradients (may be empty when there are no isosurfaces).
+    /// gradients (may be empty when there are no isosurfaces), `psi` the ψ table (read only
+    /// with the ψ rule).
     pub fn new(
         mesh: &'a TetMesh,
         opts: &'a TetRayOptions,
         tf: &TransferFunction,
         range: [f64; 2],
         gradients: &'a [Vec3],
+        psi: &'a PsiTable,
     ) -> Self {
         let mode = match (opts.mip, opts.color) {
             (true, _) => Mode::Mip,
-            (false, TetRayColor::AdaptiveSimpson(p)) => Mode::Adaptive(p),
+            (false, SegmentRule::AdaptiveSimpson(p)) => Mode::Adaptive(p),
             _ => Mode::Segments,
         };
-        let psi_mode = matches!(mode, Mode::Segments) && opts.color == TetRayColor::Psi;
+        let rule = match (&mode, opts.color) {
+            (Mode::Segments, rule @ (SegmentRule::Average | SegmentRule::Psi)) => rule,
+            _ => SegmentRule::Exact,
+        };
         Self {
             mesh,
             mode,
-            psi_mode,
+            rule,
             exact: SegmentIntegrator::new(tf),
             classifier: CellClassifier::new(tf, range),
-            psi: if psi_mode {
-                PsiTable::new()
-            } else {
-                PsiTable::with_size(2)
-            },
+            psi,
             isosurfaces: opts.isosurfaces.as_slice(),
             shading: opts.shading,
             tf: tf.clone(),
@@ -109,30 +112,27 @@ impl<'a> PixelContext<'a> {
     /// The projection renderer's fragment shader with this frame's tables.
     fn shader(&self) -> FragmentShader<'_> {
         FragmentShader {
-            mode: if self.psi_mode {
-                ColorMode::Psi
-            } else {
-                ColorMode::Exact
-            },
+            mode: self.rule,
             exact: &self.exact,
             classifier: &self.classifier,
-            psi: &self.psi,
+            psi: self.psi,
             knots: &self.knots,
             isosurfaces: self.isosurfaces,
             shading: self.shading,
         }
     }
 
-    /// Premultiplied RGBA of one segment without isosurfaces, in `f64` (exact or ψ).
+    /// Premultiplied RGBA of one segment without isosurfaces, in `f64` (exact, or the `f32`
+    /// average or ψ colour).
     #[inline]
     fn segment(&self, s: &WalkSegment) -> [f64; 4] {
         let len = s.t_out - s.t_in;
-        if self.psi_mode {
-            self.shader()
+        match self.rule {
+            SegmentRule::Average | SegmentRule::Psi => self
+                .shader()
                 .segment(s.s_in as f32, s.s_out as f32, len as f32)
-                .map(f64::from)
-        } else {
-            self.exact.integrate(s.s_in, s.s_out, len)
+                .map(f64::from),
+            _ => self.exact.integrate(s.s_in, s.s_out, len),
         }
     }
 

@@ -12,45 +12,12 @@ use super::bvh::Bvh;
 use super::geom::Geometry;
 use super::pixel::{PixelContext, PixelOut};
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
-use crate::integrate::adaptive::AdaptiveParams;
+use crate::integrate::psi::PsiTable;
+use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
 use crate::shading::BlinnPhong;
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 use crate::RenderError;
-
-/// How a ray's colour is computed.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub enum TetRayColor {
-    /// Exact integration of the piecewise-linear TF along the linear scalar
-    /// ([`SegmentIntegrator`](crate::integrate::preintegrated::SegmentIntegrator)).
-    #[default]
-    Exact,
-    /// Partial pre-integration (ψ, seed `000` §2.6): [`psi_fragment`] with a
-    /// [`CellClassifier`] and a [`PsiTable`].
-    ///
-    /// [`psi_fragment`]: crate::integrate::psi::psi_fragment
-    /// [`CellClassifier`]: crate::integrate::psi::CellClassifier
-    /// [`PsiTable`]: crate::integrate::psi::PsiTable
-    Psi,
-    /// The iterative adaptive Simpson rule of seed `001` ch. 4 (Algorithms 3 and 4) over the
-    /// whole ray, across cell boundaries: the medium is the scalar, linear within each walked
-    /// segment, classified exactly by the TF; the gaps of a non-convex mesh are empty space.
-    /// Steps (`h0`, `hmin`, `hmax`) are in world units; the per-pixel estimated error is
-    /// returned in [`TetRayRendered::error_map`]. The early termination of the options
-    /// replaces the parameters' own.
-    AdaptiveSimpson(AdaptiveParams),
-}
-
-impl TetRayColor {
-    /// Parses `exact` or `psi` (the adaptive rule needs its parameters: build it directly).
-    pub fn parse(s: &str) -> Result<Self, String> {
-        match s {
-            "exact" => Ok(Self::Exact),
-            "psi" => Ok(Self::Psi),
-            other => Err(format!("unknown colour '{other}' (exact, psi)")),
-        }
-    }
-}
 
 /// Options of a ray-cast frame.
 #[derive(Clone, Debug)]
@@ -64,7 +31,7 @@ pub struct TetRayOptions {
     /// The transfer function (resolved against the mesh's range by the renderer).
     pub tf: TransferFunction,
     /// Ray colour.
-    pub color: TetRayColor,
+    pub color: SegmentRule,
     /// Isosurfaces (seed `002` §4.6), drawn where a segment's linear scalar crosses them, with
     /// the fragment colour of the projection renderer
     /// ([`FragmentShader::fragment`](crate::pt::fragment::FragmentShader::fragment)).
@@ -89,7 +56,7 @@ impl TetRayOptions {
             height: 512,
             camera,
             tf,
-            color: TetRayColor::Exact,
+            color: SegmentRule::Exact,
             isosurfaces: Isosurfaces::default(),
             shading: BlinnPhong::default(),
             mip: false,
@@ -107,7 +74,7 @@ impl TetRayOptions {
                 )));
             }
         }
-        if let TetRayColor::AdaptiveSimpson(p) = &self.color {
+        if let SegmentRule::AdaptiveSimpson(p) = &self.color {
             let ok = |v: f64| v.is_finite() && v > 0.0;
             if !(ok(p.tol) && ok(p.h0) && ok(p.hmin) && ok(p.hmax) && p.hmin <= p.hmax) {
                 return Err(RenderError::InvalidOptions(format!(
@@ -210,6 +177,8 @@ pub struct TetRayCaster<'m> {
     pad: f64,
     /// Vertex gradients for isosurface normals, computed on first use.
     gradients: OnceLock<Vec<Vec3>>,
+    /// The ψ table (it depends on nothing), built on the first ψ frame.
+    psi: OnceLock<PsiTable>,
 }
 
 /// Bounding box of tet `t`.
@@ -253,6 +222,7 @@ impl<'m> TetRayCaster<'m> {
             boundary,
             pad,
             gradients: OnceLock::new(),
+            psi: OnceLock::new(),
         }
     }
 
@@ -383,7 +353,14 @@ impl<'m> TetRayCaster<'m> {
         } else {
             self.vertex_gradients()
         };
-        let ctx = PixelContext::new(self.mesh, opts, &tf, range, gradients);
+        let tiny;
+        let psi = if opts.color == SegmentRule::Psi && !opts.mip {
+            self.psi.get_or_init(PsiTable::new)
+        } else {
+            tiny = PsiTable::with_size(2);
+            &tiny
+        };
+        let ctx = PixelContext::new(self.mesh, opts, &tf, range, gradients, psi);
         let camera = opts.camera;
         let grid = TileGrid::new(w, h, TILE);
         let tiled = render_tiles(&grid, &opts.control, |_, r| {

@@ -8,6 +8,7 @@ use volux_core::{synth, Camera, CameraSpec, Grid, Image, Projection, TetMesh, Tr
 
 use super::*;
 use crate::integrate::adaptive::{AdaptiveParams, StepControl};
+use crate::integrate::SegmentRule;
 use crate::isosurface::{Isosurfaces, Isovalue};
 use crate::pt::reference::{ray_segments, render_mesh_reference, ReferenceOptions};
 use crate::shading::BlinnPhong;
@@ -281,7 +282,7 @@ fn rays_through_lattice_vertices_and_edges_are_walked_exactly() {
             }
         }
         let opts = TetRayOptions {
-            color: TetRayColor::Exact,
+            color: SegmentRule::Exact,
             ..options(camera, n, n)
         };
         let img = caster.render(&opts).unwrap();
@@ -367,7 +368,7 @@ fn psi_colour_is_close_to_exact() {
     let exact = caster.render(&options(cam, 40, 40)).unwrap();
     let psi = caster
         .render(&TetRayOptions {
-            color: TetRayColor::Psi,
+            color: SegmentRule::Psi,
             ..options(cam, 40, 40)
         })
         .unwrap();
@@ -444,8 +445,6 @@ fn renders_are_deterministic_and_options_are_checked() {
         })
         .unwrap_err();
     assert!(matches!(e, RenderError::Cancelled), "{e}");
-    assert_eq!(TetRayColor::parse("psi"), Ok(TetRayColor::Psi));
-    assert!(TetRayColor::parse("nope").is_err());
     let bpt = caster.bytes_per_tet();
     assert!(bpt > 64.0 && bpt < 400.0, "{bpt}");
     // A ray missing the mesh, a zero direction.
@@ -468,9 +467,9 @@ fn fraction_over(a: &Image, b: &Image, eps: f32) -> f64 {
 }
 
 /// Adaptive parameters in units of `diagonal / 256` of the mesh (as the CLI's voxel units).
-fn adaptive(mesh: &TetMesh, tol: f64, control: StepControl) -> TetRayColor {
+fn adaptive(mesh: &TetMesh, tol: f64, control: StepControl) -> SegmentRule {
     let unit = mesh.bounds().diagonal() / 256.0;
-    TetRayColor::AdaptiveSimpson(AdaptiveParams {
+    SegmentRule::AdaptiveSimpson(AdaptiveParams {
         tol,
         h0: 2.0 * unit,
         hmin: 1e-3 * unit,
@@ -567,7 +566,7 @@ fn adaptive_simpson_converges_and_respects_early_termination() {
     assert!(max <= 0.05 + 2e-3, "{max}");
     // Bad parameters are rejected.
     let mut bad = options(cam, 8, 8);
-    bad.color = TetRayColor::AdaptiveSimpson(AdaptiveParams {
+    bad.color = SegmentRule::AdaptiveSimpson(AdaptiveParams {
         tol: 0.0,
         h0: 1.0,
         hmin: 1.0,
@@ -620,8 +619,8 @@ fn opaque_isosurface_shows_its_lit_colour() {
     let sh = BlinnPhong::default();
     let expect = [0.8, 0.4, 0.2].map(|c| c * (sh.ambient + sh.diffuse) + sh.specular);
     for color in [
-        TetRayColor::Exact,
-        TetRayColor::Psi,
+        SegmentRule::Exact,
+        SegmentRule::Psi,
         adaptive(&mesh, 1e-3, StepControl::Coupled),
     ] {
         let mut o = options(cam, 16, 16);
@@ -643,7 +642,7 @@ fn opaque_isosurface_shows_its_lit_colour() {
 
 #[test]
 fn isosurfaces_agree_with_projected_tetrahedra() {
-    use crate::pt::{ColorMode, PtOptions, PtRenderer, SortMode};
+    use crate::pt::{PtOptions, PtRenderer, SortMode};
     let mesh = synth::smooth_tets(3000).unwrap();
     let caster = TetRayCaster::new(&mesh);
     let [lo, hi] = mesh.range();
@@ -677,7 +676,7 @@ fn isosurfaces_agree_with_projected_tetrahedra() {
         let mut po = PtOptions::new(cam, light.clone());
         (po.width, po.height) = (n, n);
         po.sort = SortMode::Exact;
-        po.color = ColorMode::Exact;
+        po.color = SegmentRule::Exact;
         po.early_termination = None;
         po.isosurfaces = iso.clone();
         let pt = PtRenderer::new(&mesh).render(&po).unwrap();
@@ -720,7 +719,7 @@ fn mip_shows_the_colour_of_the_largest_scalar() {
             let mut o = options(cam, n, n);
             o.mip = true;
             // Ignored by MIP.
-            o.color = TetRayColor::Psi;
+            o.color = SegmentRule::Psi;
             o.early_termination = Some(0.5);
             let got = caster.render(&o).unwrap();
             let tf = o.tf.resolved(mesh.range());
@@ -773,7 +772,7 @@ fn timing_512_smooth_200k() {
         .unwrap();
     let mut opts = TetRayOptions::new(cam, tf());
     opts.early_termination = None;
-    for color in [TetRayColor::Exact, TetRayColor::Psi] {
+    for color in [SegmentRule::Exact, SegmentRule::Psi] {
         opts.color = color;
         let mut best = f64::INFINITY;
         let mut last = None;

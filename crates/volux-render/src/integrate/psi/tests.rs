@@ -1,5 +1,5 @@
 use super::*;
-use crate::integrate::preintegrated::SegmentIntegrator;
+use crate::integrate::segment::SegmentIntegrator;
 
 /// Deterministic uniform numbers in `[0, 1)`.
 struct Lcg(u64);

@@ -7,6 +7,7 @@ use glam::Vec3;
 use volux_core::{synth, Camera, CameraSpec, Image, TetMesh, TransferFunction};
 
 use super::*;
+use crate::integrate::SegmentRule;
 use crate::isosurface::Isovalue;
 use crate::pt::reference::{render_mesh_reference, ReferenceOptions};
 
@@ -35,7 +36,7 @@ fn opts(camera: Camera, tf: TransferFunction, size: usize) -> PtOptions {
     let mut o = PtOptions::new(camera, tf);
     (o.width, o.height) = (size, size);
     o.early_termination = None;
-    o.color = ColorMode::Exact;
+    o.color = SegmentRule::Exact;
     o.sort = SortMode::Exact;
     o
 }
@@ -223,9 +224,9 @@ fn psi_and_average_modes_approach_exact() {
     let mesh = synth::smooth_tets(3000).unwrap();
     let mut o = opts(camera(&mesh, 30.0, 20.0, false), tf(), 64);
     let exact = PtRenderer::new(&mesh).render(&o).unwrap().image;
-    o.color = ColorMode::Psi;
+    o.color = SegmentRule::Psi;
     let psi = PtRenderer::new(&mesh).render(&o).unwrap().image;
-    o.color = ColorMode::Average;
+    o.color = SegmentRule::Average;
     let avg = PtRenderer::new(&mesh).render(&o).unwrap().image;
     let (mp, _) = diff(&psi, &exact);
     let (ma, _) = diff(&avg, &exact);
@@ -247,7 +248,7 @@ fn psi_and_average_modes_approach_exact() {
 fn thread_count_does_not_change_the_image() {
     let mesh = synth::smooth_tets(3000).unwrap();
     let mut o = opts(camera(&mesh, 30.0, 20.0, false), tf(), 80);
-    o.color = ColorMode::Psi;
+    o.color = SegmentRule::Psi;
     o.sort = SortMode::Centroid;
     let many = PtRenderer::new(&mesh).render(&o).unwrap().image;
     let pool = rayon::ThreadPoolBuilder::new()
