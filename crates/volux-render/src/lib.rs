@@ -18,6 +18,7 @@
 
 pub mod classify;
 pub mod composite;
+pub mod engine;
 pub mod integrate;
 pub mod isosurface;
 pub mod macrocell;
@@ -26,6 +27,7 @@ pub mod pt;
 pub mod raycast;
 pub mod resample;
 pub mod sampling;
+pub mod scene;
 pub mod shading;
 pub mod tetray;
 pub mod tiles;

@@ -6,6 +6,8 @@
 //! transfer function when the extinction is zero over its whole range; rays skip empty
 //! macrocells with a 3D DDA. The min/max grid depends only on the data (built once per
 //! volume); the empty flags depend on the TF and are rebuilt, cheaply, when it changes.
+use std::borrow::Cow;
+
 use glam::DVec3;
 use rayon::prelude::*;
 use volux_core::grid::Scalar;
@@ -78,7 +80,7 @@ impl MacrocellGrid {
 #[derive(Clone, Debug)]
 pub struct Occupancy<'a> {
     grid: &'a MacrocellGrid,
-    empty: Vec<bool>,
+    empty: Cow<'a, [bool]>,
 }
 
 impl<'a> Occupancy<'a> {
@@ -86,7 +88,15 @@ impl<'a> Occupancy<'a> {
     pub fn new(grid: &'a MacrocellGrid, table: &ClassifyTable, isovalues: &[f32]) -> Self {
         Self {
             grid,
-            empty: grid.empty_flags(table, isovalues),
+            empty: Cow::Owned(grid.empty_flags(table, isovalues)),
+        }
+    }
+
+    /// `grid` with empty flags computed before ([`MacrocellGrid::empty_flags`]).
+    pub fn from_flags(grid: &'a MacrocellGrid, empty: &'a [bool]) -> Self {
+        Self {
+            grid,
+            empty: Cow::Borrowed(empty),
         }
     }
 
@@ -123,6 +133,7 @@ impl<'a> Occupancy<'a> {
             let boundary = if d[a] > 0.0 { cell[a] + 1 } else { cell[a] } as f64 * b;
             (boundary - o[a]) / d[a]
         });
+        let empty_flags: &[bool] = &self.empty;
         let mut idx = cell[0] + stride[1] * cell[1] + stride[2] * cell[2];
         let mut run: Option<f64> = None;
         let mut t = t0;
@@ -131,7 +142,7 @@ impl<'a> Occupancy<'a> {
             // so branches on it would mispredict about every other step.
             let a01 = usize::from(t_next[1] <= t_next[0]);
             let axis = a01 + usize::from(t_next[2] < t_next[a01]) * (2 - a01);
-            let empty = self.empty.get(idx as usize).copied().unwrap_or(true);
+            let empty = empty_flags.get(idx as usize).copied().unwrap_or(true);
             match (empty, run) {
                 (false, None) => run = Some(t),
                 (true, Some(start)) => {

@@ -24,6 +24,8 @@
 //! re-projecting). Compositing is front to back (the "under" operator, equivalent to the
 //! seeds' back-to-front "over" in the reverse order) so that pixels can stop early once
 //! opaque.
+use std::ops::Deref;
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -39,10 +41,12 @@ use super::raster::{bin, fixed, tiles, Bins, Triangle};
 use super::setup::{classify_fixed, projection_tests_screen};
 use super::sort;
 use crate::composite::under;
+use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
 use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
+use crate::scene::{Method, PtSettings, Scene};
 use crate::shading::BlinnPhong;
 use crate::tiles::Rect;
 use crate::tiles::{render_tiles, Control};
@@ -171,6 +175,9 @@ pub struct PtStats {
     pub seconds: f64,
     /// Per-frame bytes per tetrahedron (projection, order, bins; not the mesh).
     pub bytes_per_tet: f64,
+    /// What the frame had to build: adjacency, gradients or the ψ table (data), the kept set
+    /// (classification), projection, order and bins (view).
+    pub rebuilt: Rebuilt,
 }
 
 /// A PT image with its statistics.
@@ -205,8 +212,8 @@ struct ViewData {
 }
 
 /// A PT renderer for one mesh, holding the caches of the update step.
-pub struct PtRenderer<'m> {
-    mesh: &'m TetMesh,
+pub struct PtRenderer<M: Deref<Target = TetMesh> = Arc<TetMesh>> {
+    mesh: M,
     adjacency: Option<Vec<[u32; 4]>>,
     gradients: Option<Vec<Vec3>>,
     convex: Option<bool>,
@@ -214,11 +221,14 @@ pub struct PtRenderer<'m> {
     kept: Option<Kept>,
     kept_version: u64,
     view: Option<ViewData>,
+    /// The view before the current one, kept for a preview and a full frame alternating.
+    spare_view: Option<ViewData>,
 }
 
-impl<'m> PtRenderer<'m> {
-    /// A renderer for `mesh`; nothing is computed until the first render.
-    pub fn new(mesh: &'m TetMesh) -> Self {
+impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
+    /// A renderer for `mesh` (borrowed or shared); nothing is computed until the first
+    /// render.
+    pub fn new(mesh: M) -> Self {
         Self {
             mesh,
             adjacency: None,
@@ -228,6 +238,7 @@ impl<'m> PtRenderer<'m> {
             kept: None,
             kept_version: 0,
             view: None,
+            spare_view: None,
         }
     }
 
@@ -242,17 +253,21 @@ impl<'m> PtRenderer<'m> {
         let range = self.mesh.range();
         let tf = opts.tf.resolved(range);
         let t = Instant::now();
-        self.update_kept(&tf, &opts.isosurfaces);
+        let had_adjacency = self.adjacency.is_some();
+        stats.rebuilt.classification = self.update_kept(&tf, &opts.isosurfaces);
         stats.discard_s = t.elapsed().as_secs_f64();
         opts.control.check()?;
-        self.update_view(opts, &mut stats)?;
+        stats.rebuilt.view = self.update_view(opts, &mut stats)?;
         opts.control.check()?;
         if !opts.isosurfaces.is_empty() && self.gradients.is_none() {
             self.gradients = Some(self.mesh.vertex_gradients());
+            stats.rebuilt.data = true;
         }
         if opts.color == SegmentRule::Psi && self.psi.is_none() {
             self.psi = Some(PsiTable::new());
+            stats.rebuilt.data = true;
         }
+        stats.rebuilt.data |= self.adjacency.is_some() && !had_adjacency;
         let exact = SegmentIntegrator::new(&tf);
         let classifier = CellClassifier::new(&tf, range);
         // Only the ψ mode reads the table; the others get a trivial one (4 entries).
@@ -278,7 +293,7 @@ impl<'m> PtRenderer<'m> {
         let kept = self.kept.as_ref().expect("kept set updated above");
         let t = Instant::now();
         let ctx = TileContext {
-            mesh: self.mesh,
+            mesh: &self.mesh,
             proj: &view.proj,
             gradients: self.gradients.as_deref(),
             shader: &shader,
@@ -312,15 +327,16 @@ impl<'m> PtRenderer<'m> {
         Ok(PtRendered { image, stats })
     }
 
-    /// Rebuilds the kept set if the TF's zero set or the isovalues changed.
-    fn update_kept(&mut self, tf: &TransferFunction, isos: &Isosurfaces) {
+    /// Rebuilds the kept set if the TF's zero set or the isovalues changed; returns whether
+    /// it did.
+    fn update_kept(&mut self, tf: &TransferFunction, isos: &Isosurfaces) -> bool {
         let support = Support::new(tf);
         let isovalues: Vec<f32> = isos.as_slice().iter().map(|i| i.value).collect();
         let key = (support.nonzero.clone(), support.knots.clone(), isovalues);
         if self.kept.as_ref().is_some_and(|k| k.key == key) {
-            return;
+            return false;
         }
-        let mesh = self.mesh;
+        let mesh = &*self.mesh;
         let s = mesh.scalars();
         let mask: Vec<bool> = mesh
             .tets()
@@ -336,9 +352,12 @@ impl<'m> PtRenderer<'m> {
         let count = mask.iter().filter(|&&k| k).count();
         self.kept = Some(Kept { key, mask, count });
         self.kept_version += 1;
+        true
     }
 
-    fn update_view(&mut self, opts: &PtOptions, stats: &mut PtStats) -> Result<(), RenderError> {
+    /// Makes the view data of `opts` current: kept, swapped in from the spare slot (a
+    /// preview and a full frame of one camera alternate), or rebuilt (returns true).
+    fn update_view(&mut self, opts: &PtOptions, stats: &mut PtStats) -> Result<bool, RenderError> {
         let key = (
             opts.camera,
             opts.width,
@@ -347,14 +366,16 @@ impl<'m> PtRenderer<'m> {
             self.kept_version,
         );
         let counting = opts.count_violations;
-        if self
-            .view
-            .as_ref()
-            .is_some_and(|v| v.key == key && (!counting || v.violations.is_some() || v.per_pixel))
-        {
-            return Ok(());
+        let fits =
+            |v: &ViewData| v.key == key && (!counting || v.violations.is_some() || v.per_pixel);
+        if self.view.as_ref().is_some_and(fits) {
+            return Ok(false);
         }
-        let mesh = self.mesh;
+        if self.spare_view.as_ref().is_some_and(fits) {
+            std::mem::swap(&mut self.view, &mut self.spare_view);
+            return Ok(false);
+        }
+        let mesh = &*self.mesh;
         let kept = &self.kept.as_ref().expect("kept set").mask;
         let t = Instant::now();
         let proj = ViewProjection::new(mesh, &opts.camera, opts.width, opts.height);
@@ -458,6 +479,7 @@ impl<'m> PtRenderer<'m> {
         let tiles = tiles(opts.width, opts.height);
         let bins = bin(&order, mesh.tets(), &proj, &tiles);
         stats.bin_s = t.elapsed().as_secs_f64();
+        self.spare_view = self.view.take();
         self.view = Some(ViewData {
             key,
             proj,
@@ -471,7 +493,53 @@ impl<'m> PtRenderer<'m> {
             cycles,
             order_bytes: 4 * order.capacity(),
         });
-        Ok(())
+        Ok(true)
+    }
+}
+
+impl PtOptions {
+    /// The options of `scene` drawn with `settings`: isosurfaces lit with the scene's
+    /// lighting.
+    pub fn from_scene(scene: &Scene, settings: &PtSettings, control: &Control) -> Self {
+        let a = &scene.appearance;
+        Self {
+            width: scene.view.width,
+            height: scene.view.height,
+            camera: scene.view.camera,
+            tf: a.effective_tf(),
+            sort: settings.sort,
+            color: settings.color,
+            isosurfaces: a.isosurfaces.clone(),
+            shading: a.lighting,
+            early_termination: scene.early_termination,
+            count_violations: settings.count_violations,
+            control: control.clone(),
+        }
+    }
+}
+
+impl<M: Deref<Target = TetMesh> + Send> Renderer for PtRenderer<M> {
+    fn name(&self) -> &'static str {
+        "pt"
+    }
+
+    fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
+        let started = Instant::now();
+        let settings = match scene.method {
+            Method::Auto => PtSettings::default(),
+            Method::ProjectedTetrahedra(s) => s,
+            other => return Err(wrong_method("pt", &other)),
+        };
+        scene.validate()?;
+        let r = PtRenderer::render(self, &PtOptions::from_scene(scene, &settings, control))?;
+        let rebuilt = r.stats.rebuilt;
+        Ok(frame(
+            r.image,
+            None,
+            started,
+            rebuilt,
+            MethodStats::ProjectedTetrahedra(r.stats),
+        ))
     }
 }
 

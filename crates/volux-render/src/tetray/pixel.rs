@@ -44,6 +44,36 @@ pub(crate) struct PixelOut {
     pub missed: bool,
 }
 
+/// The classification of a frame, what depends on the transfer function only: the caster
+/// keeps it while the TF does not change.
+pub(crate) struct Tables {
+    /// The TF as given (the key).
+    pub source: TransferFunction,
+    /// The TF resolved against the mesh's range.
+    pub tf: TransferFunction,
+    pub exact: SegmentIntegrator,
+    pub classifier: CellClassifier,
+    pub breakpoints: Vec<f64>,
+    /// The breakpoints in `f32`, for the ψ model's cuts.
+    pub knots: Vec<f32>,
+}
+
+impl Tables {
+    /// The tables of `tf` on the data range `range`.
+    pub fn new(tf: &TransferFunction, range: [f64; 2]) -> Self {
+        let resolved = tf.resolved(range);
+        let breakpoints = resolved.breakpoints();
+        Self {
+            source: tf.clone(),
+            exact: SegmentIntegrator::new(&resolved),
+            classifier: CellClassifier::new(&resolved, range),
+            knots: breakpoints.iter().map(|&k| k as f32).collect(),
+            breakpoints,
+            tf: resolved,
+        }
+    }
+}
+
 /// How the pixels of a frame are coloured.
 enum Mode {
     Segments,
@@ -57,29 +87,22 @@ pub(crate) struct PixelContext<'a> {
     mode: Mode,
     /// The colour of segments (average, ψ or exact; exact for the adaptive rule's pieces).
     rule: SegmentRule,
-    exact: SegmentIntegrator,
-    classifier: CellClassifier,
+    tables: &'a Tables,
     psi: &'a PsiTable,
     isosurfaces: &'a [Isovalue],
     shading: BlinnPhong,
-    /// The TF resolved against the mesh's range.
-    tf: TransferFunction,
-    breakpoints: Vec<f64>,
-    /// The breakpoints in `f32`, for the ψ model's cuts.
-    knots: Vec<f32>,
     gradients: &'a [Vec3],
     early: Option<f64>,
 }
 
 impl<'a> PixelContext<'a> {
-    /// The context of a frame; `tf` is resolved against `range`, `gradients` are the vertex
+    /// The context of a frame: `tables` classify with its TF, `gradients` are the vertex
     /// gradients (may be empty when there are no isosurfaces), `psi` the ψ table (read only
     /// with the ψ rule).
     pub fn new(
         mesh: &'a TetMesh,
         opts: &'a TetRayOptions,
-        tf: &TransferFunction,
-        range: [f64; 2],
+        tables: &'a Tables,
         gradients: &'a [Vec3],
         psi: &'a PsiTable,
     ) -> Self {
@@ -96,14 +119,10 @@ impl<'a> PixelContext<'a> {
             mesh,
             mode,
             rule,
-            exact: SegmentIntegrator::new(tf),
-            classifier: CellClassifier::new(tf, range),
+            tables,
             psi,
             isosurfaces: opts.isosurfaces.as_slice(),
             shading: opts.shading,
-            tf: tf.clone(),
-            breakpoints: tf.breakpoints(),
-            knots: tf.breakpoints().iter().map(|&k| k as f32).collect(),
             gradients,
             early: opts.early_termination.map(f64::from),
         }
@@ -113,10 +132,10 @@ impl<'a> PixelContext<'a> {
     fn shader(&self) -> FragmentShader<'_> {
         FragmentShader {
             mode: self.rule,
-            exact: &self.exact,
-            classifier: &self.classifier,
+            exact: &self.tables.exact,
+            classifier: &self.tables.classifier,
             psi: self.psi,
-            knots: &self.knots,
+            knots: &self.tables.knots,
             isosurfaces: self.isosurfaces,
             shading: self.shading,
         }
@@ -132,7 +151,7 @@ impl<'a> PixelContext<'a> {
                 .shader()
                 .segment(s.s_in as f32, s.s_out as f32, len as f32)
                 .map(f64::from),
-            _ => self.exact.integrate(s.s_in, s.s_out, len),
+            _ => self.tables.exact.integrate(s.s_in, s.s_out, len),
         }
     }
 
@@ -218,7 +237,7 @@ impl<'a> PixelContext<'a> {
                 });
                 let rgba = match best {
                     Some(v) => {
-                        let c = self.tf.color_at(v);
+                        let c = self.tables.tf.color_at(v);
                         [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]
                     }
                     None => [0.0; 4],
@@ -303,8 +322,8 @@ impl<'a> PixelContext<'a> {
         let mut medium = SegmentMedium {
             segs,
             cursor: 0,
-            tf: &self.tf,
-            breakpoints: &self.breakpoints,
+            tf: &self.tables.tf,
+            breakpoints: &self.tables.breakpoints,
         };
         let mut acc = [0.0f64; 4];
         let (mut error, mut samples, mut missed) = (0.0f64, 0u64, false);

@@ -1,6 +1,8 @@
 //! The renderer: per-pixel walks over 16 x 16 tiles in parallel, segments integrated and
 //! composited front to back (or the whole ray integrated adaptively, or its maximum taken).
-use std::sync::OnceLock;
+use std::ops::Deref;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -10,11 +12,13 @@ use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
 use super::bvh::Bvh;
 use super::geom::Geometry;
-use super::pixel::{PixelContext, PixelOut};
+use super::pixel::{PixelContext, PixelOut, Tables};
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
+use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
 use crate::integrate::psi::PsiTable;
 use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
+use crate::scene::{Method, Scene, MESH_UNITS_PER_DIAGONAL};
 use crate::shading::BlinnPhong;
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 use crate::RenderError;
@@ -117,6 +121,14 @@ pub struct TetRayStats {
     pub abandoned: u64,
     /// Cells in the per-frame start set (camera inside the mesh), 0 otherwise.
     pub start_cells: usize,
+    /// Tetrahedra in the mesh.
+    pub tets: usize,
+    /// Bytes of the acceleration structures per tetrahedron
+    /// ([`TetRayCaster::bytes_per_tet`]).
+    pub bytes_per_tet: f64,
+    /// What the frame had to build: the caster's structures on the first frame, gradients or
+    /// the ψ table (data), the TF's tables (classification), the start cells (view).
+    pub rebuilt: Rebuilt,
     /// Seconds for the frame.
     pub seconds: f64,
 }
@@ -170,8 +182,8 @@ pub struct TracedRay {
 
 /// A ray caster for one mesh: face planes, adjacency, cell fields and the boundary
 /// hierarchy, built once ([`TetRayCaster::new`]) and shared by every frame.
-pub struct TetRayCaster<'m> {
-    mesh: &'m TetMesh,
+pub struct TetRayCaster<M: Deref<Target = TetMesh> = Arc<TetMesh>> {
+    mesh: M,
     pub(crate) geo: Geometry,
     pub(crate) boundary: Bvh,
     pad: f64,
@@ -179,6 +191,12 @@ pub struct TetRayCaster<'m> {
     gradients: OnceLock<Vec<Vec3>>,
     /// The ψ table (it depends on nothing), built on the first ψ frame.
     psi: OnceLock<PsiTable>,
+    /// The classification of the last frame's TF.
+    tables: Mutex<Option<Arc<Tables>>>,
+    /// The start cells of the last frame's camera.
+    start: Mutex<Option<(Camera, Arc<Bvh>)>>,
+    /// Whether the first frame is still to come (it reports the structures as built).
+    first: AtomicBool,
 }
 
 /// Bounding box of tet `t`.
@@ -189,33 +207,34 @@ fn tet_box(mesh: &TetMesh, t: u32) -> (DVec3, DVec3) {
     (lo, hi)
 }
 
-impl<'m> TetRayCaster<'m> {
+impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
     /// Builds the structures of `mesh` (`O(n log n)`).
-    pub fn new(mesh: &'m TetMesh) -> Self {
-        let geo = Geometry::new(mesh);
+    pub fn new(mesh: M) -> Self {
+        let m = &*mesh;
+        let geo = Geometry::new(m);
         let pad = 1e-7 * geo.scale;
         // Cells owning a boundary face, and every cell with a vertex on the boundary: a ray
         // entering the mesh exactly through a boundary edge or vertex may continue in a cell
         // that only touches the boundary there.
-        let mut on_boundary = vec![false; mesh.positions().len()];
+        let mut on_boundary = vec![false; m.positions().len()];
         for (t, adj) in geo.adj.iter().enumerate() {
             for (f, &nb) in adj.iter().enumerate() {
                 if nb == NO_NEIGHBOR {
                     for s in FACES[f] {
-                        on_boundary[mesh.tets()[t][s] as usize] = true;
+                        on_boundary[m.tets()[t][s] as usize] = true;
                     }
                 }
             }
         }
-        let owners: Vec<u32> = (0..mesh.tets().len() as u32)
+        let owners: Vec<u32> = (0..m.tets().len() as u32)
             .filter(|&t| {
                 geo.usable(t as usize)
-                    && mesh.tets()[t as usize]
+                    && m.tets()[t as usize]
                         .iter()
                         .any(|&v| on_boundary[v as usize])
             })
             .collect();
-        let boundary = Bvh::build(owners, |t| tet_box(mesh, t), pad);
+        let boundary = Bvh::build(owners, |t| tet_box(m, t), pad);
         Self {
             mesh,
             geo,
@@ -223,6 +242,9 @@ impl<'m> TetRayCaster<'m> {
             pad,
             gradients: OnceLock::new(),
             psi: OnceLock::new(),
+            tables: Mutex::new(None),
+            start: Mutex::new(None),
+            first: AtomicBool::new(true),
         }
     }
 
@@ -232,8 +254,8 @@ impl<'m> TetRayCaster<'m> {
     }
 
     /// The mesh.
-    pub fn mesh(&self) -> &'m TetMesh {
-        self.mesh
+    pub fn mesh(&self) -> &TetMesh {
+        &self.mesh
     }
 
     /// Bytes of the acceleration structures (face planes, cell-to-face table, adjacency,
@@ -249,20 +271,21 @@ impl<'m> TetRayCaster<'m> {
     /// The cells around the ray origins of `camera`: those whose box holds a perspective eye
     /// or that straddle an orthographic camera's eye plane (`O(n)`, in parallel).
     fn start_set(&self, camera: &Camera) -> Bvh {
+        let mesh = self.mesh();
         let eye = camera.eye;
         let (_, _, f) = camera.basis();
         let pad = self.pad;
-        let b = self.mesh.bounds();
+        let b = mesh.bounds();
         let candidates: Vec<u32> = match camera.projection {
             Projection::Perspective { .. } => {
                 let inside = (eye.cmpge(b.min - pad) & eye.cmple(b.max + pad)).all();
                 if !inside {
                     return Bvh::default();
                 }
-                (0..self.mesh.tets().len() as u32)
+                (0..mesh.tets().len() as u32)
                     .into_par_iter()
                     .filter(|&t| {
-                        let (lo, hi) = tet_box(self.mesh, t);
+                        let (lo, hi) = tet_box(mesh, t);
                         (eye.cmpge(lo - pad) & eye.cmple(hi + pad)).all()
                     })
                     .collect()
@@ -279,13 +302,10 @@ impl<'m> TetRayCaster<'m> {
                 if corners.map(depth).all(|z| z > pad) {
                     return Bvh::default();
                 }
-                (0..self.mesh.tets().len() as u32)
+                (0..mesh.tets().len() as u32)
                     .into_par_iter()
                     .filter(|&t| {
-                        let z = self
-                            .mesh
-                            .tet_positions(t as usize)
-                            .map(|p| depth(p.as_dvec3()));
+                        let z = mesh.tet_positions(t as usize).map(|p| depth(p.as_dvec3()));
                         let lo = z.iter().copied().fold(f64::INFINITY, f64::min);
                         let hi = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
                         lo <= pad && hi >= -pad
@@ -297,7 +317,31 @@ impl<'m> TetRayCaster<'m> {
             .into_iter()
             .filter(|&t| self.geo.usable(t as usize))
             .collect();
-        Bvh::build(candidates, |t| tet_box(self.mesh, t), pad)
+        Bvh::build(candidates, |t| tet_box(mesh, t), pad)
+    }
+
+    /// The classification tables of `tf`, kept while it does not change.
+    fn tables(&self, tf: &TransferFunction, rebuilt: &mut Rebuilt) -> Arc<Tables> {
+        let mut cache = self.tables.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(t) = cache.as_ref().filter(|t| t.source == *tf) {
+            return t.clone();
+        }
+        rebuilt.classification = true;
+        let t = Arc::new(Tables::new(tf, self.mesh.range()));
+        *cache = Some(t.clone());
+        t
+    }
+
+    /// The start cells of `camera`'s rays, kept while the camera does not move.
+    fn start_set_for(&self, camera: &Camera, rebuilt: &mut Rebuilt) -> Arc<Bvh> {
+        let mut cache = self.start.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, s)) = cache.as_ref().filter(|(c, _)| c == camera) {
+            return s.clone();
+        }
+        rebuilt.view = true;
+        let s = Arc::new(self.start_set(camera));
+        *cache = Some((*camera, s.clone()));
+        s
     }
 
     /// Walks one ray `origin + t dir` (`t >= 0`; `t` in units of `|dir|`) through the mesh
@@ -339,9 +383,12 @@ impl<'m> TetRayCaster<'m> {
         opts.control.check()?;
         let start_time = Instant::now();
         let (w, h) = (opts.width, opts.height);
-        let range = self.mesh.range();
-        let tf = opts.tf.resolved(range);
-        let start = self.start_set(&opts.camera);
+        let mut rebuilt = Rebuilt {
+            data: self.first.swap(false, Ordering::Relaxed),
+            ..Rebuilt::default()
+        };
+        let tables = self.tables(&opts.tf, &mut rebuilt);
+        let start = self.start_set_for(&opts.camera, &mut rebuilt);
         let walker = Walker {
             geo: &self.geo,
             boundary: &self.boundary,
@@ -351,16 +398,18 @@ impl<'m> TetRayCaster<'m> {
         let gradients = if opts.isosurfaces.is_empty() || opts.mip {
             &[][..]
         } else {
+            rebuilt.data |= self.gradients.get().is_none();
             self.vertex_gradients()
         };
         let tiny;
         let psi = if opts.color == SegmentRule::Psi && !opts.mip {
+            rebuilt.data |= self.psi.get().is_none();
             self.psi.get_or_init(PsiTable::new)
         } else {
             tiny = PsiTable::with_size(2);
             &tiny
         };
-        let ctx = PixelContext::new(self.mesh, opts, &tf, range, gradients, psi);
+        let ctx = PixelContext::new(&self.mesh, opts, &tables, gradients, psi);
         let camera = opts.camera;
         let grid = TileGrid::new(w, h, TILE);
         let tiled = render_tiles(&grid, &opts.control, |_, r| {
@@ -386,11 +435,66 @@ impl<'m> TetRayCaster<'m> {
         let pixels = tiled.pixels.iter().map(|p| p.rgba).collect();
         let error_map = tiled.pixels.iter().map(|p| p.error).collect();
         stats.start_cells = start.len();
+        stats.rebuilt = rebuilt;
+        stats.tets = self.mesh.tets().len();
+        stats.bytes_per_tet = self.bytes_per_tet();
         stats.seconds = start_time.elapsed().as_secs_f64();
         Ok(TetRayRendered {
             image: Image::from_pixels(w, h, pixels)?,
             error_map,
             stats,
         })
+    }
+}
+
+impl TetRayOptions {
+    /// The options of `scene` drawn with `rule`, whose adaptive steps are in units of
+    /// `unit_length` world units (the mesh's [`Volume::unit_length`](crate::scene::Volume::unit_length)).
+    pub fn from_scene(
+        scene: &Scene,
+        rule: SegmentRule,
+        unit_length: f64,
+        control: &Control,
+    ) -> Self {
+        let a = &scene.appearance;
+        Self {
+            width: scene.view.width,
+            height: scene.view.height,
+            camera: scene.view.camera,
+            tf: a.effective_tf(),
+            color: rule.scaled(unit_length),
+            isosurfaces: a.isosurfaces.clone(),
+            shading: a.lighting,
+            mip: a.mip,
+            early_termination: scene.early_termination,
+            control: control.clone(),
+        }
+    }
+}
+
+impl<M: Deref<Target = TetMesh> + Send + Sync> Renderer for TetRayCaster<M> {
+    fn name(&self) -> &'static str {
+        "tet-raycast"
+    }
+
+    fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
+        let started = Instant::now();
+        let rule = match scene.method {
+            Method::TetRaycast(rule) => rule,
+            other => return Err(wrong_method("tet-raycast", &other)),
+        };
+        scene.validate()?;
+        let unit = self.mesh.bounds().diagonal() / MESH_UNITS_PER_DIAGONAL;
+        let opts = TetRayOptions::from_scene(scene, rule, unit, control);
+        let r = TetRayCaster::render(self, &opts)?;
+        let estimates = matches!(rule, SegmentRule::AdaptiveSimpson(_)) && !opts.mip;
+        let rebuilt = r.stats.rebuilt;
+        Ok(frame(
+            r.image,
+            estimates.then_some(r.error_map),
+            started,
+            rebuilt,
+            MethodStats::TetRaycast(r.stats),
+        ))
     }
 }

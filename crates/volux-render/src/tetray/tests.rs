@@ -48,7 +48,7 @@ fn diff(a: &Image, b: &Image) -> (f64, f64) {
 /// Renders with the caster and the reference and checks they agree.
 fn check_against_reference(
     mesh: &TetMesh,
-    caster: &TetRayCaster,
+    caster: &TetRayCaster<&TetMesh>,
     camera: Camera,
     n: usize,
     label: &str,

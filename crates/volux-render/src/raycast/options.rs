@@ -1,0 +1,176 @@
+//! Options and results of the grid ray caster.
+use glam::DVec3;
+use volux_core::{Camera, Grid, Image, TransferFunction};
+
+use crate::engine::Rebuilt;
+use crate::integrate::Integrator;
+use crate::isosurface::Isosurfaces;
+use crate::sampling::Reconstruction;
+use crate::scene::{GridRaycast, Scene};
+use crate::shading::BlinnPhong;
+use crate::tiles::Control;
+use crate::RenderError;
+
+/// What to render and how.
+#[derive(Clone)]
+pub struct RenderOptions {
+    /// Image width in pixels.
+    pub width: usize,
+    /// Image height in pixels.
+    pub height: usize,
+    /// The camera.
+    pub camera: Camera,
+    /// The transfer function (resolved against the data range by the renderer).
+    pub tf: TransferFunction,
+    /// How rays are integrated (steps in voxel units of the smallest spacing).
+    pub integrator: Integrator,
+    /// Stop a ray once its opacity reaches this value; `None` integrates to the end
+    /// (reference mode).
+    pub early_termination: Option<f32>,
+    /// Skip macrocells whose extinction is zero, when enough of them are empty for it to pay
+    /// (never changes the image).
+    pub empty_space_skipping: bool,
+    /// Offset each ray's first Riemann sample by a per-pixel pseudo-random fraction of the
+    /// step, trading wood-grain artifacts for fine noise (deterministic per pixel).
+    pub jitter: bool,
+    /// Reconstruction filter of grids (trilinear, or tricubic Catmull-Rom / B-spline).
+    pub reconstruction: Reconstruction,
+    /// Blinn-Phong gradient shading of the volume samples and isosurfaces (`None`: emission
+    /// only).
+    pub shading: Option<BlinnPhong>,
+    /// Lighting of the isosurfaces when `shading` is `None` (`None`: unlit, their own colour).
+    pub iso_lighting: Option<BlinnPhong>,
+    /// Isosurfaces composited with the volume (Riemann integrator).
+    pub isosurfaces: Isosurfaces,
+    /// Maximum intensity projection instead of compositing: each pixel shows the TF colour of
+    /// the largest value along its ray.
+    pub mip: bool,
+    /// Cancellation and progress.
+    pub control: Control,
+}
+
+impl RenderOptions {
+    /// The options of `scene` drawn with `settings` (the scene's method resolved to grid ray
+    /// casting): isosurfaces lit with the scene's lighting, the volume too when
+    /// `shade_volume`; no early termination for the reference integrator.
+    pub fn from_scene(scene: &Scene, settings: &GridRaycast, control: &Control) -> Self {
+        let a = &scene.appearance;
+        Self {
+            width: scene.view.width,
+            height: scene.view.height,
+            camera: scene.view.camera,
+            tf: a.effective_tf(),
+            integrator: settings.integrator,
+            early_termination: match settings.integrator {
+                Integrator::Reference => None,
+                _ => scene.early_termination,
+            },
+            empty_space_skipping: true,
+            jitter: settings.jitter,
+            reconstruction: settings.reconstruction,
+            shading: a.shade_volume.then_some(a.lighting),
+            iso_lighting: Some(a.lighting),
+            isosurfaces: a.isosurfaces.clone(),
+            mip: a.mip,
+            control: control.clone(),
+        }
+    }
+
+    /// Defaults: 512 x 512, Riemann with step 0.5 voxel, early termination at 0.99.
+    pub fn new(camera: Camera, tf: TransferFunction) -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            camera,
+            tf,
+            integrator: Integrator::Riemann { step: 0.5 },
+            early_termination: Some(0.99),
+            empty_space_skipping: true,
+            jitter: false,
+            reconstruction: Reconstruction::Trilinear,
+            shading: None,
+            iso_lighting: None,
+            isosurfaces: Isosurfaces::default(),
+            mip: false,
+            control: Control::default(),
+        }
+    }
+
+    pub(super) fn validate(&self) -> Result<(), RenderError> {
+        crate::check_image_size(self.width, self.height)?;
+        self.integrator
+            .validate()
+            .map_err(RenderError::InvalidOptions)?;
+        if let Some(s) = &self.shading {
+            s.validate().map_err(RenderError::InvalidOptions)?;
+        }
+        if !self.isosurfaces.is_empty()
+            && !self.mip
+            && !matches!(self.integrator, Integrator::Riemann { .. })
+        {
+            return Err(RenderError::InvalidOptions(format!(
+                "isosurfaces are drawn by the riemann integrator only, not {}",
+                self.integrator.name()
+            )));
+        }
+        self.tf.validate()?;
+        self.camera.validate()?;
+        Ok(())
+    }
+}
+
+/// Figures of one render.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RenderStats {
+    /// Rays that hit the volume.
+    pub rays: u64,
+    /// Field samples taken.
+    pub samples: u64,
+    /// Wall time in seconds.
+    pub seconds: f64,
+    /// Rays whose adaptive integration accepted a step at `hmin` above its tolerance.
+    pub rays_over_tolerance: u64,
+    /// What the render had to build (the rest came from the renderer's caches).
+    pub rebuilt: Rebuilt,
+}
+
+/// A rendered image with its figures and per-pixel estimated integration error.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image.
+    pub image: Image,
+    /// Figures of the render.
+    pub stats: RenderStats,
+    /// Estimated absolute error per pixel (largest channel; 0 where the integrator does not
+    /// estimate it), row-major.
+    pub error_map: Vec<f32>,
+}
+
+/// Placement of a field in the world: sample (i, j, k) at `origin + spacing * (i, j, k)`.
+#[derive(Clone, Copy, Debug)]
+pub struct Placement {
+    /// World position of sample (0, 0, 0).
+    pub origin: DVec3,
+    /// Distance between samples per axis.
+    pub spacing: DVec3,
+    /// Samples per axis.
+    pub dims: [usize; 3],
+}
+
+impl Placement {
+    /// The placement of a grid.
+    pub fn of(grid: &Grid) -> Self {
+        Self {
+            origin: grid.origin(),
+            spacing: grid.spacing(),
+            dims: grid.dims(),
+        }
+    }
+    pub(super) fn extent(&self) -> DVec3 {
+        DVec3::new(
+            (self.dims[0].max(2) - 1) as f64,
+            (self.dims[1].max(2) - 1) as f64,
+            (self.dims[2].max(2) - 1) as f64,
+        ) * self.spacing
+    }
+}

@@ -1,0 +1,208 @@
+//! The grid ray caster with its per-volume caches.
+use std::ops::Deref;
+use std::sync::{Arc, Mutex, OnceLock};
+use std::time::Instant;
+
+use volux_core::Grid;
+
+use super::{render_with, Classification, Derived, Placement, RenderOptions, Rendered};
+use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
+use crate::integrate::preintegrated::PreintegrationTable;
+use crate::integrate::Integrator;
+use crate::macrocell::MacrocellGrid;
+use crate::sampling::{Reconstruction, Tricubic, Trilinear};
+use crate::scene::{GridRaycast, Method, Scene};
+use crate::shading::GradientVolume;
+use crate::tiles::Control;
+use crate::RenderError;
+
+/// Renders a grid with the integrator of `opts` (no caching: see [`GridRenderer`]).
+pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<Rendered, RenderError> {
+    GridRenderer::new(grid).render(opts)
+}
+
+/// A grid ray caster that keeps what it derives between renders, keyed on what it was
+/// derived from: the macrocell min/max grid and the gradient volume (data, built once), the
+/// classification table with the macrocells' empty flags and the pre-integration table
+/// (rebuilt when the TF, the isovalues or the step change). An interactive session pays for
+/// each once.
+pub struct GridRenderer<G: Deref<Target = Grid> = Arc<Grid>> {
+    grid: G,
+    macrocells: OnceLock<MacrocellGrid>,
+    classification: Mutex<Option<Arc<Classification>>>,
+    preintegration: Mutex<Option<Arc<PreintegrationTable>>>,
+    gradients: OnceLock<Option<GradientVolume>>,
+    /// Whether tiles may take the lane paths; tests turn it off to compare them with the
+    /// ray-by-ray paths, which compute the same sums.
+    pub(super) lanes: bool,
+}
+
+impl<G: Deref<Target = Grid>> GridRenderer<G> {
+    /// A renderer for `grid` (borrowed, `&Grid`, or shared, `Arc<Grid>`).
+    pub fn new(grid: G) -> Self {
+        Self {
+            grid,
+            macrocells: OnceLock::new(),
+            classification: Mutex::new(None),
+            preintegration: Mutex::new(None),
+            gradients: OnceLock::new(),
+            lanes: true,
+        }
+    }
+
+    /// The macrocell min/max grid, built on first use.
+    pub fn macrocells(&self) -> &MacrocellGrid {
+        self.macrocells.get_or_init(|| {
+            volux_core::with_samples!(self.grid.samples(), |s| MacrocellGrid::build(
+                s,
+                self.grid.dims()
+            ))
+        })
+    }
+
+    /// The pre-integration table for `opts` (`None` for the other integrators), rebuilt only
+    /// when the TF or the step changed; and whether it was rebuilt.
+    pub fn preintegration(
+        &self,
+        opts: &RenderOptions,
+    ) -> Result<(Option<Arc<PreintegrationTable>>, bool), RenderError> {
+        let Integrator::Preintegrated { step } = opts.integrator else {
+            return Ok((None, false));
+        };
+        let d = step * self.grid.spacing().min_element();
+        let range = self.grid.range();
+        let mut cache = self
+            .preintegration
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        if let Some(t) = cache
+            .as_ref()
+            .filter(|t| t.is_valid_for(&opts.tf, range, d))
+        {
+            return Ok((Some(t.clone()), false));
+        }
+        let table = Arc::new(
+            PreintegrationTable::new(&opts.tf, range, d).map_err(RenderError::InvalidOptions)?,
+        );
+        *cache = Some(table.clone());
+        Ok((Some(table), true))
+    }
+
+    /// The precomputed gradient volume, built on the first shaded render (`None` if it does
+    /// not fit in memory: gradients are then computed on the fly).
+    pub fn gradients(&self) -> Option<&GradientVolume> {
+        self.gradients
+            .get_or_init(|| {
+                let g = &*self.grid;
+                volux_core::with_samples!(g.samples(), |s| GradientVolume::build(
+                    &Trilinear::new(s, g.dims()),
+                    g.spacing().as_vec3(),
+                    0
+                )
+                .ok())
+            })
+            .as_ref()
+    }
+
+    /// The classification for `opts`, rebuilt only when the TF or the isovalues changed
+    /// (`cells`: with the empty flags of these macrocells); and whether it was rebuilt.
+    fn classification(
+        &self,
+        opts: &RenderOptions,
+        cells: Option<&MacrocellGrid>,
+    ) -> (Arc<Classification>, bool) {
+        let range = self.grid.range();
+        let mut cache = self
+            .classification
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        if let Some(c) = cache.as_ref().filter(|c| c.is_for(opts, range, cells)) {
+            return (c.clone(), false);
+        }
+        let c = Arc::new(Classification::new(opts, range, cells));
+        *cache = Some(c.clone());
+        (c, true)
+    }
+
+    /// Renders with `opts`.
+    pub fn render(&self, opts: &RenderOptions) -> Result<Rendered, RenderError> {
+        opts.validate()?;
+        let g = &*self.grid;
+        let built_data = (opts.empty_space_skipping && self.macrocells.get().is_none())
+            || (opts.shading.is_some() && self.gradients.get().is_none());
+        let cells = opts.empty_space_skipping.then(|| self.macrocells());
+        let (classification, classified) = self.classification(opts, cells);
+        let (pre, pre_built) = self.preintegration(opts)?;
+        let gradients = opts.shading.as_ref().and_then(|_| self.gradients());
+        let derived = Derived {
+            macrocells: cells,
+            classification: Some(&classification),
+            preintegration: pre.as_deref(),
+            gradients,
+            lanes: self.lanes,
+        };
+        let (place, range) = (Placement::of(g), g.range());
+        let mut out = match opts.reconstruction {
+            Reconstruction::CatmullRom | Reconstruction::BSpline => {
+                // Cubic filters reach one voxel further than a macrocell's samples (and
+                // Catmull-Rom overshoots), so empty-space skipping is off for them.
+                let derived = Derived {
+                    macrocells: None,
+                    ..derived
+                };
+                let bspline = opts.reconstruction == Reconstruction::BSpline;
+                volux_core::with_samples!(g.samples(), |s| render_with(
+                    &Tricubic::new(s, g.dims(), bspline),
+                    place,
+                    range,
+                    opts,
+                    derived
+                ))
+            }
+            _ => volux_core::with_samples!(g.samples(), |s| render_with(
+                &Trilinear::new(s, g.dims()),
+                place,
+                range,
+                opts,
+                derived
+            )),
+        }?;
+        out.stats.rebuilt = Rebuilt {
+            data: built_data,
+            classification: classified || pre_built,
+            view: true,
+        };
+        Ok(out)
+    }
+}
+
+impl<G: Deref<Target = Grid> + Send> Renderer for GridRenderer<G> {
+    fn name(&self) -> &'static str {
+        "raycast"
+    }
+
+    fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
+        let started = Instant::now();
+        let settings = match scene.method {
+            Method::Auto => GridRaycast::default(),
+            Method::GridRaycast(s) => s,
+            other => return Err(wrong_method("raycast", &other)),
+        };
+        scene.validate()?;
+        let r = GridRenderer::render(self, &RenderOptions::from_scene(scene, &settings, control))?;
+        Ok(grid_frame(r, &settings, started))
+    }
+}
+
+/// The frame of a grid render: the error map where the integrator estimates it.
+pub(crate) fn grid_frame(r: Rendered, settings: &GridRaycast, started: Instant) -> Frame {
+    let estimates = matches!(settings.integrator, Integrator::AdaptiveSimpson(_));
+    let rebuilt = r.stats.rebuilt;
+    frame(
+        r.image,
+        estimates.then_some(r.error_map),
+        started,
+        rebuilt,
+        MethodStats::GridRaycast(r.stats),
+    )
+}

@@ -1,0 +1,430 @@
+//! What to render: the [`Volume`], the [`View`] (camera and image size), the [`Appearance`]
+//! (transfer function, lighting, isosurfaces, MIP) and the [`Method`] (which renderer, with
+//! its settings), gathered in a [`Scene`]. A front end builds a scene and hands it to a
+//! [`Renderer`](crate::engine::Renderer) made for the volume
+//! ([`create_renderer`](crate::engine::create_renderer)); it never reaches into a renderer.
+//!
+//! # Units, stated once
+//!
+//! Every length a [`Method`] holds (a grid integrator's step, adaptive Simpson's `h0`,
+//! `hmin`, `hmax`) is in the volume's **unit length**, [`Volume::unit_length`]:
+//!
+//! - a grid's smallest sample spacing (the seed `001`'s "voxel units");
+//! - a tetrahedral mesh's bounding-box diagonal divided by [`MESH_UNITS_PER_DIAGONAL`] (256):
+//!   meshes have no voxel, so this is a length of the same order for a mesh the size of a
+//!   256-voxel grid.
+//!
+//! The renderers convert to world units. Transfer-function presets take the same unit
+//! ([`Volume::preset_tf`]), so a preset looks alike on a grid and on its tetrahedral split.
+//!
+//! # One set of defaults
+//!
+//! [`Scene::new`] gives every method the same defaults: early termination at opacity
+//! [`DEFAULT_EARLY_TERMINATION`], the default [`BlinnPhong`] lighting for isosurfaces (and for
+//! the volume when [`Appearance::shade_volume`] is set), ψ colour for the tetrahedral
+//! renderers ([`SegmentRule::Psi`]), Riemann steps of half a unit for grids.
+use std::sync::Arc;
+
+use volux_core::histogram::Histogram;
+use volux_core::tetrahedralize::grid_to_tets;
+use volux_core::{Aabb, Camera, Grid, TetMesh, TransferFunction};
+
+use crate::integrate::{Integrator, SegmentRule};
+use crate::isosurface::Isosurfaces;
+use crate::pt::SortMode;
+use crate::sampling::Reconstruction;
+use crate::shading::BlinnPhong;
+use crate::RenderError;
+
+/// A mesh's unit length is its bounding-box diagonal divided by this ([`Volume::unit_length`]).
+pub const MESH_UNITS_PER_DIAGONAL: f64 = 256.0;
+
+/// The opacity at which every method stops a ray or pixel by default.
+pub const DEFAULT_EARLY_TERMINATION: f32 = 0.99;
+
+/// Bins of the histogram presets are fitted on.
+pub const HISTOGRAM_BINS: usize = 256;
+
+/// The data a renderer draws, shared (`Arc`) so that a viewer can keep rendering it on
+/// another thread. Bricked and out-of-core grids will be further kinds.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub enum Volume {
+    /// A regular grid of scalars.
+    Grid(Arc<Grid>),
+    /// A tetrahedral mesh with one scalar per vertex.
+    Mesh(Arc<TetMesh>),
+}
+
+impl From<Grid> for Volume {
+    fn from(g: Grid) -> Self {
+        Self::Grid(Arc::new(g))
+    }
+}
+
+impl From<TetMesh> for Volume {
+    fn from(m: TetMesh) -> Self {
+        Self::Mesh(Arc::new(m))
+    }
+}
+
+impl Volume {
+    /// What kind of volume this is, in words.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Grid(_) => "grid",
+            Self::Mesh(_) => "tetrahedral mesh",
+        }
+    }
+
+    /// The world-space bounding box.
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Self::Grid(g) => g.bounds(),
+            Self::Mesh(m) => m.bounds(),
+        }
+    }
+
+    /// The scalar range `[min, max]`.
+    pub fn range(&self) -> [f64; 2] {
+        match self {
+            Self::Grid(g) => g.range(),
+            Self::Mesh(m) => m.range(),
+        }
+    }
+
+    /// The unit of every length in a [`Method`] (see the module documentation): a grid's
+    /// smallest spacing, a mesh's diagonal / [`MESH_UNITS_PER_DIAGONAL`].
+    pub fn unit_length(&self) -> f64 {
+        match self {
+            Self::Grid(g) => g.spacing().min_element(),
+            Self::Mesh(m) => m.bounds().diagonal() / MESH_UNITS_PER_DIAGONAL,
+        }
+    }
+
+    /// A histogram of the scalars with `bins` bins over [`Volume::range`].
+    pub fn histogram(&self, bins: usize) -> Histogram {
+        match self {
+            Self::Grid(g) => Histogram::of_grid(g, bins),
+            Self::Mesh(m) => Histogram::from_values(m.scalars(), m.range(), bins),
+        }
+    }
+
+    /// A transfer-function preset (`auto`, `ct-bone`, ...) fitted to this volume's histogram,
+    /// its extinction per [`Volume::unit_length`].
+    pub fn preset_tf(&self, name: &str) -> Result<TransferFunction, RenderError> {
+        let hist = self.histogram(HISTOGRAM_BINS);
+        Ok(TransferFunction::preset(name, &hist)?.with_unit_length(self.unit_length()))
+    }
+
+    /// A grid split into tetrahedra (five per cell, conforming), so that the tetrahedral
+    /// renderers can draw it; a mesh is returned as it is.
+    pub fn to_tets(&self) -> Result<Volume, RenderError> {
+        match self {
+            Self::Grid(g) => Ok(grid_to_tets(g)?.into()),
+            Self::Mesh(_) => Ok(self.clone()),
+        }
+    }
+}
+
+/// Where the volume is seen from, and the image size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// The camera.
+    pub camera: Camera,
+    /// Image width in pixels.
+    pub width: usize,
+    /// Image height in pixels.
+    pub height: usize,
+}
+
+impl View {
+    /// The same view at `1 / divisor` of the resolution (rounded up; `divisor` 0 or 1 is the
+    /// view itself): progressive refinement renders such a preview first.
+    pub fn reduced(&self, divisor: usize) -> Self {
+        let k = divisor.max(1);
+        Self {
+            width: self.width.div_ceil(k),
+            height: self.height.div_ceil(k),
+            ..*self
+        }
+    }
+}
+
+/// How the data looks: classification, lighting, isosurfaces, projection mode.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Appearance {
+    /// The transfer function (colour and extinction per unit length of its own).
+    pub tf: TransferFunction,
+    /// Multiplies the transfer function's extinction (on top of its own `opacity_scale`).
+    pub opacity_scale: f64,
+    /// Blinn-Phong lighting of the isosurfaces, and of the volume when
+    /// [`Appearance::shade_volume`] is set.
+    pub lighting: BlinnPhong,
+    /// Gradient shading of the volume samples (grids).
+    pub shade_volume: bool,
+    /// Isosurfaces drawn with the volume.
+    pub isosurfaces: Isosurfaces,
+    /// Maximum intensity projection: each pixel shows the TF colour of the largest value
+    /// along its ray, opaque.
+    pub mip: bool,
+}
+
+impl Appearance {
+    /// `tf` as it is, default lighting, no isosurfaces, compositing.
+    pub fn new(tf: TransferFunction) -> Self {
+        Self {
+            tf,
+            opacity_scale: 1.0,
+            lighting: BlinnPhong::default(),
+            shade_volume: false,
+            isosurfaces: Isosurfaces::default(),
+            mip: false,
+        }
+    }
+
+    /// The transfer function the renderers use: [`Appearance::tf`] with its extinction
+    /// multiplied by [`Appearance::opacity_scale`].
+    pub fn effective_tf(&self) -> TransferFunction {
+        let scale = self.tf.opacity_scale * self.opacity_scale;
+        self.tf.clone().with_opacity_scale(scale)
+    }
+}
+
+/// Grid ray casting settings (steps in the volume's unit length: voxels).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridRaycast {
+    /// How each ray is integrated.
+    pub integrator: Integrator,
+    /// Reconstruction filter.
+    pub reconstruction: Reconstruction,
+    /// Offset each ray's first sample by a per-pixel pseudo-random fraction of the step.
+    pub jitter: bool,
+}
+
+impl Default for GridRaycast {
+    /// Riemann sum with a step of half a voxel, trilinear, no jitter.
+    fn default() -> Self {
+        Self {
+            integrator: Integrator::Riemann { step: 0.5 },
+            reconstruction: Reconstruction::Trilinear,
+            jitter: false,
+        }
+    }
+}
+
+/// Projected Tetrahedra settings.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PtSettings {
+    /// Visibility order.
+    pub sort: SortMode,
+    /// Fragment colour (average, ψ or exact).
+    pub color: SegmentRule,
+    /// Count the face pairs the centroid order gets wrong against the exact order (costs an
+    /// exact sort; for statistics).
+    pub count_violations: bool,
+}
+
+/// Which renderer draws the volume, with its settings.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub enum Method {
+    /// The library's choice: grids are ray cast, meshes drawn with Projected Tetrahedra, each
+    /// with its default settings.
+    #[default]
+    Auto,
+    /// Image-order ray casting of a grid (seed `001`).
+    GridRaycast(GridRaycast),
+    /// Projected Tetrahedra of a mesh (seeds `000`, `002`).
+    ProjectedTetrahedra(PtSettings),
+    /// Cell-to-cell ray casting of a mesh, each segment or the whole ray coloured by the
+    /// rule (adaptive steps in the volume's unit length).
+    TetRaycast(SegmentRule),
+    /// A mesh resampled onto a grid whose longest side has `samples` samples, then ray cast
+    /// (steps in voxels of that grid).
+    Resample {
+        /// Samples along the longest side.
+        samples: usize,
+        /// The grid ray casting of the resampled grid.
+        raycast: GridRaycast,
+    },
+}
+
+impl Method {
+    /// A short name: `auto`, `raycast`, `pt`, `tet-raycast`, `resample`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::GridRaycast(_) => "raycast",
+            Self::ProjectedTetrahedra(_) => "pt",
+            Self::TetRaycast(_) => "tet-raycast",
+            Self::Resample { .. } => "resample",
+        }
+    }
+
+    /// Ray casting of `volume`: the grid ray caster with `grid` for grids, the tet ray caster
+    /// with `mesh` for meshes.
+    pub fn raycast(volume: &Volume, grid: GridRaycast, mesh: SegmentRule) -> Self {
+        match volume {
+            Volume::Grid(_) => Self::GridRaycast(grid),
+            Volume::Mesh(_) => Self::TetRaycast(mesh),
+        }
+    }
+
+    /// The concrete method for `volume`: [`Method::Auto`] resolved, and an error when the
+    /// method does not apply to the volume (PT or tet ray casting of a grid: split it first
+    /// with [`Volume::to_tets`]; grid ray casting of a mesh: resample it).
+    pub fn resolve(&self, volume: &Volume) -> Result<Method, RenderError> {
+        let wrong = |what: &str| {
+            Err(RenderError::InvalidOptions(format!(
+                "{what} does not apply to a {}",
+                volume.kind()
+            )))
+        };
+        match (self, volume) {
+            (Self::Auto, Volume::Grid(_)) => Ok(Self::GridRaycast(GridRaycast::default())),
+            (Self::Auto, Volume::Mesh(_)) => Ok(Self::ProjectedTetrahedra(PtSettings::default())),
+            (Self::GridRaycast(_), Volume::Grid(_)) => Ok(*self),
+            (Self::GridRaycast(_), _) => {
+                wrong("grid ray casting (ray cast a mesh cell by cell, or resample it onto a grid)")
+            }
+            (Self::ProjectedTetrahedra(_) | Self::TetRaycast(_), Volume::Mesh(_)) => Ok(*self),
+            (Self::ProjectedTetrahedra(_), _) => wrong(
+                "Projected Tetrahedra renders tetrahedral meshes; split the grid into \
+                 tetrahedra first (--as-tets): it",
+            ),
+            (Self::TetRaycast(_), _) => wrong("tetrahedral ray casting"),
+            (Self::Resample { .. }, Volume::Mesh(_)) => Ok(*self),
+            (Self::Resample { .. }, _) => wrong("resampling onto a grid"),
+        }
+    }
+}
+
+/// Everything that decides a frame besides the volume: what a front end changes between
+/// frames.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Camera and image size.
+    pub view: View,
+    /// Classification, lighting, isosurfaces, MIP.
+    pub appearance: Appearance,
+    /// The renderer and its settings.
+    pub method: Method,
+    /// Stop a ray (or a pixel's fragments) once its opacity reaches this; `None` integrates
+    /// to the end (references).
+    pub early_termination: Option<f32>,
+}
+
+impl Scene {
+    /// A scene with the defaults of every method (see the module documentation).
+    pub fn new(camera: Camera, width: usize, height: usize, tf: TransferFunction) -> Self {
+        Self {
+            view: View {
+                camera,
+                width,
+                height,
+            },
+            appearance: Appearance::new(tf),
+            method: Method::Auto,
+            early_termination: Some(DEFAULT_EARLY_TERMINATION),
+        }
+    }
+
+    /// Checks what does not depend on the volume: image size, camera, transfer function,
+    /// lighting, early termination.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        crate::check_image_size(self.view.width, self.view.height)?;
+        self.view.camera.validate()?;
+        self.appearance.tf.validate()?;
+        let s = self.appearance.opacity_scale;
+        if !(s.is_finite() && s >= 0.0) {
+            return Err(RenderError::InvalidOptions(format!(
+                "opacity scale {s} must be finite and >= 0"
+            )));
+        }
+        self.appearance
+            .lighting
+            .validate()
+            .map_err(RenderError::InvalidOptions)?;
+        if let Some(e) = self.early_termination {
+            if !(e > 0.0 && e.is_finite()) {
+                return Err(RenderError::InvalidOptions(format!(
+                    "early termination {e} must be a positive opacity"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use volux_core::synth;
+
+    fn grid() -> Volume {
+        synth::marschner_lobb(9).unwrap().into()
+    }
+
+    #[test]
+    fn auto_picks_the_renderer_of_each_kind_and_wrong_pairs_are_refused() {
+        let g = grid();
+        let m = g.to_tets().unwrap();
+        assert_eq!(m.kind(), "tetrahedral mesh");
+        assert!(matches!(
+            Method::Auto.resolve(&g),
+            Ok(Method::GridRaycast(_))
+        ));
+        assert!(matches!(
+            Method::Auto.resolve(&m),
+            Ok(Method::ProjectedTetrahedra(_))
+        ));
+        let pt = Method::ProjectedTetrahedra(PtSettings::default());
+        let e = pt.resolve(&g).unwrap_err().to_string();
+        assert!(e.contains("--as-tets"), "{e}");
+        assert!(Method::GridRaycast(GridRaycast::default())
+            .resolve(&m)
+            .is_err());
+        assert!(matches!(
+            Method::raycast(&m, GridRaycast::default(), SegmentRule::Exact),
+            Method::TetRaycast(SegmentRule::Exact)
+        ));
+    }
+
+    #[test]
+    fn units_are_the_smallest_spacing_and_the_mesh_diagonal_share() {
+        let g = grid();
+        let Volume::Grid(grid) = &g else {
+            unreachable!()
+        };
+        assert_eq!(g.unit_length(), grid.spacing().min_element());
+        let m = g.to_tets().unwrap();
+        assert!((m.unit_length() - g.bounds().diagonal() / 256.0).abs() < 1e-12);
+        let tf = m.preset_tf("auto").unwrap();
+        assert_eq!(tf.unit_length, m.unit_length());
+    }
+
+    #[test]
+    fn opacity_scales_multiply_and_bad_scenes_are_refused() {
+        let g = grid();
+        let mut tf = g.preset_tf("grayscale").unwrap();
+        tf.opacity_scale = 2.0;
+        let camera = volux_core::CameraSpec::default()
+            .resolve(&g.bounds())
+            .unwrap();
+        let mut scene = Scene::new(camera, 8, 8, tf);
+        scene.appearance.opacity_scale = 1.5;
+        assert_eq!(scene.appearance.effective_tf().opacity_scale, 3.0);
+        assert!(scene.validate().is_ok());
+        assert_eq!(scene.view.reduced(3).width, 3);
+        let mut bad = scene.clone();
+        bad.view.width = 0;
+        assert!(bad.validate().is_err());
+        let mut bad = scene.clone();
+        bad.early_termination = Some(f32::NAN);
+        assert!(bad.validate().is_err());
+        let mut bad = scene;
+        bad.appearance.opacity_scale = -1.0;
+        assert!(bad.validate().is_err());
+    }
+}
