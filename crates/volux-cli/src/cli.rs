@@ -1,7 +1,7 @@
 //! Command-line arguments.
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 
 /// Volux: accurate, fast volume visualization of regular grids and tetrahedral meshes.
 #[derive(Debug, Parser)]
@@ -44,7 +44,7 @@ pub enum Command {
     /// tets-smooth (about SIZE tets), torus (SIZE segments around the ring).
     Generate {
         /// What to generate.
-        kind: String,
+        kind: Generator,
         /// Grid size per axis, tet count, or ring segments.
         #[arg(long, default_value_t = 128)]
         size: usize,
@@ -121,8 +121,8 @@ pub enum Command {
         /// Which renderers: `grid` (ray casting), `pt` (Projected Tetrahedra), `tetray`
         /// (tetrahedral ray casting) or `all`; `targets` times the grid speed targets, the
         /// cases of a dataset in turn, `--frames` rounds, fastest frame per case.
-        #[arg(long, default_value = "all")]
-        suite: String,
+        #[arg(long, value_enum, default_value_t = Suite::All)]
+        suite: Suite,
         /// Grid suite: run only the cases whose "dataset integrator parameter" contains this
         /// text (e.g. `marschner riemann h=0.5`, matched word by word).
         #[arg(long)]
@@ -183,8 +183,8 @@ pub struct RenderArgs {
     /// Integrator: riemann, trapezoid, simpson (fixed step), adaptive-simpson (error
     /// control), preintegrated (table over front/back values), reference (f64 ground
     /// truth, slow); for tetrahedral meshes with --method raycast: exact or psi.
-    #[arg(long, default_value = "riemann")]
-    pub integrator: String,
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Riemann)]
+    pub integrator: IntegratorArg,
     /// Fixed-step integrators: step in voxel units.
     #[arg(long, default_value_t = 0.5)]
     pub step: f64,
@@ -204,8 +204,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub decoupled: bool,
     /// Reconstruction filter: trilinear, catmull-rom or b-spline (tricubic).
-    #[arg(long, default_value = "trilinear")]
-    pub reconstruction: String,
+    #[arg(long, value_enum, default_value_t = ReconstructionArg::Trilinear)]
+    pub reconstruction: ReconstructionArg,
     /// Blinn-Phong gradient shading.
     #[arg(long)]
     pub shade: bool,
@@ -250,16 +250,16 @@ pub struct RenderArgs {
     /// projection of tetrahedral meshes), `raycast` (grids; meshes: exact cell-by-cell ray
     /// casting, colour from --integrator exact|psi or --color), `resample` (meshes resampled
     /// onto a grid, then ray cast).
-    #[arg(long, default_value = "auto")]
-    pub method: String,
+    #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
+    pub method: MethodArg,
     /// PT: visibility order, `centroid` (radix sort, approximate) or `exact` (MPVO on convex
     /// meshes, per-pixel fragment sort otherwise).
-    #[arg(long, default_value = "centroid")]
-    pub sort: String,
+    #[arg(long, value_enum, default_value_t = SortArg::Centroid)]
+    pub sort: SortArg,
     /// PT: fragment colour, `average` (Shirley-Tuchman), `psi` (partial pre-integration) or
     /// `exact` (closed-form integral, the reference).
-    #[arg(long, default_value = "psi")]
-    pub color: String,
+    #[arg(long, value_enum, default_value_t = ColorArg::Psi)]
+    pub color: ColorArg,
     /// PT: render a grid by splitting every cell into five tetrahedra.
     #[arg(long)]
     pub as_tets: bool,
@@ -274,4 +274,117 @@ pub struct RenderArgs {
     pub json: bool,
     #[command(flatten)]
     pub load: LoadArgs,
+}
+
+/// What `volux generate` makes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Generator {
+    /// The Marschner-Lobb test signal (grid).
+    MarschnerLobb,
+    /// The 3D Shepp-Logan phantom (grid).
+    SheppLogan,
+    /// A sphere's distance field (grid).
+    Sphere,
+    /// A cube of conforming tetrahedra with a smooth field (mesh).
+    TetsSmooth,
+    /// A tetrahedral torus (non-convex mesh).
+    Torus,
+}
+
+/// `volux bench --suite`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Suite {
+    /// Grid ray casting, PT and tet ray casting.
+    All,
+    /// Grid ray casting per integrator.
+    Grid,
+    /// Projected Tetrahedra per colour mode, and its accuracy.
+    Pt,
+    /// Tetrahedral ray casting.
+    Tetray,
+    /// The grid speed targets, cases in turn.
+    Targets,
+}
+
+/// `volux render --method`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    /// Grids: ray casting; meshes: Projected Tetrahedra.
+    Auto,
+    /// Projected Tetrahedra (meshes; grids with --as-tets).
+    Pt,
+    /// Ray casting: grids sample by sample, meshes cell by cell.
+    Raycast,
+    /// Meshes resampled onto a grid, then ray cast.
+    Resample,
+}
+
+/// `volux render --integrator`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorArg {
+    /// Left Riemann sum, step-corrected opacity.
+    Riemann,
+    /// Fixed-step trapezoid rule.
+    Trapezoid,
+    /// Fixed-step Simpson rule.
+    Simpson,
+    /// Adaptive Simpson with error control (seed 001).
+    #[value(alias = "adaptive")]
+    AdaptiveSimpson,
+    /// Pre-integrated classification.
+    Preintegrated,
+    /// The f64 ground truth (slow).
+    Reference,
+    /// Meshes (--method raycast): exact segment integral.
+    Exact,
+    /// Meshes (--method raycast): partial pre-integration.
+    Psi,
+}
+
+impl IntegratorArg {
+    /// The name as typed on the command line.
+    pub fn name(self) -> String {
+        self.to_possible_value()
+            .map(|v| v.get_name().to_string())
+            .unwrap_or_default()
+    }
+}
+
+/// `volux render --reconstruction`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ReconstructionArg {
+    /// Trilinear.
+    Trilinear,
+    /// Tricubic Catmull-Rom.
+    CatmullRom,
+    /// Tricubic B-spline.
+    #[value(alias = "bspline")]
+    BSpline,
+}
+
+/// `volux render --sort`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SortArg {
+    /// Centroid radix sort (approximate).
+    Centroid,
+    /// MPVO on convex meshes, per-pixel fragment sort otherwise.
+    Exact,
+}
+
+/// `volux render --color`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ColorArg {
+    /// Shirley-Tuchman averages.
+    Average,
+    /// Partial pre-integration.
+    Psi,
+    /// Closed-form segment integral.
+    Exact,
+}
+
+/// The name a value enum shows on the command line.
+pub fn value_name(v: &impl ValueEnum) -> String {
+    v.to_possible_value()
+        .map(|p| p.get_name().to_string())
+        .unwrap_or_default()
 }

@@ -29,6 +29,7 @@
 //! ```
 use volux_core::Image;
 
+use crate::pt::reference::MeshReference;
 use crate::pt::{PtRenderer, PtStats};
 use crate::raycast::{GridRenderer, RenderStats};
 use crate::resample::ResampleRenderer;
@@ -116,6 +117,8 @@ pub enum MethodStats {
     ProjectedTetrahedra(PtStats),
     /// Tetrahedral ray casting.
     TetRaycast(TetRayStats),
+    /// The brute-force mesh reference (no figures of its own).
+    MeshReference,
 }
 
 /// The renderer of `method` for `volume` (resolving [`Method::Auto`]); errors when the
@@ -128,6 +131,7 @@ pub fn create_renderer(volume: &Volume, method: &Method) -> Result<Box<dyn Rende
         (Method::ProjectedTetrahedra(_), Volume::Mesh(m)) => Box::new(PtRenderer::new(m.clone())),
         (Method::TetRaycast(_), Volume::Mesh(m)) => Box::new(TetRayCaster::new(m.clone())),
         (Method::Resample { .. }, Volume::Mesh(m)) => Box::new(ResampleRenderer::new(m.clone())),
+        (Method::MeshReference, Volume::Mesh(m)) => Box::new(MeshReference::new(m.clone())),
         (m, v) => {
             return Err(RenderError::InvalidOptions(format!(
                 "no renderer for {} of a {}",

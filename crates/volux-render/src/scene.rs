@@ -240,6 +240,10 @@ pub enum Method {
     /// Cell-to-cell ray casting of a mesh, each segment or the whole ray coloured by the
     /// rule (adaptive steps in the volume's unit length).
     TetRaycast(SegmentRule),
+    /// The brute-force per-pixel reference of meshes: every ray clipped against every cell
+    /// on its pixel, segments sorted and integrated exactly, no early termination (slow;
+    /// tests and accuracy figures).
+    MeshReference,
     /// A mesh resampled onto a grid whose longest side has `samples` samples, then ray cast
     /// (steps in voxels of that grid).
     Resample {
@@ -251,13 +255,14 @@ pub enum Method {
 }
 
 impl Method {
-    /// A short name: `auto`, `raycast`, `pt`, `tet-raycast`, `resample`.
+    /// A short name: `auto`, `raycast`, `pt`, `tet-raycast`, `mesh-reference`, `resample`.
     pub fn name(&self) -> &'static str {
         match self {
             Self::Auto => "auto",
             Self::GridRaycast(_) => "raycast",
             Self::ProjectedTetrahedra(_) => "pt",
             Self::TetRaycast(_) => "tet-raycast",
+            Self::MeshReference => "mesh-reference",
             Self::Resample { .. } => "resample",
         }
     }
@@ -275,27 +280,30 @@ impl Method {
     /// method does not apply to the volume (PT or tet ray casting of a grid: split it first
     /// with [`Volume::to_tets`]; grid ray casting of a mesh: resample it).
     pub fn resolve(&self, volume: &Volume) -> Result<Method, RenderError> {
-        let wrong = |what: &str| {
+        let wrong = |why: &str| {
             Err(RenderError::InvalidOptions(format!(
-                "{what} does not apply to a {}",
+                "{} does not draw a {}: {why}",
+                self.name(),
                 volume.kind()
             )))
         };
+        let split = "split the grid into tetrahedra first (Volume::to_tets; volux: --as-tets)";
         match (self, volume) {
             (Self::Auto, Volume::Grid(_)) => Ok(Self::GridRaycast(GridRaycast::default())),
             (Self::Auto, Volume::Mesh(_)) => Ok(Self::ProjectedTetrahedra(PtSettings::default())),
             (Self::GridRaycast(_), Volume::Grid(_)) => Ok(*self),
             (Self::GridRaycast(_), _) => {
-                wrong("grid ray casting (ray cast a mesh cell by cell, or resample it onto a grid)")
+                wrong("ray cast the mesh cell by cell (tet-raycast) or resample it")
             }
-            (Self::ProjectedTetrahedra(_) | Self::TetRaycast(_), Volume::Mesh(_)) => Ok(*self),
-            (Self::ProjectedTetrahedra(_), _) => wrong(
-                "Projected Tetrahedra renders tetrahedral meshes; split the grid into \
-                 tetrahedra first (--as-tets): it",
-            ),
-            (Self::TetRaycast(_), _) => wrong("tetrahedral ray casting"),
+            (
+                Self::ProjectedTetrahedra(_) | Self::TetRaycast(_) | Self::MeshReference,
+                Volume::Mesh(_),
+            ) => Ok(*self),
+            (Self::ProjectedTetrahedra(_) | Self::TetRaycast(_) | Self::MeshReference, _) => {
+                wrong(split)
+            }
             (Self::Resample { .. }, Volume::Mesh(_)) => Ok(*self),
-            (Self::Resample { .. }, _) => wrong("resampling onto a grid"),
+            (Self::Resample { .. }, _) => wrong("it is a grid already"),
         }
     }
 }

@@ -4,16 +4,16 @@
 use std::path::PathBuf;
 
 use serde_json::json;
-use volux_core::histogram::Histogram;
-use volux_core::{synth, CameraSpec, Grid, Image};
+use volux_core::{synth, CameraSpec, Image};
 use volux_io::Dataset;
+use volux_render::engine::{create_renderer, Frame, MethodStats};
 use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
-use volux_render::raycast::GridRenderer;
-use volux_render::RenderOptions;
+use volux_render::scene::{GridRaycast, Method, Scene, Volume};
+use volux_render::tiles::Control;
 
-use super::render::{parse_size, transfer_function};
 use super::CmdError;
 use crate::cli::LoadArgs;
+use crate::settings::{parse_size, transfer_function};
 
 /// Arguments of `volux accuracy`.
 pub struct Args {
@@ -37,46 +37,57 @@ struct Row {
     seconds: f64,
 }
 
-fn load_grid(args: &Args, show: bool) -> Result<Grid, CmdError> {
+fn load_grid(args: &Args, show: bool) -> Result<Volume, CmdError> {
     let name = args.file.to_string_lossy();
     if synth::GENERATORS[..3].contains(&name.as_ref()) {
-        return Ok(synth::generate_grid(&name, 64)?);
+        return Ok(synth::generate_grid(&name, 64)?.into());
     }
     match super::load(&args.file, &args.load, show)?.0 {
-        Dataset::Grid(g) => Ok(g),
+        Dataset::Grid(g) => Ok(g.into()),
         _ => Err("accuracy works on regular grids".into()),
     }
 }
 
 /// Percentage of pixels whose error exceeds `eps`, per channel.
-fn pct_over(a: &Image, reference: &Image, eps: f64) -> [f64; 4] {
-    let n = a.pixels().len().max(1) as f64;
-    std::array::from_fn(|c| {
-        let over = a
-            .pixels()
-            .iter()
-            .zip(reference.pixels())
-            .filter(|(p, q)| ((p[c] - q[c]).abs() as f64) > eps);
-        100.0 * over.count() as f64 / n
-    })
+fn pct_over(a: &Image, reference: &Image, eps: f64) -> Result<[f64; 4], CmdError> {
+    let d = a.compare(reference, eps)?;
+    Ok(d.fraction_over_per_channel.map(|f| 100.0 * f))
+}
+
+/// The render time of a grid frame in seconds.
+fn seconds(f: &Frame) -> f64 {
+    match &f.stats.method {
+        MethodStats::GridRaycast(s) => s.seconds,
+        _ => f.stats.ms / 1e3,
+    }
+}
+
+/// The samples of a grid frame.
+fn samples(f: &Frame) -> u64 {
+    match &f.stats.method {
+        MethodStats::GridRaycast(s) => s.samples,
+        _ => 0,
+    }
 }
 
 pub fn run(args: &Args, show: bool) -> Result<(), CmdError> {
     let (w, h) = parse_size(&args.size)?;
-    let grid = load_grid(args, show)?;
-    let hist = Histogram::of_grid(&grid, 256);
-    let tf = transfer_function(&args.tf, &hist, grid.spacing().min_element())?;
+    let volume = load_grid(args, show)?;
+    let tf = transfer_function(&args.tf, &volume)?;
     let spec = CameraSpec {
         azimuth: Some(30.0),
         elevation: Some(20.0),
         ..Default::default()
     };
-    let mut opts = RenderOptions::new(spec.resolve(&grid.bounds())?, tf);
-    (opts.width, opts.height, opts.early_termination) = (w, h, None);
-    let renderer = GridRenderer::new(&grid);
+    let mut scene = Scene::new(spec.resolve(&volume.bounds())?, w, h, tf);
+    scene.early_termination = None;
+    let mut renderer = create_renderer(&volume, &Method::GridRaycast(GridRaycast::default()))?;
     let mut render = |integrator| {
-        opts.integrator = integrator;
-        renderer.render(&opts)
+        scene.method = Method::GridRaycast(GridRaycast {
+            integrator,
+            ..GridRaycast::default()
+        });
+        renderer.render(&scene, &Control::default())
     };
     let reference = render(Integrator::Reference)?;
     let mut rows = Vec::new();
@@ -86,9 +97,9 @@ pub fn run(args: &Args, show: bool) -> Result<(), CmdError> {
             method: "riemann",
             param: ("step", step),
             threshold: args.eps,
-            pct_over: pct_over(&r.image, &reference.image, args.eps),
-            samples: r.stats.samples,
-            seconds: r.stats.seconds,
+            pct_over: pct_over(&r.image, &reference.image, args.eps)?,
+            samples: samples(&r),
+            seconds: seconds(&r),
         });
     }
     for (method, control) in [
@@ -109,13 +120,13 @@ pub fn run(args: &Args, show: bool) -> Result<(), CmdError> {
                 method,
                 param: ("tol", tol),
                 threshold: tol,
-                pct_over: pct_over(&r.image, &reference.image, tol),
-                samples: r.stats.samples,
-                seconds: r.stats.seconds,
+                pct_over: pct_over(&r.image, &reference.image, tol)?,
+                samples: samples(&r),
+                seconds: seconds(&r),
             });
         }
     }
-    print_rows(&rows, args.json, reference.stats.seconds);
+    print_rows(&rows, args.json, seconds(&reference));
     Ok(())
 }
 

@@ -6,7 +6,7 @@ use volux_core::{synth, Grid, TetMesh};
 use volux_io::Dataset;
 
 use super::CmdError;
-use crate::cli::LoadArgs;
+use crate::cli::{value_name, Generator, LoadArgs};
 
 pub fn run(input: &Path, output: &Path, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
     let (data, _) = super::load(input, args, show)?;
@@ -15,7 +15,9 @@ pub fn run(input: &Path, output: &Path, args: &LoadArgs, show: bool) -> Result<(
     Ok(())
 }
 
-pub fn generate(kind: &str, size: usize, output: &Path) -> Result<(), CmdError> {
+pub fn generate(kind: Generator, size: usize, output: &Path) -> Result<(), CmdError> {
+    let kind = value_name(&kind);
+    let kind = kind.as_str();
     if size == 0 || size > 4096 * 4096 * 16 {
         return Err(format!("--size {size} is out of range").into());
     }

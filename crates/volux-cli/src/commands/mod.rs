@@ -1,13 +1,13 @@
-//! The commands, one module each.
+//! The commands, one module each; arguments become library objects in
+//! [`crate::settings`], and every render goes through the engine API
+//! ([`volux_render::engine`]).
 mod accuracy;
 mod bench;
-mod bench_pt;
-mod bench_targets;
 mod compare;
 mod convert;
 mod info;
 mod render;
-mod render_pt;
+mod report;
 
 use std::path::Path;
 
@@ -29,7 +29,7 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             output,
             load,
         } => convert::run(&input, &output, &load, show),
-        Command::Generate { kind, size, output } => convert::generate(&kind, size, &output),
+        Command::Generate { kind, size, output } => convert::generate(kind, size, &output),
         Command::Render(args) => render::run(&args, show),
         Command::Demo => render::demo(show),
         Command::Compare {
@@ -76,7 +76,7 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             json,
             suite,
             only,
-        } => bench::run(quick, frames, grid_size, json, &suite, only.as_deref()),
+        } => bench::run(quick, frames, grid_size, json, suite, only.as_deref()),
     }
 }
 

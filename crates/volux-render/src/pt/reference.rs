@@ -41,13 +41,17 @@
 //!
 //! Degenerate (zero-volume) cells and cells with non-finite positions or scalars are
 //! skipped. Isosurfaces are not rendered.
+use std::sync::Arc;
+
 use glam::DVec3;
 use rayon::prelude::*;
 use volux_core::mesh::FACES;
 use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
 use crate::composite::composite64;
+use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
 use crate::integrate::segment::SegmentIntegrator;
+use crate::scene::{Method, Scene};
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 use crate::RenderError;
 
@@ -423,6 +427,47 @@ pub fn render_mesh_reference(
     })?
     .pixels;
     Ok(Image::from_pixels(w, h, pixels)?)
+}
+
+/// [`render_mesh_reference`] as a [`Renderer`] ([`Method::MeshReference`]).
+pub struct MeshReference {
+    mesh: Arc<TetMesh>,
+}
+
+impl MeshReference {
+    /// The reference renderer of `mesh`.
+    pub fn new(mesh: Arc<TetMesh>) -> Self {
+        Self { mesh }
+    }
+}
+
+impl Renderer for MeshReference {
+    fn name(&self) -> &'static str {
+        "mesh-reference"
+    }
+
+    fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
+        let started = std::time::Instant::now();
+        if scene.method != Method::MeshReference {
+            return Err(wrong_method("mesh-reference", &scene.method));
+        }
+        scene.validate()?;
+        control.check()?;
+        let opts = ReferenceOptions {
+            width: scene.view.width,
+            height: scene.view.height,
+            camera: scene.view.camera,
+            tf: scene.appearance.effective_tf(),
+        };
+        let image = render_mesh_reference(&self.mesh, &opts)?;
+        Ok(frame(
+            image,
+            None,
+            started,
+            Rebuilt::ALL,
+            MethodStats::MeshReference,
+        ))
+    }
 }
 
 #[cfg(test)]

@@ -9,12 +9,13 @@
 //! two such figures taken in the same rounds; the median of the per-round ratios is printed
 //! beside it as a check (two estimates far apart say the machine was too noisy).
 use serde_json::json;
-use volux_core::{CameraSpec, Grid, TransferFunction};
+use volux_core::{CameraSpec, TransferFunction};
+use volux_render::engine::create_renderer;
 use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
-use volux_render::raycast::GridRenderer;
-use volux_render::RenderOptions;
+use volux_render::scene::{GridRaycast, Method, Scene, Volume};
 
-use super::CmdError;
+use super::{frame, grid_of, grids};
+use crate::commands::CmdError;
 
 /// Riemann step 0.5 must take at most this on a 256^3 volume.
 const RIEMANN_TARGET_MS: f64 = 150.0;
@@ -67,22 +68,34 @@ impl Timings {
     }
 }
 
-/// Renders the cases of one dataset in turn, `rounds` times.
-fn time_cases(grid: &Grid, tf: &TransferFunction, rounds: usize) -> Result<Timings, CmdError> {
-    let renderer = GridRenderer::new(grid);
-    renderer.macrocells();
+/// Renders the cases of one dataset in turn, `rounds` times (after one frame each that
+/// builds the caches).
+fn time_cases(volume: &Volume, tf: &TransferFunction, rounds: usize) -> Result<Timings, CmdError> {
+    let mut renderer = create_renderer(volume, &Method::GridRaycast(GridRaycast::default()))?;
     let spec = CameraSpec {
         azimuth: Some(30.0),
         elevation: Some(20.0),
         ..Default::default()
     };
     let cases = cases();
+    let scenes = cases
+        .iter()
+        .map(|(_, integrator)| {
+            let mut scene = Scene::new(spec.resolve(&volume.bounds())?, 512, 512, tf.clone());
+            scene.method = Method::GridRaycast(GridRaycast {
+                integrator: *integrator,
+                ..GridRaycast::default()
+            });
+            Ok(scene)
+        })
+        .collect::<Result<Vec<_>, CmdError>>()?;
+    for scene in &scenes {
+        frame(renderer.as_mut(), scene)?;
+    }
     let mut ms = vec![Vec::with_capacity(rounds); cases.len()];
     for _ in 0..rounds {
-        for (times, (_, integrator)) in ms.iter_mut().zip(&cases) {
-            let mut opts = RenderOptions::new(spec.resolve(&grid.bounds())?, tf.clone());
-            (opts.width, opts.height, opts.integrator) = (512, 512, *integrator);
-            times.push(renderer.render(&opts)?.stats.seconds * 1e3);
+        for (times, scene) in ms.iter_mut().zip(&scenes) {
+            times.push(frame(renderer.as_mut(), scene)?.stats.ms);
         }
     }
     Ok(Timings { ms })
@@ -105,11 +118,13 @@ pub fn run(n: usize, rounds: usize, as_json: bool) -> Result<Vec<serde_json::Val
         );
     }
     let mut rows = Vec::new();
-    for (name, grid, tf) in super::bench::datasets(n)? {
-        let t = time_cases(&grid, &tf, rounds)?;
+    for (name, volume, tf) in grids(n)? {
+        let t = time_cases(&volume, &tf, rounds)?;
         let adaptive = [2, 3].map(|c| (t.fastest(c), t.ratio(c, 1)));
         // The Riemann target is set for 256^3 volumes only.
-        let riemann_met = (grid.dims() == [256; 3]).then(|| t.fastest(0) <= RIEMANN_TARGET_MS);
+        let riemann_met = grid_of(&volume)
+            .filter(|g| g.dims() == [256; 3])
+            .map(|_| t.fastest(0) <= RIEMANN_TARGET_MS);
         let adaptive_met = adaptive.map(|(_, (r, _))| r <= 1.0);
         if as_json {
             let adaptive_rows = [0, 1].map(|k| {

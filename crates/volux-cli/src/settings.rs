@@ -1,0 +1,299 @@
+//! Command-line arguments turned into library objects, in one place (ripgrep's `hiargs`):
+//! sizes, colours, lighting, isosurfaces, integrators, the method for a volume, the transfer
+//! function and the camera, and from them the [`Scene`] a command renders. No command parses
+//! a string itself.
+use std::path::Path;
+
+use volux_core::image::PngOptions;
+use volux_core::{CameraSpec, TransferFunction};
+use volux_io::Dataset;
+use volux_render::integrate::{AdaptiveParams, Integrator, SegmentRule, StepControl};
+use volux_render::isosurface::{parse_iso, Isosurfaces};
+use volux_render::pt::SortMode;
+use volux_render::sampling::Reconstruction;
+use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, Volume};
+use volux_render::shading::{BlinnPhong, Light};
+
+use crate::cli::{ColorArg, IntegratorArg, MethodArg, ReconstructionArg, RenderArgs, SortArg};
+use crate::commands::CmdError;
+
+/// Parses `WxH`.
+pub fn parse_size(s: &str) -> Result<(usize, usize), CmdError> {
+    let bad = || format!("--size '{s}': expected WxH, e.g. 512x512, each 1..=16384");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (usize, usize) = (
+        w.trim().parse().map_err(|_| bad())?,
+        h.trim().parse().map_err(|_| bad())?,
+    );
+    if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
+        return Err(bad().into());
+    }
+    Ok((w, h))
+}
+
+/// Parses `R,G,B` in 0..1 or `none`.
+fn parse_background(s: &str) -> Result<Option<[f32; 3]>, CmdError> {
+    if s.eq_ignore_ascii_case("none") {
+        return Ok(None);
+    }
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--background '{s}': expected R,G,B in 0..1 or 'none'"))?;
+    match v.as_slice() {
+        [r, g, b] if v.iter().all(|c| (0.0..=1.0).contains(c)) => Ok(Some([*r, *g, *b])),
+        _ => Err(format!("--background '{s}': expected three values in 0..1 or 'none'").into()),
+    }
+}
+
+/// A preset name or a JSON file; presets are fitted to `volume` and scaled to its unit
+/// length.
+pub fn transfer_function(spec: &str, volume: &Volume) -> Result<TransferFunction, CmdError> {
+    let path = Path::new(spec);
+    if spec.ends_with(".json") || path.is_file() {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{spec}: {e}"))?;
+        return Ok(TransferFunction::from_json(&text).map_err(|e| format!("{spec}: {e}"))?);
+    }
+    Ok(volume.preset_tf(spec)?)
+}
+
+/// The lighting options (`--ambient`, `--diffuse`, `--specular`, `--shininess`, `--light`).
+pub fn lighting(args: &RenderArgs) -> Result<BlinnPhong, CmdError> {
+    let bad = || format!("--light '{}': expected X,Y,Z or 'headlight'", args.light);
+    let light = if args.light == "headlight" {
+        Light::Headlight
+    } else {
+        let v: Vec<f32> = args
+            .light
+            .split(',')
+            .map(|c| c.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad())?;
+        match v.as_slice() {
+            [x, y, z] => Light::Direction(glam::Vec3::new(*x, *y, *z)),
+            _ => return Err(bad().into()),
+        }
+    };
+    let s = BlinnPhong {
+        ambient: args.ambient,
+        diffuse: args.diffuse,
+        specular: args.specular,
+        shininess: args.shininess,
+        light,
+        ..BlinnPhong::default()
+    };
+    s.validate()?;
+    Ok(s)
+}
+
+/// The `--iso` options.
+pub fn isosurfaces(args: &RenderArgs) -> Result<Isosurfaces, CmdError> {
+    let values = args
+        .isos
+        .iter()
+        .map(|s| parse_iso(s).map_err(|e| format!("--iso '{s}': {e}")))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Isosurfaces::new(values)?)
+}
+
+/// The adaptive Simpson parameters of the command line (in the volume's unit length).
+fn adaptive(args: &RenderArgs) -> AdaptiveParams {
+    AdaptiveParams {
+        tol: args.tol,
+        h0: args.h0,
+        hmin: args.hmin,
+        hmax: args.hmax,
+        control: if args.decoupled {
+            StepControl::Decoupled
+        } else {
+            StepControl::Coupled
+        },
+        early_termination: None,
+    }
+}
+
+/// The grid integrator named on the command line (`None` for the mesh-only `exact` and
+/// `psi`).
+pub fn integrator(args: &RenderArgs) -> Option<Integrator> {
+    let step = args.step;
+    Some(match args.integrator {
+        IntegratorArg::Riemann => Integrator::Riemann { step },
+        IntegratorArg::Trapezoid => Integrator::Trapezoid { step },
+        IntegratorArg::Simpson => Integrator::Simpson { step },
+        IntegratorArg::AdaptiveSimpson => Integrator::AdaptiveSimpson(adaptive(args)),
+        IntegratorArg::Preintegrated => Integrator::Preintegrated { step },
+        IntegratorArg::Reference => Integrator::Reference,
+        IntegratorArg::Exact | IntegratorArg::Psi => return None,
+    })
+}
+
+impl From<SortArg> for SortMode {
+    fn from(s: SortArg) -> Self {
+        match s {
+            SortArg::Centroid => SortMode::Centroid,
+            SortArg::Exact => SortMode::Exact,
+        }
+    }
+}
+
+impl From<ColorArg> for SegmentRule {
+    fn from(c: ColorArg) -> Self {
+        match c {
+            ColorArg::Average => SegmentRule::Average,
+            ColorArg::Psi => SegmentRule::Psi,
+            ColorArg::Exact => SegmentRule::Exact,
+        }
+    }
+}
+
+impl From<ReconstructionArg> for Reconstruction {
+    fn from(r: ReconstructionArg) -> Self {
+        match r {
+            ReconstructionArg::Trilinear => Reconstruction::Trilinear,
+            ReconstructionArg::CatmullRom => Reconstruction::CatmullRom,
+            ReconstructionArg::BSpline => Reconstruction::BSpline,
+        }
+    }
+}
+
+/// The segment rule of mesh ray casting: `--integrator exact|psi|adaptive-simpson`, or the
+/// colour of `--color` for the grid integrators.
+pub fn tet_ray_rule(args: &RenderArgs) -> SegmentRule {
+    match args.integrator {
+        IntegratorArg::Exact => SegmentRule::Exact,
+        IntegratorArg::Psi => SegmentRule::Psi,
+        IntegratorArg::AdaptiveSimpson => SegmentRule::AdaptiveSimpson(adaptive(args)),
+        _ => args.color.into(),
+    }
+}
+
+/// Grid ray casting as the command line sets it (errors for the mesh-only integrators).
+fn grid_raycast(args: &RenderArgs) -> Result<GridRaycast, CmdError> {
+    let integrator = integrator(args).ok_or_else(|| {
+        format!(
+            "--integrator {} applies to tetrahedral meshes (--method raycast)",
+            args.integrator.name()
+        )
+    })?;
+    Ok(GridRaycast {
+        integrator,
+        reconstruction: args.reconstruction.into(),
+        jitter: args.jitter,
+    })
+}
+
+/// The loaded data as the volume to render: a grid split into tetrahedra for PT
+/// (`--as-tets` with `--method auto|pt`).
+pub fn volume(data: Dataset, args: &RenderArgs) -> Result<Volume, CmdError> {
+    let volume = match data {
+        Dataset::Grid(g) => Volume::from(g),
+        Dataset::Mesh(m) => Volume::from(m),
+        _ => return Err("unsupported dataset kind".into()),
+    };
+    let pt = matches!(args.method, MethodArg::Auto | MethodArg::Pt);
+    if args.as_tets && pt && matches!(volume, Volume::Grid(_)) {
+        return Ok(volume.to_tets()?);
+    }
+    Ok(volume)
+}
+
+/// The method for `volume` as the command line asks for it.
+pub fn method(args: &RenderArgs, volume: &Volume) -> Result<Method, CmdError> {
+    let pt = || {
+        Method::ProjectedTetrahedra(PtSettings {
+            sort: args.sort.into(),
+            color: args.color.into(),
+            count_violations: args.stats,
+        })
+    };
+    let mesh = matches!(volume, Volume::Mesh(_));
+    Ok(match args.method {
+        MethodArg::Auto | MethodArg::Pt if mesh => pt(),
+        // The library says why PT does not draw a grid (split it with --as-tets).
+        MethodArg::Pt => pt().resolve(volume).map(|_| pt())?,
+        MethodArg::Raycast if mesh => Method::TetRaycast(tet_ray_rule(args)),
+        MethodArg::Resample if mesh => Method::Resample {
+            samples: args.resample,
+            raycast: grid_raycast(args)?,
+        },
+        _ => Method::GridRaycast(grid_raycast(args)?),
+    })
+}
+
+/// The camera of the command line: `--camera FILE`, or the orbit options.
+pub fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
+    if let Some(p) = &args.camera {
+        let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+        return Ok(CameraSpec::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?);
+    }
+    Ok(CameraSpec {
+        projection: Some(
+            if args.orthographic {
+                "orthographic"
+            } else {
+                "perspective"
+            }
+            .into(),
+        ),
+        azimuth: args.azimuth,
+        elevation: args.elevation,
+        zoom: Some(args.zoom),
+        ..Default::default()
+    })
+}
+
+/// What `volux render` checks before loading the file: image size, output options, camera
+/// file, lighting, isosurfaces, the integrator's parameters.
+pub struct RenderPlan {
+    /// Image size.
+    pub size: (usize, usize),
+    /// PNG output options.
+    pub png: PngOptions,
+    /// The camera (resolved on the volume's bounds later).
+    pub camera: CameraSpec,
+    /// Lighting of isosurfaces and shaded volumes.
+    pub lighting: BlinnPhong,
+    /// Isosurfaces.
+    pub isosurfaces: Isosurfaces,
+}
+
+impl RenderPlan {
+    /// Parses and checks everything that does not need the data.
+    pub fn new(args: &RenderArgs) -> Result<Self, CmdError> {
+        let size = parse_size(&args.size)?;
+        let png = PngOptions {
+            background: parse_background(&args.background)?,
+            sixteen_bit: args.sixteen_bit,
+        };
+        let camera = camera_spec(args)?;
+        if let Some(i) = integrator(args) {
+            i.validate()?;
+        }
+        Ok(Self {
+            size,
+            png,
+            camera,
+            lighting: lighting(args)?,
+            isosurfaces: isosurfaces(args)?,
+        })
+    }
+
+    /// The scene of `volume`: its transfer function, camera and method.
+    pub fn scene(&self, args: &RenderArgs, volume: &Volume) -> Result<Scene, CmdError> {
+        let tf = transfer_function(&args.tf, volume)?;
+        let camera = self.camera.resolve(&volume.bounds())?;
+        let mut scene = Scene::new(camera, self.size.0, self.size.1, tf);
+        scene.method = method(args, volume)?;
+        let a = &mut scene.appearance;
+        a.opacity_scale = args.opacity_scale;
+        a.lighting = self.lighting;
+        a.shade_volume = args.shade;
+        a.isosurfaces = self.isosurfaces.clone();
+        a.mip = args.mip;
+        if args.no_early_termination {
+            scene.early_termination = None;
+        }
+        Ok(scene)
+    }
+}
