@@ -19,7 +19,9 @@
 pub mod classify;
 pub mod composite;
 pub mod engine;
+pub mod geometry;
 pub mod integrate;
+pub mod intervals;
 pub mod isosurface;
 pub mod macrocell;
 pub mod mip;

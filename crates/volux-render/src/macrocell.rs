@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use volux_core::grid::Scalar;
 
 use crate::classify::ClassifyTable;
+use crate::intervals::{Interval, IntervalSource};
 
 /// Min/max of the samples covered by each macrocell.
 #[derive(Clone, Debug)]
@@ -105,20 +106,61 @@ impl<'a> Occupancy<'a> {
         self.empty.iter().filter(|e| **e).count() as f64 / self.empty.len().max(1) as f64
     }
 
-    /// The parts of the voxel-space ray `o + t d`, `t` in `[t0, t1]`, that cross non-empty
-    /// macrocells, merged into maximal intervals, in order. Found by a 3D DDA (Amanatides and
-    /// Woo): per macrocell, one comparison chain to pick the axis crossed first and one add
-    /// to advance it; a run of non-empty macrocells becomes one interval.
+    /// The occupied intervals of the voxel-space ray `o + t d`, `t` in `[t0, t1]`, front to
+    /// back: maximal runs of non-empty macrocells, each with the range of values its samples
+    /// take (Open VKL's interval iterator: `tRange`, `valueRange`). Found lazily by a 3D DDA
+    /// (Amanatides and Woo).
+    pub fn intervals(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Intervals<'_, true> {
+        Intervals::new(self, o, d, t0, t1)
+    }
+
+    /// The `t` ranges of [`Occupancy::intervals`] into `out` (cleared first), without the
+    /// value ranges: the traversal's hot path.
     pub fn occupied(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, out: &mut Vec<(f64, f64)>) {
         out.clear();
+        out.extend(Intervals::<false>::new(self, o, d, t0, t1).map(|i| (i.t[0], i.t[1])));
+    }
+}
+
+impl IntervalSource for Occupancy<'_> {
+    fn occupied(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, out: &mut Vec<(f64, f64)>) {
+        Occupancy::occupied(self, o, d, t0, t1, out);
+    }
+
+    fn empty_fraction(&self) -> f64 {
+        Occupancy::empty_fraction(self)
+    }
+}
+
+/// The occupied intervals of one ray through a macrocell grid ([`Occupancy::intervals`]);
+/// `VALUES` says whether the value ranges are gathered.
+pub struct Intervals<'a, const VALUES: bool> {
+    occupancy: &'a Occupancy<'a>,
+    /// The macrocell the walk is in, and its index.
+    cell: [i64; 3],
+    idx: i64,
+    step: [i64; 3],
+    stride: [i64; 3],
+    /// Distance between crossings of macrocell planes, and the next crossing, per axis.
+    delta: [f64; 3],
+    t_next: [f64; 3],
+    /// Where the walk is, and where it stops.
+    t: f64,
+    t1: f64,
+    /// The start and value range of the run of non-empty macrocells being walked.
+    run: Option<(f64, [f32; 2])>,
+    done: bool,
+}
+
+impl<'a, const VALUES: bool> Intervals<'a, VALUES> {
+    fn new(occupancy: &'a Occupancy<'a>, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Self {
         let b = MacrocellGrid::BLOCK as f64;
-        let counts = self.grid.counts;
+        let counts = occupancy.grid.counts;
         let p = (o + d * t0) / b;
-        let mut cell: [i64; 3] =
+        let cell: [i64; 3] =
             std::array::from_fn(|a| (p[a].floor() as i64).clamp(0, counts[a] as i64 - 1));
         let step: [i64; 3] = std::array::from_fn(|a| if d[a] > 0.0 { 1 } else { -1 });
         let stride = [1, counts[0] as i64, (counts[0] * counts[1]) as i64];
-        // Distance between crossings of macrocell planes, and the next crossing, per axis.
         let delta: [f64; 3] = std::array::from_fn(|a| {
             if d[a] == 0.0 {
                 f64::INFINITY
@@ -126,44 +168,98 @@ impl<'a> Occupancy<'a> {
                 b / d[a].abs()
             }
         });
-        let mut t_next: [f64; 3] = std::array::from_fn(|a| {
+        let t_next: [f64; 3] = std::array::from_fn(|a| {
             if d[a] == 0.0 {
                 return f64::INFINITY;
             }
             let boundary = if d[a] > 0.0 { cell[a] + 1 } else { cell[a] } as f64 * b;
             (boundary - o[a]) / d[a]
         });
-        let empty_flags: &[bool] = &self.empty;
-        let mut idx = cell[0] + stride[1] * cell[1] + stride[2] * cell[2];
-        let mut run: Option<f64> = None;
-        let mut t = t0;
-        while t < t1 {
+        Self {
+            occupancy,
+            cell,
+            idx: cell[0] + stride[1] * cell[1] + stride[2] * cell[2],
+            step,
+            stride,
+            delta,
+            t_next,
+            t: t0,
+            t1,
+            run: None,
+            done: false,
+        }
+    }
+
+    /// The interval of the run that started at `start` with `values`, ending at `end`.
+    #[inline(always)]
+    fn interval(start: f64, values: [f32; 2], end: f64) -> Interval {
+        Interval {
+            t: [start, end],
+            values,
+        }
+    }
+}
+
+impl<const VALUES: bool> Iterator for Intervals<'_, VALUES> {
+    type Item = Interval;
+
+    #[inline]
+    fn next(&mut self) -> Option<Interval> {
+        if self.done {
+            return None;
+        }
+        let counts = self.occupancy.grid.counts;
+        let empty_flags: &[bool] = &self.occupancy.empty;
+        let ranges = &self.occupancy.grid.ranges;
+        while self.t < self.t1 {
             // The axis crossed first, by selects: which axis comes next is unpredictable,
             // so branches on it would mispredict about every other step.
+            let t_next = self.t_next;
             let a01 = usize::from(t_next[1] <= t_next[0]);
             let axis = a01 + usize::from(t_next[2] < t_next[a01]) * (2 - a01);
-            let empty = empty_flags.get(idx as usize).copied().unwrap_or(true);
-            match (empty, run) {
-                (false, None) => run = Some(t),
-                (true, Some(start)) => {
-                    out.push((start, t));
-                    run = None;
+            let empty = empty_flags.get(self.idx as usize).copied().unwrap_or(true);
+            let mut finished = None;
+            match (empty, &mut self.run) {
+                (false, None) => {
+                    let v = if VALUES {
+                        ranges[self.idx as usize]
+                    } else {
+                        [0.0; 2]
+                    };
+                    self.run = Some((self.t, v));
+                }
+                (false, Some((_, v))) if VALUES => {
+                    let r = ranges[self.idx as usize];
+                    *v = [v[0].min(r[0]), v[1].max(r[1])];
+                }
+                (true, Some((start, v))) => {
+                    finished = Some(Self::interval(*start, *v, self.t));
+                    self.run = None;
                 }
                 _ => {}
             }
             let exit = t_next[axis];
-            let exit = if exit < t1 { exit } else { t1 };
-            t = if exit > t { exit } else { t };
-            cell[axis] += step[axis];
-            if cell[axis] < 0 || cell[axis] >= counts[axis] as i64 {
+            let exit = if exit < self.t1 { exit } else { self.t1 };
+            self.t = if exit > self.t { exit } else { self.t };
+            self.cell[axis] += self.step[axis];
+            if self.cell[axis] < 0 || self.cell[axis] >= counts[axis] as i64 {
+                // Out of the grid: nothing more to walk.
+                self.t1 = self.t1.min(self.t);
+                if finished.is_some() {
+                    return finished;
+                }
                 break;
             }
-            idx += step[axis] * stride[axis];
-            t_next[axis] += delta[axis];
+            self.idx += self.step[axis] * self.stride[axis];
+            self.t_next[axis] += self.delta[axis];
+            if finished.is_some() {
+                return finished;
+            }
         }
-        if let Some(start) = run {
-            out.push((start, t.min(t1)));
-        }
+        self.done = true;
+        self.run
+            .take()
+            .map(|(start, v)| Self::interval(start, v, self.t.min(self.t1)))
     }
 }
 
@@ -224,5 +320,72 @@ mod tests {
         );
         occ.occupied(DVec3::new(-5.0, 2.0, 2.0), DVec3::X, 5.0, 37.0, &mut out);
         assert!(out.is_empty());
+        // The iterator gives the same interval with the values of its macrocells.
+        let it: Vec<_> = occ
+            .intervals(DVec3::new(-5.0, 20.0, 20.0), DVec3::X, 5.0, 37.0)
+            .collect();
+        assert_eq!(it.len(), 1);
+        assert_eq!(it[0].t, [21.0, 29.0]);
+        assert_eq!(it[0].values, [0.0, 1.0]);
+    }
+
+    /// Random rays through a random occupancy: the lazy iterator's intervals equal the
+    /// non-empty macrocells a brute-force march finds, and the values cover the samples.
+    #[test]
+    fn intervals_match_a_brute_force_march() {
+        let dims = [29, 23, 18];
+        let mut rng = volux_testkit::TestRng::new(5);
+        let v: Vec<f32> = (0..dims[0] * dims[1] * dims[2])
+            .map(|_| {
+                if rng.unit() < 0.02 {
+                    rng.unit() as f32
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let g = MacrocellGrid::build(&v, dims);
+        let tf = TransferFunction::from_json(
+            r#"{"color": [[0,1,1,1]], "extinction": [[0,0],[0.3,0],[1,1]]}"#,
+        )
+        .unwrap();
+        let table = ClassifyTable::new(&tf, [0.0, 1.0], 256);
+        let occ = Occupancy::new(&g, &table, &[]);
+        let mut spans = Vec::new();
+        for _ in 0..300 {
+            let o = DVec3::new(
+                rng.range(-5.0, 33.0),
+                rng.range(-5.0, 27.0),
+                rng.range(-5.0, 22.0),
+            );
+            let d = DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            let ext = DVec3::new(28.0, 22.0, 17.0);
+            let Some((t0, t1)) = crate::raycast::ray_box(o, d, DVec3::ZERO, ext) else {
+                continue;
+            };
+            let it: Vec<_> = occ.intervals(o, d, t0, t1).collect();
+            occ.occupied(o, d, t0, t1, &mut spans);
+            assert_eq!(
+                it.iter().map(|i| (i.t[0], i.t[1])).collect::<Vec<_>>(),
+                spans
+            );
+            // March in small steps: a point in a non-empty macrocell lies in an interval.
+            let n = 2000;
+            for k in 0..n {
+                let t = t0 + (t1 - t0) * (k as f64 + 0.5) / n as f64;
+                let p = (o + d * t) / MacrocellGrid::BLOCK as f64;
+                let c = [0, 1, 2].map(|a| (p[a].floor() as usize).min(g.counts[a] - 1));
+                let m = c[0] + g.counts[0] * (c[1] + g.counts[1] * c[2]);
+                let inside = it.iter().find(|i| i.t[0] <= t && t <= i.t[1]);
+                if !occ.empty[m] {
+                    let i = inside.unwrap_or_else(|| panic!("t {t} in macrocell {c:?} missed"));
+                    assert!(i.values[0] <= g.ranges[m][0] && g.ranges[m][1] <= i.values[1]);
+                }
+            }
+        }
     }
 }

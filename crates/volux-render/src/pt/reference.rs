@@ -14,17 +14,10 @@
 //!
 //! # Ties: rays in face planes
 //!
-//! A pixel ray may lie exactly in the plane of a face (axis-aligned lattices seen along an
-//! axis). To count such a ray exactly once, each face plane is computed *canonically* from
-//! its three vertices sorted lexicographically by position, so the two cells sharing a face
-//! see exactly opposite normals and offsets; a ray lying in a plane (`n . d = 0` and
-//! `n . (o - a) = 0` exactly) is then decided as if its origin were shifted by the
-//! infinitesimal vector `eps (1, delta, delta^2)` (simulation of simplicity): it is inside
-//! the half-space when the first non-zero component of the outward normal is negative.
-//! Because that is one consistent perturbation of the ray for all faces, a ray along a shared
-//! face or a shared edge is claimed by exactly one of the cells around it (tested on an
-//! axis-aligned lattice below). Crossings of a shared face give bit-identical `t` in both
-//! cells, since `t = -num / den` with both negated.
+//! The face planes are the canonical ones of [`crate::geometry::planes`] (shared with the tet
+//! ray caster): a ray along a shared face or a shared edge is claimed by exactly one of the
+//! cells around it (tested on an axis-aligned lattice below), and crossings of a shared face
+//! give bit-identical `t` in both cells.
 //!
 //! # Acceleration
 //!
@@ -45,19 +38,16 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use rayon::prelude::*;
-use volux_core::mesh::FACES;
 use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
 use crate::composite::composite64;
 use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
+use crate::geometry::TetPlanes;
+pub use crate::geometry::{ray_tet_intersection, TetCrossing};
 use crate::integrate::segment::SegmentIntegrator;
 use crate::scene::{Method, Scene};
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 use crate::RenderError;
-
-/// A cell whose volume is at most this times the cube of its longest edge (times 6) counts
-/// as degenerate and is skipped.
-const DEGENERATE_VOLUME: f64 = 1e-12;
 
 /// What to render with [`render_mesh_reference`].
 #[derive(Clone, Debug, PartialEq)]
@@ -71,27 +61,6 @@ pub struct ReferenceOptions {
     /// The transfer function. It is resolved against the mesh's scalar range before use
     /// ([`TransferFunction::resolved`], which leaves an already resolved TF unchanged).
     pub tf: TransferFunction,
-}
-
-/// Where a ray crosses one tetrahedron: parameters (world distances along the unit
-/// direction, `0 <= t_in < t_out`) and the linearly interpolated scalar at both ends.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TetCrossing {
-    /// Entry parameter (clipped to 0 when the origin is inside).
-    pub t_in: f64,
-    /// Exit parameter.
-    pub t_out: f64,
-    /// Scalar at the entry point.
-    pub s_in: f64,
-    /// Scalar at the exit point.
-    pub s_out: f64,
-}
-
-impl TetCrossing {
-    /// Length of the segment, `t_out - t_in` (world units for a unit direction).
-    pub fn length(&self) -> f64 {
-        self.t_out - self.t_in
-    }
 }
 
 /// One segment of a ray inside one tetrahedron of a mesh.
@@ -124,146 +93,6 @@ impl Segment {
     pub fn length(&self) -> f64 {
         self.t_out - self.t_in
     }
-}
-
-/// The four face planes of a non-degenerate tetrahedron, canonical (see the module
-/// documentation), with outward normals.
-#[derive(Clone, Copy, Debug)]
-struct TetPlanes {
-    /// Outward (not unit) normal of face `f`, the face opposite vertex `f`.
-    n: [DVec3; 4],
-    /// The lexicographically smallest vertex of face `f`.
-    a: [DVec3; 4],
-    /// `n[f] . (p[f] - a[f])`, negative: the signed height of the opposite vertex.
-    h_opp: [f64; 4],
-    /// Vertex scalars.
-    s: [f64; 4],
-}
-
-/// Lexicographic order of points (how a face's vertices are sorted before its plane is
-/// computed, so that neighbouring cells compute the bit-identical plane).
-pub(crate) fn lex_cmp(a: &DVec3, b: &DVec3) -> std::cmp::Ordering {
-    a.x.total_cmp(&b.x)
-        .then(a.y.total_cmp(&b.y))
-        .then(a.z.total_cmp(&b.z))
-}
-
-/// Whether the first non-zero component of `n` is negative: the sign of `n . (1, d, d^2)`
-/// for an infinitesimal `d > 0`.
-pub(crate) fn lex_negative(n: DVec3) -> bool {
-    if n.x != 0.0 {
-        n.x < 0.0
-    } else if n.y != 0.0 {
-        n.y < 0.0
-    } else {
-        n.z < 0.0
-    }
-}
-
-/// Six times the signed volume of the cell `p`, or `None` when the cell is degenerate (volume
-/// at most [`DEGENERATE_VOLUME`] times the cube of its longest edge) or not finite. One test
-/// for the reference and the tet ray caster, so both skip the same cells.
-pub(crate) fn cell_volume6(p: [DVec3; 4]) -> Option<f64> {
-    let vol6 = (p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]);
-    let mut edge2 = 0.0f64;
-    for i in 0..4 {
-        for j in i + 1..4 {
-            edge2 = edge2.max(p[i].distance_squared(p[j]));
-        }
-    }
-    let bound = DEGENERATE_VOLUME * edge2 * edge2.sqrt();
-    (vol6.is_finite() && bound.is_finite() && vol6.abs() > bound).then_some(vol6)
-}
-
-impl TetPlanes {
-    /// `None` for a degenerate cell or non-finite input.
-    fn new(p: [DVec3; 4], s: [f64; 4]) -> Option<Self> {
-        if !(p.iter().all(|v| v.is_finite()) && s.iter().all(|v| v.is_finite())) {
-            return None;
-        }
-        cell_volume6(p)?;
-        let mut planes = Self {
-            n: [DVec3::ZERO; 4],
-            a: [DVec3::ZERO; 4],
-            h_opp: [0.0; 4],
-            s,
-        };
-        for (f, slots) in FACES.iter().enumerate() {
-            let mut v = slots.map(|i| p[i]);
-            v.sort_by(lex_cmp);
-            let nc = (v[1] - v[0]).cross(v[2] - v[0]);
-            let h = nc.dot(p[f] - v[0]);
-            if !(h != 0.0 && h.is_finite()) {
-                return None;
-            }
-            let (n, h) = if h > 0.0 { (-nc, -h) } else { (nc, h) };
-            planes.n[f] = n;
-            planes.a[f] = v[0];
-            planes.h_opp[f] = h;
-        }
-        Some(planes)
-    }
-
-    /// Clips the ray `origin + t dir`, `t >= 0`, against the cell.
-    fn clip(&self, origin: DVec3, dir: DVec3) -> Option<TetCrossing> {
-        let mut t_in = 0.0f64;
-        let mut t_out = f64::INFINITY;
-        let mut num = [0.0; 4];
-        let mut den = [0.0; 4];
-        for f in 0..4 {
-            num[f] = self.n[f].dot(origin - self.a[f]);
-            den[f] = self.n[f].dot(dir);
-            if den[f] < 0.0 {
-                t_in = t_in.max(-num[f] / den[f]);
-            } else if den[f] > 0.0 {
-                t_out = t_out.min(-num[f] / den[f]);
-            } else {
-                // Parallel to the plane (or NaN): all inside or all outside; a ray in the
-                // plane itself is decided by the tie rule.
-                let inside = num[f] < 0.0 || (num[f] == 0.0 && lex_negative(self.n[f]));
-                if den[f].is_nan() || !inside {
-                    return None;
-                }
-            }
-        }
-        if !(t_out > t_in && t_out.is_finite()) {
-            return None;
-        }
-        let scalar = |t: f64| {
-            let (mut w, mut acc) = (0.0, 0.0);
-            for f in 0..4 {
-                let l = ((num[f] + t * den[f]) / self.h_opp[f]).max(0.0);
-                w += l;
-                acc += l * self.s[f];
-            }
-            if w > 0.0 {
-                acc / w
-            } else {
-                self.s.iter().sum::<f64>() * 0.25
-            }
-        };
-        Some(TetCrossing {
-            t_in,
-            t_out,
-            s_in: scalar(t_in),
-            s_out: scalar(t_out),
-        })
-    }
-}
-
-/// Intersects the ray `origin + t dir`, `t >= 0`, with the tetrahedron of corners `p` and
-/// vertex scalars `s` (any orientation). Returns `None` when the ray misses it, touches it
-/// only in a point (a vertex, or an edge crossed transversally), or when the cell is
-/// degenerate or an input is not finite. A ray lying in a face plane is decided by the
-/// tie rule of the module documentation. `t` is in units of `|dir|`; for a unit direction it
-/// is a world distance.
-pub fn ray_tet_intersection(
-    p: [DVec3; 4],
-    s: [f64; 4],
-    origin: DVec3,
-    dir: DVec3,
-) -> Option<TetCrossing> {
-    TetPlanes::new(p, s)?.clip(origin, dir)
 }
 
 fn tet_input(mesh: &TetMesh, t: usize) -> ([DVec3; 4], [f64; 4]) {
@@ -476,20 +305,11 @@ mod tests {
     use glam::Vec3;
     use volux_core::tetrahedralize::curvilinear_to_tets;
     use volux_core::{synth, CameraSpec};
+    use volux_testkit::TestRng;
 
-    /// Deterministic uniform numbers in `[0, 1)`.
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn vec(&mut self) -> DVec3 {
-            DVec3::new(self.next(), self.next(), self.next())
-        }
+    /// A point uniform in the unit cube.
+    fn random_point(rng: &mut TestRng) -> DVec3 {
+        DVec3::new(rng.unit(), rng.unit(), rng.unit())
     }
 
     fn field(p: DVec3) -> f64 {
@@ -611,17 +431,17 @@ mod tests {
 
     #[test]
     fn scalar_interpolation_is_exact_for_linear_fields() {
-        let mut rng = Lcg(5);
+        let mut rng = TestRng::new(5);
         let mut worst = 0.0f64;
         let mut hits = 0;
         for _ in 0..500 {
-            let p = [0; 4].map(|_| rng.vec() * 4.0 - 2.0);
+            let p = [0; 4].map(|_| random_point(&mut rng) * 4.0 - 2.0);
             let s = p.map(field);
             // A ray through a random interior point, from a random direction.
-            let w = [0; 4].map(|_| rng.next() + 0.01);
+            let w = [0; 4].map(|_| rng.unit() + 0.01);
             let sum: f64 = w.iter().sum();
             let inner = (0..4).map(|i| p[i] * (w[i] / sum)).sum::<DVec3>();
-            let d = (rng.vec() - 0.5).normalize();
+            let d = (random_point(&mut rng) - 0.5).normalize();
             let o = inner - d * 5.0;
             let Some(c) = ray_tet_intersection(p, s, o, d) else {
                 continue; // a degenerate draw

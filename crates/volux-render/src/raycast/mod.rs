@@ -27,6 +27,7 @@ use crate::composite::RayAccumulator;
 use crate::engine::Rebuilt;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::Integrator;
+use crate::intervals::IntervalSource;
 use crate::macrocell::{MacrocellGrid, Occupancy};
 use crate::sampling::Field;
 use crate::shading::{BlinnPhong, GradientVolume};
@@ -84,6 +85,18 @@ pub fn render_field<F: Field>(
     range: [f64; 2],
     opts: &RenderOptions,
 ) -> Result<Rendered, RenderError> {
+    render_field_in(field, place, range, None, opts)
+}
+
+/// [`render_field`] with rays sampled only in the `intervals` the volume gives (the seam of
+/// bricked and out-of-core grids: they supply the sampler, `field`, and the intervals).
+pub fn render_field_in<F: Field>(
+    field: &F,
+    place: Placement,
+    range: [f64; 2],
+    intervals: Option<&dyn IntervalSource>,
+    opts: &RenderOptions,
+) -> Result<Rendered, RenderError> {
     let pre = match opts.integrator {
         Integrator::Preintegrated { step } => Some(
             PreintegrationTable::new(&opts.tf, range, step * place.spacing.min_element())
@@ -99,6 +112,7 @@ pub fn render_field<F: Field>(
         Derived {
             macrocells: None,
             classification: None,
+            intervals,
             preintegration: pre.as_ref(),
             gradients: None,
             lanes: true,
@@ -112,6 +126,8 @@ struct Derived<'a> {
     macrocells: Option<&'a MacrocellGrid>,
     /// The classification, when the caller keeps one (built here otherwise).
     classification: Option<&'a Classification>,
+    /// The caller's intervals (a bricked grid's), instead of the macrocells'.
+    intervals: Option<&'a dyn IntervalSource>,
     preintegration: Option<&'a PreintegrationTable>,
     gradients: Option<&'a GradientVolume>,
     /// Whether tiles may take the lane paths.
@@ -139,9 +155,11 @@ fn render_with<F: Field>(
     let occupancy = derived
         .macrocells
         .zip(classification.empty.as_deref())
-        .filter(|_| !opts.mip)
-        .map(|(m, empty)| Occupancy::from_flags(m, empty))
-        .filter(|o| worth_skipping(o.empty_fraction(), &opts.integrator));
+        .map(|(m, empty)| Occupancy::from_flags(m, empty));
+    let intervals = derived
+        .intervals
+        .or(occupancy.as_ref().map(|o| o as &dyn IntervalSource))
+        .filter(|i| !opts.mip && worth_skipping(i.empty_fraction(), &opts.integrator));
     let breakpoints = opts.tf.resolved(range).breakpoints();
     let (lane_table, breakpoint_ranks) = match opts.integrator {
         Integrator::Riemann { step } => (
@@ -160,7 +178,7 @@ fn render_with<F: Field>(
         field,
         place,
         table,
-        occupancy: occupancy.as_ref(),
+        intervals,
         preintegration: derived.preintegration,
         gradients: derived.gradients,
         lane_table,
@@ -281,7 +299,8 @@ struct RayContext<'a, F> {
     field: &'a F,
     place: Placement,
     table: &'a ClassifyTable,
-    occupancy: Option<&'a Occupancy<'a>>,
+    /// Where rays sample (`None`: everywhere between entry and exit).
+    intervals: Option<&'a dyn IntervalSource>,
     preintegration: Option<&'a PreintegrationTable>,
     gradients: Option<&'a GradientVolume>,
     /// The classification for the lane-wise paths: per-slab colour and opacity for the

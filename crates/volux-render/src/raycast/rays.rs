@@ -142,7 +142,7 @@ impl<F: Field> RayContext<'_, F> {
         let o_v = (origin - place.origin) / place.spacing;
         let d_v = dir / place.spacing;
         spans.clear();
-        match self.occupancy {
+        match self.intervals {
             Some(occ) => occ.occupied(o_v, d_v, t0, t1, spans),
             None => spans.push((t0, t1)),
         }

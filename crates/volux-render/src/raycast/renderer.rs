@@ -137,6 +137,7 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
         let derived = Derived {
             macrocells: cells,
             classification: Some(&classification),
+            intervals: None,
             preintegration: pre.as_deref(),
             gradients,
             lanes: self.lanes,

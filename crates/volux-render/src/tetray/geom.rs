@@ -1,7 +1,7 @@
 //! Per-mesh geometry of the ray caster: canonical face planes shared by the two cells of a
 //! face, the face-to-face adjacency and the linear scalar field of every cell.
 //!
-//! The planes follow [`crate::pt::reference`] exactly: a face's plane is computed from its
+//! The planes follow [`crate::geometry::planes`] exactly (as the mesh reference does): a face's plane is computed from its
 //! three vertices sorted lexicographically by position, `n = (v1 - v0) x (v2 - v0)` in `f64`,
 //! and each cell sees it with the sign that makes it point outward. Since a face's plane is
 //! stored once and read by both of its cells with opposite signs, the numerators and
@@ -50,7 +50,7 @@ pub(crate) struct Geometry {
     pub scale: f64,
 }
 
-pub(crate) use crate::pt::reference::{cell_volume6, lex_cmp, lex_negative};
+use crate::geometry::{cell_volume6, lex_cmp, lex_negative};
 
 /// The linear field through four points, or `None` for a degenerate or non-finite cell.
 fn cell_field(p: [DVec3; 4], s: [f64; 4]) -> Option<[f64; 4]> {
