@@ -3,7 +3,8 @@
 use std::path::Path;
 
 mod common;
-use common::{coverage, png_pixels, shared, volux};
+use common::{coverage, png_pixels, volux};
+use volux_testkit::data::shared;
 
 /// Decodes an 8-bit RGB(A) PNG and returns (width, height, fraction of pixels that are not
 /// the background colour of the top-left corner, mean luminance of those).

@@ -11,8 +11,7 @@
 use std::path::Path;
 use std::process::Command;
 
-mod common;
-use common::shared;
+use volux_testkit::data::shared;
 
 fn decode(path: &Path) -> (u32, u32, Vec<u8>) {
     let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));

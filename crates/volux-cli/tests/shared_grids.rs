@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 mod common;
 use common::{png_pixels, volux};
+use volux_testkit::data::shared;
 
 /// The fraction of pixels that differ from the top-left corner's colour, and the standard
 /// deviation of those pixels' luminance (0-255).
@@ -56,11 +57,7 @@ fn grid_inputs(dir: &Path) -> Vec<PathBuf> {
 
 #[test]
 fn every_shared_grid_renders_a_picture_with_the_default_tf() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    if !dir.is_dir() {
-        eprintln!("skipping: {} is absent", dir.display());
-        return;
-    }
+    let Some(dir) = shared("") else { return };
     let tmp = tempfile::tempdir().unwrap();
     let png = tmp.path().join("r.png");
     let inputs = grid_inputs(&dir);

@@ -4,7 +4,8 @@
 use std::process::Output;
 
 mod common;
-use common::{shared, volux};
+use common::volux;
+use volux_testkit::data::shared;
 
 fn json(out: &Output) -> serde_json::Value {
     assert!(

@@ -7,34 +7,22 @@ use dicom_core::VR;
 use dicom_dictionary_std::tags;
 use volux_core::ScalarType;
 use volux_io::{dicom, ErrorKind};
+use volux_testkit::data::shared;
 
-const SERIES: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/tcia_cptac_sar_mr_3slice_dicom"
-);
-const EMRI: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/pydicom_emri_small/emri_small.dcm"
-);
+/// In `shared/data`: a three-slice MR series and a multi-frame file.
+const SERIES: &str = "tcia_cptac_sar_mr_3slice_dicom";
+const EMRI: &str = "pydicom_emri_small/emri_small.dcm";
 const FILES: [&str; 3] = ["1-1.dcm", "1-2.dcm", "1-3.dcm"];
 
-fn present(p: &str) -> bool {
-    let ok = Path::new(p).exists();
-    if !ok {
-        eprintln!("skipping: {p} is absent");
-    }
-    ok
-}
-
-fn sidecar(p: &str) -> serde_json::Value {
+fn sidecar(p: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
 }
 
 /// Copies the shared series into a new temp folder.
-fn copy_series() -> tempfile::TempDir {
+fn copy_series(series: &Path) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     for f in FILES {
-        std::fs::copy(Path::new(SERIES).join(f), dir.path().join(f)).unwrap();
+        std::fs::copy(series.join(f), dir.path().join(f)).unwrap();
     }
     dir
 }
@@ -66,12 +54,12 @@ fn err_kind(r: volux_io::Result<volux_core::Grid>) -> ErrorKind {
 
 #[test]
 fn shared_series_folder() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let side = sidecar(&format!("{SERIES}/series.json"));
+    };
+    let side = sidecar(&series.join("series.json"));
     assert_eq!(side["files"].as_array().unwrap().len(), 3);
-    let g = dicom::read(Path::new(SERIES), None).unwrap();
+    let g = dicom::read(&series, None).unwrap();
     assert_eq!(g.dims(), [512, 512, 3]);
     assert_eq!(g.scalar_type(), ScalarType::U16);
     let s = g.spacing();
@@ -82,7 +70,7 @@ fn shared_series_folder() {
     // Slice k of the volume is the file at z = -12 + 12 k (1-1 is at z = 12).
     let mut range = [f64::INFINITY, f64::NEG_INFINITY];
     for (k, f) in FILES.iter().rev().enumerate() {
-        let one = dicom::read(&Path::new(SERIES).join(f), None).unwrap();
+        let one = dicom::read(&series.join(f), None).unwrap();
         assert_eq!(one.dims(), [512, 512, 1]);
         assert_eq!(one.origin().z, -12.0 + 12.0 * k as f64);
         for i in (0..512 * 512).step_by(97) {
@@ -99,11 +87,11 @@ fn shared_series_folder() {
 
 #[test]
 fn shared_multiframe() {
-    if !present(EMRI) {
+    let Some(emri) = shared(EMRI) else {
         return;
-    }
-    let side = sidecar(&format!("{EMRI}.json"));
-    let g = dicom::read(Path::new(EMRI), None).unwrap();
+    };
+    let side = sidecar(&emri.with_extension("dcm.json"));
+    let g = dicom::read(&emri, None).unwrap();
     let (c, r, f) = (
         side["columns"].as_u64().unwrap() as usize,
         side["rows"].as_u64().unwrap() as usize,
@@ -121,21 +109,17 @@ fn shared_multiframe() {
     assert!(g.notes().iter().any(|n| n.contains("PixelSpacing")));
     assert!(g.notes().iter().any(|n| n.contains("SpacingBetweenSlices")));
     // Through `load` (magic-byte detection).
-    let (_, fmt) = volux_io::load(Path::new(EMRI), &Default::default()).unwrap();
+    let (_, fmt) = volux_io::load(&emri, &Default::default()).unwrap();
     assert_eq!(fmt, volux_io::Format::Dicom);
 }
 
 #[test]
 fn folder_skips_non_dicom_files() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let dir = copy_series();
-    std::fs::copy(
-        format!("{SERIES}/series.json"),
-        dir.path().join("series.json"),
-    )
-    .unwrap();
+    };
+    let dir = copy_series(&series);
+    std::fs::copy(series.join("series.json"), dir.path().join("series.json")).unwrap();
     std::fs::write(dir.path().join("notes.txt"), "hello").unwrap();
     std::fs::create_dir(dir.path().join("sub")).unwrap();
     let g = dicom::read(dir.path(), None).unwrap();
@@ -144,10 +128,10 @@ fn folder_skips_non_dicom_files() {
 
 #[test]
 fn uneven_gap_is_a_missing_slice() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let dir = copy_series();
+    };
+    let dir = copy_series(&series);
     let p = dir.path().join("1-1.dcm");
     edit(&p, &p, |o| set_z(o, 40.0));
     let k = err_kind(dicom::read(dir.path(), None));
@@ -159,10 +143,10 @@ fn uneven_gap_is_a_missing_slice() {
 
 #[test]
 fn duplicate_position() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let dir = copy_series();
+    };
+    let dir = copy_series(&series);
     let p = dir.path().join("1-1.dcm");
     edit(&p, &p, |o| set_z(o, 0.0));
     let k = err_kind(dicom::read(dir.path(), None));
@@ -174,10 +158,10 @@ fn duplicate_position() {
 
 #[test]
 fn missing_positions_fall_back_to_instance_number() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let dir = copy_series();
+    };
+    let dir = copy_series(&series);
     for (i, f) in FILES.iter().enumerate() {
         let p = dir.path().join(f);
         edit(&p, &p, |o| {
@@ -194,10 +178,10 @@ fn missing_positions_fall_back_to_instance_number() {
 
 #[test]
 fn truncated_file() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let dir = copy_series();
+    };
+    let dir = copy_series(&series);
     let p = dir.path().join("1-2.dcm");
     let bytes = std::fs::read(&p).unwrap();
     std::fs::write(&p, &bytes[..bytes.len() - 200_000]).unwrap();
@@ -225,12 +209,12 @@ fn truncated_file() {
 
 #[test]
 fn short_pixel_data_element() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
+    };
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("short.dcm");
-    edit(&Path::new(SERIES).join("1-1.dcm"), &p, |o| {
+    edit(&series.join("1-1.dcm"), &p, |o| {
         o.put(dicom_core::DataElement::new(
             tags::PIXEL_DATA,
             VR::OW,
@@ -252,10 +236,10 @@ fn short_pixel_data_element() {
 
 #[test]
 fn different_rows() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let dir = copy_series();
+    };
+    let dir = copy_series(&series);
     let p = dir.path().join("1-2.dcm");
     edit(&p, &p, |o| {
         o.put(dicom_core::DataElement::new(
@@ -301,13 +285,13 @@ fn no_dicom_files() {
 
 #[test]
 fn two_series() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let dir = copy_series();
+    };
+    let dir = copy_series(&series);
     for f in ["1-1.dcm", "1-2.dcm"] {
         let to = dir.path().join(format!("b{f}"));
-        edit(&Path::new(SERIES).join(f), &to, |o| {
+        edit(&series.join(f), &to, |o| {
             o.put_str(tags::SERIES_INSTANCE_UID, VR::UI, "1.2.3.4");
         });
     }
@@ -330,11 +314,11 @@ fn two_series() {
 
 #[test]
 fn compressed_transfer_syntax_is_unsupported() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
+    };
     let dir = tempfile::tempdir().unwrap();
-    let mut bytes = std::fs::read(Path::new(SERIES).join("1-1.dcm")).unwrap();
+    let mut bytes = std::fs::read(series.join("1-1.dcm")).unwrap();
     // Same length: "1.2.840.10008.1.2.1\0" -> "1.2.840.10008.1.2.5\0" (RLE Lossless).
     let at = bytes
         .windows(20)
@@ -355,10 +339,10 @@ fn compressed_transfer_syntax_is_unsupported() {
 /// The same slice re-encoded as implicit VR little endian and explicit VR big endian.
 #[test]
 fn other_uncompressed_transfer_syntaxes() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let src = Path::new(SERIES).join("1-1.dcm");
+    };
+    let src = series.join("1-1.dcm");
     let want = dicom::read(&src, None).unwrap();
     let dir = tempfile::tempdir().unwrap();
     for ts in ["1.2.840.10008.1.2", "1.2.840.10008.1.2.2"] {
@@ -378,10 +362,10 @@ fn other_uncompressed_transfer_syntaxes() {
 
 #[test]
 fn rescale_to_i16_and_f32() {
-    if !present(SERIES) {
+    let Some(series) = shared(SERIES) else {
         return;
-    }
-    let src = Path::new(SERIES).join("1-1.dcm");
+    };
+    let src = series.join("1-1.dcm");
     let raw = dicom::read(&src, None).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let cases = [
@@ -408,12 +392,12 @@ fn rescale_to_i16_and_f32() {
 
 #[test]
 fn lying_frame_count_is_truncated() {
-    if !present(EMRI) {
+    let Some(emri) = shared(EMRI) else {
         return;
-    }
+    };
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("frames.dcm");
-    edit(Path::new(EMRI), &p, |o| {
+    edit(&emri, &p, |o| {
         o.put_str(tags::NUMBER_OF_FRAMES, VR::IS, "2000000000");
     });
     let k = err_kind(dicom::read(&p, None));

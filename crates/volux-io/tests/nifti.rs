@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use volux_core::{Samples, ScalarType};
 use volux_io::{nifti, ErrorKind};
+use volux_testkit::data::shared;
 
 /// Header fields a test sets.
 #[derive(Clone)]
@@ -389,16 +390,11 @@ fn bitpix_mismatch_is_noted() {
 /// The shared VTK head MR (raw + JSON sidecar) written as `.nii.gz` reads back identically.
 #[test]
 fn shared_head_mr_as_nii_gz() {
-    let raw = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/vtk_head_mr/HeadMRVolume_48x62x42_uint8.raw"
-    );
-    if !Path::new(raw).exists() {
-        eprintln!("skipping: {raw} is absent");
+    let Some(raw) = shared("vtk_head_mr/HeadMRVolume_48x62x42_uint8.raw") else {
         return;
-    }
+    };
     let side: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(format!("{raw}.json")).unwrap()).unwrap();
+        serde_json::from_slice(&std::fs::read(raw.with_extension("raw.json")).unwrap()).unwrap();
     let dims: Vec<i16> = side["dims_xyz"]
         .as_array()
         .unwrap()

@@ -5,16 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 use volux_io::{off, plot3d, ErrorKind, ReadError};
-
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} is absent", p.display());
-        None
-    }
-}
+use volux_testkit::data::shared;
 
 fn sidecar(p: &Path) -> Value {
     let s = std::fs::read_to_string(format!("{}.json", p.display())).unwrap();

@@ -4,16 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 use volux_io::{load, Dataset, LoadOptions};
-
-fn data_dir() -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    if p.is_dir() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} is absent", p.display());
-        None
-    }
-}
+use volux_testkit::data::shared;
 
 fn sidecars(dir: &Path) -> Vec<(PathBuf, Value)> {
     let mut out = Vec::new();
@@ -142,7 +133,7 @@ fn check_slc(path: &Path) {
 
 #[test]
 fn every_shared_dataset_matches_its_sidecar() {
-    let Some(dir) = data_dir() else { return };
+    let Some(dir) = shared("") else { return };
     let mut checked = 0;
     for (json, side) in sidecars(&dir) {
         let folder = json.parent().unwrap();

@@ -5,16 +5,11 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 use volux_core::Grid;
 use volux_io::{load, raw, Dataset, Format, LoadOptions};
-
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+use volux_testkit::data::{shared, shared_root};
 
 /// (data file, sidecar JSON) of every raw grid.
 fn raw_datasets() -> Option<Vec<(PathBuf, Value)>> {
-    let dir = Path::new(DATA);
-    if !dir.is_dir() {
-        eprintln!("skipping: {} is absent", dir.display());
-        return None;
-    }
+    let dir = shared("")?;
     let mut out = Vec::new();
     for folder in std::fs::read_dir(dir).unwrap().flatten() {
         if !folder.path().is_dir() {
@@ -79,7 +74,11 @@ fn shared_raw_datasets_match_their_sidecars() {
     let Some(sets) = raw_datasets() else {
         return;
     };
-    assert!(!sets.is_empty(), "no raw datasets found in {DATA}");
+    assert!(
+        !sets.is_empty(),
+        "no raw datasets found in {}",
+        shared_root().display()
+    );
     for (p, car) in &sets {
         let gz = p.to_string_lossy().ends_with(".gz");
         let g = raw::read(p).unwrap_or_else(|e| panic!("{e}"));
@@ -107,11 +106,9 @@ fn shared_raw_datasets_match_their_sidecars() {
 
 #[test]
 fn shared_raw_through_the_sidecar_path() {
-    let p = Path::new(DATA).join("vtk_carotid/carotid_76x49x45_float32.raw.json");
-    if !p.exists() {
-        eprintln!("skipping: {} is absent", p.display());
+    let Some(p) = shared("vtk_carotid/carotid_76x49x45_float32.raw.json") else {
         return;
-    }
+    };
     let g = raw::read(&p).unwrap();
     assert_eq!(g.dims(), [76, 49, 45]);
     assert_eq!(g.range(), [0.0, 580.0]);

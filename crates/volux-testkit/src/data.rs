@@ -7,7 +7,8 @@ pub fn shared_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
 }
 
-/// A file of `../shared/data`, or `None` (printing that the test skips it) when absent.
+/// A file of `../shared/data`, or `None` (printing that the test skips it) when absent;
+/// `shared("")` is the folder itself.
 pub fn shared(rel: &str) -> Option<PathBuf> {
     let p = shared_root().join(rel);
     if p.exists() {

@@ -1,7 +1,7 @@
 //! Helpers shared by the end-to-end tests of the `volux` binary.
 #![allow(dead_code)] // each test crate uses its own subset
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 /// Runs the `volux` binary with `args` in `dir`.
@@ -11,19 +11,6 @@ pub fn volux(args: &[&str], dir: &Path) -> Output {
         .current_dir(dir)
         .output()
         .expect("the volux binary runs")
-}
-
-/// A file of `../shared/data`, or `None` (with a message) when it is absent.
-pub fn shared(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} is absent", p.display());
-        None
-    }
 }
 
 /// The pixels of an 8-bit PNG, one slice of channel values per pixel, and its size.

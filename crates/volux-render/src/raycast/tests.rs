@@ -181,12 +181,7 @@ fn lane_stream_matches_the_per_sample_loop() {
             o.shading = lights[k % 3];
             let stream = render_grid(&g, &o).unwrap();
             let loop_ = render_ray_by_ray(&g, &o);
-            let mut worst = 0.0f32;
-            for (a, b) in stream.image.pixels().iter().zip(loop_.image.pixels()) {
-                for c in 0..4 {
-                    worst = worst.max((a[c] - b[c]).abs());
-                }
-            }
+            let worst = stream.image.compare(&loop_.image, 0.0).unwrap().max_error;
             let case = format!("{rule} step {step} jitter {jitter} light {}", k % 3);
             assert!(worst < 1e-4, "{case}: {worst}");
             let (ns, nl) = (stream.stats.samples as f64, loop_.stats.samples as f64);
@@ -207,13 +202,7 @@ fn lane_mip_matches_the_ray_by_ray_mip() {
         o.integrator = Integrator::Riemann { step };
         let lanes = render_grid(&g, &o).unwrap();
         let single = render_ray_by_ray(&g, &o);
-        let worst = lanes
-            .image
-            .pixels()
-            .iter()
-            .zip(single.image.pixels())
-            .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
-            .fold(0.0f32, f32::max);
+        let worst = lanes.image.compare(&single.image, 0.0).unwrap().max_error;
         assert!(worst < 1e-4, "step {step}: {worst}");
         let (nl, ns) = (lanes.stats.samples as f64, single.stats.samples as f64);
         assert!(
@@ -254,19 +243,13 @@ fn lane_adaptive_rays_match_the_f64_integrator() {
         o.shading = shading;
         let lanes = render_grid(&g, &o).unwrap();
         let single = render_ray_by_ray(&g, &o);
-        let (mut worst, mut sum) = (0.0f32, 0.0f64);
-        for (a, b) in lanes.image.pixels().iter().zip(single.image.pixels()) {
-            for c in 0..4 {
-                worst = worst.max((a[c] - b[c]).abs());
-                sum += f64::from((a[c] - b[c]).abs());
-            }
-        }
-        let mean = sum / (4 * lanes.image.pixels().len()) as f64;
+        let d = lanes.image.compare(&single.image, 0.0).unwrap();
+        let (worst, mean) = (d.max_error, d.mean_error);
         let case = format!("stop {stop:?} shaded {}", shading.is_some());
         // Measured: worst 2.2e-5 unshaded; 3.9e-4 shaded, where lit colours vary more and a
         // few steps sit at the tolerance (mean 7e-7).
         let bound = if shading.is_some() { 0.1 } else { 0.02 };
-        assert!(worst < bound * tol as f32, "{case}: worst {worst}");
+        assert!(worst < bound * tol, "{case}: worst {worst}");
         assert!(mean < 1e-6, "{case}: mean {mean}");
         let (nl, ns) = (lanes.stats.samples as f64, single.stats.samples as f64);
         assert!((nl - ns).abs() <= 1e-3 * ns, "samples {nl} vs {ns}");
@@ -304,13 +287,7 @@ fn empty_space_skipping_changes_nothing() {
             let full = render_grid(&g, &o).unwrap();
             o.empty_space_skipping = true;
             let skip = render_grid(&g, &o).unwrap();
-            let diff = full
-                .image
-                .pixels()
-                .iter()
-                .zip(skip.image.pixels())
-                .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
-                .fold(0.0, f32::max);
+            let diff = full.image.compare(&skip.image, 0.0).unwrap().max_error;
             let tol = if matches!(integrator, Integrator::AdaptiveSimpson(_)) {
                 0.01
             } else {
@@ -343,12 +320,7 @@ fn cached_gradients_match_on_the_fly_shading() {
     )
     .unwrap()
     .image;
-    let d = cached
-        .pixels()
-        .iter()
-        .zip(fly.pixels())
-        .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
-        .fold(0.0, f32::max);
+    let d = cached.compare(&fly, 0.0).unwrap().max_error;
     assert!(d < 0.01, "{d}");
     assert!(cached.coverage(0.5) > 0.05);
 }
@@ -421,16 +393,6 @@ mod accuracy_tests {
         render_grid(g, &o).unwrap()
     }
 
-    fn fraction_over(a: &Image, b: &Image, eps: f32) -> f64 {
-        let over = a
-            .pixels()
-            .iter()
-            .zip(b.pixels())
-            .filter(|(p, q)| (0..4).any(|c| (p[c] - q[c]).abs() > eps))
-            .count();
-        over as f64 / a.pixels().len() as f64
-    }
-
     #[test]
     fn adaptive_meets_tolerance_against_reference() {
         for g in [
@@ -454,7 +416,11 @@ mod accuracy_tests {
                         early_termination: None,
                     };
                     let r = render(&g, Integrator::AdaptiveSimpson(p));
-                    let over = fraction_over(&r.image, &reference.image, eps as f32);
+                    let over = r
+                        .image
+                        .compare(&reference.image, eps)
+                        .unwrap()
+                        .fraction_over;
                     assert!(
                         over <= 0.001,
                         "{control:?} eps {eps}: {:.3} % of rays over",
@@ -475,13 +441,9 @@ mod accuracy_tests {
     #[test]
     fn seed_step_limits_are_at_least_as_accurate_as_riemann_0_2() {
         fn over_per_channel(a: &Image, b: &Image) -> [usize; 4] {
-            let mut n = [0; 4];
-            for (p, q) in a.pixels().iter().zip(b.pixels()) {
-                for c in 0..4 {
-                    n[c] += usize::from((p[c] - q[c]).abs() > 0.01);
-                }
-            }
-            n
+            let d = a.compare(b, 0.01).unwrap();
+            d.fraction_over_per_channel
+                .map(|f| (f * d.pixels as f64).round() as usize)
         }
         const N: usize = 128;
         let rays = 40 * 40;
@@ -533,15 +495,7 @@ mod accuracy_tests {
             render_grid(&g, &o).unwrap().image
         };
         let reference = render(Integrator::Reference, false);
-        let mean_err = |img: &Image| {
-            let e: f32 = img
-                .pixels()
-                .iter()
-                .zip(reference.pixels())
-                .map(|(p, q)| (0..4).map(|c| (p[c] - q[c]).abs()).sum::<f32>())
-                .sum();
-            e / (4 * img.pixels().len()) as f32
-        };
+        let mean_err = |img: &Image| img.compare(&reference, 0.0).unwrap().mean_error;
         // Measured (ML 33^3, 40x40): step 1: 0.0137 vs 0.0265; step 0.25: 0.0024 vs 0.0076.
         for (step, ratio) in [(1.0, 0.6), (0.25, 0.5)] {
             let pre = mean_err(&render(Integrator::Preintegrated { step }, true));
@@ -554,12 +508,7 @@ mod accuracy_tests {
         // Skipping empty space changes nothing for pre-integration either.
         let a = render(Integrator::Preintegrated { step: 0.7 }, true);
         let b = render(Integrator::Preintegrated { step: 0.7 }, false);
-        let d = a
-            .pixels()
-            .iter()
-            .zip(b.pixels())
-            .map(|(p, q)| (0..4).map(|c| (p[c] - q[c]).abs()).fold(0.0f32, f32::max))
-            .fold(0.0, f32::max);
+        let d = a.compare(&b, 0.0).unwrap().max_error;
         assert!(d < 1e-6, "skipping changed the pre-integrated image by {d}");
     }
 
@@ -569,11 +518,7 @@ mod accuracy_tests {
         let reference = render(&g, Integrator::Reference).image;
         let err = |i: Integrator| {
             let img = render(&g, i).image;
-            img.pixels()
-                .iter()
-                .zip(reference.pixels())
-                .map(|(p, q)| (0..4).map(|c| (p[c] - q[c]).abs()).fold(0.0f32, f32::max))
-                .fold(0.0, f32::max)
+            img.compare(&reference, 0.0).unwrap().max_error
         };
         for rule in [
             |s| Integrator::Riemann { step: s },
@@ -679,12 +624,7 @@ mod surface_tests {
         ] {
             o.integrator = i;
             let img = render_grid(&g, &o).unwrap().image;
-            let d = img
-                .pixels()
-                .iter()
-                .zip(fine.pixels())
-                .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
-                .fold(0.0, f32::max);
+            let d = img.compare(&fine, 0.0).unwrap().max_error;
             assert!(d < tol, "{}: {d}", i.name());
         }
         let (centre, edge) = (fine.get(32, 32)[0], fine.get(39, 32)[0]);

@@ -3,8 +3,9 @@ use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
 use volux_core::grid::{Buffer, Samples};
+use volux_core::image::ImageDiff;
 use volux_core::tetrahedralize::grid_to_tets;
-use volux_core::{synth, Camera, CameraSpec, Grid, Image, Projection, TetMesh, TransferFunction};
+use volux_core::{synth, Camera, CameraSpec, Grid, Projection, TetMesh, TransferFunction};
 
 use super::*;
 use crate::integrate::adaptive::{AdaptiveParams, StepControl};
@@ -32,19 +33,6 @@ fn options(camera: Camera, w: usize, h: usize) -> TetRayOptions {
     }
 }
 
-/// Mean (per channel) and max absolute difference.
-fn diff(a: &Image, b: &Image) -> (f64, f64) {
-    let (mut sum, mut max) = (0.0f64, 0.0f64);
-    for (p, q) in a.pixels().iter().zip(b.pixels()) {
-        for c in 0..4 {
-            let d = (p[c] as f64 - q[c] as f64).abs();
-            sum += d;
-            max = max.max(d);
-        }
-    }
-    (sum / (a.pixels().len() * 4) as f64, max)
-}
-
 /// Renders with the caster and the reference and checks they agree.
 fn check_against_reference(
     mesh: &TetMesh,
@@ -65,7 +53,11 @@ fn check_against_reference(
         },
     )
     .unwrap();
-    let (mean, max) = diff(&got.image, &want);
+    let ImageDiff {
+        mean_error: mean,
+        max_error: max,
+        ..
+    } = got.image.compare(&want, 0.0).unwrap();
     let cov = want.coverage(1e-3);
     eprintln!(
         "{label}: mean {mean:.2e}, max {max:.2e}, coverage {cov:.2}, {:?}",
@@ -297,7 +289,11 @@ fn rays_through_lattice_vertices_and_edges_are_walked_exactly() {
             },
         )
         .unwrap();
-        let (mean, max) = diff(&img.image, &reference);
+        let ImageDiff {
+            mean_error: mean,
+            max_error: max,
+            ..
+        } = img.image.compare(&reference, 0.0).unwrap();
         assert!(mean < 1e-6 && max < 1e-5, "view {vi}: {mean} {max}");
     }
     assert!(through_vertices >= 3 * 16, "{through_vertices}");
@@ -372,7 +368,11 @@ fn psi_colour_is_close_to_exact() {
             ..options(cam, 40, 40)
         })
         .unwrap();
-    let (mean, max) = diff(&exact.image, &psi.image);
+    let ImageDiff {
+        mean_error: mean,
+        max_error: max,
+        ..
+    } = exact.image.compare(&psi.image, 0.0).unwrap();
     eprintln!("psi vs exact: mean {mean:.2e}, max {max:.2e}");
     assert!(
         mean > 0.0,
@@ -403,7 +403,7 @@ fn early_termination_stops_rays_within_the_threshold() {
         "{:?}",
         early.stats
     );
-    let (_, max) = diff(&full.image, &early.image);
+    let max = full.image.compare(&early.image, 0.0).unwrap().max_error;
     assert!(max <= 0.05 + 1e-6, "{max}");
     assert!(early.image.pixels().iter().any(|p| p[3] >= 0.95));
 }
@@ -455,17 +455,6 @@ fn renders_are_deterministic_and_options_are_checked() {
     assert!(caster.trace(DVec3::ZERO, DVec3::ZERO).segments.is_empty());
 }
 
-/// Fraction of pixels where some channel differs by more than `eps`.
-fn fraction_over(a: &Image, b: &Image, eps: f32) -> f64 {
-    let over = a
-        .pixels()
-        .iter()
-        .zip(b.pixels())
-        .filter(|(p, q)| (0..4).any(|c| (p[c] - q[c]).abs() > eps))
-        .count();
-    over as f64 / a.pixels().len() as f64
-}
-
 /// Adaptive parameters in units of `diagonal / 256` of the mesh (as the CLI's voxel units).
 fn adaptive(mesh: &TetMesh, tol: f64, control: StepControl) -> SegmentRule {
     let unit = mesh.bounds().diagonal() / 256.0;
@@ -502,8 +491,12 @@ fn adaptive_simpson_matches_the_exact_colour_within_the_tolerance() {
                     ..options(cam, n, n)
                 })
                 .unwrap();
-            let over = fraction_over(&got.image, &exact.image, tol as f32);
-            let (mean, max) = diff(&got.image, &exact.image);
+            let ImageDiff {
+                fraction_over: over,
+                mean_error: mean,
+                max_error: max,
+                ..
+            } = got.image.compare(&exact.image, tol).unwrap();
             let est_max = got.error_map.iter().copied().fold(0.0f32, f32::max);
             let est_mean = got.error_map.iter().sum::<f32>() / (n * n) as f32;
             eprintln!(
@@ -543,7 +536,11 @@ fn adaptive_simpson_converges_and_respects_early_termination() {
                 ..options(cam, 32, 32)
             })
             .unwrap();
-        let (mean, max) = diff(&r.image, &exact.image);
+        let ImageDiff {
+            mean_error: mean,
+            max_error: max,
+            ..
+        } = r.image.compare(&exact.image, 0.0).unwrap();
         eprintln!("tol {tol}: mean {mean:.2e} max {max:.2e}");
         assert!(max <= tol * 2.0 + 1e-6, "tol {tol}: {max}");
         assert!(mean < last);
@@ -562,7 +559,7 @@ fn adaptive_simpson_converges_and_respects_early_termination() {
     opts.early_termination = Some(0.95);
     let early = caster.render(&opts).unwrap();
     assert!(early.stats.samples < full.stats.samples / 2);
-    let (_, max) = diff(&full.image, &early.image);
+    let max = full.image.compare(&early.image, 0.0).unwrap().max_error;
     assert!(max <= 0.05 + 2e-3, "{max}");
     // Bad parameters are rejected.
     let mut bad = options(cam, 8, 8);
@@ -680,22 +677,30 @@ fn isosurfaces_agree_with_projected_tetrahedra() {
         po.early_termination = None;
         po.isosurfaces = iso.clone();
         let pt = PtRenderer::new(&mesh).render(&po).unwrap();
-        let (mean, max) = diff(&ray.image, &pt.image);
+        let ImageDiff {
+            mean_error: mean,
+            max_error: max,
+            ..
+        } = ray.image.compare(&pt.image, 0.0).unwrap();
         let plain = caster
             .render(&TetRayOptions {
                 isosurfaces: Isosurfaces::default(),
                 ..o.clone()
             })
             .unwrap();
-        let (shown, _) = diff(&ray.image, &plain.image);
+        let shown = ray.image.compare(&plain.image, 0.0).unwrap().mean_error;
         eprintln!("camera {i}: PT vs tetray with isosurfaces: mean {mean:.2e}, max {max:.2e}; surfaces change the image by {shown:.2e}");
         assert!(shown > 0.01, "the surfaces show");
         assert!(mean < 1.0 / 255.0, "camera {i}: mean {mean}, max {max}");
         // The adaptive rule draws the same surfaces.
         o.color = adaptive(&mesh, 1e-3, StepControl::Coupled);
         let ad = caster.render(&o).unwrap();
-        let over = fraction_over(&ad.image, &ray.image, 1e-3);
-        let (mean, max) = diff(&ad.image, &ray.image);
+        let ImageDiff {
+            fraction_over: over,
+            mean_error: mean,
+            max_error: max,
+            ..
+        } = ad.image.compare(&ray.image, 1e-3).unwrap();
         eprintln!("camera {i}: adaptive vs exact with isosurfaces: {:.3} % over, mean {mean:.2e}, max {max:.2e}", over * 100.0);
         assert!(over <= 0.01, "camera {i}: {over}");
     }

@@ -1,17 +1,8 @@
 use super::*;
 use crate::integrate::segment::SegmentIntegrator;
-
-/// Deterministic uniform numbers in `[0, 1)`.
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use volux_testkit::reference::max_diff;
+use volux_testkit::tf::{random_tf, tf};
+use volux_testkit::TestRng;
 
 /// Bilinear interpolation of `f` sampled at nodes uniform in `u`, `depth(u)` the thickness.
 struct Grid {
@@ -81,17 +72,17 @@ fn explore_table_parametrizations() {
             ("sqrt", &sqrt_depth, &sqrt_coord),
         ] {
             let g = Grid::new(n, depth);
-            let mut rng = Lcg(5);
+            let mut rng = TestRng::new(5);
             let (mut worst, mut wat) = (0.0f64, (0.0, 0.0));
             // random thicknesses: log-uniform in [1e-4, 1e6] plus uniform in coordinate
             for k in 0..200_000 {
                 let (a, b) = if k % 2 == 0 {
                     (
-                        10f64.powf(rng.next() * 10.0 - 4.0),
-                        10f64.powf(rng.next() * 10.0 - 4.0),
+                        10f64.powf(rng.unit() * 10.0 - 4.0),
+                        10f64.powf(rng.unit() * 10.0 - 4.0),
                     )
                 } else {
-                    (depth(rng.next()), depth(rng.next()))
+                    (depth(rng.unit()), depth(rng.unit()))
                 };
                 let e = (g.at(coord(a), coord(b)) - psi_exact(a, b)).abs();
                 if e > worst {
@@ -119,17 +110,6 @@ fn explore_table_parametrizations() {
     }
 }
 
-fn tf(json: &str) -> TransferFunction {
-    TransferFunction::from_json(json).unwrap()
-}
-
-fn max_diff<const N: usize>(a: [f64; N], b: [f64; N]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
-}
-
 fn widen(v: [f32; 4]) -> [f64; 4] {
     v.map(f64::from)
 }
@@ -147,17 +127,17 @@ fn psi_simpson(a: f64, b: f64, m: usize) -> f64 {
 }
 
 /// Thickness log-uniform in `[10^lo, 10^hi]`, or exactly 0 one time in ten.
-fn log_depth(rng: &mut Lcg, lo: f64, hi: f64) -> f64 {
-    if rng.next() < 0.1 {
+fn log_depth(rng: &mut TestRng, lo: f64, hi: f64) -> f64 {
+    if rng.unit() < 0.1 {
         0.0
     } else {
-        10f64.powf(lo + (hi - lo) * rng.next())
+        10f64.powf(lo + (hi - lo) * rng.unit())
     }
 }
 
 #[test]
 fn psi_exact_matches_brute_force() {
-    let mut rng = Lcg(1);
+    let mut rng = TestRng::new(1);
     let mut worst = 0.0f64;
     for _ in 0..60 {
         let (a, b) = (
@@ -187,7 +167,7 @@ fn psi_exact_matches_brute_force() {
             log_depth(&mut rng, -8.0, 9.0),
             log_depth(&mut rng, -8.0, 9.0),
         );
-        let m = rng.next();
+        let m = rng.unit();
         let c = a + (b - a) * m;
         let q = a * m + 0.5 * (b - a) * m * m;
         let split = m * psi_exact(a * m, c * m)
@@ -216,7 +196,7 @@ fn psi_exact_edge_cases() {
     let a = 1e8;
     assert!((psi_exact(a, 0.0) * a - 1.0).abs() < 2e-8);
     // psi lies between the end transparency zeta and 1, and decreases in both arguments.
-    let mut rng = Lcg(2);
+    let mut rng = TestRng::new(2);
     for _ in 0..1000 {
         let (a, b) = (
             log_depth(&mut rng, -4.0, 4.0),
@@ -230,9 +210,9 @@ fn psi_exact_edge_cases() {
 }
 
 /// A resolved TF that is linear in colour and extinction on `[lo, hi]`.
-fn linear_tf(rng: &mut Lcg, lo: f64, hi: f64, tau_max: f64) -> TransferFunction {
-    let c = |rng: &mut Lcg, x: f64| [x, rng.next(), rng.next(), rng.next()];
-    let t = |rng: &mut Lcg, x: f64| [x, tau_max * rng.next() * rng.next()];
+fn linear_tf(rng: &mut TestRng, lo: f64, hi: f64, tau_max: f64) -> TransferFunction {
+    let c = |rng: &mut TestRng, x: f64| [x, rng.unit(), rng.unit(), rng.unit()];
+    let t = |rng: &mut TestRng, x: f64| [x, tau_max * rng.unit() * rng.unit()];
     let color = vec![c(rng, lo), c(rng, hi)];
     let extinction = vec![t(rng, lo), t(rng, hi)];
     let t = TransferFunction {
@@ -250,15 +230,15 @@ fn linear_tf(rng: &mut Lcg, lo: f64, hi: f64, tau_max: f64) -> TransferFunction 
 
 #[test]
 fn psi_colour_is_exact_for_linear_tfs() {
-    let mut rng = Lcg(3);
+    let mut rng = TestRng::new(3);
     let (mut worst64, mut worst32, mut worst_avg) = (0.0f64, 0.0f64, 0.0f64);
     let table = PsiTable::new();
     for case in 0..400 {
         let t = linear_tf(&mut rng, 0.0, 100.0, [0.1, 1.0, 10.0, 100.0][case % 4]);
         let seg = SegmentIntegrator::new(&t);
         let cls = CellClassifier::new(&t, [0.0, 100.0]);
-        let (s_f, s_b) = (100.0 * rng.next(), 100.0 * rng.next());
-        let l = 10f64.powf(rng.next() * 4.0 - 3.0);
+        let (s_f, s_b) = (100.0 * rng.unit(), 100.0 * rng.unit());
+        let l = 10f64.powf(rng.unit() * 4.0 - 3.0);
         let want = seg.integrate(s_f, s_b, l);
         let (cf, cb) = (t.color_at(s_f), t.color_at(s_b));
         let (tf_, tb) = (t.tau_per_world(s_f), t.tau_per_world(s_b));
@@ -283,30 +263,6 @@ fn psi_colour_is_exact_for_linear_tfs() {
     assert!(worst_avg > 100.0 * worst32, "{worst_avg} {worst32}");
 }
 
-fn random_tf(rng: &mut Lcg) -> TransferFunction {
-    let k = 3 + (rng.next() * 6.0) as usize;
-    let mut xs: Vec<f64> = (0..k).map(|_| rng.next() * 100.0).collect();
-    xs.sort_by(f64::total_cmp);
-    let color: Vec<[f64; 4]> = xs
-        .iter()
-        .map(|&x| [x, rng.next(), rng.next(), rng.next()])
-        .collect();
-    let mut ys: Vec<f64> = (0..k).map(|_| rng.next() * 100.0).collect();
-    ys.sort_by(f64::total_cmp);
-    let extinction: Vec<[f64; 2]> = ys.iter().map(|&y| [y, rng.next() * 2.0]).collect();
-    let t = TransferFunction {
-        space: volux_core::transfer::Space::Value,
-        color,
-        extinction,
-        opacity: Vec::new(),
-        opacity_step: 1.0,
-        opacity_scale: 1.0,
-        unit_length: 1.0,
-    };
-    t.validate().unwrap();
-    t
-}
-
 /// Composites front to back `[C, A]` pieces.
 fn composite(pieces: &[[f64; 4]]) -> [f64; 4] {
     crate::composite::composite64(pieces.iter().copied())
@@ -316,16 +272,16 @@ fn composite(pieces: &[[f64; 4]]) -> [f64; 4] {
 fn breakpoints_inside_the_segment() {
     // The psi model sees the TF only at s_f and s_b: breakpoints in between are missed.
     // Report how much, and check that splitting at the breakpoints restores exactness.
-    let mut rng = Lcg(4);
+    let mut rng = TestRng::new(4);
     let table = PsiTable::new();
     let (mut worst_psi, mut worst_avg, mut worst_split) = (0.0f64, 0.0f64, 0.0f64);
     let (mut sum_psi, mut sum_avg, mut count) = (0.0f64, 0.0f64, 0);
     for _ in 0..300 {
-        let t = random_tf(&mut rng);
+        let t = random_tf(&mut rng, 3);
         let seg = SegmentIntegrator::new(&t);
         let cls = CellClassifier::with_size(&t, [0.0, 100.0], 1 << 16);
-        let (s_f, s_b) = (100.0 * rng.next(), 100.0 * rng.next());
-        let l = 10f64.powf(rng.next() * 2.0 - 0.5);
+        let (s_f, s_b) = (100.0 * rng.unit(), 100.0 * rng.unit());
+        let l = 10f64.powf(rng.unit() * 2.0 - 0.5);
         let inside: Vec<f64> = t
             .breakpoints()
             .into_iter()
@@ -381,15 +337,15 @@ fn breakpoints_inside_the_segment() {
 
 #[test]
 fn average_is_exact_for_a_constant_medium() {
-    let mut rng = Lcg(6);
+    let mut rng = TestRng::new(6);
     let mut worst = 0.0f64;
     for _ in 0..200 {
-        let t = random_tf(&mut rng);
+        let t = random_tf(&mut rng, 3);
         let seg = SegmentIntegrator::new(&t);
         let cls = CellClassifier::with_size(&t, [0.0, 100.0], 1 << 16);
         // A table node value, so the classifier reproduces the TF up to f32 rounding.
-        let s = (100.0 * rng.next() * 65535.0).round() / 65535.0;
-        let l = 10f64.powf(rng.next() * 5.0 - 3.0);
+        let s = (100.0 * rng.unit() * 65535.0).round() / 65535.0;
+        let l = 10f64.powf(rng.unit() * 5.0 - 3.0);
         let want = seg.integrate(s, s, l);
         let (c, tau) = (t.color_at(s), t.tau_per_world(s));
         assert!(max_diff(average_segment(c, tau, c, tau, l), want) < 1e-15);
@@ -408,13 +364,13 @@ fn average_converges_at_first_order_as_l_vanishes() {
     // l int_0^1 c tau dx + O(l^2) = l (c_f tau_f + (c_f dtau + tau_f dc) / 2 + dc dtau / 3),
     // the average's l (c_f + c_b)(tau_f + tau_b) / 4 has dc dtau / 4 in place of dc dtau / 3:
     // the error is -l dc dtau / 12 + O(l^2).
-    let mut rng = Lcg(8);
+    let mut rng = TestRng::new(8);
     let table = PsiTable::new();
     for _ in 0..50 {
         let t = linear_tf(&mut rng, 0.0, 100.0, 5.0);
         let seg = SegmentIntegrator::new(&t);
         let cls = CellClassifier::new(&t, [0.0, 100.0]);
-        let (s_f, s_b) = (100.0 * rng.next(), 100.0 * rng.next());
+        let (s_f, s_b) = (100.0 * rng.unit(), 100.0 * rng.unit());
         let (cf, cb) = (t.color_at(s_f), t.color_at(s_b));
         let (tf_, tb) = (t.tau_per_world(s_f), t.tau_per_world(s_b));
         let coef = [0, 1, 2].map(|k| -(cb[k] - cf[k]) * (tb - tf_) / 12.0);
@@ -483,7 +439,7 @@ fn psi_table_error_is_bounded() {
         }
     }
     // Random thicknesses, log-uniform over [1e-4, 1e6] (and 0).
-    let mut rng = Lcg(9);
+    let mut rng = TestRng::new(9);
     let (mut random, mut random_100, mut thin_rel) = (0.0f64, 0.0f64, 0.0f64);
     for _ in 0..100_000 {
         let (a, b) = (
@@ -506,7 +462,7 @@ fn psi_table_error_is_bounded() {
     // The gamma interface (f32 gamma loses the thickness as gamma -> 1, so up to 0.999).
     let mut by_gamma = 0.0f64;
     for _ in 0..20_000 {
-        let (gf, gb) = ((0.999 * rng.next()) as f32, (0.999 * rng.next()) as f32);
+        let (gf, gb) = ((0.999 * rng.unit()) as f32, (0.999 * rng.unit()) as f32);
         let d = |g: f32| g as f64 / (1.0 - g as f64);
         let e = (table.psi(gf, gb) as f64 - psi_exact(d(gf), d(gb))).abs();
         by_gamma = by_gamma.max(e);
@@ -585,25 +541,25 @@ fn classifier_error_is_bounded_by_the_kinks() {
 fn linear_pieces_are_exact_between_breakpoints() {
     // On a value range without breakpoints inside, `linear_on` gives the TF exactly (to f32),
     // including next to the breakpoints where the table blends; with one inside, nothing.
-    let mut rng = Lcg(11);
+    let mut rng = TestRng::new(11);
     let (mut worst, mut some, mut none) = (0.0f64, 0, 0);
     for _ in 0..200 {
         // Breakpoints exact in f32 (otherwise their rounding shows next to steep kinks).
-        let mut t = random_tf(&mut rng);
+        let mut t = random_tf(&mut rng, 3);
         let snap = |x: f64| (x * 64.0).round() / 64.0;
         t.color.iter_mut().for_each(|p| p[0] = snap(p[0]));
         t.extinction.iter_mut().for_each(|p| p[0] = snap(p[0]));
         let cls = CellClassifier::new(&t, [0.0, 100.0]);
         let bp = t.breakpoints();
         for _ in 0..50 {
-            let (a, b) = (rng.next() * 120.0 - 10.0, rng.next() * 120.0 - 10.0);
-            let (lo, hi) = if rng.next() < 0.5 {
+            let (a, b) = (rng.unit() * 120.0 - 10.0, rng.unit() * 120.0 - 10.0);
+            let (lo, hi) = if rng.unit() < 0.5 {
                 (a.min(b), a.max(b))
             } else {
                 // Short ranges, often ending next to a breakpoint.
-                let k = bp[(rng.next() * bp.len() as f64) as usize];
-                let w = 1e-3 + rng.next() * 2.0;
-                if rng.next() < 0.5 {
+                let k = bp[(rng.unit() * bp.len() as f64) as usize];
+                let w = 1e-3 + rng.unit() * 2.0;
+                if rng.unit() < 0.5 {
                     (k, k + w)
                 } else {
                     (k - w, k)
@@ -703,7 +659,7 @@ fn bad_inputs_give_transparent_black() {
 
 #[test]
 fn thin_segments_use_an_accurate_series() {
-    let mut rng = Lcg(12);
+    let mut rng = TestRng::new(12);
     let mut worst = 0.0f64;
     for _ in 0..100_000 {
         let (a, b) = (
@@ -767,14 +723,14 @@ fn psi_fragment_timing() {
     );
     let cls = CellClassifier::new(&t, [0.0, 100.0]);
     let table = PsiTable::new();
-    let mut rng = Lcg(10);
+    let mut rng = TestRng::new(10);
     let n = 1 << 20;
     let random: Vec<[f32; 3]> = (0..n)
         .map(|_| {
-            let l = 10f64.powf(rng.next() * 3.0 - 2.0);
+            let l = 10f64.powf(rng.unit() * 3.0 - 2.0);
             [
-                (100.0 * rng.next()) as f32,
-                (100.0 * rng.next()) as f32,
+                (100.0 * rng.unit()) as f32,
+                (100.0 * rng.unit()) as f32,
                 l as f32,
             ]
         })

@@ -2,39 +2,11 @@
 //! big-integer arithmetic, every table entry against brute-force geometry, the fan's coverage
 //! of the convex hull, degenerate and non-finite input.
 use super::*;
+use volux_testkit::TestRng;
 
 // -------------------------------------------------------------------------------------------
 // Helpers
 // -------------------------------------------------------------------------------------------
-
-/// Seeded xorshift64 generator (no dependencies).
-struct XorShift(u64);
-
-impl XorShift {
-    fn new(seed: u64) -> Self {
-        XorShift(seed.max(1))
-    }
-    fn next_u64(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        self.0 = x;
-        x
-    }
-    /// Uniform in `[0, 1)`.
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Uniform in `[lo, hi)`.
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    /// Uniform integer in `lo..=hi`.
-    fn int(&mut self, lo: i64, hi: i64) -> i64 {
-        lo + (self.next_u64() % ((hi - lo + 1) as u64)) as i64
-    }
-}
 
 fn v2(x: f64, y: f64) -> DVec2 {
     DVec2::new(x, y)
@@ -81,7 +53,7 @@ fn orient2d_basic_and_symmetries() {
     assert_eq!(orient2d(a, a, c), Sign::Zero);
     assert_eq!(orient2d(a, a, a), Sign::Zero);
     // Cyclic invariance and antisymmetry on near-degenerate random triples.
-    let mut rng = XorShift::new(7);
+    let mut rng = TestRng::new(7);
     for _ in 0..20_000 {
         let p = v2(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
         let q = v2(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
@@ -98,7 +70,7 @@ fn orient2d_basic_and_symmetries() {
 
 #[test]
 fn orient2d_matches_i128_on_integers() {
-    let mut rng = XorShift::new(11);
+    let mut rng = TestRng::new(11);
     for round in 0..50_000 {
         // Small grids give many exact collinearities; large ones exercise the exact stages.
         let r = if round % 2 == 0 { 5 } else { (1i64 << 52) - 1 };
@@ -159,12 +131,12 @@ fn orient2d_nearly_collinear_ulp_grid() {
 
 #[test]
 fn orient2d_exactly_collinear_dyadic_and_one_ulp_off() {
-    let mut rng = XorShift::new(5);
+    let mut rng = TestRng::new(5);
     for _ in 0..20_000 {
         // a, a + d, a + 2d with dyadic values of 20 bits: all sums exact.
         let k = rng.int(-40, 40) as i32;
         let s = 2f64.powi(k);
-        let g = |rng: &mut XorShift| rng.int(-(1 << 20), 1 << 20) as f64 * s;
+        let g = |rng: &mut TestRng| rng.int(-(1 << 20), 1 << 20) as f64 * s;
         let a = v2(g(&mut rng), g(&mut rng));
         let d = v2(g(&mut rng), g(&mut rng));
         let b = a + d;
@@ -256,7 +228,7 @@ fn orient2d_extreme_magnitudes() {
 /// the full predicate agrees with stage 4 everywhere, subnormals and huge values included.
 #[test]
 fn orient2d_stages_agree() {
-    let mut rng = XorShift::new(99);
+    let mut rng = TestRng::new(99);
     for i in 0..40_000 {
         let k = if i % 2 == 0 {
             rng.int(-480, 500) as i32
@@ -717,7 +689,7 @@ fn check(v: [DVec2; 4]) -> u8 {
 
 /// Random points of the bounding box: strictly inside the hull, each lies in exactly one fan
 /// triangle; strictly outside, in none (points on an edge are skipped).
-fn check_coverage(v: [DVec2; 4], rng: &mut XorShift, samples: usize) {
+fn check_coverage(v: [DVec2; 4], rng: &mut TestRng, samples: usize) {
     let c = classify(v);
     if c.class.is_degenerate() {
         return;
@@ -791,7 +763,7 @@ fn realizable_codes() -> Vec<u8> {
 fn every_code_on_an_exhaustive_grid_matches_brute_force() {
     let grid: Vec<(i64, i64)> = (0..16).map(|i| (i % 4, i / 4)).collect();
     let mut hits = [0usize; 81];
-    let mut rng = XorShift::new(3);
+    let mut rng = TestRng::new(3);
     for a in 0..16 {
         for b in 0..16 {
             for c in 0..16 {
@@ -833,7 +805,7 @@ fn every_code_has_a_hand_made_witness() {
         ),
     ];
     let mut covered = [false; 81];
-    let mut rng = XorShift::new(17);
+    let mut rng = TestRng::new(17);
     for (base, class) in bases {
         for perm in permutations() {
             for mirror in [false, true] {
@@ -878,7 +850,7 @@ fn every_code_has_a_hand_made_witness() {
 /// relative, coverage by sampling); every realizable code is met.
 #[test]
 fn random_tetrahedra_match_brute_force() {
-    let mut rng = XorShift::new(0x5eed_1234_abcd_ef01);
+    let mut rng = TestRng::new(0x5eed_1234_abcd_ef01);
     let mut hits = [0usize; 81];
     let mut strictly_relative = 0;
     for n in 0..100_000 {

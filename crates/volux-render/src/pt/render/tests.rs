@@ -4,6 +4,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use glam::Vec3;
+use volux_core::image::ImageDiff;
 use volux_core::{synth, Camera, CameraSpec, Image, TetMesh, TransferFunction};
 
 use super::*;
@@ -49,20 +50,6 @@ fn reference(mesh: &TetMesh, o: &PtOptions) -> Image {
         tf: o.tf.clone(),
     };
     render_mesh_reference(mesh, &r).unwrap()
-}
-
-/// Mean and maximum absolute difference per channel over all pixels.
-fn diff(a: &Image, b: &Image) -> (f64, f64) {
-    let mut sum = 0.0f64;
-    let mut max = 0.0f64;
-    for (p, q) in a.pixels().iter().zip(b.pixels()) {
-        for c in 0..4 {
-            let d = f64::from((p[c] - q[c]).abs());
-            sum += d;
-            max = max.max(d);
-        }
-    }
-    (sum / (4 * a.pixels().len()) as f64, max)
 }
 
 fn grid_f32(dims: [usize; 3], v: Vec<f32>) -> volux_core::Grid {
@@ -146,7 +133,11 @@ fn single_tets_of_every_class_match_the_exact_ray_integral() {
         let out = r.render(&o).unwrap();
         assert_eq!(out.stats.tets_drawn, 1, "{name}");
         let refi = reference(&mesh, &o);
-        let (mean, max) = diff(&out.image, &refi);
+        let ImageDiff {
+            mean_error: mean,
+            max_error: max,
+            ..
+        } = out.image.compare(&refi, 0.0).unwrap();
         assert!(out.image.coverage(0.01) > 0.05, "{name}: nothing drawn");
         // Interior pixels match to rounding; silhouette pixels can differ only where a pixel
         // centre lies on the silhouette (f32 vs f64 inside tests).
@@ -188,7 +179,11 @@ fn convex_mesh_with_exact_order_and_colour_matches_reference() {
         let o = opts(camera(&mesh, az, el, ortho), tf(), 64);
         let out = PtRenderer::new(&mesh).render(&o).unwrap();
         assert_eq!(out.stats.exact_strategy, "mpvo");
-        let (mean, max) = diff(&out.image, &reference(&mesh, &o));
+        let ImageDiff {
+            mean_error: mean,
+            max_error: max,
+            ..
+        } = out.image.compare(&reference(&mesh, &o), 0.0).unwrap();
         eprintln!("convex az {az}: mean {mean:.2e}, max {max:.2e}");
         assert!(mean < 1.0 / 255.0 / 10.0, "mean {mean}");
         assert!(max < 0.05, "max {max}");
@@ -201,7 +196,11 @@ fn non_convex_torus_with_exact_order_matches_reference() {
     let o = opts(camera(&mesh, 20.0, 35.0, false), tf(), 64);
     let out = PtRenderer::new(&mesh).render(&o).unwrap();
     assert_eq!(out.stats.exact_strategy, "per-pixel");
-    let (mean, max) = diff(&out.image, &reference(&mesh, &o));
+    let ImageDiff {
+        mean_error: mean,
+        max_error: max,
+        ..
+    } = out.image.compare(&reference(&mesh, &o), 0.0).unwrap();
     eprintln!("torus: mean {mean:.2e}, max {max:.2e}");
     assert!(mean < 1.0 / 255.0, "mean {mean}");
     assert!(max < 0.1, "max {max}");
@@ -215,7 +214,11 @@ fn centroid_order_is_close_on_a_convex_mesh_and_reports_violations() {
     o.count_violations = true;
     let out = PtRenderer::new(&mesh).render(&o).unwrap();
     assert!(out.stats.sort_violations.is_some());
-    let (mean, _) = diff(&out.image, &reference(&mesh, &o));
+    let mean = out
+        .image
+        .compare(&reference(&mesh, &o), 0.0)
+        .unwrap()
+        .mean_error;
     assert!(mean < 1.0 / 255.0, "mean {mean}");
 }
 
@@ -228,8 +231,8 @@ fn psi_and_average_modes_approach_exact() {
     let psi = PtRenderer::new(&mesh).render(&o).unwrap().image;
     o.color = SegmentRule::Average;
     let avg = PtRenderer::new(&mesh).render(&o).unwrap().image;
-    let (mp, _) = diff(&psi, &exact);
-    let (ma, _) = diff(&avg, &exact);
+    let mp = psi.compare(&exact, 0.0).unwrap().mean_error;
+    let ma = avg.compare(&exact, 0.0).unwrap().mean_error;
     eprintln!("psi mean {mp:.2e}, average mean {ma:.2e}");
     // ψ cut at the TF's breakpoints is exact up to its table's interpolation error.
     assert!(mp < 2e-5, "psi mean error {mp}");
@@ -272,16 +275,11 @@ fn constant_medium_box_has_no_cracks_or_double_blending() {
     .unwrap();
     let o = opts(camera(&mesh, 33.0, 27.0, false), tf, 96);
     let out = PtRenderer::new(&mesh).render(&o).unwrap();
-    let (mean, max) = diff(&out.image, &reference(&mesh, &o));
+    let d = out.image.compare(&reference(&mesh, &o), 1e-3).unwrap();
+    let (mean, max) = (d.mean_error, d.max_error);
     assert!(mean < 1e-4, "mean {mean}");
     // Only silhouette pixels may differ (a centre exactly on the outline).
-    let big = out
-        .image
-        .pixels()
-        .iter()
-        .zip(reference(&mesh, &o).pixels())
-        .filter(|(a, b)| (a[3] - b[3]).abs() > 1e-3)
-        .count();
+    let big = (d.fraction_over_per_channel[3] * d.pixels as f64).round() as usize;
     assert!(big <= 4, "{big} pixels differ, max {max}");
 }
 
@@ -337,7 +335,11 @@ fn discarded_tets_do_not_change_the_image_and_recolouring_reuses_the_view() {
     let mut r = PtRenderer::new(&mesh);
     let first = r.render(&o).unwrap();
     assert!(first.stats.tets_kept < first.stats.tets);
-    let (mean, _) = diff(&first.image, &reference(&mesh, &o));
+    let mean = first
+        .image
+        .compare(&reference(&mesh, &o), 0.0)
+        .unwrap()
+        .mean_error;
     assert!(mean < 1.0 / 255.0 / 10.0, "mean {mean}");
     // Same zero set, new colours: no new per-tetrahedron pass.
     let mut o2 = o.clone();

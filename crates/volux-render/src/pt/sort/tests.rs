@@ -5,29 +5,9 @@ use glam::{DVec3, Vec3};
 use volux_core::synth::{smooth_tets, torus_tets};
 use volux_core::tetrahedralize::{lattice_tets, orient_positive};
 use volux_core::TetMesh;
+use volux_testkit::TestRng;
 
 use super::*;
-
-/// splitmix64, enough randomness for tests without a dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn shuffle(&mut self, v: &mut [u32]) {
-        for i in (1..v.len()).rev() {
-            v.swap(i, (self.next() % (i as u64 + 1)) as usize);
-        }
-    }
-}
 
 /// The documented order of depths, written independently of `depth_key`: numeric, -0 == +0,
 /// NaN after everything.
@@ -51,18 +31,18 @@ fn check_against_std(depths: &[f32], ids: &[u32]) {
 
 #[test]
 fn radix_sort_equals_stable_std_sort() {
-    let mut rng = Rng(7);
+    let mut rng = TestRng::new(7);
     for n in [0usize, 1, 5, 255, 256, 257, 1000, 100_000] {
         let depths: Vec<f32> = (0..n)
-            .map(|_| match rng.next() % 10 {
+            .map(|_| match rng.below(10) {
                 0 => f32::INFINITY,
                 1 => f32::NEG_INFINITY,
                 2 => f32::NAN,
                 3 => -0.0,
                 4 => 0.0,
-                5 => (rng.next() % 7) as f32 - 3.0,
+                5 => rng.int(-3, 3) as f32,
                 // Any bit pattern: subnormals, huge values, negative NaN.
-                6 => f32::from_bits(rng.next() as u32),
+                6 => f32::from_bits((rng.next_u64() >> 32) as u32),
                 _ => (rng.unit() * 2000.0 - 1000.0) as f32,
             })
             .collect();
@@ -77,7 +57,7 @@ fn radix_sort_equals_stable_std_sort() {
 
 #[test]
 fn radix_sort_skips_constant_digits_correctly() {
-    let mut rng = Rng(11);
+    let mut rng = TestRng::new(11);
     // Depths in [1, 1.0001): the top digits are constant and their passes skipped.
     let narrow: Vec<f32> = (0..50_000)
         .map(|_| 1.0 + (rng.unit() * 1e-4) as f32)
@@ -214,7 +194,7 @@ fn mpvo_keeps_discarded_cells_in_the_graph() {
 fn both_cells_of_a_face_see_opposite_relations() {
     let mesh = smooth_tets(2000).unwrap();
     let adj = mesh.face_adjacency();
-    let mut rng = Rng(3);
+    let mut rng = TestRng::new(3);
     for i in 0..8 {
         let eye = DVec3::new(rng.unit(), rng.unit(), rng.unit()) * 3.0 - 1.0;
         let fwd = DVec3::new(rng.unit(), rng.unit(), rng.unit()) - 0.5;
