@@ -1,6 +1,6 @@
 //! Isosurfaces along a ray: which isovalues a ray step crosses, and where.
 //!
-//! The seed `001_...txt` renders isosurfaces as shaded, possibly semi-transparent layers
+//! The seed `002` (§4.6) renders isosurfaces as Phong-lit, possibly semi-transparent layers
 //! composited with the volume. A traversal that samples the field at consecutive distances
 //! `t_a < t_b` asks [`Isosurfaces::crossings`] for the isovalues crossed in `(t_a, t_b]`; each
 //! crossing is located by root refinement on the field itself (not by linear interpolation of

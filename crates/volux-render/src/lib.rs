@@ -1,16 +1,57 @@
 //! # volux-render
 //!
-//! The rendering stages of the Volux pipeline, one module each, shared by every traversal:
+//! The rendering engine of Volux. Front ends (the CLI, the viewer, benchmarks) build a
+//! [`Scene`](scene::Scene) and call one [`Renderer`](engine::Renderer) made for their
+//! [`Volume`](scene::Volume) by [`create_renderer`](engine::create_renderer); the renderers
+//! share the pipeline's stages, one module each:
+//! **data** → **field sampling** → **classification** → **integration** → **traversal** →
+//! **compositing** → **image**.
 //!
-//! - [`sampling`]: field reconstruction (trilinear sampling of native-type grids);
-//! - [`classify`]: classification, a lookup table built from a [`TransferFunction`];
-//! - [`integrate`]: the optical model and its integrators (Riemann sum with step-corrected
-//!   opacity, `001_...txt` eq. 2.14);
-//! - [`raycast`]: image-order traversal of regular grids, front-to-back compositing;
-//! - [`resample`]: tetrahedral meshes resampled onto a grid (the simple correct path for
-//!   meshes until cell projection lands).
+//! ```
+//! use volux_core::{image::PngOptions, synth, CameraSpec};
+//! use volux_render::{engine::create_renderer, scene::{Scene, Volume}, tiles::Control};
 //!
-//! [`TransferFunction`]: volux_core::TransferFunction
+//! let volume = Volume::from(synth::marschner_lobb(64)?);
+//! let camera = CameraSpec { azimuth: Some(30.0), ..Default::default() }.resolve(&volume.bounds())?;
+//! let scene = Scene::new(camera, 256, 256, volume.preset_tf("auto")?);
+//! let frame = create_renderer(&volume, &scene.method)?.render(&scene, &Control::default())?;
+//! frame.image.write_png(&std::env::temp_dir().join("volux-quick-start.png"), &PngOptions::default())?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! ## The engine API
+//!
+//! - [`scene`]: what to render: the volume, the view, the appearance, the method, with
+//!   units and defaults stated once;
+//! - [`engine`]: the [`Renderer`](engine::Renderer) trait, frames and their figures, and the
+//!   choice of renderer for a volume and a method;
+//! - [`tiles`]: the one tile driver (parallel tiles, cancellation, progress) every renderer
+//!   runs on, and [`Control`](tiles::Control).
+//!
+//! ## Shared stages
+//!
+//! - [`sampling`]: field reconstruction (trilinear and tricubic sampling of native-type
+//!   grids, lane-wise);
+//! - [`classify`]: classification, lookup tables built from a transfer function;
+//! - [`integrate`]: the optical model and its integrators (Riemann, trapezoid, Simpson,
+//!   adaptive Simpson of seed `001`, pre-integration, and the linear-segment rules of the
+//!   tetrahedral renderers: average, ψ, exact);
+//! - [`composite`]: the front-to-back *under* operator, `f32` and `f64`;
+//! - [`shading`]: gradients and Blinn-Phong lighting; [`isosurface`]: isovalue crossings;
+//!   [`mip`]: maximum intensity projection;
+//! - [`macrocell`] and [`intervals`]: empty-space skipping, the interval iterator a ray
+//!   samples, and the seam bricked grids plug into;
+//! - [`geometry`]: the exact orientation predicate and canonical face planes of meshes.
+//!
+//! ## Traversals (the renderers)
+//!
+//! - [`raycast`]: image-order ray casting of regular grids (seed `001`);
+//! - [`pt`]: Projected Tetrahedra, cell projection of meshes (seeds `000` and `002`), with
+//!   the brute-force per-pixel mesh reference;
+//! - [`tetray`]: cell-to-cell ray casting of meshes;
+//! - [`resample`]: meshes resampled onto a grid and ray cast.
+//!
+//! `docs/seeds.md` in the repository says which seed document each number names.
 #![deny(missing_docs)]
 // One `unsafe` block, proven by a benchmark: the lane sampler's unchecked corner loads
 // (`sampling::Trilinear::interpolate4`, with the argument for their soundness).

@@ -1,8 +1,9 @@
 //! Gradient shading: normals from the scalar field and the Blinn-Phong model.
 //!
-//! The seed `001_...txt` shades direct volume renderings and isosurfaces with the Blinn-Phong
-//! model lit along the *gradient* of the scalar field, the gradient standing in for the surface
-//! normal. This module holds the pieces a traversal needs for that:
+//! The seeds light isosurfaces with the Phong model along the *gradient* of the scalar field,
+//! the gradient standing in for the surface normal (seed `002` §4.6; seed `001` treats no
+//! lighting, §2.4); Volux lights volume samples the same way on request (Blinn-Phong, as
+//! classic direct volume renderers do). This module holds the pieces a traversal needs:
 //!
 //! - [`gradient`]: central differences on any [`Field`] (on the fly, no extra memory);
 //! - [`GradientVolume`]: the same gradients precomputed once per volume (3 x `i16` per voxel,
@@ -346,7 +347,7 @@ pub enum Light {
     Direction(Vec3),
 }
 
-/// Blinn-Phong shading along the field gradient (`001_...txt`), two-sided.
+/// Blinn-Phong shading along the field gradient (seed `002` §4.6), two-sided.
 ///
 /// `out = rgb * (ambient + diffuse * max(N.L, 0)) + specular * max(N.H, 0)^shininess`, with
 /// `N` the unit gradient flipped to face the viewer, `L` the unit light direction and `H` the

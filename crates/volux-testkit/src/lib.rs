@@ -2,12 +2,12 @@
 //!
 //! Helpers every Volux test suite shares, so that each exists once (a dev-dependency only):
 //!
-//! - [`rng`]: [`TestRng`](rng::TestRng), a seeded generator for reproducible random cases;
+//! - [`rng`]: [`TestRng`], a seeded generator for reproducible random cases;
 //! - [`tf`]: random piecewise-linear transfer functions;
 //! - [`data`]: paths into `../shared/data`, skipping with a message when a file is absent;
 //! - [`images`]: image comparison with stated tolerances, writing the expected, actual and
 //!   difference images on failure (the metrics are [`volux_core::image::compare`]'s);
-//! - [`reference`]: brute-force integrals used as independent references (composite
+//! - [`reference`](mod@reference): brute-force integrals used as independent references (composite
 //!   Simpson of a linear ray segment).
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]

@@ -20,7 +20,7 @@ use volux_core::mesh::FACES;
 
 /// A cell whose volume is at most this times the cube of its longest edge (times 6) counts
 /// as degenerate and is skipped.
-const DEGENERATE_VOLUME: f64 = 1e-12;
+pub const DEGENERATE_VOLUME: f64 = 1e-12;
 
 /// Where a ray crosses one tetrahedron: parameters (world distances along the unit
 /// direction, `0 <= t_in < t_out`) and the linearly interpolated scalar at both ends.

@@ -2,7 +2,7 @@
 //! front-to-back compositing with early ray termination, parallel over square image tiles.
 //!
 //! Each ray is handed to one of the [`Integrator`]s of [`crate::integrate`] as a
-//! [`RayMedium`] (trilinear reconstruction of [`crate::sampling`], classification of
+//! [`RayMedium`](crate::integrate::RayMedium) (trilinear reconstruction of [`crate::sampling`], classification of
 //! [`crate::classify`]); steps are given in voxel units (the smallest spacing), as in the seed
 //! `001_...txt`. A tile takes one of these paths:
 //!

@@ -1,7 +1,7 @@
 //! Ray casting of tetrahedral meshes by cell-to-cell traversal (issue 5): Garrity's
 //! boundary-face entry, Bunyk et al.'s and Weiler et al.'s (HARC) walk from cell to cell
 //! through face adjacency (seed `000` §2.4), with the segment colours of the projection
-//! renderer (exact pre-integration, or partial pre-integration ψ of seed `000` §2.6), the
+//! renderer (exact pre-integration, or partial pre-integration ψ of seed `000` §2.3, applied to cells in §2.6), the
 //! adaptive Simpson rule of seed `001` ch. 4 along the whole ray, isosurfaces (seed `002`
 //! §4.6) and maximum intensity projection (`pixel.rs`).
 //!
