@@ -15,7 +15,7 @@ use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, Volume};
 use volux_render::shading::{BlinnPhong, Light};
 
 use crate::cli::{ColorArg, IntegratorArg, MethodArg, ReconstructionArg, RenderArgs, SortArg};
-use crate::commands::CmdError;
+use crate::commands::common::CmdError;
 
 /// Parses `WxH`.
 pub fn parse_size(s: &str) -> Result<(usize, usize), CmdError> {

@@ -5,8 +5,8 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use crate::aabb::Aabb;
 use crate::error::{Error, Result};
-use crate::Aabb;
 
 /// The projection of a camera.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

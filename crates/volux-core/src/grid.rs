@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use crate::aabb::Aabb;
 use crate::error::{Error, Result};
 use crate::limits::{check_alloc, checked_dims};
-use crate::Aabb;
 
 /// The native scalar type of a grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]

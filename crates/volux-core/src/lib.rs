@@ -3,6 +3,7 @@
 //! The data model of Volux, the first stage of the pipeline
 //! (**data** -> sampling -> classification -> integration -> traversal -> compositing -> image):
 //!
+//! - [`aabb::Aabb`]: world-space bounding boxes;
 //! - [`grid::Grid`]: a regular grid of scalars kept in their native type, possibly memory-mapped;
 //! - [`mesh::TetMesh`]: a tetrahedral mesh with one scalar per vertex, validation, boundary faces,
 //!   face adjacency and per-vertex gradients;
@@ -10,10 +11,14 @@
 //! - [`transfer::TransferFunction`]: piecewise-linear colour and extinction, presets, JSON;
 //! - [`camera::Camera`]: perspective and orthographic cameras, JSON;
 //! - [`image::Image`]: the RGBA f32 linear framebuffer and PNG output;
-//! - [`synth`]: synthetic datasets for tests, benchmarks and the demo.
+//! - [`histogram`]: value histograms (the automatic transfer function is fitted on them);
+//! - [`synth`]: synthetic datasets for tests, benchmarks and the demo;
+//! - [`error`]: the typed errors of the data model; [`limits`]: allocation limits checked
+//!   before any large buffer is reserved.
 #![deny(missing_docs)]
 #![deny(unsafe_code)]
 
+pub mod aabb;
 pub mod camera;
 pub mod error;
 pub mod grid;
@@ -25,36 +30,10 @@ pub mod synth;
 pub mod tetrahedralize;
 pub mod transfer;
 
+pub use aabb::Aabb;
 pub use camera::{Camera, CameraSpec, Projection, RayGenerator};
 pub use error::{Error, Result};
 pub use grid::{Buffer, Grid, Samples, ScalarType};
 pub use image::Image;
 pub use mesh::{MeshReport, TetMesh};
 pub use transfer::TransferFunction;
-
-/// A world-space axis-aligned bounding box.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Aabb {
-    /// Minimum corner.
-    pub min: glam::DVec3,
-    /// Maximum corner.
-    pub max: glam::DVec3,
-}
-
-impl Aabb {
-    /// The smallest box holding all `points`; `None` when empty.
-    pub fn from_points(points: impl IntoIterator<Item = glam::DVec3>) -> Option<Self> {
-        let mut it = points.into_iter();
-        let first = it.next()?;
-        let (min, max) = it.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
-        Some(Self { min, max })
-    }
-    /// Centre of the box.
-    pub fn center(&self) -> glam::DVec3 {
-        (self.min + self.max) * 0.5
-    }
-    /// Length of the diagonal.
-    pub fn diagonal(&self) -> f64 {
-        (self.max - self.min).length()
-    }
-}

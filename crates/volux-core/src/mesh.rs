@@ -8,8 +8,8 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::aabb::Aabb;
 use crate::error::{Error, Result};
-use crate::Aabb;
 
 /// Marks a face with no neighbour (a boundary face) in [`TetMesh::face_adjacency`].
 pub const NO_NEIGHBOR: u32 = u32::MAX;

@@ -24,7 +24,11 @@ use std::path::Path;
 use glam::Vec3;
 use volux_core::{Buffer, Samples, TetMesh};
 
-use crate::{ErrorKind, ReadError, Result};
+use crate::error::ErrorKind;
+
+use crate::error::ReadError;
+
+use crate::error::Result;
 
 /// A numeric type of a VTK array.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

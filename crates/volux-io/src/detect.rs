@@ -2,7 +2,11 @@
 use std::io::Read;
 use std::path::Path;
 
-use crate::{ErrorKind, ReadError, Result};
+use crate::error::ErrorKind;
+
+use crate::error::ReadError;
+
+use crate::error::Result;
 
 /// The formats Volux reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

@@ -19,10 +19,12 @@ use std::path::{Path, PathBuf};
 
 use volux_core::Grid;
 
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
 use crate::nrrd::header_lines;
 use crate::raw::{self, Decoded, ElemType};
 use crate::util::{header_err, read_exact_checked};
-use crate::{ErrorKind, ReadError, Result};
 
 /// The header fields Volux uses (keys lowercased).
 struct Header {

@@ -18,9 +18,12 @@ use std::path::{Path, PathBuf};
 
 use volux_core::{Grid, ScalarType};
 
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
+use crate::error::WriteError;
 use crate::raw::{self, Decoded, ElemType};
 use crate::util::{header_err, read_exact_checked};
-use crate::{ErrorKind, ReadError, Result, WriteError};
 
 /// Largest header read, in bytes.
 pub(crate) const MAX_HEADER_BYTES: u64 = 1 << 20;

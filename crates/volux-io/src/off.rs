@@ -20,8 +20,10 @@ use glam::Vec3;
 use volux_core::limits::{check_alloc, memory_limit};
 use volux_core::TetMesh;
 
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
 use crate::util::open_maybe_gz;
-use crate::{ErrorKind, ReadError, Result};
 
 /// Shortest possible vertex or tet line: 4 one-character tokens, 3 separators, a newline.
 const MIN_LINE_BYTES: u64 = 8;

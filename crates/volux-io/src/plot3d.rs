@@ -22,7 +22,11 @@ use glam::Vec3;
 use volux_core::tetrahedralize::curvilinear_to_tets;
 use volux_core::TetMesh;
 
-use crate::{ErrorKind, ReadError, Result};
+use crate::error::ErrorKind;
+
+use crate::error::ReadError;
+
+use crate::error::Result;
 
 /// The names of the q variables, in file order, then the derived one.
 pub const VARIABLES: [&str; 6] = [

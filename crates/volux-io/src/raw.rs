@@ -18,8 +18,11 @@ use std::path::{Path, PathBuf};
 
 use volux_core::{Buffer, Grid, Samples, ScalarType};
 
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
+use crate::error::WriteError;
 use crate::util::{header_err, open_maybe_gz, read_exact_checked};
-use crate::{ErrorKind, ReadError, Result, WriteError};
 
 /// Largest sidecar read (a sidecar is a few hundred bytes; anything huge is not one).
 const MAX_SIDECAR_BYTES: u64 = 1 << 20;

@@ -17,9 +17,11 @@ use std::path::Path;
 
 use volux_core::Grid;
 
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
 use crate::raw::{self, ElemType};
 use crate::util::header_err;
-use crate::{ErrorKind, ReadError, Result};
 
 /// The magic number that starts an SLC file.
 pub const MAGIC: &str = "11111";
@@ -347,10 +349,16 @@ mod tests {
     fn detection_finds_slc_by_magic_but_not_in_raw_data() {
         let bytes = slc([2, 1, 1], 0, &[vec![1, 2]]);
         let p = write("volume.dat", &bytes);
-        assert_eq!(crate::detect(&p).unwrap(), crate::Format::Slc);
+        assert_eq!(
+            crate::detect::detect(&p).unwrap(),
+            crate::detect::Format::Slc
+        );
         // Raw data that happens to start with the magic number stays raw.
         let p = write("data.raw", &bytes);
-        assert_eq!(crate::detect(&p).unwrap(), crate::Format::RawJson);
+        assert_eq!(
+            crate::detect::detect(&p).unwrap(),
+            crate::detect::Format::RawJson
+        );
     }
 
     trait ReplaceFirst {

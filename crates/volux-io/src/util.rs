@@ -4,7 +4,11 @@ use std::path::Path;
 
 use flate2::read::MultiGzDecoder;
 
-use crate::{ErrorKind, ReadError, Result};
+use crate::error::ErrorKind;
+
+use crate::error::ReadError;
+
+use crate::error::Result;
 
 /// Opens `path`, transparently decompressing gzip (detected by its magic bytes).
 pub fn open_maybe_gz(path: &Path) -> Result<Box<dyn Read>> {

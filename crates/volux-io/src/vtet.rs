@@ -21,8 +21,11 @@ use std::path::Path;
 use glam::Vec3;
 use volux_core::TetMesh;
 
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
+use crate::error::WriteError;
 use crate::util::{header_err, read_exact_checked};
-use crate::{ErrorKind, ReadError, Result, WriteError};
 
 /// Magic bytes of the format.
 pub const MAGIC: &[u8] = b"VOLUXTET";

@@ -24,7 +24,10 @@ use volux_core::tetrahedralize::curvilinear_to_tets;
 use volux_core::Grid;
 
 use crate::cells::{self, Attribute, CellSet, NumType, Values};
-use crate::{Dataset, ErrorKind, ReadError, Result};
+use crate::dataset::Dataset;
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
 
 type R<T> = std::result::Result<T, ErrorKind>;
 

@@ -27,99 +27,17 @@
 //! assert_eq!((frame.image.width(), frame.stats.pixels), (64, 64 * 64));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-use volux_core::Image;
-
+use crate::error::RenderError;
 use crate::pt::reference::MeshReference;
-use crate::pt::{PtRenderer, PtStats};
-use crate::raycast::{GridRenderer, RenderStats};
+use crate::pt::render::PtRenderer;
+use crate::raycast::renderer::GridRenderer;
 use crate::resample::ResampleRenderer;
 use crate::scene::{Method, Scene, Volume};
-use crate::tetray::{TetRayCaster, TetRayStats};
+use crate::tetray::render::TetRayCaster;
 use crate::tiles::Control;
-use crate::RenderError;
 
-/// A renderer of one volume: turns scenes into frames, keeping its caches between calls.
-pub trait Renderer: Send {
-    /// The method's short name (`raycast`, `pt`, `tet-raycast`, `resample`).
-    fn name(&self) -> &'static str;
-
-    /// Renders `scene`, which must name this renderer's method or [`Method::Auto`];
-    /// `control` cancels it and receives its progress.
-    fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError>;
-
-    /// Renders `scene` at `1 / divisor` of its resolution: the quick first pass of
-    /// progressive refinement (a viewer shows it while the camera moves).
-    fn render_preview(
-        &mut self,
-        scene: &Scene,
-        control: &Control,
-        divisor: usize,
-    ) -> Result<Frame, RenderError> {
-        let mut small = scene.clone();
-        small.view = scene.view.reduced(divisor);
-        self.render(&small, control)
-    }
-}
-
-/// A rendered frame.
-#[derive(Clone, Debug)]
-pub struct Frame {
-    /// Premultiplied linear RGBA.
-    pub image: Image,
-    /// Estimated absolute integration error per pixel (largest channel), row-major, where the
-    /// method estimates it (adaptive Simpson; 0 elsewhere); `None` for methods that do not.
-    pub error_map: Option<Vec<f32>>,
-    /// What the frame did.
-    pub stats: FrameStats,
-}
-
-/// Figures of a frame: the common ones, and the method's own.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FrameStats {
-    /// Wall time of the frame in milliseconds.
-    pub ms: f64,
-    /// Pixels rendered.
-    pub pixels: usize,
-    /// Which caches the frame rebuilt.
-    pub rebuilt: Rebuilt,
-    /// The method's own figures.
-    pub method: MethodStats,
-}
-
-/// Which derived data a frame had to build (the rest came from the renderer's caches).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct Rebuilt {
-    /// Data structures of the volume (macrocells, gradients, adjacency, ray-caster planes
-    /// and hierarchy, a resampled grid): built once per volume, or per setting they need.
-    pub data: bool,
-    /// Classification: what depends on the transfer function and the isovalues.
-    pub classification: bool,
-    /// View: what depends on the camera and the image size.
-    pub view: bool,
-}
-
-impl Rebuilt {
-    /// Everything rebuilt (a renderer without caches for that stage).
-    pub const ALL: Self = Self {
-        data: true,
-        classification: true,
-        view: true,
-    };
-}
-
-/// The figures only one method has.
-#[derive(Clone, Debug, PartialEq)]
-#[non_exhaustive]
-pub enum MethodStats {
-    /// Grid ray casting (also of a resampled mesh).
-    GridRaycast(RenderStats),
-    /// Projected Tetrahedra.
-    ProjectedTetrahedra(PtStats),
-    /// Tetrahedral ray casting.
-    TetRaycast(TetRayStats),
-    /// The brute-force mesh reference (no figures of its own).
-    MeshReference,
-}
+pub use crate::frame::{Frame, FrameStats, MethodStats, Rebuilt};
+pub use crate::renderer::Renderer;
 
 /// The renderer of `method` for `volume` (resolving [`Method::Auto`]); errors when the
 /// method does not apply to the volume. Nothing heavy is built until the first frame, except
@@ -149,33 +67,4 @@ pub fn render_once(
     control: &Control,
 ) -> Result<Frame, RenderError> {
     create_renderer(volume, &scene.method)?.render(scene, control)
-}
-
-/// The error of a renderer handed a scene for another method.
-pub(crate) fn wrong_method(renderer: &'static str, method: &Method) -> RenderError {
-    RenderError::InvalidOptions(format!(
-        "the '{renderer}' renderer cannot draw method '{}': create a renderer for it",
-        method.name()
-    ))
-}
-
-/// A frame from an image, the error map where the method estimates one, and the figures.
-pub(crate) fn frame(
-    image: Image,
-    error_map: Option<Vec<f32>>,
-    started: std::time::Instant,
-    rebuilt: Rebuilt,
-    method: MethodStats,
-) -> Frame {
-    let pixels = image.width() * image.height();
-    Frame {
-        image,
-        error_map,
-        stats: FrameStats {
-            ms: started.elapsed().as_secs_f64() * 1e3,
-            pixels,
-            rebuilt,
-            method,
-        },
-    }
 }

@@ -25,6 +25,8 @@
 //!   units and defaults stated once;
 //! - [`engine`]: the [`Renderer`](engine::Renderer) trait, frames and their figures, and the
 //!   choice of renderer for a volume and a method;
+//! - [`renderer`]: the trait every renderer implements; [`frame`]: frames and their figures
+//!   (the common ones and each method's own); [`error`]: the renderers' errors;
 //! - [`tiles`]: the one tile driver (parallel tiles, cancellation, progress) every renderer
 //!   runs on, and [`Control`](tiles::Control).
 //!
@@ -60,6 +62,8 @@
 pub mod classify;
 pub mod composite;
 pub mod engine;
+pub mod error;
+pub mod frame;
 pub mod geometry;
 pub mod integrate;
 pub mod intervals;
@@ -68,6 +72,7 @@ pub mod macrocell;
 pub mod mip;
 pub mod pt;
 pub mod raycast;
+pub mod renderer;
 pub mod resample;
 pub mod sampling;
 pub mod scene;
@@ -75,32 +80,5 @@ pub mod shading;
 pub mod tetray;
 pub mod tiles;
 
+pub use error::{check_image_size, RenderError, MAX_IMAGE_SIDE};
 pub use raycast::{render_grid, RenderOptions, RenderStats};
-
-/// Errors of the renderers.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum RenderError {
-    /// The render was cancelled through its cancellation flag.
-    #[error("render cancelled")]
-    Cancelled,
-    /// Options that cannot be used (zero image size, non-positive step...).
-    #[error("invalid render options: {0}")]
-    InvalidOptions(String),
-    /// An error of the data model.
-    #[error("{0}")]
-    Data(#[from] volux_core::Error),
-}
-
-/// Largest image side accepted by the renderers.
-pub const MAX_IMAGE_SIDE: usize = 1 << 15;
-
-/// Checks an image size: both sides between 1 and [`MAX_IMAGE_SIDE`].
-pub fn check_image_size(width: usize, height: usize) -> Result<(), RenderError> {
-    if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
-        return Err(RenderError::InvalidOptions(format!(
-            "image size {width}x{height} must be between 1 and {MAX_IMAGE_SIDE}"
-        )));
-    }
-    Ok(())
-}

@@ -108,17 +108,94 @@ impl<'a> Occupancy<'a> {
 
     /// The occupied intervals of the voxel-space ray `o + t d`, `t` in `[t0, t1]`, front to
     /// back: maximal runs of non-empty macrocells, each with the range of values its samples
-    /// take (Open VKL's interval iterator: `tRange`, `valueRange`). Found lazily by a 3D DDA
-    /// (Amanatides and Woo).
-    pub fn intervals(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Intervals<'_, true> {
-        Intervals::new(self, o, d, t0, t1)
+    /// take (Open VKL's interval iterator: `tRange`, `valueRange`).
+    pub fn intervals(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> std::vec::IntoIter<Interval> {
+        let mut out = Vec::new();
+        self.walk::<true>(o, d, t0, t1, |t, values| out.push(Interval { t, values }));
+        out.into_iter()
     }
 
     /// The `t` ranges of [`Occupancy::intervals`] into `out` (cleared first), without the
     /// value ranges: the traversal's hot path.
     pub fn occupied(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, out: &mut Vec<(f64, f64)>) {
         out.clear();
-        out.extend(Intervals::<false>::new(self, o, d, t0, t1).map(|i| (i.t[0], i.t[1])));
+        self.walk::<false>(o, d, t0, t1, |t, _| out.push((t[0], t[1])));
+    }
+
+    /// The 3D DDA (Amanatides and Woo) of [`Occupancy::intervals`]: per macrocell, one
+    /// comparison chain to pick the axis crossed first and one add to advance it; a run of
+    /// non-empty macrocells becomes one interval, handed to `emit` with its value range when
+    /// `VALUES` (the hot path leaves the ranges out: it was measured 15 to 25 % slower on the
+    /// phantom with them gathered through an iterator's state).
+    #[inline]
+    fn walk<const VALUES: bool>(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t0: f64,
+        t1: f64,
+        mut emit: impl FnMut([f64; 2], [f32; 2]),
+    ) {
+        let b = MacrocellGrid::BLOCK as f64;
+        let counts = self.grid.counts;
+        let ranges = &self.grid.ranges;
+        let empty_flags: &[bool] = &self.empty;
+        let p = (o + d * t0) / b;
+        let mut cell: [i64; 3] =
+            std::array::from_fn(|a| (p[a].floor() as i64).clamp(0, counts[a] as i64 - 1));
+        let step: [i64; 3] = std::array::from_fn(|a| if d[a] > 0.0 { 1 } else { -1 });
+        let stride = [1, counts[0] as i64, (counts[0] * counts[1]) as i64];
+        // Distance between crossings of macrocell planes, and the next crossing, per axis.
+        let delta: [f64; 3] = std::array::from_fn(|a| {
+            if d[a] == 0.0 {
+                f64::INFINITY
+            } else {
+                b / d[a].abs()
+            }
+        });
+        let mut t_next: [f64; 3] = std::array::from_fn(|a| {
+            if d[a] == 0.0 {
+                return f64::INFINITY;
+            }
+            let boundary = if d[a] > 0.0 { cell[a] + 1 } else { cell[a] } as f64 * b;
+            (boundary - o[a]) / d[a]
+        });
+        let mut idx = cell[0] + stride[1] * cell[1] + stride[2] * cell[2];
+        let mut run: Option<f64> = None;
+        let mut values = [f32::INFINITY, f32::NEG_INFINITY];
+        let mut t = t0;
+        while t < t1 {
+            // The axis crossed first, by selects: which axis comes next is unpredictable,
+            // so branches on it would mispredict about every other step.
+            let a01 = usize::from(t_next[1] <= t_next[0]);
+            let axis = a01 + usize::from(t_next[2] < t_next[a01]) * (2 - a01);
+            let empty = empty_flags.get(idx as usize).copied().unwrap_or(true);
+            match (empty, run) {
+                (false, None) => run = Some(t),
+                (true, Some(start)) => {
+                    emit([start, t], values);
+                    run = None;
+                    values = [f32::INFINITY, f32::NEG_INFINITY];
+                }
+                _ => {}
+            }
+            if VALUES && !empty {
+                let r = ranges[idx as usize];
+                values = [values[0].min(r[0]), values[1].max(r[1])];
+            }
+            let exit = t_next[axis];
+            let exit = if exit < t1 { exit } else { t1 };
+            t = if exit > t { exit } else { t };
+            cell[axis] += step[axis];
+            if cell[axis] < 0 || cell[axis] >= counts[axis] as i64 {
+                break;
+            }
+            idx += step[axis] * stride[axis];
+            t_next[axis] += delta[axis];
+        }
+        if let Some(start) = run {
+            emit([start, t.min(t1)], values);
+        }
     }
 }
 
@@ -129,137 +206,6 @@ impl IntervalSource for Occupancy<'_> {
 
     fn empty_fraction(&self) -> f64 {
         Occupancy::empty_fraction(self)
-    }
-}
-
-/// The occupied intervals of one ray through a macrocell grid ([`Occupancy::intervals`]);
-/// `VALUES` says whether the value ranges are gathered.
-pub struct Intervals<'a, const VALUES: bool> {
-    occupancy: &'a Occupancy<'a>,
-    /// The macrocell the walk is in, and its index.
-    cell: [i64; 3],
-    idx: i64,
-    step: [i64; 3],
-    stride: [i64; 3],
-    /// Distance between crossings of macrocell planes, and the next crossing, per axis.
-    delta: [f64; 3],
-    t_next: [f64; 3],
-    /// Where the walk is, and where it stops.
-    t: f64,
-    t1: f64,
-    /// The start and value range of the run of non-empty macrocells being walked.
-    run: Option<(f64, [f32; 2])>,
-    done: bool,
-}
-
-impl<'a, const VALUES: bool> Intervals<'a, VALUES> {
-    fn new(occupancy: &'a Occupancy<'a>, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Self {
-        let b = MacrocellGrid::BLOCK as f64;
-        let counts = occupancy.grid.counts;
-        let p = (o + d * t0) / b;
-        let cell: [i64; 3] =
-            std::array::from_fn(|a| (p[a].floor() as i64).clamp(0, counts[a] as i64 - 1));
-        let step: [i64; 3] = std::array::from_fn(|a| if d[a] > 0.0 { 1 } else { -1 });
-        let stride = [1, counts[0] as i64, (counts[0] * counts[1]) as i64];
-        let delta: [f64; 3] = std::array::from_fn(|a| {
-            if d[a] == 0.0 {
-                f64::INFINITY
-            } else {
-                b / d[a].abs()
-            }
-        });
-        let t_next: [f64; 3] = std::array::from_fn(|a| {
-            if d[a] == 0.0 {
-                return f64::INFINITY;
-            }
-            let boundary = if d[a] > 0.0 { cell[a] + 1 } else { cell[a] } as f64 * b;
-            (boundary - o[a]) / d[a]
-        });
-        Self {
-            occupancy,
-            cell,
-            idx: cell[0] + stride[1] * cell[1] + stride[2] * cell[2],
-            step,
-            stride,
-            delta,
-            t_next,
-            t: t0,
-            t1,
-            run: None,
-            done: false,
-        }
-    }
-
-    /// The interval of the run that started at `start` with `values`, ending at `end`.
-    #[inline(always)]
-    fn interval(start: f64, values: [f32; 2], end: f64) -> Interval {
-        Interval {
-            t: [start, end],
-            values,
-        }
-    }
-}
-
-impl<const VALUES: bool> Iterator for Intervals<'_, VALUES> {
-    type Item = Interval;
-
-    #[inline]
-    fn next(&mut self) -> Option<Interval> {
-        if self.done {
-            return None;
-        }
-        let counts = self.occupancy.grid.counts;
-        let empty_flags: &[bool] = &self.occupancy.empty;
-        let ranges = &self.occupancy.grid.ranges;
-        while self.t < self.t1 {
-            // The axis crossed first, by selects: which axis comes next is unpredictable,
-            // so branches on it would mispredict about every other step.
-            let t_next = self.t_next;
-            let a01 = usize::from(t_next[1] <= t_next[0]);
-            let axis = a01 + usize::from(t_next[2] < t_next[a01]) * (2 - a01);
-            let empty = empty_flags.get(self.idx as usize).copied().unwrap_or(true);
-            let mut finished = None;
-            match (empty, &mut self.run) {
-                (false, None) => {
-                    let v = if VALUES {
-                        ranges[self.idx as usize]
-                    } else {
-                        [0.0; 2]
-                    };
-                    self.run = Some((self.t, v));
-                }
-                (false, Some((_, v))) if VALUES => {
-                    let r = ranges[self.idx as usize];
-                    *v = [v[0].min(r[0]), v[1].max(r[1])];
-                }
-                (true, Some((start, v))) => {
-                    finished = Some(Self::interval(*start, *v, self.t));
-                    self.run = None;
-                }
-                _ => {}
-            }
-            let exit = t_next[axis];
-            let exit = if exit < self.t1 { exit } else { self.t1 };
-            self.t = if exit > self.t { exit } else { self.t };
-            self.cell[axis] += self.step[axis];
-            if self.cell[axis] < 0 || self.cell[axis] >= counts[axis] as i64 {
-                // Out of the grid: nothing more to walk.
-                self.t1 = self.t1.min(self.t);
-                if finished.is_some() {
-                    return finished;
-                }
-                break;
-            }
-            self.idx += self.step[axis] * self.stride[axis];
-            self.t_next[axis] += self.delta[axis];
-            if finished.is_some() {
-                return finished;
-            }
-        }
-        self.done = true;
-        self.run
-            .take()
-            .map(|(start, v)| Self::interval(start, v, self.t.min(self.t1)))
     }
 }
 

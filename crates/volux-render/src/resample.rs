@@ -13,12 +13,13 @@ use glam::DVec3;
 use volux_core::limits::check_alloc;
 use volux_core::TetMesh;
 
-use crate::engine::{wrong_method, Frame, Renderer};
+use crate::error::RenderError;
+use crate::frame::Frame;
 use crate::raycast::{grid_frame, render_field, Placement, RenderOptions};
+use crate::renderer::{wrong_method, Renderer};
 use crate::sampling::Trilinear;
 use crate::scene::{Method, Scene};
 use crate::tiles::Control;
-use crate::RenderError;
 
 /// A mesh resampled on a grid: f32 values (NaN outside the mesh) and their placement.
 #[derive(Clone, Debug)]

@@ -1,7 +1,7 @@
 //! What to render: the [`Volume`], the [`View`] (camera and image size), the [`Appearance`]
 //! (transfer function, lighting, isosurfaces, MIP) and the [`Method`] (which renderer, with
 //! its settings), gathered in a [`Scene`]. A front end builds a scene and hands it to a
-//! [`Renderer`](crate::engine::Renderer) made for the volume
+//! [`Renderer`](crate::renderer::Renderer) made for the volume
 //! ([`create_renderer`](crate::engine::create_renderer)); it never reaches into a renderer.
 //!
 //! # Units, stated once
@@ -29,12 +29,12 @@ use volux_core::histogram::Histogram;
 use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::{Aabb, Camera, Grid, TetMesh, TransferFunction};
 
-use crate::integrate::{Integrator, SegmentRule};
+use crate::error::RenderError;
+use crate::integrate::integrator::Integrator;
+use crate::integrate::segment::SegmentRule;
 use crate::isosurface::Isosurfaces;
-use crate::pt::SortMode;
 use crate::sampling::Reconstruction;
 use crate::shading::BlinnPhong;
-use crate::RenderError;
 
 /// A mesh's unit length is its bounding-box diagonal divided by this ([`Volume::unit_length`]).
 pub const MESH_UNITS_PER_DIAGONAL: f64 = 256.0;
@@ -213,6 +213,27 @@ impl Default for GridRaycast {
     }
 }
 
+/// Visibility order of Projected Tetrahedra ([`crate::pt::sort`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SortMode {
+    /// Centroid depth, radix sorted (the seeds' order; approximate).
+    #[default]
+    Centroid,
+    /// Exact: MPVO for convex meshes, per-pixel fragment sorting otherwise.
+    Exact,
+}
+
+impl SortMode {
+    /// Parses `centroid` or `exact`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s {
+            "centroid" => Ok(Self::Centroid),
+            "exact" => Ok(Self::Exact),
+            other => Err(format!("unknown sort '{other}' (centroid, exact)")),
+        }
+    }
+}
+
 /// Projected Tetrahedra settings.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PtSettings {
@@ -341,7 +362,7 @@ impl Scene {
     /// Checks what does not depend on the volume: image size, camera, transfer function,
     /// lighting, early termination.
     pub fn validate(&self) -> Result<(), RenderError> {
-        crate::check_image_size(self.view.width, self.view.height)?;
+        crate::error::check_image_size(self.view.width, self.view.height)?;
         self.view.camera.validate()?;
         self.appearance.tf.validate()?;
         let s = self.appearance.opacity_scale;

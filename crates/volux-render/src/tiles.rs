@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use crate::RenderError;
+use crate::error::RenderError;
 
 /// Side of the square tiles of the ray casters, in pixels: neighbouring rays read the same
 /// voxels or cells, so a tile keeps them on one core.

@@ -11,7 +11,7 @@ use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
 use volux_render::scene::{GridRaycast, Method, Scene, Volume};
 use volux_render::tiles::Control;
 
-use super::CmdError;
+use super::common::CmdError;
 use crate::cli::LoadArgs;
 use crate::settings::{parse_size, transfer_function};
 
@@ -42,7 +42,7 @@ fn load_grid(args: &Args, show: bool) -> Result<Volume, CmdError> {
     if synth::GENERATORS[..3].contains(&name.as_ref()) {
         return Ok(synth::generate_grid(&name, 64)?.into());
     }
-    match super::load(&args.file, &args.load, show)?.0 {
+    match super::common::load(&args.file, &args.load, show)?.0 {
         Dataset::Grid(g) => Ok(g.into()),
         _ => Err("accuracy works on regular grids".into()),
     }

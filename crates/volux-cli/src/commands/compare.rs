@@ -5,7 +5,7 @@ use std::path::Path;
 use volux_core::image::{compare, difference_values, read_png, PngOptions};
 use volux_core::Image;
 
-use super::CmdError;
+use super::common::CmdError;
 
 /// Options of `volux compare`.
 pub struct Args<'a> {

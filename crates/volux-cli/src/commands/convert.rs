@@ -5,11 +5,11 @@ use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::{synth, Grid, TetMesh};
 use volux_io::Dataset;
 
-use super::CmdError;
+use super::common::CmdError;
 use crate::cli::{value_name, Generator, LoadArgs};
 
 pub fn run(input: &Path, output: &Path, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
-    let (data, _) = super::load(input, args, show)?;
+    let (data, _) = super::common::load(input, args, show)?;
     write(data, output)?;
     eprintln!("wrote {}", output.display());
     Ok(())

@@ -6,11 +6,11 @@ use volux_core::histogram::Histogram;
 use volux_core::{Grid, TetMesh};
 use volux_io::{Dataset, Format};
 
-use super::CmdError;
+use super::common::CmdError;
 use crate::cli::LoadArgs;
 
 pub fn run(path: &Path, as_json: bool, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
-    let (data, format) = super::load(path, args, show)?;
+    let (data, format) = super::common::load(path, args, show)?;
     let value = match &data {
         Dataset::Grid(g) => grid_json(g, format),
         Dataset::Mesh(m) => mesh_json(m, format),

@@ -3,21 +3,16 @@
 //! ([`volux_render::engine`]).
 mod accuracy;
 mod bench;
+pub mod common;
 mod compare;
 mod convert;
 mod info;
 mod render;
 mod report;
 
-use std::path::Path;
-
-use volux_io::{Dataset, Format, LoadOptions};
-
-use crate::cli::{Cli, Command, LoadArgs};
+use crate::cli::{Cli, Command};
 use crate::progress;
-
-/// An error of a command: one readable line.
-pub type CmdError = Box<dyn std::error::Error + Send + Sync>;
+use common::CmdError;
 
 /// Runs the command.
 pub fn run(cli: Cli) -> Result<(), CmdError> {
@@ -78,18 +73,4 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             only,
         } => bench::run(quick, frames, grid_size, json, suite, only.as_deref()),
     }
-}
-
-/// Loads a file with a spinner.
-pub fn load(path: &Path, args: &LoadArgs, show: bool) -> Result<(Dataset, Format), CmdError> {
-    let pb = progress::spinner(show, format!("loading {}", path.display()));
-    let opts = LoadOptions {
-        q_variable: args.q_variable.clone(),
-        q_file: args.q_file.clone(),
-        series_uid: args.series.clone(),
-        array: args.array.clone(),
-    };
-    let out = volux_io::load(path, &opts);
-    pb.finish_and_clear();
-    Ok(out?)
 }

@@ -8,8 +8,8 @@ use volux_render::engine::{create_renderer, Frame};
 use volux_render::scene::{Scene, Volume};
 use volux_render::tiles::Control;
 
+use super::common::CmdError;
 use super::report;
-use super::CmdError;
 use crate::cli::RenderArgs;
 use crate::progress;
 use crate::settings::RenderPlan;
@@ -17,7 +17,7 @@ use crate::settings::RenderPlan;
 /// Renders the file of `args` and writes the PNG (and the error map).
 pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let plan = RenderPlan::new(args)?;
-    let (data, _) = super::load(&args.file, &args.load, show)?;
+    let (data, _) = super::common::load(&args.file, &args.load, show)?;
     let volume = crate::settings::volume(data, args)?;
     let scene = plan.scene(args, &volume)?;
     let frame = render(&volume, &scene, show)?;

@@ -36,7 +36,11 @@ use dicom_dictionary_std::tags;
 use dicom_object::{DefaultDicomObject, OpenFileOptions};
 use volux_core::Grid;
 
-use crate::{ErrorKind, ReadError, Result};
+use crate::error::ErrorKind;
+
+use crate::error::ReadError;
+
+use crate::error::Result;
 
 mod attrs;
 mod geometry;

@@ -8,7 +8,9 @@ use volux_core::grid::Scalar;
 use volux_core::{with_samples, Buffer, Samples, ScalarType};
 
 use super::attrs::{ImageInfo, Obj};
-use crate::{ErrorKind, ReadError, Result};
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
 
 /// Implicit VR little endian.
 pub(super) const IMPLICIT_LE: &str = "1.2.840.10008.1.2";

@@ -1,8 +1,10 @@
 //! The fixed-layout 348-byte NIfTI-1 header: byte order, dims, datatype, scaling, geometry.
 use std::path::Path;
 
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
 use crate::util::header_err;
-use crate::{ErrorKind, ReadError, Result};
 
 /// Size of a NIfTI-1 header; `sizeof_hdr` must hold it (in the file's byte order).
 pub(super) const HEADER_BYTES: usize = 348;

@@ -26,8 +26,10 @@ use std::path::{Path, PathBuf};
 
 use volux_core::{Buffer, Grid, Samples, ScalarType};
 
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
 use crate::util::{header_err, open_maybe_gz, read_exact_checked};
-use crate::{ErrorKind, ReadError, Result};
 
 mod header;
 mod values;

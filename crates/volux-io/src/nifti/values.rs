@@ -5,7 +5,8 @@ use rayon::prelude::*;
 use volux_core::{Buffer, Samples, ScalarType};
 
 use super::header::{Dtype, Header};
-use crate::{ReadError, Result};
+use crate::error::ReadError;
+use crate::error::Result;
 
 /// The Volux scalar type a NIfTI datatype is kept as, when it is kept natively.
 pub(super) fn native_type(dtype: Dtype) -> Option<ScalarType> {

@@ -25,7 +25,10 @@ use glam::Vec3;
 use volux_core::Grid;
 
 use crate::cells::{self, Attribute, CellSet};
-use crate::{Dataset, ErrorKind, ReadError, Result};
+use crate::dataset::Dataset;
+use crate::error::ErrorKind;
+use crate::error::ReadError;
+use crate::error::Result;
 use data::Encoding;
 use tree::Elem;
 

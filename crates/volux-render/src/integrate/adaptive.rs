@@ -21,7 +21,7 @@
 //!   integral then crosses that interval with its own step, which persists from interval to
 //!   interval, evaluating the inner integral inside by plain Simpson (any step shorter than
 //!   an accepted one is accepted too, as the seed argues).
-use super::{Medium, RayIntegral, RayMedium};
+use super::medium::{Medium, RayIntegral, RayMedium};
 
 /// How the steps of the inner and outer integrals are controlled (`001_...txt` sec. 4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -21,7 +21,7 @@
 //! allowed per step for tolerances of [`AdaptiveLanes::MIN_TOL`] and above; the f64 integrator
 //! serves smaller tolerances and the reference.
 use super::adaptive::{AdaptiveParams, SAFETY};
-use super::RayIntegral;
+use super::medium::RayIntegral;
 
 /// Rays integrated together.
 pub const RAYS: usize = 4;

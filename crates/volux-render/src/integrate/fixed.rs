@@ -1,6 +1,6 @@
 //! Fixed-step trapezoid and Simpson rules for the inner and outer integrals
 //! (`001_...txt` eqs. 2.15 to 2.17, with the same rule for both integrals).
-use super::{Medium, RayIntegral, RayMedium};
+use super::medium::{Medium, RayIntegral, RayMedium};
 
 /// Colour integrand `c tau T` at a sample with optical depth `depth`.
 #[inline]

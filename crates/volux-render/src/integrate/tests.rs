@@ -2,6 +2,7 @@
 //! along the ray, s = t, with linear extinction tau = a s), the fitted order of convergence of
 //! each fixed-step rule, and the error control of the adaptive one.
 use super::*;
+use crate::classify::Classified;
 use crate::composite::RayAccumulator;
 
 const L: f64 = 2.0;

@@ -56,4 +56,6 @@ pub mod render;
 pub mod setup;
 pub mod sort;
 
-pub use render::{PtOptions, PtRendered, PtRenderer, PtStats, SortMode};
+pub use crate::frame::PtStats;
+pub use crate::scene::SortMode;
+pub use render::{PtOptions, PtRendered, PtRenderer};

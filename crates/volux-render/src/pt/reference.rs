@@ -41,13 +41,14 @@ use rayon::prelude::*;
 use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
 use crate::composite::composite64;
-use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
+use crate::error::RenderError;
+use crate::frame::{Frame, MethodStats, Rebuilt};
 use crate::geometry::TetPlanes;
 pub use crate::geometry::{ray_tet_intersection, TetCrossing};
 use crate::integrate::segment::SegmentIntegrator;
+use crate::renderer::{frame, wrong_method, Renderer};
 use crate::scene::{Method, Scene};
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
-use crate::RenderError;
 
 /// What to render with [`render_mesh_reference`].
 #[derive(Clone, Debug, PartialEq)]

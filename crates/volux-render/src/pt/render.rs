@@ -41,37 +41,17 @@ use super::raster::{bin, fixed, tiles, Bins, Triangle};
 use super::setup::{classify_fixed, projection_tests_screen};
 use super::sort;
 use crate::composite::under;
-use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
+use crate::error::RenderError;
+use crate::frame::{Frame, MethodStats, PtStats};
 use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
-use crate::scene::{Method, PtSettings, Scene};
+use crate::renderer::{frame, wrong_method, Renderer};
+use crate::scene::{Method, PtSettings, Scene, SortMode};
 use crate::shading::BlinnPhong;
 use crate::tiles::Rect;
 use crate::tiles::{render_tiles, Control};
-use crate::RenderError;
-
-/// Visibility order.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum SortMode {
-    /// Centroid depth, radix sorted (the seeds' order; approximate).
-    #[default]
-    Centroid,
-    /// Exact: MPVO for convex meshes, per-pixel fragment sorting otherwise.
-    Exact,
-}
-
-impl SortMode {
-    /// Parses `centroid` or `exact`.
-    pub fn parse(s: &str) -> Result<Self, String> {
-        match s {
-            "centroid" => Ok(Self::Centroid),
-            "exact" => Ok(Self::Exact),
-            other => Err(format!("unknown sort '{other}' (centroid, exact)")),
-        }
-    }
-}
 
 /// Options of a PT render.
 #[derive(Clone, Debug)]
@@ -119,7 +99,7 @@ impl PtOptions {
     }
 
     fn validate(&self) -> Result<(), RenderError> {
-        crate::check_image_size(self.width, self.height)?;
+        crate::error::check_image_size(self.width, self.height)?;
         self.camera.validate()?;
         self.tf.validate()?;
         self.shading
@@ -134,50 +114,6 @@ impl PtOptions {
         }
         Ok(())
     }
-}
-
-/// What a PT render did and how long each stage took.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PtStats {
-    /// Tetrahedra in the mesh.
-    pub tets: usize,
-    /// Kept by the discard step.
-    pub tets_kept: usize,
-    /// Drawn (kept, projected, not degenerate).
-    pub tets_drawn: usize,
-    /// Kept but with a degenerate projection.
-    pub degenerate: usize,
-    /// Kept but with a vertex behind the near plane or outside the guard band.
-    pub clipped: usize,
-    /// Fragments shaded.
-    pub fragments: u64,
-    /// Face pairs ordered against the exact face order by the centroid sort (when counted).
-    pub sort_violations: Option<u64>,
-    /// How the exact order was obtained: "mpvo", "per-pixel", or "" for centroid.
-    pub exact_strategy: &'static str,
-    /// Cycles MPVO had to break.
-    pub cycles_broken: usize,
-    /// Seconds in the discard step (0 when cached).
-    pub discard_s: f64,
-    /// Seconds in the per-tetrahedron pass (0 when cached).
-    pub project_s: f64,
-    /// Seconds sorting (0 when cached).
-    pub sort_s: f64,
-    /// Seconds of the centroid sort when violations were counted.
-    pub centroid_sort_s: f64,
-    /// Seconds of the MPVO sort when violations were counted or the exact order was asked.
-    pub exact_sort_s: f64,
-    /// Seconds binning (0 when cached).
-    pub bin_s: f64,
-    /// Seconds rasterizing and compositing.
-    pub raster_s: f64,
-    /// Seconds in total.
-    pub seconds: f64,
-    /// Per-frame bytes per tetrahedron (projection, order, bins; not the mesh).
-    pub bytes_per_tet: f64,
-    /// What the frame had to build: adjacency, gradients or the ψ table (data), the kept set
-    /// (classification), projection, order and bins (view).
-    pub rebuilt: Rebuilt,
 }
 
 /// A PT image with its statistics.

@@ -10,13 +10,14 @@
 //! each round's colours lane-wise with the cached gradient volume, as the stream does.
 use glam::Vec3;
 
+use super::context::{pixel, PixelOut, RayContext};
 use super::stream::{block_order, StreamShading};
-use super::{pixel, PixelOut, RayContext, TILE};
 use crate::classify::{BreakpointRanks, LaneTable};
 use crate::integrate::adaptive_lanes::{AdaptiveLanes, LaneMedia, RAYS};
 use crate::integrate::{AdaptiveParams, Integrator, StepControl};
 use crate::sampling::{Field, LANES};
 use crate::shading::Lanes3;
+use crate::tiles::TILE;
 
 /// The ray in one slot: its pixel, the intervals to integrate and the next one to enter.
 #[derive(Default)]

@@ -3,10 +3,11 @@
 //! around it; when a ray ends, its maximum is refined between samples as ray by ray
 //! ([`mip::refine_peak`]) and its pixel written. The same lattice, maximum and refinement as
 //! [`RayContext::mip`] (tested), with the lattice sampled in f32.
+use super::context::{MipRay, PixelOut, RayContext};
 use super::stream::{block_order, LaneLattice};
-use super::{MipRay, PixelOut, RayContext, TILE};
 use crate::mip;
 use crate::sampling::{Field, LANES};
+use crate::tiles::TILE;
 
 /// The lanes: per-lane lattice and running maximum, and each lane's ray.
 struct MipLanes {

@@ -2,14 +2,14 @@
 use glam::DVec3;
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
-use crate::engine::Rebuilt;
-use crate::integrate::Integrator;
+use crate::error::RenderError;
+use crate::frame::RenderStats;
+use crate::integrate::integrator::Integrator;
 use crate::isosurface::Isosurfaces;
 use crate::sampling::Reconstruction;
 use crate::scene::{GridRaycast, Scene};
-use crate::shading::BlinnPhong;
+use crate::shading::blinn_phong::BlinnPhong;
 use crate::tiles::Control;
-use crate::RenderError;
 
 /// What to render and how.
 #[derive(Clone)]
@@ -97,7 +97,7 @@ impl RenderOptions {
     }
 
     pub(super) fn validate(&self) -> Result<(), RenderError> {
-        crate::check_image_size(self.width, self.height)?;
+        crate::error::check_image_size(self.width, self.height)?;
         self.integrator
             .validate()
             .map_err(RenderError::InvalidOptions)?;
@@ -117,21 +117,6 @@ impl RenderOptions {
         self.camera.validate()?;
         Ok(())
     }
-}
-
-/// Figures of one render.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct RenderStats {
-    /// Rays that hit the volume.
-    pub rays: u64,
-    /// Field samples taken.
-    pub samples: u64,
-    /// Wall time in seconds.
-    pub seconds: f64,
-    /// Rays whose adaptive integration accepted a step at `hmin` above its tolerance.
-    pub rays_over_tolerance: u64,
-    /// What the render had to build (the rest came from the renderer's caches).
-    pub rebuilt: Rebuilt,
 }
 
 /// A rendered image with its figures and per-pixel estimated integration error.

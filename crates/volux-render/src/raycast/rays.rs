@@ -4,8 +4,9 @@
 use glam::{DVec3, Vec3};
 use volux_core::TransferFunction;
 
+use super::clip::{ray_box, voxel_crossings};
+use super::context::{pixel, pixel_hash, GridRay, MipRay, PixelOut, RayContext, RayShading};
 use super::stream::TrapezoidRule;
-use super::{ray_box, voxel_crossings, GridRay, MipRay, PixelOut, RayContext, RayShading};
 use crate::classify::{Classified, LaneTable};
 use crate::composite::{under_partial, RayAccumulator};
 use crate::integrate::preintegrated::PreintegrationTable;
@@ -512,27 +513,5 @@ fn classify_exact(tf: &TransferFunction, v: f64) -> Medium {
         rgb: tf.color_at(v),
         tau: tf.tau_per_world(v),
         value: v,
-    }
-}
-
-/// A deterministic pseudo-random number in [0, 1) for pixel (x, y) (a 32-bit integer hash), so
-/// jittered images do not depend on the thread count.
-pub(super) fn pixel_hash(x: usize, y: usize) -> f64 {
-    let mut v = (x as u32).wrapping_mul(0x9E37_79B9) ^ (y as u32).wrapping_mul(0x85EB_CA6B);
-    v ^= v >> 16;
-    v = v.wrapping_mul(0x7FEB_352D);
-    v ^= v >> 15;
-    v = v.wrapping_mul(0x846C_A68B);
-    v ^= v >> 16;
-    v as f64 / 4_294_967_296.0
-}
-
-pub(super) fn pixel(r: &RayIntegral) -> PixelOut {
-    PixelOut {
-        rgba: r.rgba.map(|v| v as f32),
-        samples: r.samples,
-        error: r.error as f32,
-        missed: r.tolerance_missed,
-        hit: true,
     }
 }

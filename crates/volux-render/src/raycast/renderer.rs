@@ -5,16 +5,19 @@ use std::time::Instant;
 
 use volux_core::Grid;
 
-use super::{render_with, Classification, Derived, Placement, RenderOptions, Rendered};
-use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
+use super::context::{Classification, Derived};
+use super::options::{Placement, RenderOptions, Rendered};
+use super::traverse::render_with;
+use crate::error::RenderError;
+use crate::frame::{Frame, MethodStats, Rebuilt};
+use crate::integrate::integrator::Integrator;
 use crate::integrate::preintegrated::PreintegrationTable;
-use crate::integrate::Integrator;
 use crate::macrocell::MacrocellGrid;
+use crate::renderer::{frame, wrong_method, Renderer};
 use crate::sampling::{Reconstruction, Tricubic, Trilinear};
 use crate::scene::{GridRaycast, Method, Scene};
-use crate::shading::GradientVolume;
+use crate::shading::gradient::GradientVolume;
 use crate::tiles::Control;
-use crate::RenderError;
 
 /// Renders a grid with the integrator of `opts` (no caching: see [`GridRenderer`]).
 pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<Rendered, RenderError> {

@@ -20,7 +20,7 @@
 //! `[t_(i-1), t_i]`, clipped to the ray, as in [`RayContext::preintegrated`].
 use glam::{DVec3, Vec3};
 
-use super::{pixel_hash, PixelOut, RayContext, TILE};
+use super::context::{pixel_hash, PixelOut, RayContext};
 use crate::classify::LaneTable;
 use crate::composite::{under_if, under_partial, RayAccumulator};
 use crate::integrate::adaptive_lanes::exp_lanes;
@@ -28,6 +28,7 @@ use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{riemann_step, Integrator};
 use crate::sampling::{Field, LANES};
 use crate::shading::{BlinnPhong, GradientVolume, Lanes3};
+use crate::tiles::TILE;
 
 /// Shading in the stream: the model and the gradients it lights with.
 #[derive(Clone, Copy)]

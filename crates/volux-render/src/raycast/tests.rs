@@ -1,12 +1,16 @@
 use super::*;
-use crate::integrate::AdaptiveParams;
+use crate::error::RenderError;
+use crate::integrate::{AdaptiveParams, Integrator};
 use crate::isosurface::Isosurfaces;
+use crate::raycast::traverse::worth_skipping;
 use crate::sampling::{Reconstruction, Trilinear};
 use crate::shading::BlinnPhong;
+use glam::DVec3;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use volux_core::grid::{Buffer, Samples};
 use volux_core::CameraSpec;
+use volux_core::Image;
 use volux_core::{Camera, Grid, TransferFunction};
 
 fn constant_grid(v: f32) -> Grid {

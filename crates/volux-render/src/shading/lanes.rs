@@ -8,7 +8,8 @@
 //! lights its table entries without dividing by the opacity.
 use glam::Vec3;
 
-use super::{BlinnPhong, GradientVolume, Light};
+use super::blinn_phong::{BlinnPhong, Light};
+use super::gradient::GradientVolume;
 use crate::integrate::adaptive_lanes::exp_lanes;
 use crate::sampling::{clamped_cell, FLOOR_SMALL_LIMIT, LANES};
 

@@ -58,11 +58,14 @@
 //! [`render_mesh_reference`]: crate::pt::reference::render_mesh_reference
 mod bvh;
 mod geom;
+mod options;
 mod pixel;
-mod render;
+pub mod render;
 pub mod walk;
 
-pub use render::{TetRayCaster, TetRayOptions, TetRayRendered, TetRayStats, TracedRay};
+pub use crate::frame::TetRayStats;
+pub use options::TetRayOptions;
+pub use render::{TetRayCaster, TetRayRendered, TracedRay};
 pub use walk::{WalkOutcome, WalkSegment};
 
 #[cfg(test)]

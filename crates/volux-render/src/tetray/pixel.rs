@@ -19,7 +19,7 @@
 use glam::{DVec3, Vec3};
 use volux_core::{TetMesh, TransferFunction};
 
-use super::render::TetRayOptions;
+use super::options::TetRayOptions;
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::composite::under64;
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};

@@ -12,126 +12,16 @@ use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
 use super::bvh::Bvh;
 use super::geom::Geometry;
+use super::options::TetRayOptions;
 use super::pixel::{PixelContext, PixelOut, Tables};
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
-use crate::engine::{frame, wrong_method, Frame, MethodStats, Rebuilt, Renderer};
+use crate::error::RenderError;
+use crate::frame::{Frame, MethodStats, Rebuilt, TetRayStats};
 use crate::integrate::psi::PsiTable;
 use crate::integrate::SegmentRule;
-use crate::isosurface::Isosurfaces;
+use crate::renderer::{frame, wrong_method, Renderer};
 use crate::scene::{Method, Scene, MESH_UNITS_PER_DIAGONAL};
-use crate::shading::BlinnPhong;
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
-use crate::RenderError;
-
-/// Options of a ray-cast frame.
-#[derive(Clone, Debug)]
-pub struct TetRayOptions {
-    /// Image width (1 to 32768).
-    pub width: usize,
-    /// Image height (1 to 32768).
-    pub height: usize,
-    /// The camera.
-    pub camera: Camera,
-    /// The transfer function (resolved against the mesh's range by the renderer).
-    pub tf: TransferFunction,
-    /// Ray colour.
-    pub color: SegmentRule,
-    /// Isosurfaces (seed `002` §4.6), drawn where a segment's linear scalar crosses them, with
-    /// the fragment colour of the projection renderer
-    /// ([`FragmentShader::fragment`](crate::pt::fragment::FragmentShader::fragment)).
-    pub isosurfaces: Isosurfaces,
-    /// Lighting of the isosurfaces (normals interpolated from the vertex gradients).
-    pub shading: BlinnPhong,
-    /// Maximum intensity projection: each pixel shows the TF colour, opaque, of the largest
-    /// scalar along its ray (the largest segment end point: the field is linear per cell);
-    /// the colour mode, isosurfaces and early termination are ignored.
-    pub mip: bool,
-    /// Stop a ray once its opacity reaches this (`None`: never).
-    pub early_termination: Option<f32>,
-    /// Cancellation and progress.
-    pub control: Control,
-}
-
-impl TetRayOptions {
-    /// 512 x 512, exact colour, no isosurfaces, default lighting, early termination at 0.999.
-    pub fn new(camera: Camera, tf: TransferFunction) -> Self {
-        Self {
-            width: 512,
-            height: 512,
-            camera,
-            tf,
-            color: SegmentRule::Exact,
-            isosurfaces: Isosurfaces::default(),
-            shading: BlinnPhong::default(),
-            mip: false,
-            early_termination: Some(0.999),
-            control: Control::default(),
-        }
-    }
-
-    fn validate(&self) -> Result<(), RenderError> {
-        crate::check_image_size(self.width, self.height)?;
-        if let Some(e) = self.early_termination {
-            if !(e > 0.0 && e.is_finite()) {
-                return Err(RenderError::InvalidOptions(format!(
-                    "early termination {e} must be a positive opacity"
-                )));
-            }
-        }
-        if let SegmentRule::AdaptiveSimpson(p) = &self.color {
-            let ok = |v: f64| v.is_finite() && v > 0.0;
-            if !(ok(p.tol) && ok(p.h0) && ok(p.hmin) && ok(p.hmax) && p.hmin <= p.hmax) {
-                return Err(RenderError::InvalidOptions(format!(
-                    "adaptive tolerance {} and steps h0 {}, hmin {}, hmax {} must be positive \
-                     and finite, hmin <= hmax",
-                    p.tol, p.h0, p.hmin, p.hmax
-                )));
-            }
-        }
-        self.shading
-            .validate()
-            .map_err(RenderError::InvalidOptions)?;
-        self.camera.validate()?;
-        self.tf.validate()?;
-        Ok(())
-    }
-}
-
-/// What a frame did.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct TetRayStats {
-    /// Rays cast (one per pixel).
-    pub rays: u64,
-    /// Segments integrated (cells crossed, summed over rays).
-    pub segments: u64,
-    /// Scalar values evaluated: the medium samples of the adaptive rule, two per segment
-    /// otherwise.
-    pub samples: u64,
-    /// Rays whose adaptive integration accepted a step at `hmin` above its tolerance.
-    pub rays_over_tolerance: u64,
-    /// Re-entries into the mesh after leaving it through a boundary face (non-convex meshes,
-    /// gaps).
-    pub reentries: u64,
-    /// Walks that lost the cell-to-cell path (non-manifold faces) and were resumed from the
-    /// boundary hierarchy.
-    pub recovered: u64,
-    /// Local searches around edges and vertices ([`WalkOutcome::local_searches`]).
-    pub local_searches: u64,
-    /// Rays stopped by the step bound.
-    pub abandoned: u64,
-    /// Cells in the per-frame start set (camera inside the mesh), 0 otherwise.
-    pub start_cells: usize,
-    /// Tetrahedra in the mesh.
-    pub tets: usize,
-    /// Bytes of the acceleration structures per tetrahedron
-    /// ([`TetRayCaster::bytes_per_tet`]).
-    pub bytes_per_tet: f64,
-    /// What the frame had to build: the caster's structures on the first frame, gradients or
-    /// the ψ table (data), the TF's tables (classification), the start cells (view).
-    pub rebuilt: Rebuilt,
-    /// Seconds for the frame.
-    pub seconds: f64,
-}
 
 impl TetRayStats {
     /// Counts one ray's pixel and walk.
@@ -444,31 +334,6 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             error_map,
             stats,
         })
-    }
-}
-
-impl TetRayOptions {
-    /// The options of `scene` drawn with `rule`, whose adaptive steps are in units of
-    /// `unit_length` world units (the mesh's [`Volume::unit_length`](crate::scene::Volume::unit_length)).
-    pub fn from_scene(
-        scene: &Scene,
-        rule: SegmentRule,
-        unit_length: f64,
-        control: &Control,
-    ) -> Self {
-        let a = &scene.appearance;
-        Self {
-            width: scene.view.width,
-            height: scene.view.height,
-            camera: scene.view.camera,
-            tf: a.effective_tf(),
-            color: rule.scaled(unit_length),
-            isosurfaces: a.isosurfaces.clone(),
-            shading: a.lighting,
-            mip: a.mip,
-            early_termination: scene.early_termination,
-            control: control.clone(),
-        }
     }
 }
 

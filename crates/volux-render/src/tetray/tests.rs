@@ -8,13 +8,13 @@ use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::{synth, Camera, CameraSpec, Grid, Projection, TetMesh, TransferFunction};
 
 use super::*;
+use crate::error::RenderError;
 use crate::integrate::adaptive::{AdaptiveParams, StepControl};
 use crate::integrate::SegmentRule;
 use crate::isosurface::{Isosurfaces, Isovalue};
 use crate::pt::reference::{ray_segments, render_mesh_reference, ReferenceOptions};
 use crate::shading::BlinnPhong;
 use crate::tiles::Control;
-use crate::RenderError;
 
 fn tf() -> TransferFunction {
     TransferFunction::from_json(

@@ -6,8 +6,8 @@ use volux_render::engine::{create_renderer, MethodStats};
 use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
 use volux_render::scene::{GridRaycast, Method, Scene};
 
-use super::{frame, grids, median, selected};
-use crate::commands::CmdError;
+use super::common::{frame, grids, median, selected};
+use crate::commands::common::CmdError;
 
 /// How a case lights and projects.
 #[derive(Clone, Copy, PartialEq, Eq)]

@@ -15,17 +15,14 @@ use volux_render::isosurface::{Isosurfaces, Isovalue};
 use volux_render::pt::{PtStats, SortMode};
 use volux_render::scene::{Method, PtSettings, Scene, Volume};
 
-use super::{frame, median, meshes, shared};
-use crate::commands::CmdError;
+use super::common::{frame, median, meshes, shared, EARLY_TERMINATION};
+use crate::commands::common::CmdError;
 
 /// Non-zero extinction over the whole range (normalized), up to 3 optical depths across the
 /// mesh's diagonal.
 const DENSE_TF: &str = r#"{"space": "normalized",
   "color": [[0, 0.1, 0.2, 0.9], [0.5, 0.9, 0.5, 0.1], [1, 1, 1, 1]],
   "extinction": [[0, 0.05], [0.5, 0.3], [1, 1.5]]}"#;
-
-/// The early termination of the PT and tet ray casting cases.
-pub(super) const EARLY_TERMINATION: f32 = 0.999;
 
 /// Two isosurfaces at a third and two thirds of the range.
 fn isos(range: [f64; 2]) -> Result<Isosurfaces, CmdError> {

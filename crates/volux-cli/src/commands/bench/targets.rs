@@ -14,8 +14,8 @@ use volux_render::engine::create_renderer;
 use volux_render::integrate::{AdaptiveParams, Integrator, StepControl};
 use volux_render::scene::{GridRaycast, Method, Scene, Volume};
 
-use super::{frame, grid_of, grids};
-use crate::commands::CmdError;
+use super::common::{frame, grid_of, grids};
+use crate::commands::common::CmdError;
 
 /// Riemann step 0.5 must take at most this on a 256^3 volume.
 const RIEMANN_TARGET_MS: f64 = 150.0;

@@ -8,9 +8,8 @@ use volux_render::integrate::SegmentRule;
 use volux_render::scene::{Method, Scene};
 use volux_render::tetray::TetRayStats;
 
-use super::pt::EARLY_TERMINATION;
-use super::{frame, median, meshes};
-use crate::commands::CmdError;
+use super::common::{frame, median, meshes, EARLY_TERMINATION};
+use crate::commands::common::CmdError;
 
 /// Runs the tet ray casting benchmark; returns the JSON rows.
 pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {

@@ -8,7 +8,8 @@ use rayon::prelude::*;
 use volux_core::mesh::{FACES, NO_NEIGHBOR};
 use volux_core::TetMesh;
 
-use super::{centroid_keys, centroid_order, SortError, View};
+use super::radix::{centroid_keys, centroid_order};
+use super::view::{SortError, View};
 
 /// Relative tolerance below which the eye counts as lying in a face plane (see
 /// [`face_precedence`]).

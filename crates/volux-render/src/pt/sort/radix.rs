@@ -2,7 +2,7 @@
 use rayon::prelude::*;
 use volux_core::TetMesh;
 
-use super::View;
+use super::view::View;
 
 /// Below this many ids a stable comparison sort is faster than three radix passes.
 const SMALL: usize = 256;

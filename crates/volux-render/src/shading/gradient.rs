@@ -1,29 +1,10 @@
-//! Gradient shading: normals from the scalar field and the Blinn-Phong model.
-//!
-//! The seeds light isosurfaces with the Phong model along the *gradient* of the scalar field,
-//! the gradient standing in for the surface normal (seed `002` §4.6; seed `001` treats no
-//! lighting, §2.4); Volux lights volume samples the same way on request (Blinn-Phong, as
-//! classic direct volume renderers do). This module holds the pieces a traversal needs:
-//!
-//! - [`gradient`]: central differences on any [`Field`] (on the fly, no extra memory);
-//! - [`GradientVolume`]: the same gradients precomputed once per volume (3 x `i16` per voxel,
-//!   padded to 8 bytes)
-//!   with trilinear lookup, for renderers that shade every sample and can spare the memory;
-//! - [`BlinnPhong`] and [`Light`]: the two-sided lighting model with a gradient-magnitude
-//!   threshold, so homogeneous (noisy, flat) regions stay unlit and keep their emission only.
-//!
-//! Coordinates: positions are in voxel space (sample `(i, j, k)` at `(i, j, k)`, as in
-//! [`crate::sampling`]); gradients are returned in *world* units (data units per world unit),
-//! i.e. the voxel-space differences divided by the grid spacing.
+//! Gradients of a scalar field in world units: on the fly ([`gradient`]) or precomputed once
+//! per volume ([`GradientVolume`]).
 use glam::Vec3;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
+use crate::error::RenderError;
 use crate::sampling::Field;
-use crate::RenderError;
-
-mod lanes;
-pub use lanes::{ln_lanes, pow_lanes, Lanes3, RayLight};
 
 /// Clamps `p` into the grid box `[0, dims - 1]` per axis (NaN becomes 0; never panics).
 #[inline]
@@ -136,11 +117,11 @@ pub struct GradientKey {
 /// changed.
 #[derive(Clone, Debug)]
 pub struct GradientVolume {
-    key: GradientKey,
+    pub(super) key: GradientKey,
     /// Gradients x, y, z and a zero pad: one aligned 8-byte load per voxel.
-    data: Vec<[i16; 4]>,
+    pub(super) data: Vec<[i16; 4]>,
     /// World-unit gradient per quantization count, per axis (`scale / spacing`).
-    to_world: Vec3,
+    pub(super) to_world: Vec3,
 }
 
 impl GradientVolume {
@@ -336,136 +317,12 @@ fn grid_gradient(values: &[f32], dims: [usize; 3], ijk: [usize; 3]) -> Vec3 {
     g
 }
 
-/// Where the light comes from.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Light {
-    /// A light at the eye: the light direction is the view direction.
-    Headlight,
-    /// A directional light; the vector points *from the scene towards the light*, in world
-    /// space (need not be normalized).
-    Direction(Vec3),
-}
-
-/// Blinn-Phong shading along the field gradient (seed `002` §4.6), two-sided.
-///
-/// `out = rgb * (ambient + diffuse * max(N.L, 0)) + specular * max(N.H, 0)^shininess`, with
-/// `N` the unit gradient flipped to face the viewer, `L` the unit light direction and `H` the
-/// half vector of `L` and the direction to the viewer; the specular term is white and present
-/// only where the surface faces the light (`N.L > 0`). The result is not clamped (the image
-/// writer clamps).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct BlinnPhong {
-    /// Ambient coefficient (fraction of the colour kept regardless of the light).
-    pub ambient: f32,
-    /// Diffuse (Lambert) coefficient.
-    pub diffuse: f32,
-    /// Specular coefficient (white highlight).
-    pub specular: f32,
-    /// Specular exponent.
-    pub shininess: f32,
-    /// The light.
-    pub light: Light,
-    /// Gradient magnitude (data units per world unit) below which a sample is not lit: its
-    /// colour is returned unchanged (emission only), so flat and noisy regions, whose gradient
-    /// direction means nothing, do not flicker. The default, 1e-3, only guards regions flat to
-    /// rounding; for real data use [`BlinnPhong::relative_min_gradient`] (e.g. 1 % of the data
-    /// range per voxel) or a few times the noise level divided by the spacing.
-    pub min_gradient: f32,
-}
-
-impl Default for BlinnPhong {
-    /// Ambient 0.3, diffuse 0.7, specular 0.3, shininess 32, headlight, `min_gradient` 1e-3.
-    fn default() -> Self {
-        Self {
-            ambient: 0.3,
-            diffuse: 0.7,
-            specular: 0.3,
-            shininess: 32.0,
-            light: Light::Headlight,
-            min_gradient: 1e-3,
-        }
-    }
-}
-
-impl BlinnPhong {
-    /// A gradient threshold of `fraction` of the data range per voxel (of the smallest
-    /// spacing): `fraction * (range[1] - range[0]) / min(spacing)`, in data units per world
-    /// unit. Returns 0 when the inputs are not finite or the spacing is not positive.
-    pub fn relative_min_gradient(range: [f64; 2], spacing: Vec3, fraction: f32) -> f32 {
-        let r =
-            ((range[1] - range[0]).abs() * fraction as f64 / spacing.min_element() as f64) as f32;
-        if r.is_finite() && r > 0.0 {
-            r
-        } else {
-            0.0
-        }
-    }
-
-    /// Checks that the coefficients are finite and non-negative and the light direction is a
-    /// finite non-zero vector.
-    pub fn validate(&self) -> Result<(), String> {
-        for (name, v) in [
-            ("ambient", self.ambient),
-            ("diffuse", self.diffuse),
-            ("specular", self.specular),
-            ("shininess", self.shininess),
-            ("min_gradient", self.min_gradient),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("shading {name} {v} must be finite and >= 0"));
-            }
-        }
-        if let Light::Direction(d) = self.light {
-            if !(d.is_finite() && d.length_squared() > 0.0) {
-                return Err(format!("light direction {d} must be finite and non-zero"));
-            }
-        }
-        Ok(())
-    }
-
-    /// Shades a sample of colour `rgb` with field gradient `gradient` (world units) seen along
-    /// `view_dir`, the ray direction from the eye into the volume (need not be normalized).
-    ///
-    /// Returns `rgb` unchanged (emission only) when the gradient magnitude is below
-    /// [`min_gradient`](Self::min_gradient) or not finite, or when the view direction is zero or
-    /// not finite. Two-sided: the normal is the gradient or its opposite, whichever faces the
-    /// viewer, so both sides of a surface are lit alike. An invalid directional light (zero or
-    /// non-finite) leaves ambient light only.
-    #[inline]
-    pub fn shade(&self, rgb: [f32; 3], gradient: Vec3, view_dir: Vec3) -> [f32; 3] {
-        let len = gradient.length();
-        let to_eye = -view_dir.normalize_or_zero();
-        if !(len >= self.min_gradient && len > 0.0 && len.is_finite()) || to_eye == Vec3::ZERO {
-            return rgb;
-        }
-        let mut n = gradient / len;
-        if n.dot(to_eye) < 0.0 {
-            n = -n;
-        }
-        let l = match self.light {
-            Light::Headlight => to_eye,
-            Light::Direction(d) => d.normalize_or_zero(),
-        };
-        let n_l = n.dot(l);
-        let (diffuse, specular) = if n_l > 0.0 {
-            let h = (l + to_eye).normalize_or_zero();
-            let n_h = n.dot(h).max(0.0);
-            (n_l, n_h.powf(self.shininess))
-        } else {
-            (0.0, 0.0)
-        };
-        let k = self.ambient + self.diffuse * diffuse;
-        let s = self.specular * specular;
-        rgb.map(|c| c * k + s)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::Trilinear;
+    use crate::shading::blinn_phong::{BlinnPhong, Light};
+    use serde::Deserialize;
 
     fn grid(dims: [usize; 3], f: impl Fn(f32, f32, f32) -> f32) -> Vec<f32> {
         let mut v = Vec::with_capacity(dims[0] * dims[1] * dims[2]);

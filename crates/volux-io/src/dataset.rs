@@ -1,0 +1,30 @@
+//! What the readers return: a [`Dataset`], and the options some readers need.
+use std::path::PathBuf;
+
+use volux_core::grid::Grid;
+use volux_core::mesh::TetMesh;
+
+/// A loaded dataset.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub enum Dataset {
+    /// A regular grid.
+    Grid(Grid),
+    /// A tetrahedral mesh.
+    Mesh(TetMesh),
+}
+
+/// Options that some readers need.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// PLOT3D: which q variable (`density`, `momentum-x|y|z`, `energy`, `velocity-magnitude`,
+    /// or an index 0..4). Default: density.
+    pub q_variable: Option<String>,
+    /// PLOT3D: the q file; default: the xyz file name with `xyz` replaced by `q`.
+    pub q_file: Option<PathBuf>,
+    /// DICOM: the SeriesInstanceUID to load when a folder holds several (default: the series
+    /// with the most slices).
+    pub series_uid: Option<String>,
+    /// VTK / VTU: the name of the point-data array to use (default: the first scalar array).
+    pub array: Option<String>,
+}

@@ -1,0 +1,183 @@
+//! What the grid ray caster's paths share: the per-render context of every ray
+//! ([`RayContext`]), the medium along one ray ([`GridRay`]), a pixel's result, the derived
+//! data a render uses and the classification renderers keep between frames.
+use glam::{DVec3, Vec3};
+use volux_core::camera::RayGenerator;
+use volux_core::transfer::TransferFunction;
+
+use super::options::{Placement, RenderOptions};
+use crate::classify::{BreakpointRanks, ClassifyTable, LaneTable};
+use crate::composite::RayAccumulator;
+use crate::integrate::medium::RayIntegral;
+use crate::integrate::preintegrated::PreintegrationTable;
+use crate::intervals::IntervalSource;
+use crate::macrocell::MacrocellGrid;
+use crate::shading::blinn_phong::BlinnPhong;
+use crate::shading::gradient::GradientVolume;
+
+/// One pixel's result.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct PixelOut {
+    pub(crate) rgba: [f32; 4],
+    pub(crate) samples: u64,
+    pub(crate) error: f32,
+    pub(crate) missed: bool,
+    pub(crate) hit: bool,
+}
+
+impl PixelOut {
+    /// A hit ray composited into `acc` with `samples` samples (no error estimate).
+    pub(crate) fn composited(acc: &RayAccumulator, samples: u64) -> Self {
+        Self {
+            rgba: acc.rgba,
+            samples,
+            error: 0.0,
+            missed: false,
+            hit: true,
+        }
+    }
+}
+
+/// Data derived from the volume and the TF that a render uses, built (and cached) by the caller.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Derived<'a> {
+    pub(crate) macrocells: Option<&'a MacrocellGrid>,
+    /// The classification, when the caller keeps one (built here otherwise).
+    pub(crate) classification: Option<&'a Classification>,
+    /// The caller's intervals (a bricked grid's), instead of the macrocells'.
+    pub(crate) intervals: Option<&'a dyn IntervalSource>,
+    pub(crate) preintegration: Option<&'a PreintegrationTable>,
+    pub(crate) gradients: Option<&'a GradientVolume>,
+    /// Whether tiles may take the lane paths.
+    pub(crate) lanes: bool,
+}
+
+/// The classification of a render, what depends on the transfer function: its table and
+/// the macrocells' empty flags (zero extinction over a macrocell's range and no isovalue in
+/// it). A renderer keeps it between frames ([`Classification::is_for`]).
+pub(crate) struct Classification {
+    /// What it was built from: the TF as given, the data range, the isovalues.
+    pub(crate) tf: TransferFunction,
+    pub(crate) range: [f64; 2],
+    pub(crate) isovalues: Vec<f32>,
+    pub(crate) table: ClassifyTable,
+    /// Empty flags per macrocell (when built for a macrocell grid).
+    pub(crate) empty: Option<Vec<bool>>,
+}
+
+impl Classification {
+    /// Classifies with `opts`' TF over `range`, and flags the empty macrocells of `cells`.
+    pub(crate) fn new(
+        opts: &RenderOptions,
+        range: [f64; 2],
+        cells: Option<&MacrocellGrid>,
+    ) -> Self {
+        let table = ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE);
+        let isovalues = isovalues(opts);
+        let empty = cells.map(|m| m.empty_flags(&table, &isovalues));
+        Self {
+            tf: opts.tf.clone(),
+            range,
+            isovalues,
+            table,
+            empty,
+        }
+    }
+
+    /// Whether this was built for `opts`' TF and isovalues, `range`, and (when `cells` is
+    /// given) has the empty flags.
+    pub(crate) fn is_for(
+        &self,
+        opts: &RenderOptions,
+        range: [f64; 2],
+        cells: Option<&MacrocellGrid>,
+    ) -> bool {
+        self.tf == opts.tf
+            && self.range == range
+            && self.isovalues == isovalues(opts)
+            && (cells.is_none() || self.empty.is_some())
+    }
+}
+
+pub(crate) fn isovalues(opts: &RenderOptions) -> Vec<f32> {
+    opts.isosurfaces
+        .as_slice()
+        .iter()
+        .map(|i| i.value)
+        .collect()
+}
+
+/// Everything a ray needs, shared by all rays of a render.
+pub(crate) struct RayContext<'a, F> {
+    pub(crate) field: &'a F,
+    pub(crate) place: Placement,
+    pub(crate) table: &'a ClassifyTable,
+    /// Where rays sample (`None`: everywhere between entry and exit).
+    pub(crate) intervals: Option<&'a dyn IntervalSource>,
+    pub(crate) preintegration: Option<&'a PreintegrationTable>,
+    pub(crate) gradients: Option<&'a GradientVolume>,
+    /// The classification for the lane-wise paths: per-slab colour and opacity for the
+    /// Riemann step (no `exp` per sample), colour and extinction for adaptive Simpson.
+    pub(crate) lane_table: Option<LaneTable>,
+    /// Breakpoint counts per lane-table entry, for adaptive Simpson's hidden-peak test.
+    pub(crate) breakpoint_ranks: Option<BreakpointRanks>,
+    pub(crate) tf: TransferFunction,
+    pub(crate) breakpoints: Vec<f64>,
+    /// The camera's rays for this image size.
+    pub(crate) rays: RayGenerator,
+    pub(crate) opts: &'a RenderOptions,
+}
+
+/// The classified medium along one ray through a grid, in voxel space.
+pub(crate) struct GridRay<'a, F> {
+    pub(crate) field: &'a F,
+    pub(crate) o_v: DVec3,
+    pub(crate) d_v: DVec3,
+    pub(crate) table: &'a ClassifyTable,
+    /// Classify exactly with this TF instead of the table (the reference path).
+    pub(crate) exact: Option<&'a TransferFunction>,
+    pub(crate) breakpoints: &'a [f64],
+    /// Shading of the emitted colour: the lighting model and the ray's context.
+    pub(crate) shade: Option<RayShading<'a>>,
+}
+
+/// What a [`GridRay`] needs to light its samples.
+pub(crate) struct RayShading<'a> {
+    pub(crate) model: &'a BlinnPhong,
+    pub(crate) gradients: Option<&'a GradientVolume>,
+    pub(crate) spacing: Vec3,
+    pub(crate) view: Vec3,
+}
+
+/// A ray of maximum intensity projection: voxel-space origin and direction, the extent and
+/// the step of its sample lattice (world units).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct MipRay {
+    pub(crate) o_v: DVec3,
+    pub(crate) d_v: DVec3,
+    pub(crate) t0: f64,
+    pub(crate) t1: f64,
+    pub(crate) step: f64,
+}
+
+/// A deterministic pseudo-random number in [0, 1) for pixel (x, y) (a 32-bit integer hash), so
+/// jittered images do not depend on the thread count.
+pub(crate) fn pixel_hash(x: usize, y: usize) -> f64 {
+    let mut v = (x as u32).wrapping_mul(0x9E37_79B9) ^ (y as u32).wrapping_mul(0x85EB_CA6B);
+    v ^= v >> 16;
+    v = v.wrapping_mul(0x7FEB_352D);
+    v ^= v >> 15;
+    v = v.wrapping_mul(0x846C_A68B);
+    v ^= v >> 16;
+    v as f64 / 4_294_967_296.0
+}
+
+pub(crate) fn pixel(r: &RayIntegral) -> PixelOut {
+    PixelOut {
+        rgba: r.rgba.map(|v| v as f32),
+        samples: r.samples,
+        error: r.error as f32,
+        missed: r.tolerance_missed,
+        hit: true,
+    }
+}

@@ -1,0 +1,62 @@
+//! The trait every renderer implements: one call renders a [`Scene`] into a [`Frame`]
+//! (OSPRay's `renderFrame`). [`crate::engine`] chooses the renderer for a volume.
+use std::time::Instant;
+
+use volux_core::image::Image;
+
+use crate::error::RenderError;
+use crate::frame::{Frame, FrameStats, MethodStats, Rebuilt};
+use crate::scene::{Method, Scene};
+use crate::tiles::Control;
+
+/// A renderer of one volume: turns scenes into frames, keeping its caches between calls.
+pub trait Renderer: Send {
+    /// The method's short name (`raycast`, `pt`, `tet-raycast`, `resample`).
+    fn name(&self) -> &'static str;
+
+    /// Renders `scene`, which must name this renderer's method or [`Method::Auto`];
+    /// `control` cancels it and receives its progress.
+    fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError>;
+
+    /// Renders `scene` at `1 / divisor` of its resolution: the quick first pass of
+    /// progressive refinement (a viewer shows it while the camera moves).
+    fn render_preview(
+        &mut self,
+        scene: &Scene,
+        control: &Control,
+        divisor: usize,
+    ) -> Result<Frame, RenderError> {
+        let mut small = scene.clone();
+        small.view = scene.view.reduced(divisor);
+        self.render(&small, control)
+    }
+}
+
+/// The error of a renderer handed a scene for another method.
+pub(crate) fn wrong_method(renderer: &'static str, method: &Method) -> RenderError {
+    RenderError::InvalidOptions(format!(
+        "the '{renderer}' renderer cannot draw method '{}': create a renderer for it",
+        method.name()
+    ))
+}
+
+/// A frame from an image, the error map where the method estimates one, and the figures.
+pub(crate) fn frame(
+    image: Image,
+    error_map: Option<Vec<f32>>,
+    started: Instant,
+    rebuilt: Rebuilt,
+    method: MethodStats,
+) -> Frame {
+    let pixels = image.width() * image.height();
+    Frame {
+        image,
+        error_map,
+        stats: FrameStats {
+            ms: started.elapsed().as_secs_f64() * 1e3,
+            pixels,
+            rebuilt,
+            method,
+        },
+    }
+}
