@@ -2,7 +2,7 @@
 //!
 //! Readers and writers for the formats Volux users have. [`load()`](fn@load) picks the reader from the
 //! file's magic bytes first and its extension second, and returns a [`Dataset`]: a regular
-//! [`Grid`] or a [`TetMesh`]. Every reader checks sizes before allocating, reports truncated or
+//! [`Grid`](volux_core::grid::Grid) or a [`TetMesh`](volux_core::mesh::TetMesh). Every reader checks sizes before allocating, reports truncated or
 //! inconsistent files as a [`ReadError`] naming the file, and never panics on bad input.
 //!
 //! | format | module | crate used |

@@ -9,7 +9,7 @@
 //! distance `t`. Traversals (grid ray casting, tet ray casting) supply it, so one
 //! implementation of each rule serves all renderers.
 //!
-//! - [`Integrator`](integrator::Integrator): the choice of rule of the grid ray caster;
+//! - [`Integrator`]: the choice of rule of the grid ray caster;
 //! - [`medium`]: the medium along a ray as the rules see it, and what a ray's integral holds;
 //! - [`riemann`](mod@riemann): left Riemann sum with step-corrected opacity (eq. 2.14), order 1;
 //! - [`fixed::trapezoid`], [`fixed::simpson`]: fixed-step rules, orders 2 and 4;

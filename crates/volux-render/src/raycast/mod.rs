@@ -1,7 +1,7 @@
 //! Image-order traversal of regular grids: one ray per pixel, exact ray/box entry and exit,
 //! front-to-back compositing with early ray termination, parallel over square image tiles.
 //!
-//! Each ray is handed to one of the [`Integrator`]s of [`crate::integrate`] as a
+//! Each ray is handed to one of the [`Integrator`](crate::integrate::Integrator)s of [`crate::integrate`] as a
 //! [`RayMedium`](crate::integrate::RayMedium) (trilinear reconstruction of [`crate::sampling`], classification of
 //! [`crate::classify`]); steps are given in voxel units (the smallest spacing), as in the seed
 //! `001_...txt`. A tile takes one of these paths:

@@ -5,7 +5,7 @@
 //! lighting, §2.4); Volux lights volume samples the same way on request (Blinn-Phong, as
 //! classic direct volume renderers do). This module holds the pieces a traversal needs:
 //!
-//! - [`gradient`]: central differences on any [`Field`] (on the fly, no extra memory);
+//! - [`gradient()`](fn@gradient): central differences on any [`Field`](crate::sampling::Field) (on the fly, no extra memory);
 //! - [`GradientVolume`]: the same gradients precomputed once per volume (3 x `i16` per voxel,
 //!   padded to 8 bytes)
 //!   with trilinear lookup, for renderers that shade every sample and can spare the memory;

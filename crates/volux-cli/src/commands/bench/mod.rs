@@ -6,7 +6,7 @@
 //! - [`tetray`]: ms/frame of tetrahedral ray casting;
 //! - [`targets`]: the grid speed targets, cases in turn, fastest frame per case.
 //!
-//! Each case renders through a [`Renderer`] kept for its volume, as a viewer would, and times
+//! Each case renders through a [`Renderer`](volux_render::engine::Renderer) kept for its volume, as a viewer would, and times
 //! [`FrameStats::ms`](volux_render::engine::FrameStats::ms), the wall time of the render call.
 use super::common::CmdError;
 use crate::cli::Suite;
