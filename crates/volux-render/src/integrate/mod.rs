@@ -19,12 +19,15 @@
 //!   lanes, the fast path of renderers that sample several rays together;
 //! - [`segment`]: the colour of a segment along which the scalar is linear ([`SegmentRule`]:
 //!   average, ψ, exact, adaptive), the one segment integrator of the tetrahedral renderers;
+//! - [`fragment`]: a segment's colour by its rule, cut at the isosurfaces it crosses (the
+//!   fragment of Projected Tetrahedra, the segment of the tet ray caster);
 //! - [`psi`]: partial pre-integration (the ψ table, the TF lookup of cells, average and ψ
 //!   fragment colours);
 //! - [`preintegrated`]: the grid's pre-integration table over (front, back) values.
 pub mod adaptive;
 pub mod adaptive_lanes;
 pub mod fixed;
+pub mod fragment;
 pub mod integrator;
 pub mod medium;
 pub mod preintegrated;

@@ -41,14 +41,14 @@
 //! - [`sort`]: visibility order: centroid radix sort, MPVO, violation counts, convexity;
 //! - [`raster`]: screen tiles, binning in drawing order, scanline rasterization with exact
 //!   fixed-point edge functions and the top-left rule;
-//! - [`fragment`]: the colour of a fragment (average, ψ, exact) with isosurfaces;
+//! - the colour of a fragment (average, ψ, exact) with isosurfaces is
+//!   [`crate::integrate::fragment`], shared with the tet ray caster;
 //! - [`render`]: [`PtRenderer`], the stages wired together with the caches of the update step
 //!   (discard, per-tetrahedron pass, order, bins), parallel over tiles and deterministic;
 //! - [`reference`](mod@reference): a brute-force per-pixel ray/tetrahedron integrator, the independent
 //!   reference of the tests.
 
 pub mod classify;
-pub mod fragment;
 pub mod project;
 pub mod raster;
 pub mod reference;

@@ -33,8 +33,6 @@ use rayon::prelude::*;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
 use super::classify::{ternary_code, TERNARY_TABLE};
-use super::fragment::FragmentShader;
-use super::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
 use super::raster::{bin, fixed, tiles, Bins, Triangle};
@@ -43,6 +41,8 @@ use super::sort;
 use crate::composite::under;
 use crate::error::RenderError;
 use crate::frame::{Frame, MethodStats, PtStats};
+use crate::integrate::fragment::FragmentShader;
+use crate::integrate::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
 use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;

@@ -50,7 +50,8 @@
 //! (`smooth_tets(3000)`: max `1.6e-4`, 52 samples per ray; `torus_tets(24)`: max `6.4e-4`),
 //! and no ray is over tolerance.
 //!
-//! **Isosurfaces** (seed `002` §4.6) use the projection renderer's fragment shader, with
+//! **Isosurfaces** (seed `002` §4.6) use the fragment shader PT uses too
+//! ([`crate::integrate::fragment`]), with
 //! normals interpolated from the vertex gradients at the segment's end points (barycentric):
 //! PT with exact order and colour and this caster agree to `3e-5` on average per channel.
 //! **MIP** shows the TF colour of the largest segment end point, opaque.

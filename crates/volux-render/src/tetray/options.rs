@@ -24,7 +24,7 @@ pub struct TetRayOptions {
     pub color: SegmentRule,
     /// Isosurfaces (seed `002` §4.6), drawn where a segment's linear scalar crosses them, with
     /// the fragment colour of the projection renderer
-    /// ([`FragmentShader::fragment`](crate::pt::fragment::FragmentShader::fragment)).
+    /// ([`FragmentShader::fragment`](crate::integrate::fragment::FragmentShader::fragment)).
     pub isosurfaces: Isosurfaces,
     /// Lighting of the isosurfaces (normals interpolated from the vertex gradients).
     pub shading: BlinnPhong,

@@ -23,12 +23,12 @@ use super::options::TetRayOptions;
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::composite::under64;
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
+use crate::integrate::fragment::FragmentShader;
 use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;
 use crate::integrate::{hides_breakpoints, hides_breakpoints_along, Medium, RayMedium};
 use crate::isosurface::Isovalue;
-use crate::pt::fragment::FragmentShader;
 use crate::shading::BlinnPhong;
 
 /// What one pixel produced.

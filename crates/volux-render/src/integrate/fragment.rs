@@ -20,11 +20,11 @@
 //! with [`BlinnPhong`] (two-sided) and drawn with the isovalue's colour and opacity.
 use glam::Vec3;
 
+use super::psi::{self, CellClassifier, LinearPiece, PsiTable};
+use super::segment::{SegmentIntegrator, SegmentRule};
 use crate::composite::under;
-use crate::integrate::psi::{self, CellClassifier, LinearPiece, PsiTable};
-use crate::integrate::segment::{SegmentIntegrator, SegmentRule};
 use crate::isosurface::Isovalue;
-use crate::shading::BlinnPhong;
+use crate::shading::blinn_phong::BlinnPhong;
 
 /// Everything a fragment's colour depends on besides its own `(s_f, s_b, l)`.
 pub struct FragmentShader<'a> {
