@@ -57,7 +57,7 @@ impl Sign {
         Sign::from_i8(self.as_i8() * other.as_i8())
     }
 
-    pub(crate) fn of_f64(x: f64) -> Sign {
+    fn of_f64(x: f64) -> Sign {
         if x > 0.0 {
             Sign::Positive
         } else if x < 0.0 {
@@ -90,8 +90,8 @@ const FILTER_MIN: f64 = f64::from_bits((1023 - 900) << 52);
 /// `2^-485` and `2^509`: with every non-zero coordinate in `[2^-485, 2^509)` the products of
 /// two coordinates and their error terms are representable (no overflow, no underflow), so
 /// the floating-point expansion arithmetic below is exact.
-pub(crate) const EXPANSION_MIN: f64 = f64::from_bits((1023 - 485) << 52);
-pub(crate) const EXPANSION_MAX: f64 = f64::from_bits((1023 + 509) << 52);
+const EXPANSION_MIN: f64 = f64::from_bits((1023 - 485) << 52);
+const EXPANSION_MAX: f64 = f64::from_bits((1023 + 509) << 52);
 /// `2^27 + 1`, Dekker's splitter for binary64.
 const SPLITTER: f64 = 134_217_729.0;
 
@@ -222,7 +222,7 @@ fn grow_expansion(e: &mut [f64; 12], n: usize, b: f64) -> usize {
 }
 
 /// Stage 3: the determinant as an exact floating-point expansion.
-pub(crate) fn orient2d_expansion(a: DVec2, b: DVec2, c: DVec2) -> Sign {
+fn orient2d_expansion(a: DVec2, b: DVec2, c: DVec2) -> Sign {
     let products = [
         two_product(a.x, b.y),
         two_product(-a.y, b.x),
@@ -310,7 +310,7 @@ fn accumulate_product(acc: &mut [u64; LIMBS], x: f64, y: f64, negate: bool) {
 }
 
 /// Stage 4: exact orientation of any finite input with a fixed-size big integer.
-pub(crate) fn orient2d_bignum(a: DVec2, b: DVec2, c: DVec2) -> Sign {
+fn orient2d_bignum(a: DVec2, b: DVec2, c: DVec2) -> Sign {
     let mut acc = [0u64; LIMBS];
     accumulate_product(&mut acc, a.x, b.y, false);
     accumulate_product(&mut acc, a.y, b.x, true);
@@ -326,3 +326,6 @@ pub(crate) fn orient2d_bignum(a: DVec2, b: DVec2, c: DVec2) -> Sign {
         Sign::Positive
     }
 }
+
+#[cfg(test)]
+mod tests;

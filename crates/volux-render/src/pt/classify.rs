@@ -88,8 +88,6 @@
 //! 1, 2, 3, 4 and 80).
 use glam::DVec2;
 
-#[cfg(test)]
-use crate::geometry::orient::{orient2d_bignum, orient2d_expansion, EXPANSION_MAX, EXPANSION_MIN};
 pub use crate::geometry::{orient2d, Sign};
 
 // -------------------------------------------------------------------------------------------
