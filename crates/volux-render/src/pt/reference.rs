@@ -190,6 +190,15 @@ pub fn render_mesh_reference(
     mesh: &TetMesh,
     opts: &ReferenceOptions,
 ) -> Result<Image, RenderError> {
+    render_mesh_reference_with(mesh, opts, &Control::default())
+}
+
+/// [`render_mesh_reference`] with cancellation and progress.
+pub fn render_mesh_reference_with(
+    mesh: &TetMesh,
+    opts: &ReferenceOptions,
+    control: &Control,
+) -> Result<Image, RenderError> {
     let (w, h) = (opts.width, opts.height);
     if w == 0 || h == 0 {
         return Err(RenderError::InvalidOptions(format!(
@@ -232,7 +241,7 @@ pub fn render_mesh_reference(
             }
         }
     }
-    let pixels = render_tiles(&grid, &Control::default(), |ti, r| {
+    let pixels = render_tiles(&grid, control, |ti, r| {
         let mut out = Vec::with_capacity(r.area());
         let mut segs = Vec::new();
         for y in r.y0..r.y1 {
@@ -282,14 +291,13 @@ impl Renderer for MeshReference {
             return Err(wrong_method("mesh-reference", &scene.method));
         }
         scene.validate()?;
-        control.check()?;
         let opts = ReferenceOptions {
             width: scene.view.width,
             height: scene.view.height,
             camera: scene.view.camera,
             tf: scene.appearance.effective_tf(),
         };
-        let image = render_mesh_reference(&self.mesh, &opts)?;
+        let image = render_mesh_reference_with(&self.mesh, &opts, control)?;
         Ok(frame(
             image,
             None,
