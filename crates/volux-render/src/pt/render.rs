@@ -48,7 +48,7 @@ use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
 use crate::renderer::{frame, wrong_method, Renderer};
-use crate::scene::{Method, PtSettings, Scene, SortMode};
+use crate::scene::{Method, PtSettings, Scene, SortMode, DEFAULT_EARLY_TERMINATION};
 use crate::shading::BlinnPhong;
 use crate::tiles::Rect;
 use crate::tiles::{render_tiles, Control};
@@ -81,7 +81,8 @@ pub struct PtOptions {
 }
 
 impl PtOptions {
-    /// 512 x 512, centroid order, ψ colour, early termination at 0.999.
+    /// 512 x 512, centroid order, ψ colour, early termination at
+    /// [`DEFAULT_EARLY_TERMINATION`] (the defaults of [`crate::scene`]).
     pub fn new(camera: Camera, tf: TransferFunction) -> Self {
         Self {
             width: 512,
@@ -92,7 +93,7 @@ impl PtOptions {
             color: SegmentRule::Psi,
             isosurfaces: Isosurfaces::default(),
             shading: BlinnPhong::default(),
-            early_termination: Some(0.999),
+            early_termination: Some(DEFAULT_EARLY_TERMINATION),
             count_violations: false,
             control: Control::default(),
         }

@@ -7,7 +7,7 @@ use crate::frame::RenderStats;
 use crate::integrate::integrator::Integrator;
 use crate::isosurface::Isosurfaces;
 use crate::sampling::Reconstruction;
-use crate::scene::{GridRaycast, Scene};
+use crate::scene::{GridRaycast, Scene, DEFAULT_EARLY_TERMINATION};
 use crate::shading::blinn_phong::BlinnPhong;
 use crate::tiles::Control;
 
@@ -76,7 +76,8 @@ impl RenderOptions {
         }
     }
 
-    /// Defaults: 512 x 512, Riemann with step 0.5 voxel, early termination at 0.99.
+    /// Defaults: 512 x 512, Riemann with step 0.5 voxel, early termination at
+    /// [`DEFAULT_EARLY_TERMINATION`] (the defaults of [`crate::scene`]).
     pub fn new(camera: Camera, tf: TransferFunction) -> Self {
         Self {
             width: 512,
@@ -84,7 +85,7 @@ impl RenderOptions {
             camera,
             tf,
             integrator: Integrator::Riemann { step: 0.5 },
-            early_termination: Some(0.99),
+            early_termination: Some(DEFAULT_EARLY_TERMINATION),
             empty_space_skipping: true,
             jitter: false,
             reconstruction: Reconstruction::Trilinear,

@@ -5,7 +5,7 @@ use volux_core::transfer::TransferFunction;
 use crate::error::RenderError;
 use crate::integrate::segment::SegmentRule;
 use crate::isosurface::Isosurfaces;
-use crate::scene::Scene;
+use crate::scene::{Scene, DEFAULT_EARLY_TERMINATION};
 use crate::shading::BlinnPhong;
 use crate::tiles::Control;
 
@@ -39,7 +39,8 @@ pub struct TetRayOptions {
 }
 
 impl TetRayOptions {
-    /// 512 x 512, exact colour, no isosurfaces, default lighting, early termination at 0.999.
+    /// 512 x 512, exact colour, no isosurfaces, default lighting, early termination at
+    /// [`DEFAULT_EARLY_TERMINATION`] (the engine's default colour is ψ: [`crate::scene`]).
     pub fn new(camera: Camera, tf: TransferFunction) -> Self {
         Self {
             width: 512,
@@ -50,7 +51,7 @@ impl TetRayOptions {
             isosurfaces: Isosurfaces::default(),
             shading: BlinnPhong::default(),
             mip: false,
-            early_termination: Some(0.999),
+            early_termination: Some(DEFAULT_EARLY_TERMINATION),
             control: Control::default(),
         }
     }
