@@ -161,12 +161,14 @@ pub struct Appearance {
     /// Blinn-Phong lighting of the isosurfaces, and of the volume when
     /// [`Appearance::shade_volume`] is set.
     pub lighting: BlinnPhong,
-    /// Gradient shading of the volume samples (grids).
+    /// Gradient shading of the volume samples (grid ray casting; the mesh renderers light
+    /// their isosurfaces only and ignore it).
     pub shade_volume: bool,
     /// Isosurfaces drawn with the volume.
     pub isosurfaces: Isosurfaces,
     /// Maximum intensity projection: each pixel shows the TF colour of the largest value
-    /// along its ray, opaque.
+    /// along its ray, opaque (the ray casters; Projected Tetrahedra composites cells and
+    /// ignores it).
     pub mip: bool,
 }
 
