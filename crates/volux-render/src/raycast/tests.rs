@@ -661,3 +661,68 @@ fn skipping_is_used_where_it_saves_samples() {
     assert!(worth_skipping(0.86, &r(2.0)));
     assert!(!worth_skipping(0.0, &r(0.01)));
 }
+
+/// The traversal seam: a volume that supplies its own sampler and intervals (as a bricked
+/// grid will) renders like the grid renderer when its intervals are the macrocells', and
+/// shows only what its intervals cover otherwise.
+#[test]
+fn a_volume_can_supply_its_own_intervals() {
+    use crate::intervals::IntervalSource;
+    use crate::macrocell::{MacrocellGrid, Occupancy};
+
+    /// Samples only the first half of every ray's span through the box.
+    struct FrontHalf;
+    impl IntervalSource for FrontHalf {
+        fn occupied(&self, _: DVec3, _: DVec3, t0: f64, t1: f64, out: &mut Vec<(f64, f64)>) {
+            out.clear();
+            out.push((t0, 0.5 * (t0 + t1)));
+        }
+        fn empty_fraction(&self) -> f64 {
+            1.0
+        }
+    }
+
+    let g = volux_core::synth::sphere(33).unwrap();
+    let tf = TransferFunction::from_json(
+        r#"{"color": [[-2,0.2,0.4,1],[1,1,0.8,0.2]], "extinction": [[-2,0],[0,0],[0.3,0.4],[1,0.1]]}"#,
+    )
+    .unwrap();
+    let spec = CameraSpec {
+        azimuth: Some(20.0),
+        elevation: Some(10.0),
+        ..Default::default()
+    };
+    let mut o = RenderOptions::new(spec.resolve(&g.bounds()).unwrap(), tf);
+    (o.width, o.height) = (40, 40);
+    let values = match g.samples() {
+        Samples::F32(b) => b.as_slice().to_vec(),
+        _ => unreachable!("the sphere is f32"),
+    };
+    let field = Trilinear::new(&values, g.dims());
+    let (place, range) = (Placement::of(&g), g.range());
+    let cells = MacrocellGrid::build(&values, g.dims());
+    let table = crate::classify::ClassifyTable::new(&o.tf, range, 4096);
+    let occupancy = Occupancy::new(&cells, &table, &[]);
+    let seam = render_field_in(&field, place, range, Some(&occupancy), &o).unwrap();
+    let whole = render_grid(&g, &o).unwrap();
+    let d = seam.image.compare(&whole.image, 0.0).unwrap();
+    assert!(d.max_error < 1e-6, "{d:?}");
+    let front = render_field_in(&field, place, range, Some(&FrontHalf), &o).unwrap();
+    // The back half of every ray is missing: less opacity, never more.
+    let (front_alpha, whole_alpha): (f32, f32) = front
+        .image
+        .pixels()
+        .iter()
+        .zip(whole.image.pixels())
+        .fold((0.0, 0.0), |(f, w), (p, q)| {
+            assert!(p[3] <= q[3] + 1e-6);
+            (f + p[3], w + q[3])
+        });
+    assert!(front_alpha < whole_alpha, "{front_alpha} vs {whole_alpha}");
+    let changed = front
+        .image
+        .compare(&whole.image, 0.01)
+        .unwrap()
+        .fraction_over;
+    assert!(changed > 0.05, "{changed}");
+}
