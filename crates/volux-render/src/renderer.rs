@@ -11,7 +11,8 @@ use crate::tiles::Control;
 
 /// A renderer of one volume: turns scenes into frames, keeping its caches between calls.
 pub trait Renderer: Send {
-    /// The method's short name (`raycast`, `pt`, `tet-raycast`, `resample`).
+    /// The method's short name ([`Method::name`]: `raycast`, `pt`, `tet-raycast`,
+    /// `mesh-reference`, `resample`).
     fn name(&self) -> &'static str;
 
     /// Renders `scene`, which must name this renderer's method or [`Method::Auto`];
