@@ -225,17 +225,6 @@ pub enum SortMode {
     Exact,
 }
 
-impl SortMode {
-    /// Parses `centroid` or `exact`.
-    pub fn parse(s: &str) -> Result<Self, String> {
-        match s {
-            "centroid" => Ok(Self::Centroid),
-            "exact" => Ok(Self::Exact),
-            other => Err(format!("unknown sort '{other}' (centroid, exact)")),
-        }
-    }
-}
-
 /// Projected Tetrahedra settings.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PtSettings {

@@ -13,7 +13,7 @@
 //! larger end value.
 use glam::DVec3;
 use volux_core::{CameraSpec, Grid, Image, TransferFunction};
-use volux_render::engine::{create_renderer, Renderer};
+use volux_render::engine::render_once;
 use volux_render::integrate::{AdaptiveParams, Integrator, SegmentRule, StepControl};
 use volux_render::pt::SortMode;
 use volux_render::raycast::ray_box;
@@ -92,8 +92,9 @@ fn reference(scene: &Scene, mip: bool) -> Image {
 }
 
 fn render(volume: &Volume, scene: &Scene) -> Image {
-    let mut r: Box<dyn Renderer> = create_renderer(volume, &scene.method).unwrap();
-    r.render(scene, &Control::default()).unwrap().image
+    render_once(volume, scene, &Control::default())
+        .unwrap()
+        .image
 }
 
 fn adaptive(tol: f64) -> AdaptiveParams {
