@@ -64,6 +64,7 @@ pub mod composite;
 pub mod engine;
 pub mod error;
 pub mod frame;
+pub mod framing;
 pub mod geometry;
 pub mod integrate;
 pub mod intervals;

@@ -58,6 +58,12 @@ impl MacrocellGrid {
         Self { counts, ranges }
     }
 
+    /// The `[min, max]` of each macrocell, x fastest (infinite for a macrocell without
+    /// samples).
+    pub fn ranges(&self) -> &[[f32; 2]] {
+        &self.ranges
+    }
+
     /// Macrocells per axis.
     pub fn counts(&self) -> [usize; 3] {
         self.counts
