@@ -320,6 +320,38 @@ impl Method {
     }
 }
 
+impl Method {
+    /// Whether this (resolved) method draws everything `appearance` asks for: Projected
+    /// Tetrahedra composites cells and has no maximum intensity projection, and the mesh
+    /// renderers light their isosurfaces but not the volume. A front end calls this so that
+    /// an option is never silently ignored.
+    pub fn check_appearance(&self, appearance: &Appearance) -> Result<(), RenderError> {
+        let refuse = |what: &str, instead: &str| {
+            Err(RenderError::InvalidOptions(format!(
+                "{} {what}; {instead}",
+                self.name()
+            )))
+        };
+        let mesh = matches!(
+            self,
+            Self::ProjectedTetrahedra(_) | Self::TetRaycast(_) | Self::MeshReference
+        );
+        if appearance.mip && matches!(self, Self::ProjectedTetrahedra(_) | Self::MeshReference) {
+            return refuse(
+                "composites cells and has no maximum intensity projection",
+                "ray cast the mesh for MIP (volux: --method raycast)",
+            );
+        }
+        if appearance.shade_volume && mesh {
+            return refuse(
+                "lights isosurfaces but does not shade the volume",
+                "add isosurfaces, or resample the mesh onto a grid (volux: --method resample)",
+            );
+        }
+        Ok(())
+    }
+}
+
 /// Everything that decides a frame besides the volume: what a front end changes between
 /// frames.
 #[derive(Clone, Debug, PartialEq)]
@@ -409,6 +441,31 @@ mod tests {
             Method::raycast(&m, GridRaycast::default(), SegmentRule::Exact),
             Method::TetRaycast(SegmentRule::Exact)
         ));
+    }
+
+    #[test]
+    fn appearance_a_method_cannot_draw_is_refused() {
+        let g = grid();
+        let tf = g.preset_tf("grayscale").unwrap();
+        let mip = Appearance {
+            mip: true,
+            ..Appearance::new(tf.clone())
+        };
+        let shaded = Appearance {
+            shade_volume: true,
+            ..Appearance::new(tf.clone())
+        };
+        let pt = Method::ProjectedTetrahedra(PtSettings::default());
+        let tet = Method::TetRaycast(SegmentRule::Psi);
+        let grid = Method::GridRaycast(GridRaycast::default());
+        let e = pt.check_appearance(&mip).unwrap_err().to_string();
+        assert!(e.contains("maximum intensity"), "{e}");
+        assert!(tet.check_appearance(&mip).is_ok());
+        let e = tet.check_appearance(&shaded).unwrap_err().to_string();
+        assert!(e.contains("does not shade the volume"), "{e}");
+        assert!(grid.check_appearance(&mip).is_ok());
+        assert!(grid.check_appearance(&shaded).is_ok());
+        assert!(pt.check_appearance(&Appearance::new(tf)).is_ok());
     }
 
     #[test]
