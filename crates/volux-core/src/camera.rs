@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::aabb::Aabb;
 use crate::error::{Error, Result};
+use crate::json_shape;
 
 /// The projection of a camera.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -114,8 +115,15 @@ pub struct CameraSpec {
 
 impl CameraSpec {
     /// Parses the JSON form.
+    ///
+    /// A wrong shape is an [`Error::InvalidCamera`] naming the field and the expected shape
+    /// (e.g. `eye: expected [x, y, z] (3 numbers), got 2 numbers`); malformed JSON is an
+    /// [`Error::Json`] with serde's line and column. `null` counts as a missing field.
     pub fn from_json(text: &str) -> Result<Self> {
-        Ok(serde_json::from_str(text)?)
+        let mut obj = json_shape::parse_object(text, &FIELDS, Error::InvalidCamera)?;
+        obj.retain(|_, v| !v.is_null());
+        check_shape(&obj).map_err(Error::InvalidCamera)?;
+        Ok(serde_json::from_value(serde_json::Value::Object(obj))?)
     }
 
     /// Resolves the spec against the data's bounding box.
@@ -189,6 +197,36 @@ impl CameraSpec {
             ))),
         }
     }
+}
+
+/// The fields of the JSON form of [`CameraSpec`].
+const FIELDS: [&str; 9] = [
+    "projection",
+    "fov_y_deg",
+    "eye",
+    "target",
+    "up",
+    "azimuth",
+    "elevation",
+    "distance",
+    "zoom",
+];
+
+/// Checks the shape of every field of the camera's JSON form, naming the field.
+fn check_shape(obj: &json_shape::Object) -> std::result::Result<(), String> {
+    use json_shape::{check_number, NumberKind};
+    json_shape::check_known(obj, &FIELDS)?;
+    json_shape::check_choice(obj, "projection", &["perspective", "orthographic"])?;
+    for field in ["eye", "target", "up"] {
+        if let Some(v) = obj.get(field) {
+            json_shape::check_tuple(field, v, 3, "[x, y, z]")?;
+        }
+    }
+    for field in ["fov_y_deg", "azimuth", "elevation"] {
+        check_number(obj, field, NumberKind::Any)?;
+    }
+    check_number(obj, "distance", NumberKind::Positive)?;
+    check_number(obj, "zoom", NumberKind::Positive)
 }
 
 /// Whether the box is a thin slab across z (z extent under a fifth of both others).
@@ -339,6 +377,53 @@ mod tests {
         };
         let (_, _, f) = spec.resolve(&slab).unwrap().basis();
         assert!((f - DVec3::Y).length() < 1e-9);
+    }
+
+    #[test]
+    fn json_shape_errors_name_the_field() {
+        let cases = [
+            (
+                r#"{"eye": [1, 2]}"#,
+                "eye: expected [x, y, z] (3 numbers), got 2 numbers",
+            ),
+            (
+                r#"{"target": "centre"}"#,
+                r#"target: expected [x, y, z] (3 numbers), got "centre""#,
+            ),
+            (
+                r#"{"up": [0, 0, "z"]}"#,
+                r#"up: expected [x, y, z] (3 numbers), got [0,0,"z"]"#,
+            ),
+            (
+                r#"{"projection": "fisheye"}"#,
+                r#"projection: expected "perspective" or "orthographic", got "fisheye""#,
+            ),
+            (r#"{"azimuth": "90"}"#, r#"azimuth: expected a number, got "90""#),
+            (r#"{"zoom": 0}"#, "zoom: expected a positive number, got 0"),
+            (r#"{"distance": -2}"#, "distance: expected a positive number, got -2"),
+            (
+                r#"{"bogus": 1}"#,
+                "unknown field \"bogus\" (expected one of projection, fov_y_deg, eye, target, up, azimuth, elevation, distance, zoom)",
+            ),
+            ("3", "expected a JSON object with fields projection"),
+        ];
+        for (text, want) in cases {
+            let e = CameraSpec::from_json(text).unwrap_err().to_string();
+            assert!(e.starts_with("invalid camera: "), "{e}");
+            assert!(e.contains(want), "{text}: got {e}, want {want}");
+        }
+        let e = CameraSpec::from_json(r#"{"zoom": 2,}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("JSON: ") && e.contains("line 1 column"),
+            "{e}"
+        );
+        let s = CameraSpec::from_json(
+            r#"{"eye": null, "up": [0, 1, 0], "projection": "orthographic"}"#,
+        )
+        .unwrap();
+        assert_eq!((s.eye, s.up), (None, Some([0.0, 1.0, 0.0])));
     }
 
     #[test]

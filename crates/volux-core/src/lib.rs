@@ -24,6 +24,7 @@ pub mod error;
 pub mod grid;
 pub mod histogram;
 pub mod image;
+mod json_shape;
 pub mod limits;
 pub mod mesh;
 pub mod synth;

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::histogram::Histogram;
+use crate::json_shape;
 
 /// Whether control-point positions are data values or fractions of the data range.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -25,7 +26,8 @@ pub enum Space {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TransferFunction {
-    /// Whether positions are values or normalized.
+    /// Whether positions are values or normalized; JSON `"value"` or `"normalized"`, missing
+    /// means `"value"`.
     #[serde(default)]
     pub space: Space,
     /// Colour control points `[s, r, g, b]` (linear RGB in 0..1), sorted by `s`.
@@ -36,19 +38,47 @@ pub struct TransferFunction {
     /// Alternative to `extinction`: opacity per `opacity_step` as `[s, alpha]`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub opacity: Vec<[f64; 2]>,
-    /// Length (in units of `unit_length`) that `opacity` refers to; default 1.
+    /// Length (in units of `unit_length`) that `opacity` refers to; missing means 1 (one
+    /// `unit_length`).
     #[serde(default = "one")]
     pub opacity_step: f64,
-    /// Global multiplier of the extinction; default 1.
+    /// Global multiplier of the extinction; missing means 1.
     #[serde(default = "one")]
     pub opacity_scale: f64,
-    /// World length that `tau` refers to; default 1.
+    /// World length that `tau` refers to; missing means 1 world unit. Presets are set to the
+    /// volume's unit length instead (the renderer's `Volume::preset` calls
+    /// [`TransferFunction::with_unit_length`]; a grid's unit is its smallest voxel spacing).
     #[serde(default = "one")]
     pub unit_length: f64,
 }
 
 fn one() -> f64 {
     1.0
+}
+
+/// The fields of the JSON form, in documentation order.
+const FIELDS: [&str; 7] = [
+    "space",
+    "color",
+    "extinction",
+    "opacity",
+    "opacity_step",
+    "opacity_scale",
+    "unit_length",
+];
+
+/// Checks the shape of every field of the JSON form, naming the field in the message.
+fn check_shape(obj: &json_shape::Object) -> std::result::Result<(), String> {
+    use json_shape::{check_number, check_points, NumberKind};
+    json_shape::check_known(obj, &FIELDS)?;
+    json_shape::check_choice(obj, "space", &["value", "normalized"])?;
+    json_shape::check_required(obj, "color", "a list of [value, r, g, b] points")?;
+    check_points(obj, "color", 4, "[value, r, g, b]")?;
+    check_points(obj, "extinction", 2, "[value, tau]")?;
+    check_points(obj, "opacity", 2, "[value, alpha]")?;
+    check_number(obj, "opacity_step", NumberKind::Positive)?;
+    check_number(obj, "opacity_scale", NumberKind::NonNegative)?;
+    check_number(obj, "unit_length", NumberKind::Positive)
 }
 
 /// The preset names accepted by [`TransferFunction::preset`].
@@ -112,8 +142,15 @@ fn srgb(x: f64) -> f64 {
 
 impl TransferFunction {
     /// Parses the JSON form and validates it.
+    ///
+    /// A wrong shape is an [`Error::InvalidTransferFunction`] naming the field and the
+    /// expected shape (e.g. `color[0]: expected [value, r, g, b] (4 numbers), got 5 numbers`,
+    /// `unknown field "colour" (...)`); malformed JSON is an [`Error::Json`] with serde's
+    /// line and column. Missing optional fields take the defaults documented on the fields.
     pub fn from_json(text: &str) -> Result<Self> {
-        let tf: Self = serde_json::from_str(text)?;
+        let obj = json_shape::parse_object(text, &FIELDS, Error::InvalidTransferFunction)?;
+        check_shape(&obj).map_err(Error::InvalidTransferFunction)?;
+        let tf: Self = serde_json::from_value(serde_json::Value::Object(obj))?;
         tf.validate()?;
         Ok(tf)
     }
@@ -426,6 +463,85 @@ mod tests {
         ] {
             assert!(TransferFunction::from_json(bad).is_err(), "{bad}");
         }
+    }
+
+    fn json_err(text: &str) -> String {
+        TransferFunction::from_json(text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn json_shape_errors_name_the_field() {
+        let cases = [
+            (
+                r#"{"color": [[0, 1, 1, 1, 1]], "extinction": [[0, 1]]}"#,
+                "color[0]: expected [value, r, g, b] (4 numbers), got 5 numbers",
+            ),
+            (
+                r#"{"color": [[0, 1, 1, 1]], "extinction": [[0, 1], [1, 1], "abc"]}"#,
+                r#"extinction[2]: expected [value, tau] (2 numbers), got "abc""#,
+            ),
+            (
+                r#"{"color": [[0, 1, 1, 1]], "opacity": [[0, 1, 2]]}"#,
+                "opacity[0]: expected [value, alpha] (2 numbers), got 3 numbers",
+            ),
+            (
+                r#"{"space": "hu", "color": [[0, 1, 1, 1]], "extinction": [[0, 1]]}"#,
+                r#"space: expected "value" or "normalized", got "hu""#,
+            ),
+            (
+                r#"{"colour": [[0, 1, 1, 1]], "extinction": [[0, 1]]}"#,
+                r#"unknown field "colour" (expected one of space, color, extinction, opacity, opacity_step, opacity_scale, unit_length)"#,
+            ),
+            (
+                r#"{"color": [[0, 1, 1, 1]], "opacity": [[0, 1]], "opacity_step": 0}"#,
+                "opacity_step: expected a positive number, got 0",
+            ),
+            (
+                r#"{"color": [[0, 1, 1, 1]], "extinction": [[0, 1]], "unit_length": "1"}"#,
+                r#"unit_length: expected a positive number, got "1""#,
+            ),
+            (
+                r#"{"color": [[0, 1, 1, 1]], "extinction": [[0, 1]], "opacity_scale": -1}"#,
+                "opacity_scale: expected a number >= 0, got -1",
+            ),
+            (
+                r#"{"color": 3, "extinction": [[0, 1]]}"#,
+                "color: expected a list of [value, r, g, b] points, got 3",
+            ),
+            (
+                r#"{"extinction": [[0, 1]]}"#,
+                r#"missing field "color" (a list of [value, r, g, b] points)"#,
+            ),
+            (
+                "[1, 2]",
+                "expected a JSON object with fields space, color, extinction",
+            ),
+        ];
+        for (text, want) in cases {
+            let e = json_err(text);
+            assert!(e.starts_with("invalid transfer function: "), "{e}");
+            assert!(e.contains(want), "{text}: got {e}, want {want}");
+        }
+    }
+
+    #[test]
+    fn json_syntax_errors_keep_line_and_column() {
+        let e = json_err("{\"color\": [[0, 1, 1, 1]],, }");
+        assert!(
+            e.starts_with("JSON: ") && e.contains("line 1 column"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn json_defaults_are_the_documented_ones() {
+        let tf = TransferFunction::from_json(r#"{"color": [[0, 1, 1, 1]], "opacity": [[0, 0.5]]}"#)
+            .unwrap();
+        assert_eq!(tf.space, Space::Value);
+        assert_eq!(
+            (tf.opacity_step, tf.opacity_scale, tf.unit_length),
+            (1.0, 1.0, 1.0)
+        );
     }
 
     #[test]
