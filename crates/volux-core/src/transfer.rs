@@ -288,6 +288,35 @@ impl TransferFunction {
         v
     }
 
+    /// Several value-space TFs combined into one: each layer is a TF (space [`Space::Value`],
+    /// e.g. the result of [`TransferFunction::resolved`]; `opacity` points are converted as
+    /// `resolved` does) with a weight multiplying its extinction.
+    ///
+    /// The result is in value space with the first layer's `unit_length` and an
+    /// `opacity_scale` of 1. Its extinction per world unit is `sum_i w_i * tau_i(s)` (each layer's
+    /// [`TransferFunction::tau_per_world`]), its colour the extinction-weighted mix
+    /// `sum_i w_i tau_i(s) c_i(s) / sum_i w_i tau_i(s)`, or the plain average of the layers'
+    /// colours where that sum is 0. The mix is not piecewise linear, so it is sampled at every
+    /// layer's breakpoints and at 8 evenly spaced points inside each interval between them;
+    /// colours are clamped to 0..1.
+    ///
+    /// Errors: no layers, a weight that is negative or not finite, a layer not in value space
+    /// or not valid ([`TransferFunction::validate`]).
+    pub fn layered(layers: &[(TransferFunction, f64)]) -> Result<TransferFunction> {
+        let layers = resolve_layers(layers)?;
+        let unit = layers[0].0.unit_length;
+        let mut color = Vec::new();
+        let mut extinction = Vec::new();
+        for s in layer_samples(&layers) {
+            let (tau, c) = mix_at(&layers, s);
+            color.push([s, c[0], c[1], c[2]]);
+            extinction.push([s, tau * unit]);
+        }
+        let tf = Self::values(color, extinction).with_unit_length(unit);
+        tf.validate()?;
+        Ok(tf)
+    }
+
     /// Sets the world length that `tau` refers to (presets use the voxel size).
     pub fn with_unit_length(mut self, unit_length: f64) -> Self {
         self.unit_length = unit_length;
@@ -420,6 +449,82 @@ impl TransferFunction {
     }
 }
 
+/// Interior points sampled between consecutive breakpoints by [`TransferFunction::layered`].
+const LAYER_SUBSAMPLES: usize = 8;
+
+/// Checks the layers of [`TransferFunction::layered`] and resolves their opacity points to
+/// extinction.
+fn resolve_layers(layers: &[(TransferFunction, f64)]) -> Result<Vec<(TransferFunction, f64)>> {
+    let bad = |m: String| Error::InvalidTransferFunction(m);
+    if layers.is_empty() {
+        return Err(bad(
+            "a layered transfer function needs at least one layer".into()
+        ));
+    }
+    layers
+        .iter()
+        .enumerate()
+        .map(|(i, (tf, w))| {
+            if !(w.is_finite() && *w >= 0.0) {
+                return Err(bad(format!(
+                    "layer {i}: weight {w} must be finite and >= 0"
+                )));
+            }
+            if tf.space != Space::Value {
+                return Err(bad(format!(
+                    "layer {i}: not in value space (resolve it on the data range first)"
+                )));
+            }
+            tf.validate().map_err(|e| match e {
+                Error::InvalidTransferFunction(m) => bad(format!("layer {i}: {m}")),
+                other => other,
+            })?;
+            // In value space the range is not used: this only converts opacity points.
+            Ok((tf.resolved([0.0, 1.0]), *w))
+        })
+        .collect()
+}
+
+/// The positions [`TransferFunction::layered`] samples: the union of the layers'
+/// breakpoints plus [`LAYER_SUBSAMPLES`] evenly spaced points inside each interval.
+fn layer_samples(layers: &[(TransferFunction, f64)]) -> Vec<f64> {
+    let mut knots: Vec<f64> = layers.iter().flat_map(|(tf, _)| tf.breakpoints()).collect();
+    knots.sort_by(f64::total_cmp);
+    knots.dedup();
+    let mut out = Vec::with_capacity(knots.len() * (LAYER_SUBSAMPLES + 1));
+    for pair in knots.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        out.push(a);
+        let n = (LAYER_SUBSAMPLES + 1) as f64;
+        out.extend((1..=LAYER_SUBSAMPLES).map(|k| a + (b - a) * k as f64 / n));
+    }
+    out.extend(knots.last());
+    out
+}
+
+/// The summed extinction per world unit and the extinction-weighted colour of the layers
+/// at `s` (the plain average colour where the extinction is 0), clamped to 0..1.
+fn mix_at(layers: &[(TransferFunction, f64)], s: f64) -> (f64, [f64; 3]) {
+    let mut tau = 0.0;
+    let mut weighted = [0.0; 3];
+    let mut plain = [0.0; 3];
+    for (tf, w) in layers {
+        let t = w * tf.tau_per_world(s);
+        let c = tf.color_at(s);
+        tau += t;
+        for k in 0..3 {
+            weighted[k] += t * c[k];
+            plain[k] += c[k] / layers.len() as f64;
+        }
+    }
+    let color = if tau > 0.0 {
+        weighted.map(|v| v / tau)
+    } else {
+        plain
+    };
+    (tau, color.map(|v| v.clamp(0.0, 1.0)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -542,6 +647,135 @@ mod tests {
             (tf.opacity_step, tf.opacity_scale, tf.unit_length),
             (1.0, 1.0, 1.0)
         );
+    }
+
+    fn tf(text: &str) -> TransferFunction {
+        TransferFunction::from_json(text).unwrap()
+    }
+
+    /// Positions from -5 to 45 in steps of 0.37 (inside, between and outside the points).
+    fn probes() -> impl Iterator<Item = f64> {
+        (0..135).map(|i| -5.0 + 0.37 * i as f64)
+    }
+
+    #[test]
+    fn one_layer_reproduces_the_original() {
+        let a = tf(r#"{"color": [[0,0,0,0],[10,1,0.5,0],[30,0.2,0.9,1]],
+            "extinction": [[2,0],[12,3],[25,1]], "opacity_scale": 2, "unit_length": 0.5}"#);
+        let l = TransferFunction::layered(&[(a.clone(), 1.0)]).unwrap();
+        assert_eq!(
+            (l.space, l.unit_length, l.opacity_scale),
+            (Space::Value, 0.5, 1.0)
+        );
+        for s in probes() {
+            assert!(
+                (l.tau_per_world(s) - a.tau_per_world(s)).abs() < 1e-9,
+                "{s}"
+            );
+            let (p, q) = (l.color_at(s), a.color_at(s));
+            assert!(
+                (0..3).all(|k| (p[k] - q[k]).abs() < 1e-9),
+                "{s}: {p:?} {q:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn opacity_layers_are_converted() {
+        let a = tf(r#"{"color": [[0,1,0,0]], "opacity": [[0,0.1],[10,0.8]], "opacity_step": 0.5}"#);
+        let l = TransferFunction::layered(&[(a.clone(), 1.0)]).unwrap();
+        let r = a.resolved([0.0, 1.0]);
+        for s in probes() {
+            assert!(
+                (l.tau_per_world(s) - r.tau_per_world(s)).abs() < 1e-9,
+                "{s}"
+            );
+        }
+        assert!(l.tau_per_world(5.0) > 0.0);
+    }
+
+    #[test]
+    fn disjoint_layers_keep_their_colours_and_sum_extinction() {
+        let a = tf(r#"{"color": [[0,1,0,0]], "extinction": [[0,0],[1,1],[9,1],[10,0]]}"#);
+        let b = tf(r#"{"color": [[0,0,0,1]], "extinction": [[20,0],[21,2],[29,2],[30,0]]}"#);
+        let l = TransferFunction::layered(&[(a.clone(), 1.0), (b.clone(), 1.0)]).unwrap();
+        for s in probes() {
+            let sum = a.tau_per_world(s) + b.tau_per_world(s);
+            assert!((l.tau_per_world(s) - sum).abs() < 1e-9, "{s}");
+        }
+        let close = |p: [f64; 3], q: [f64; 3]| (0..3).all(|k| (p[k] - q[k]).abs() < 1e-9);
+        for s in [0.5, 5.0, 9.5] {
+            assert!(
+                close(l.color_at(s), [1.0, 0.0, 0.0]),
+                "{s}: {:?}",
+                l.color_at(s)
+            );
+        }
+        for s in [20.5, 25.0, 29.5] {
+            assert!(
+                close(l.color_at(s), [0.0, 0.0, 1.0]),
+                "{s}: {:?}",
+                l.color_at(s)
+            );
+        }
+        // Where neither absorbs the colour is the plain average.
+        assert!(close(l.color_at(15.0), [0.5, 0.0, 0.5]));
+    }
+
+    #[test]
+    fn overlapping_layers_mix_by_extinction() {
+        let a = tf(r#"{"color": [[0,1,0,0]], "extinction": [[0,1]]}"#);
+        let b = tf(r#"{"color": [[0,0,0,1]], "extinction": [[0,3]], "unit_length": 2}"#);
+        // b absorbs 1.5 per world unit, a 1: red share 1 / 2.5.
+        let l = TransferFunction::layered(&[(a, 1.0), (b, 1.0)]).unwrap();
+        let c = l.color_at(0.0);
+        assert!(
+            (c[0] - 0.4).abs() < 1e-9 && (c[2] - 0.6).abs() < 1e-9,
+            "{c:?}"
+        );
+        assert!((l.tau_per_world(0.0) - 2.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn weights_scale_extinction() {
+        let a = tf(r#"{"color": [[0,1,1,1]], "extinction": [[0,0],[10,4]]}"#);
+        let l = TransferFunction::layered(&[(a.clone(), 0.2)]).unwrap();
+        for s in probes() {
+            assert!(
+                (l.tau_per_world(s) - 0.2 * a.tau_per_world(s)).abs() < 1e-9,
+                "{s}"
+            );
+        }
+    }
+
+    #[test]
+    fn layered_rejects_bad_layers() {
+        let a = tf(r#"{"color": [[0,1,1,1]], "extinction": [[0,1]]}"#);
+        let norm = TransferFunction {
+            space: Space::Normalized,
+            ..a.clone()
+        };
+        let empty = TransferFunction {
+            color: Vec::new(),
+            ..a.clone()
+        };
+        let err = |layers: &[(TransferFunction, f64)]| {
+            TransferFunction::layered(layers).unwrap_err().to_string()
+        };
+        assert!(err(&[]).contains("at least one layer"));
+        assert!(err(&[(a.clone(), -1.0)]).contains("layer 0: weight -1"));
+        assert!(err(&[(a.clone(), f64::NAN)]).contains("weight NaN"));
+        assert!(err(&[(a.clone(), f64::INFINITY)]).contains("weight inf"));
+        assert!(err(&[(a.clone(), 1.0), (norm, 1.0)]).contains("layer 1: not in value space"));
+        assert!(err(&[(empty, 1.0)]).contains("layer 0: no colour control points"));
+    }
+
+    #[test]
+    fn layer_samples_subdivide_each_interval() {
+        let a = tf(r#"{"color": [[0,1,1,1],[9,1,1,1]], "extinction": [[18,1]]}"#);
+        let s = layer_samples(&[(a, 1.0)]);
+        assert_eq!(s.len(), 2 * 9 + 1);
+        assert_eq!((s[0], s[1], s[9], s[18]), (0.0, 1.0, 9.0, 18.0));
     }
 
     #[test]
