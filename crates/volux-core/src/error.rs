@@ -43,6 +43,9 @@ pub enum Error {
     /// A camera that cannot be used.
     #[error("invalid camera: {0}")]
     InvalidCamera(String),
+    /// Heat-map arguments that cannot be used (e.g. a scale maximum that is not > 0).
+    #[error("invalid heat map: {0}")]
+    InvalidHeatMap(String),
     /// An unknown preset or generator name.
     #[error("unknown {kind} '{name}' (known: {known})")]
     UnknownName {

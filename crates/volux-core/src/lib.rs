@@ -11,6 +11,7 @@
 //! - [`transfer::TransferFunction`]: piecewise-linear colour and extinction, presets, JSON;
 //! - [`camera::Camera`]: perspective and orthographic cameras, JSON;
 //! - [`image::Image`]: the RGBA f32 linear framebuffer and PNG output;
+//! - [`heatmap`]: heat-map images of per-pixel values with a colour-scale legend;
 //! - [`histogram`]: value histograms (the automatic transfer function is fitted on them);
 //! - [`synth`]: synthetic datasets for tests, benchmarks and the demo;
 //! - [`error`]: the typed errors of the data model; [`limits`]: allocation limits checked
@@ -22,6 +23,7 @@ pub mod aabb;
 pub mod camera;
 pub mod error;
 pub mod grid;
+pub mod heatmap;
 pub mod histogram;
 pub mod image;
 mod json_shape;

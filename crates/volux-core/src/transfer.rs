@@ -94,14 +94,18 @@ pub const PRESETS: [&str; 9] = [
     "cool-warm",
 ];
 
-const VIRIDIS: [[f64; 3]; 5] = [
+/// Stops of the viridis colour scale (sRGB-encoded, evenly spaced from 0 to 1), for
+/// [`colormap_at`].
+pub const VIRIDIS: [[f64; 3]; 5] = [
     [0.267, 0.005, 0.329],
     [0.229, 0.322, 0.546],
     [0.128, 0.567, 0.551],
     [0.369, 0.789, 0.383],
     [0.993, 0.906, 0.144],
 ];
-const INFERNO: [[f64; 3]; 5] = [
+/// Stops of the inferno colour scale (sRGB-encoded, evenly spaced from 0 to 1; near black to
+/// pale yellow), for [`colormap_at`].
+pub const INFERNO: [[f64; 3]; 5] = [
     [0.001, 0.000, 0.014],
     [0.341, 0.062, 0.429],
     [0.735, 0.216, 0.330],
@@ -133,6 +137,22 @@ fn colormap(stops: &[[f64; 3]]) -> Vec<[f64; 4]> {
         .enumerate()
         .map(|(i, c)| [i as f64 / n, srgb(c[0]), srgb(c[1]), srgb(c[2])])
         .collect()
+}
+
+/// The linear RGB colour at `t` of a colour scale given by evenly spaced sRGB-encoded
+/// `stops` (such as [`VIRIDIS`] or [`INFERNO`]): the stops are interpolated in sRGB (evenly
+/// perceived steps), then converted to linear. `t` is clamped to 0..1 (NaN counts as 0); no
+/// stops give black.
+pub fn colormap_at(stops: &[[f64; 3]], t: f64) -> [f64; 3] {
+    let Some(last) = stops.len().checked_sub(1) else {
+        return [0.0; 3];
+    };
+    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
+    let x = t * last as f64;
+    let i = (x.floor() as usize).min(last.saturating_sub(1));
+    let (a, b) = (stops[i], stops[(i + 1).min(last)]);
+    let f = x - i as f64;
+    [0, 1, 2].map(|k| srgb(a[k] + (b[k] - a[k]) * f))
 }
 
 /// sRGB-encoded colormap entries to linear.
@@ -776,6 +796,21 @@ mod tests {
         let s = layer_samples(&[(a, 1.0)]);
         assert_eq!(s.len(), 2 * 9 + 1);
         assert_eq!((s[0], s[1], s[9], s[18]), (0.0, 1.0, 9.0, 18.0));
+    }
+
+    #[test]
+    fn colormap_at_interpolates_the_stops() {
+        let lin = |c: [f64; 3]| c.map(srgb);
+        assert_eq!(colormap_at(&INFERNO, 0.0), lin(INFERNO[0]));
+        assert_eq!(colormap_at(&INFERNO, 1.0), lin(INFERNO[4]));
+        assert_eq!(colormap_at(&INFERNO, 0.5), lin(INFERNO[2]));
+        assert_eq!(colormap_at(&VIRIDIS, 7.0), lin(VIRIDIS[4]));
+        assert_eq!(colormap_at(&VIRIDIS, -1.0), lin(VIRIDIS[0]));
+        assert_eq!(colormap_at(&VIRIDIS, f64::NAN), lin(VIRIDIS[0]));
+        let mid = colormap_at(&[[0.0; 3], [1.0; 3]], 0.5);
+        assert!((mid[0] - srgb(0.5)).abs() < 1e-12);
+        assert_eq!(colormap_at(&[[0.2, 0.4, 0.6]], 0.7), lin([0.2, 0.4, 0.6]));
+        assert_eq!(colormap_at(&[], 0.5), [0.0; 3]);
     }
 
     #[test]
