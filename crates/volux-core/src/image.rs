@@ -169,10 +169,20 @@ impl Image {
 /// Writes `bytes` to `path` through `path.tmp-<pid>` and a rename, so readers never see a
 /// partial file and a failure leaves nothing behind.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomically_with(path, |f| f.write_all(bytes))
+}
+
+/// Like [`write_atomically`], for content produced by `write` (streamed, so large files need
+/// no buffer): `write` fills the temporary file (and flushes what it wraps around it), which
+/// is then synced and renamed to `path`. On any error the temporary file is removed.
+pub fn write_atomically_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> Result<()> {
     let tmp = temp_path(path);
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
+        write(&mut f)?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
@@ -359,6 +369,23 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
         let bad = dir.path().join("missing-dir").join("b.png");
         assert!(img.write_png(&bad, &PngOptions::default()).is_err());
+    }
+
+    #[test]
+    fn streamed_writes_are_atomic() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.bin");
+        write_atomically_with(&p, |f| f.write_all(b"abc")).unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"abc");
+        let e = write_atomically_with(&p, |f| {
+            f.write_all(b"partial")?;
+            Err(std::io::Error::other("disk full"))
+        })
+        .unwrap_err();
+        assert!(e.to_string().contains("disk full"), "{e}");
+        // The old file is kept and no temporary file is left.
+        assert_eq!(std::fs::read(&p).unwrap(), b"abc");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
     #[test]
