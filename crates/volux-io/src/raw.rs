@@ -11,9 +11,13 @@
 //! ([`volux_core::Buffer::map_file`]), not copied. The file length must match the sidecar
 //! exactly: shorter is [`ErrorKind::Truncated`], longer is a header/data mismatch.
 //!
+//! [`write`] writes the data and the sidecar (gzip when the data name ends in `.gz`);
+//! [`write_with_progress`] reports progress and [`encoded_size`] tells in advance how many
+//! bytes of data will be written.
+//!
 //! This module also holds the data-section helpers shared with [`crate::nrrd`] and
 //! [`crate::metaimage`]: element types, decoding, mapping and ASCII parsing.
-use std::io::{Read, Seek, SeekFrom};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use volux_core::{Buffer, Grid, Samples, ScalarType};
@@ -22,7 +26,9 @@ use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
 use crate::error::WriteError;
-use crate::util::{header_err, open_maybe_gz, read_exact_checked};
+use crate::util::{
+    header_err, open_maybe_gz, read_exact_checked, write_chunked, Progress, PROGRESS_STEP,
+};
 
 /// Largest sidecar read (a sidecar is a few hundred bytes; anything huge is not one).
 const MAX_SIDECAR_BYTES: u64 = 1 << 20;
@@ -532,32 +538,90 @@ pub(crate) fn samples_le_bytes(samples: &Samples) -> Vec<u8> {
     }
 }
 
+/// Bytes of data [`write`] produces for `grid` before any compression (values times their
+/// size; the sidecar is not counted), so a caller can warn before writing a huge file.
+pub fn encoded_size(grid: &Grid) -> u64 {
+    (grid.len() as u64).saturating_mul(grid.scalar_type().size() as u64)
+}
+
 /// Writes `grid` as raw little-endian data in its native type at `path`, plus the sidecar
 /// `path.json` (`dims_xyz`, `dtype`, `endianness`, `compression`, `spacing`, `origin`,
-/// `value_range`). Both files are written atomically (temporary name, then rename).
+/// `value_range`). A data name ending in `.gz` (e.g. `ct.raw.gz`, sidecar `ct.raw.gz.json`)
+/// is gzip-compressed. Both files are written atomically (temporary name, then rename).
 pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
+    write_with_progress(grid, path, &|_, _| {})
+}
+
+/// [`write`], reporting `(bytes written, total bytes)` to `progress` as the data goes out:
+/// once at the start, every few MiB, and at the end. Bytes are counted before compression,
+/// so the total is [`encoded_size`].
+pub fn write_with_progress(
+    grid: &Grid,
+    path: &Path,
+    progress: &dyn Fn(u64, u64),
+) -> Result<(), WriteError> {
     let (data_path, sidecar) = data_and_sidecar(path);
     let werr = |p: &Path| {
         let p = p.to_path_buf();
         move |source: volux_core::Error| WriteError { path: p, source }
     };
-    volux_core::limits::check_alloc("raw output", grid.len() as u64, 4)
-        .map_err(werr(&data_path))?;
-    let bytes = samples_le_bytes(grid.samples());
-    let car = serde_json::json!({
+    let gzip = data_path
+        .to_string_lossy()
+        .to_ascii_lowercase()
+        .ends_with(".gz");
+    let text = serde_json::to_vec_pretty(&sidecar_json(grid, gzip))
+        .map_err(|e| werr(&sidecar)(volux_core::Error::Json(e)))?;
+    volux_core::image::write_atomically_with(&data_path, |file| {
+        write_data(file, grid.samples(), gzip, encoded_size(grid), progress)
+    })
+    .map_err(werr(&data_path))?;
+    volux_core::image::write_atomically(&sidecar, &text).map_err(werr(&sidecar))
+}
+
+/// The sidecar [`write`] puts beside the data.
+fn sidecar_json(grid: &Grid, gzip: bool) -> serde_json::Value {
+    serde_json::json!({
         "kind": "grid",
         "format": "raw",
         "dims_xyz": grid.dims(),
         "layout": "x fastest, then y, then z (C-order array [z][y][x])",
         "dtype": grid.scalar_type().name(),
         "endianness": "little",
-        "compression": "none",
+        "compression": if gzip { "gzip" } else { "none" },
         "spacing": grid.spacing().to_array(),
         "origin": grid.origin().to_array(),
         "value_range": grid.range(),
-    });
-    let text =
-        serde_json::to_vec_pretty(&car).map_err(|e| werr(&sidecar)(volux_core::Error::Json(e)))?;
-    volux_core::image::write_atomically(&data_path, &bytes).map_err(werr(&data_path))?;
-    volux_core::image::write_atomically(&sidecar, &text).map_err(werr(&sidecar))
+    })
+}
+
+/// Streams the samples to `file`, gzip-compressed when asked, reporting progress.
+fn write_data(
+    file: &mut std::fs::File,
+    samples: &Samples,
+    gzip: bool,
+    total: u64,
+    progress: &dyn Fn(u64, u64),
+) -> std::io::Result<()> {
+    let buffered = std::io::BufWriter::new(file);
+    if gzip {
+        let enc = flate2::write::GzEncoder::new(buffered, flate2::Compression::default());
+        let mut out = Progress::new(enc, total, PROGRESS_STEP, progress);
+        write_samples(&mut out, samples)?;
+        out.into_inner().finish()?.flush()
+    } else {
+        let mut out = Progress::new(buffered, total, PROGRESS_STEP, progress);
+        write_samples(&mut out, samples)?;
+        out.flush()
+    }
+}
+
+/// Writes the samples as little-endian bytes of their native type.
+fn write_samples(out: &mut impl Write, samples: &Samples) -> std::io::Result<()> {
+    let none = |_: &[u8]| {};
+    match samples {
+        Samples::U8(b) => b.chunks(1 << 20).try_for_each(|c| out.write_all(c)),
+        Samples::U16(b) => write_chunked(out, b, |v, o| o.extend(v.to_le_bytes()), none),
+        Samples::I16(b) => write_chunked(out, b, |v, o| o.extend(v.to_le_bytes()), none),
+        Samples::F32(b) => write_chunked(out, b, |v, o| o.extend(v.to_le_bytes()), none),
+    }
 }

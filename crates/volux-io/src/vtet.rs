@@ -16,6 +16,7 @@
 //! The reader checks that the file length is exactly what the counts require before allocating,
 //! then the checksum; [`TetMesh::new`] rejects invalid meshes (out-of-range indices, empty
 //! meshes, non-finite positions) and reports repairs. No crate is needed: the layout is fixed.
+use std::io::Write;
 use std::path::Path;
 
 use glam::Vec3;
@@ -25,7 +26,7 @@ use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
 use crate::error::WriteError;
-use crate::util::{header_err, read_exact_checked};
+use crate::util::{header_err, read_exact_checked, write_chunked, Progress, PROGRESS_STEP};
 
 /// Magic bytes of the format.
 pub const MAGIC: &[u8] = b"VOLUXTET";
@@ -36,9 +37,17 @@ pub const VERSION: u32 = 1;
 /// Bytes before the payload: magic, version, two counts.
 const HEADER_BYTES: u64 = 8 + 4 + 8 + 8;
 
+/// Initial state of the FNV-1a 64-bit hash.
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
 /// FNV-1a 64-bit hash of `bytes`.
 fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+    fnv1a_update(FNV_OFFSET, bytes)
+}
+
+/// The FNV-1a 64-bit hash state `h` continued over `bytes`.
+fn fnv1a_update(h: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(h, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
     })
 }
@@ -161,39 +170,78 @@ fn decode(path: &Path, body: &[u8], nv: usize, nt: usize) -> Result<TetMesh> {
     TetMesh::new(positions, scalars, tets).map_err(|e| ReadError::new(path, e))
 }
 
+/// Bytes [`write`] produces for `mesh` (header, arrays and checksum): the file's length, so a
+/// caller can warn before writing a huge file.
+pub fn encoded_size(mesh: &TetMesh) -> u64 {
+    let (nv, nt) = (mesh.positions().len() as u64, mesh.tets().len() as u64);
+    nv.saturating_mul(16)
+        .saturating_add(nt.saturating_mul(16))
+        .saturating_add(HEADER_BYTES + 8)
+}
+
 /// Writes `mesh` as a `.vtet` file (atomically: temporary name, then rename).
 pub fn write(mesh: &TetMesh, path: &Path) -> Result<(), WriteError> {
-    let werr = |source| WriteError {
+    write_with_progress(mesh, path, &|_, _| {})
+}
+
+/// [`write`], reporting `(bytes written, total bytes)` to `progress` as the file goes out:
+/// once at the start, every few MiB, and at the end; the total is [`encoded_size`].
+pub fn write_with_progress(
+    mesh: &TetMesh,
+    path: &Path,
+    progress: &dyn Fn(u64, u64),
+) -> Result<(), WriteError> {
+    volux_core::image::write_atomically_with(path, |file| {
+        let buffered = std::io::BufWriter::new(file);
+        let mut out = Progress::new(buffered, encoded_size(mesh), PROGRESS_STEP, progress);
+        write_mesh(&mut out, mesh)?;
+        out.flush()
+    })
+    .map_err(|source| WriteError {
         path: path.to_path_buf(),
         source,
-    };
+    })
+}
+
+/// Streams the header, the arrays and their checksum to `out`.
+fn write_mesh(out: &mut impl Write, mesh: &TetMesh) -> std::io::Result<()> {
     let (nv, nt) = (mesh.positions().len() as u64, mesh.tets().len() as u64);
-    let total = nv
-        .checked_mul(16)
-        .and_then(|v| v.checked_add(nt.checked_mul(16)?))
-        .and_then(|v| v.checked_add(HEADER_BYTES + 8))
-        .unwrap_or(u64::MAX);
-    volux_core::limits::check_alloc(".vtet output", total, 1).map_err(werr)?;
-    let mut out = Vec::with_capacity(total as usize);
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&nv.to_le_bytes());
-    out.extend_from_slice(&nt.to_le_bytes());
-    let start = out.len();
-    for p in mesh.positions() {
-        for c in p.to_array() {
-            out.extend_from_slice(&c.to_le_bytes());
-        }
+    out.write_all(MAGIC)?;
+    out.write_all(&VERSION.to_le_bytes())?;
+    out.write_all(&nv.to_le_bytes())?;
+    out.write_all(&nt.to_le_bytes())?;
+    let mut sum = FNV_OFFSET;
+    let mut hash = |bytes: &[u8]| sum = fnv1a_update(sum, bytes);
+    write_chunked(
+        out,
+        mesh.positions(),
+        |p, o| p.to_array().iter().for_each(|c| o.extend(c.to_le_bytes())),
+        &mut hash,
+    )?;
+    write_chunked(
+        out,
+        mesh.scalars(),
+        |s, o| o.extend(s.to_le_bytes()),
+        &mut hash,
+    )?;
+    write_chunked(
+        out,
+        mesh.tets(),
+        |t, o| t.iter().for_each(|v| o.extend(v.to_le_bytes())),
+        &mut hash,
+    )?;
+    out.write_all(&sum.to_le_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fnv1a_is_the_reference_hash_and_chains() {
+        assert_eq!(fnv1a(b""), FNV_OFFSET);
+        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a(b"foobar"), 0x8594_4171_f739_67e8);
+        assert_eq!(fnv1a_update(fnv1a(b"foo"), b"bar"), fnv1a(b"foobar"));
     }
-    for s in mesh.scalars() {
-        out.extend_from_slice(&s.to_le_bytes());
-    }
-    for t in mesh.tets() {
-        for v in t {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-    }
-    let sum = fnv1a(&out[start..]);
-    out.extend_from_slice(&sum.to_le_bytes());
-    volux_core::image::write_atomically(path, &out).map_err(werr)
 }

@@ -106,6 +106,7 @@ proptest! {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("v.raw");
         raw::write(&g, &p).unwrap();
+        prop_assert_eq!(std::fs::metadata(&p).unwrap().len(), raw::encoded_size(&g));
         let r = raw::read(&p).unwrap();
         prop_assert_eq!(r.dims(), g.dims());
         // serde_json (without its `float_roundtrip` feature) may parse a 17-digit number 1 ulp
@@ -120,6 +121,13 @@ proptest! {
         // The sidecar path works too.
         let r2 = raw::read(&dir.path().join("v.raw.json")).unwrap();
         prop_assert_eq!(values(&r2), values(&g));
+        // A .raw.gz name writes gzip data that reads back the same.
+        let gz = dir.path().join("v.raw.gz");
+        raw::write(&g, &gz).unwrap();
+        let r3 = raw::read(&gz).unwrap();
+        prop_assert_eq!(r3.scalar_type(), g.scalar_type());
+        prop_assert_eq!(values(&r3), values(&g));
+        prop_assert!(r3.notes().is_empty(), "{:?}", r3.notes());
     }
 
     #[test]
@@ -167,6 +175,105 @@ fn raw_gzip_big_endian_and_origin() {
     let (d, f) = load(&p, &LoadOptions::default()).unwrap();
     assert_eq!(f, volux_io::Format::RawJson);
     assert!(matches!(d, Dataset::Grid(g) if g.dims() == [3, 2, 2]));
+}
+
+/// Records the progress reports of a writer.
+#[derive(Default)]
+struct Reports(std::cell::RefCell<Vec<(u64, u64)>>);
+
+impl Reports {
+    fn record(&self) -> impl Fn(u64, u64) + '_ {
+        |done, total| self.0.borrow_mut().push((done, total))
+    }
+
+    /// Checks the reports start at 0, end at `total`, never go back, and number at least `min`.
+    fn check(&self, total: u64, min: usize) {
+        let r = self.0.borrow();
+        assert_eq!(r.first(), Some(&(0, total)), "{r:?}");
+        assert_eq!(r.last(), Some(&(total, total)), "{r:?}");
+        assert!(
+            r.windows(2).all(|w| w[0].0 <= w[1].0 && w[0].1 == w[1].1),
+            "{r:?}"
+        );
+        assert!(r.len() >= min, "{} reports", r.len());
+    }
+}
+
+/// A 128 x 128 x 200 uint16 grid (6.5 MB of data) with varied values.
+fn big_u16_grid() -> Grid {
+    let v: Vec<u16> = (0..128 * 128 * 200u32)
+        .map(|i| (i * 7 % 4099) as u16)
+        .collect();
+    Grid::new(
+        [128, 128, 200],
+        [1.0; 3],
+        [0.0; 3],
+        Samples::U16(Buffer::owned(v)),
+    )
+    .unwrap()
+}
+
+#[test]
+fn raw_gzip_write_round_trip_and_sidecar() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = Grid::new(
+        [3, 2, 2],
+        [0.5, 1.0, 2.0],
+        [1.0, 2.0, 3.0],
+        Samples::I16(Buffer::owned(I16_VALS.to_vec())),
+    )
+    .unwrap();
+    let p = dir.path().join("ct.raw.gz");
+    raw::write(&g, &p).unwrap();
+    let bytes = std::fs::read(&p).unwrap();
+    assert_eq!(&bytes[..2], &[0x1f, 0x8b]);
+    let car: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("ct.raw.gz.json")).unwrap()).unwrap();
+    assert_eq!(car["compression"], "gzip");
+    let r = raw::read(&p).unwrap();
+    assert_eq!((r.dims(), r.scalar_type()), ([3, 2, 2], ScalarType::I16));
+    assert_eq!(values(&r), values(&g));
+    assert_eq!(r.origin().to_array(), [1.0, 2.0, 3.0]);
+    // Only the data and its sidecar are left: no temporary files.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    // Writing through the sidecar's name writes the same pair.
+    let q = dir.path().join("b.raw.gz.json");
+    raw::write(&g, &q).unwrap();
+    assert_eq!(values(&raw::read(&q).unwrap()), values(&g));
+}
+
+#[test]
+fn raw_write_reports_progress_and_its_size() {
+    let g = big_u16_grid();
+    let total = raw::encoded_size(&g);
+    assert_eq!(total, 128 * 128 * 200 * 2);
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["big.raw", "big.raw.gz"] {
+        let reports = Reports::default();
+        let p = dir.path().join(name);
+        raw::write_with_progress(&g, &p, &reports.record()).unwrap();
+        reports.check(total, 3);
+        assert_eq!(values(&raw::read(&p).unwrap()), values(&g), "{name}");
+    }
+    let plain = std::fs::metadata(dir.path().join("big.raw")).unwrap().len();
+    assert_eq!(plain, total);
+    let small = Grid::new(
+        [2, 1, 1],
+        [1.0; 3],
+        [0.0; 3],
+        Samples::F32(Buffer::owned(vec![1.0, 2.0])),
+    )
+    .unwrap();
+    assert_eq!(raw::encoded_size(&small), 8);
+}
+
+#[test]
+fn raw_write_errors_name_the_file_and_leave_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("missing").join("v.raw.gz");
+    let e = raw::write(&big_u16_grid(), &p).unwrap_err();
+    assert_eq!(e.path, p);
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
 #[test]
@@ -735,6 +842,7 @@ proptest! {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("m.vtet");
         vtet::write(&mesh, &p).unwrap();
+        prop_assert_eq!(std::fs::metadata(&p).unwrap().len(), vtet::encoded_size(&mesh));
         let r = vtet::read(&p).unwrap();
         prop_assert_eq!(r.positions(), mesh.positions());
         prop_assert_eq!(r.scalars(), mesh.scalars());
@@ -743,6 +851,47 @@ proptest! {
         prop_assert_eq!(r.report().degenerate, mesh.report().degenerate);
         prop_assert_eq!(r.range(), mesh.range());
     }
+}
+
+#[test]
+fn vtet_write_reports_progress_and_its_size() {
+    // A 60 x 60 x 60 grid of points split into 5 tets per cube: over 1 million tets.
+    let n = 60u32;
+    let id = |i: u32, j: u32, k: u32| i + n * (j + n * k);
+    let mut pos = Vec::new();
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                pos.push(Vec3::new(i as f32, j as f32, k as f32));
+            }
+        }
+    }
+    let mut tets = Vec::new();
+    for k in 0..n - 1 {
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let c = |a, b, d| id(i + a, j + b, k + d);
+                tets.push([c(0, 0, 0), c(1, 0, 0), c(0, 1, 0), c(0, 0, 1)]);
+                tets.push([c(1, 1, 0), c(1, 0, 0), c(0, 1, 0), c(1, 1, 1)]);
+            }
+        }
+    }
+    let scalars = (0..pos.len()).map(|i| i as f32).collect();
+    let mesh = TetMesh::new(pos, scalars, tets).unwrap();
+    let total = vtet::encoded_size(&mesh);
+    let (nv, nt) = (mesh.positions().len() as u64, mesh.tets().len() as u64);
+    assert_eq!(total, 28 + 16 * nv + 16 * nt + 8);
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("big.vtet");
+    let reports = Reports::default();
+    vtet::write_with_progress(&mesh, &p, &reports.record()).unwrap();
+    reports.check(total, 3);
+    assert_eq!(std::fs::metadata(&p).unwrap().len(), total);
+    let r = vtet::read(&p).unwrap();
+    assert_eq!((r.positions(), r.tets()), (mesh.positions(), mesh.tets()));
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    let bad = dir.path().join("missing").join("m.vtet");
+    assert_eq!(vtet::write(&mesh, &bad).unwrap_err().path, bad);
 }
 
 #[test]
