@@ -152,15 +152,17 @@ pub struct LoadArgs {
 pub struct RenderArgs {
     /// The file (or DICOM folder) to render.
     pub file: PathBuf,
-    /// Output PNG.
-    #[arg(long, short, default_value = "out.png")]
-    pub output: PathBuf,
+    /// Output PNG [default: out.png, and it says so when it replaces a file].
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
     /// Transfer function: a preset (auto, grayscale, ct-bone, ct-skin, ct-soft-tissue,
-    /// mr-default, viridis, inferno, cool-warm) or a JSON file.
-    #[arg(long, default_value = "auto")]
-    pub tf: String,
+    /// mr-default, viridis, inferno, cool-warm) or a JSON file (`volux help tf`); repeat it
+    /// to layer several, each optionally weighted as NAME:WEIGHT (`--tf ct-bone --tf
+    /// ct-skin:0.2`: bone under a faint skin) [default: auto].
+    #[arg(long)]
+    pub tf: Vec<String>,
     /// Multiply the extinction of the transfer function.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
     pub opacity_scale: f64,
     /// Camera JSON file (look-at or orbit form); overrides the angle options.
     #[arg(long)]
@@ -171,8 +173,21 @@ pub struct RenderArgs {
     /// Orbit elevation in degrees (default 0).
     #[arg(long, allow_hyphen_values = true)]
     pub elevation: Option<f64>,
+    /// A named view: front, back, left, right (the camera on -y, +y, -x, +x, z up), top,
+    /// bottom (on +z, -z, y up); --azimuth and --elevation turn from it. Axis directions:
+    /// Volux does not yet apply a scan's patient orientation.
+    #[arg(long, value_enum)]
+    pub view: Option<ViewArg>,
+    /// Up direction X,Y,Z of the orbit camera (default 0,0,1; e.g. 0,0,-1 for scans stored
+    /// head down).
+    #[arg(long, allow_hyphen_values = true)]
+    pub up: Option<String>,
+    /// What the camera frames: `visible` (what the transfer function and isosurfaces show,
+    /// fitted to the image) or `all` (the whole bounding box, as a camera file sees it).
+    #[arg(long, value_enum, default_value_t = FrameArg::Visible)]
+    pub frame: FrameArg,
     /// Zoom factor.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
     pub zoom: f64,
     /// Use an orthographic projection.
     #[arg(long)]
@@ -186,19 +201,19 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = IntegratorArg::Riemann)]
     pub integrator: IntegratorArg,
     /// Fixed-step integrators: step in voxel units.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
     pub step: f64,
     /// adaptive-simpson: absolute error tolerance per channel and ray.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.01)]
     pub tol: f64,
     /// adaptive-simpson: initial step (voxels).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
     pub h0: f64,
     /// adaptive-simpson: smallest step (voxels), accepted whatever its error.
-    #[arg(long, default_value_t = 0.001)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.001)]
     pub hmin: f64,
     /// adaptive-simpson: largest step (voxels).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
     pub hmax: f64,
     /// adaptive-simpson: control the colour integral's step apart from the opacity's.
     #[arg(long)]
@@ -210,22 +225,22 @@ pub struct RenderArgs {
     #[arg(long)]
     pub shade: bool,
     /// Shading: ambient coefficient.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.3)]
     pub ambient: f32,
     /// Shading: diffuse coefficient.
-    #[arg(long, default_value_t = 0.7)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.7)]
     pub diffuse: f32,
     /// Shading: specular coefficient.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.3)]
     pub specular: f32,
     /// Shading: specular exponent.
-    #[arg(long, default_value_t = 32.0)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 32.0)]
     pub shininess: f32,
     /// Shading: light direction X,Y,Z (towards the light), or `headlight`.
-    #[arg(long, default_value = "headlight")]
+    #[arg(long, allow_hyphen_values = true, default_value = "headlight")]
     pub light: String,
     /// An isosurface VALUE:R,G,B,A (repeatable; grids: riemann integrator; PT: any colour).
-    #[arg(long = "iso")]
+    #[arg(long = "iso", allow_hyphen_values = true)]
     pub isos: Vec<String>,
     /// Maximum intensity projection.
     #[arg(long)]
@@ -241,7 +256,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub error_map: Option<PathBuf>,
     /// Background colour as R,G,B in 0..1 (linear), or `none` for a transparent PNG.
-    #[arg(long, default_value = "0,0,0")]
+    #[arg(long, allow_hyphen_values = true, default_value = "0,0,0")]
     pub background: String,
     /// Write 16 bits per channel.
     #[arg(long)]
@@ -274,6 +289,50 @@ pub struct RenderArgs {
     pub json: bool,
     #[command(flatten)]
     pub load: LoadArgs,
+    /// The long names of the options given on the command line (filled after parsing), so
+    /// that an option that would change nothing is refused rather than ignored.
+    #[arg(skip)]
+    pub given: Vec<String>,
+}
+
+impl RenderArgs {
+    /// Whether `--NAME` was given on the command line.
+    pub fn given(&self, name: &str) -> bool {
+        self.given.iter().any(|g| g == name)
+    }
+
+    /// The output path: `-o`, or `out.png`.
+    pub fn output(&self) -> PathBuf {
+        self.output
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("out.png"))
+    }
+}
+
+/// `volux render --view`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ViewArg {
+    /// The camera on -y, looking along +y, z up.
+    Front,
+    /// The camera on +y, looking along -y, z up.
+    Back,
+    /// The camera on -x, looking along +x, z up.
+    Left,
+    /// The camera on +x, looking along -x, z up.
+    Right,
+    /// The camera on +z, looking down, y up.
+    Top,
+    /// The camera on -z, looking up, y up.
+    Bottom,
+}
+
+/// `volux render --frame`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FrameArg {
+    /// The region the transfer function and isosurfaces make visible, fitted to the image.
+    Visible,
+    /// The whole bounding box.
+    All,
 }
 
 /// What `volux generate` makes.

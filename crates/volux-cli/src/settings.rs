@@ -5,8 +5,9 @@
 use std::path::Path;
 
 use volux_core::image::PngOptions;
-use volux_core::{CameraSpec, TransferFunction};
+use volux_core::{Camera, CameraSpec, TransferFunction};
 use volux_io::Dataset;
+use volux_render::framing::{fit_to_box, visible_bounds};
 use volux_render::integrate::{AdaptiveParams, Integrator, SegmentRule, StepControl};
 use volux_render::isosurface::{parse_iso, Isosurfaces};
 use volux_render::pt::SortMode;
@@ -14,7 +15,9 @@ use volux_render::sampling::Reconstruction;
 use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, Volume};
 use volux_render::shading::{BlinnPhong, Light};
 
-use crate::cli::{ColorArg, IntegratorArg, MethodArg, ReconstructionArg, RenderArgs, SortArg};
+use crate::cli::{
+    ColorArg, FrameArg, IntegratorArg, MethodArg, ReconstructionArg, RenderArgs, SortArg, ViewArg,
+};
 use crate::commands::common::CmdError;
 
 /// Parses `WxH`.
@@ -56,6 +59,39 @@ pub fn transfer_function(spec: &str, volume: &Volume) -> Result<TransferFunction
         return Ok(TransferFunction::from_json(&text).map_err(|e| format!("{spec}: {e}"))?);
     }
     Ok(volume.preset_tf(spec)?)
+}
+
+/// `NAME` or `NAME:WEIGHT` (a weight multiplies the layer's extinction).
+fn layer_spec(spec: &str) -> Result<(&str, f64), CmdError> {
+    match spec.rsplit_once(':') {
+        Some((name, w)) if !name.is_empty() && w.trim().parse::<f64>().is_ok() => {
+            let w: f64 = w.trim().parse().unwrap_or(1.0);
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(format!("--tf '{spec}': the weight {w} must be >= 0").into());
+            }
+            Ok((name, w))
+        }
+        _ => Ok((spec, 1.0)),
+    }
+}
+
+/// The `--tf` options: one preset or file, or several layered (`NAME[:WEIGHT]` each).
+pub fn layered_tf(specs: &[String], volume: &Volume) -> Result<TransferFunction, CmdError> {
+    match specs {
+        [] => transfer_function("auto", volume),
+        [one] if layer_spec(one)?.1 == 1.0 => transfer_function(layer_spec(one)?.0, volume),
+        _ => {
+            let range = volume.range();
+            let layers = specs
+                .iter()
+                .map(|spec| {
+                    let (name, weight) = layer_spec(spec)?;
+                    Ok((transfer_function(name, volume)?.resolved(range), weight))
+                })
+                .collect::<Result<Vec<_>, CmdError>>()?;
+            Ok(TransferFunction::layered(&layers)?)
+        }
+    }
 }
 
 /// The lighting options (`--ambient`, `--diffuse`, `--specular`, `--shininess`, `--light`).
@@ -221,12 +257,21 @@ pub fn method(args: &RenderArgs, volume: &Volume) -> Result<Method, CmdError> {
     })
 }
 
-/// The camera of the command line: `--camera FILE`, or the orbit options.
+/// The camera of the command line: `--camera FILE`, or the orbit options (`--view`,
+/// `--azimuth`, `--elevation`, `--up`, `--zoom`, `--orthographic`).
 pub fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
     if let Some(p) = &args.camera {
         let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
         return Ok(CameraSpec::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?);
     }
+    let (azimuth, up) = match args.view {
+        None => (None, args.up.as_deref().map(parse_up).transpose()?),
+        Some(v) => view_angles(v),
+    };
+    let turn = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (None, None) => None,
+        (a, b) => Some(a.unwrap_or(0.0) + b.unwrap_or(0.0)),
+    };
     Ok(CameraSpec {
         projection: Some(
             if args.orthographic {
@@ -236,11 +281,61 @@ pub fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
             }
             .into(),
         ),
-        azimuth: args.azimuth,
+        azimuth: turn(azimuth, args.azimuth),
         elevation: args.elevation,
+        up,
         zoom: Some(args.zoom),
         ..Default::default()
     })
+}
+
+/// A named view as an orbit: the azimuth around the up axis, and that axis (z for the side
+/// views; y for top and bottom, where azimuth +-90 puts the camera on +-z).
+fn view_angles(view: ViewArg) -> (Option<f64>, Option<[f64; 3]>) {
+    let z = Some([0.0, 0.0, 1.0]);
+    let y = Some([0.0, 1.0, 0.0]);
+    match view {
+        ViewArg::Front => (Some(0.0), z),
+        ViewArg::Back => (Some(180.0), z),
+        ViewArg::Left => (Some(-90.0), z),
+        ViewArg::Right => (Some(90.0), z),
+        ViewArg::Top => (Some(90.0), y),
+        ViewArg::Bottom => (Some(-90.0), y),
+    }
+}
+
+/// Parses `--up X,Y,Z` (not zero).
+fn parse_up(s: &str) -> Result<[f64; 3], CmdError> {
+    let bad = || format!("--up '{s}': expected X,Y,Z, not all zero, e.g. 0,0,-1");
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) && v.iter().any(|c| *c != 0.0) => {
+            Ok([*x, *y, *z])
+        }
+        _ => Err(bad().into()),
+    }
+}
+
+/// Checks that `path` names a PNG file (`flag` for the message).
+pub fn png_path(path: &Path, flag: &str) -> Result<(), CmdError> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
+    match ext.as_deref() {
+        Some("png") => Ok(()),
+        Some(other) => Err(format!(
+            "{flag} {}: Volux writes PNG images; name the file .png, not .{other}",
+            path.display()
+        )
+        .into()),
+        None => Err(format!(
+            "{flag} {}: Volux writes PNG images; add the .png extension",
+            path.display()
+        )
+        .into()),
+    }
 }
 
 /// What `volux render` checks before loading the file: image size, output options, camera
@@ -261,6 +356,11 @@ pub struct RenderPlan {
 impl RenderPlan {
     /// Parses and checks everything that does not need the data.
     pub fn new(args: &RenderArgs) -> Result<Self, CmdError> {
+        crate::applicable::check_options(args)?;
+        png_path(&args.output(), "--output")?;
+        if let Some(p) = &args.error_map {
+            png_path(p, "--error-map")?;
+        }
         let size = parse_size(&args.size)?;
         let png = PngOptions {
             background: parse_background(&args.background)?,
@@ -279,12 +379,19 @@ impl RenderPlan {
         })
     }
 
-    /// The scene of `volume`: its transfer function, camera and method.
-    pub fn scene(&self, args: &RenderArgs, volume: &Volume) -> Result<Scene, CmdError> {
-        let tf = transfer_function(&args.tf, volume)?;
-        let camera = self.camera.resolve(&volume.bounds())?;
-        let mut scene = Scene::new(camera, self.size.0, self.size.1, tf);
-        scene.method = method(args, volume)?;
+    /// The scene of `volume`: its transfer function, camera and method, every option
+    /// checked against the method (`loaded_grid`: the file held a grid).
+    pub fn scene(
+        &self,
+        args: &RenderArgs,
+        volume: &Volume,
+        loaded_grid: bool,
+    ) -> Result<Scene, CmdError> {
+        let tf = layered_tf(&args.tf, volume)?;
+        let method = method(args, volume)?;
+        let placeholder = self.camera.resolve(&volume.bounds())?;
+        let mut scene = Scene::new(placeholder, self.size.0, self.size.1, tf);
+        scene.method = method;
         let a = &mut scene.appearance;
         a.opacity_scale = args.opacity_scale;
         a.lighting = self.lighting;
@@ -294,6 +401,37 @@ impl RenderPlan {
         if args.no_early_termination {
             scene.early_termination = None;
         }
+        let resolved = scene.method.resolve(volume)?;
+        crate::applicable::check_method(args, &resolved, loaded_grid)?;
+        resolved.check_appearance(&scene.appearance)?;
+        scene.view.camera = self.camera_for(args, volume, &scene)?;
+        scene.validate()?;
         Ok(scene)
+    }
+
+    /// The camera: a camera file as written (missing fields fit the framed box); the orbit
+    /// options fitted to the framed box's projection, then zoomed.
+    fn camera_for(
+        &self,
+        args: &RenderArgs,
+        volume: &Volume,
+        scene: &Scene,
+    ) -> Result<Camera, CmdError> {
+        let bounds = match args.frame {
+            FrameArg::All => volume.bounds(),
+            FrameArg::Visible => {
+                visible_bounds(volume, &scene.appearance).unwrap_or_else(|_| volume.bounds())
+            }
+        };
+        if args.camera.is_some() {
+            return Ok(self.camera.resolve(&bounds)?);
+        }
+        let unzoomed = CameraSpec {
+            zoom: None,
+            ..self.camera.clone()
+        };
+        let camera = unzoomed.resolve(&bounds)?;
+        let aspect = self.size.0 as f64 / self.size.1 as f64;
+        Ok(fit_to_box(&camera, &bounds, aspect, args.zoom))
     }
 }

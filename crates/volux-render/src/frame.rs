@@ -88,7 +88,8 @@ pub struct PtStats {
     pub tets_kept: usize,
     /// Drawn (kept, projected, not degenerate).
     pub tets_drawn: usize,
-    /// Kept but with a degenerate projection.
+    /// Kept but with a degenerate projection (zero-area; the mesh's zero-volume cells are
+    /// discarded before, see [`volux_core::MeshReport::degenerate`]).
     pub degenerate: usize,
     /// Kept but with a vertex behind the near plane or outside the guard band.
     pub clipped: usize,
@@ -114,7 +115,12 @@ pub struct PtStats {
     pub bin_s: f64,
     /// Seconds rasterizing and compositing.
     pub raster_s: f64,
-    /// Seconds in total.
+    /// Seconds of the diagnostics that only [`PtSettings::count_violations`] asks for (the
+    /// other order, its adjacency, the count), not in [`PtStats::seconds`] nor the stages.
+    ///
+    /// [`PtSettings::count_violations`]: crate::scene::PtSettings::count_violations
+    pub diagnostics_s: f64,
+    /// Seconds of the frame, diagnostics excluded.
     pub seconds: f64,
     /// Per-frame bytes per tetrahedron (projection, order, bins; not the mesh).
     pub bytes_per_tet: f64,

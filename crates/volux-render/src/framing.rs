@@ -6,7 +6,7 @@
 //! empty-space skipping), meshes cell by cell (a tetrahedron's values span the range of its
 //! vertices'), so the box is conservative: it holds every sample a renderer can see.
 use glam::DVec3;
-use volux_core::{Aabb, Grid, TetMesh};
+use volux_core::{Aabb, Camera, Grid, Projection, TetMesh};
 
 use crate::classify::ClassifyTable;
 use crate::macrocell::MacrocellGrid;
@@ -147,6 +147,58 @@ fn mesh_box(m: &TetMesh, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
     Aabb::from_points(points)
 }
 
+/// `camera` moved along its view axis (perspective) or resized (orthographic) so that the
+/// eight corners of `bounds` fill the image of aspect `aspect` (width / height) to
+/// [`FIT_MARGIN`] on the tighter side, then zoomed by `zoom`. The view direction, target and
+/// up stay; the bounding sphere a plain fit uses leaves a box a third of the frame.
+pub fn fit_to_box(camera: &Camera, bounds: &Aabb, aspect: f64, zoom: f64) -> Camera {
+    let (right, up, forward) = camera.basis();
+    let corners = (0..8).map(|i| {
+        let pick = |bit: usize, a: f64, b: f64| if i & bit == 0 { a } else { b };
+        DVec3::new(
+            pick(1, bounds.min.x, bounds.max.x),
+            pick(2, bounds.min.y, bounds.max.y),
+            pick(4, bounds.min.z, bounds.max.z),
+        )
+    });
+    let mut fitted = *camera;
+    match camera.projection {
+        Projection::Perspective { fov_y_deg } => {
+            let ty = (fov_y_deg.to_radians() * 0.5).tan() * FIT_MARGIN;
+            let tx = ty * aspect;
+            // Each corner needs the eye at least this far behind the target along the view
+            // axis: |x| / (depth) <= tx and |y| / (depth) <= ty.
+            let needed = corners
+                .map(|p| {
+                    let d = p - camera.target;
+                    let (x, y, z) = (d.dot(right), d.dot(up), d.dot(forward));
+                    (x.abs() / tx).max(y.abs() / ty) - z
+                })
+                .fold(0.0f64, f64::max);
+            if needed > 0.0 && needed.is_finite() {
+                fitted.eye = camera.target - forward * (needed / zoom);
+            }
+        }
+        Projection::Orthographic { .. } => {
+            let half = corners
+                .map(|p| {
+                    let d = p - camera.target;
+                    (d.dot(right).abs() / aspect).max(d.dot(up).abs())
+                })
+                .fold(0.0f64, f64::max);
+            if half > 0.0 && half.is_finite() {
+                fitted.projection = Projection::Orthographic {
+                    height: 2.0 * half / FIT_MARGIN / zoom,
+                };
+            }
+        }
+    }
+    fitted
+}
+
+/// The share of the image a fitted box fills on its tighter side.
+pub const FIT_MARGIN: f64 = 0.92;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -234,5 +286,50 @@ mod tests {
             b.diagonal() < all.diagonal() && b.diagonal() > 0.0,
             "{b:?} {all:?}"
         );
+    }
+
+    #[test]
+    fn a_fitted_box_fills_the_frame_to_the_margin() {
+        let b = Aabb {
+            min: DVec3::new(-1.0, -2.0, -0.5),
+            max: DVec3::new(3.0, 2.0, 0.5),
+        };
+        for (projection, aspect) in [
+            ("perspective", 1.0),
+            ("perspective", 2.0),
+            ("orthographic", 0.5),
+        ] {
+            let spec = volux_core::CameraSpec {
+                projection: Some(projection.into()),
+                azimuth: Some(30.0),
+                elevation: Some(20.0),
+                ..Default::default()
+            };
+            let cam = fit_to_box(&spec.resolve(&b).unwrap(), &b, aspect, 1.0);
+            let (w, h) = ((200.0 * aspect) as usize, 200);
+            let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+            for i in 0..8 {
+                let p = DVec3::new(
+                    if i & 1 == 0 { b.min.x } else { b.max.x },
+                    if i & 2 == 0 { b.min.y } else { b.max.y },
+                    if i & 4 == 0 { b.min.z } else { b.max.z },
+                );
+                let (x, y, _) = cam.project(p, w, h);
+                lo = [lo[0].min(x), lo[1].min(y)];
+                hi = [hi[0].max(x), hi[1].max(y)];
+            }
+            // Inside the image, and filling the margin on the tighter side (the box is
+            // centred on the target, so its projection is about centred too).
+            assert!(lo[0] >= 0.0 && lo[1] >= 0.0, "{projection} {lo:?}");
+            assert!(
+                hi[0] <= w as f64 && hi[1] <= h as f64,
+                "{projection} {hi:?}"
+            );
+            let fill = ((hi[0] - lo[0]) / w as f64).max((hi[1] - lo[1]) / h as f64);
+            assert!(
+                fill > 0.8 && fill <= 1.0,
+                "{projection} aspect {aspect}: fill {fill}"
+            );
+        }
     }
 }

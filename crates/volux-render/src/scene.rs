@@ -326,10 +326,15 @@ impl Method {
     /// renderers light their isosurfaces but not the volume. A front end calls this so that
     /// an option is never silently ignored.
     pub fn check_appearance(&self, appearance: &Appearance) -> Result<(), RenderError> {
+        let who = match self {
+            Self::ProjectedTetrahedra(_) => "Projected Tetrahedra",
+            Self::TetRaycast(_) => "mesh ray casting",
+            Self::MeshReference => "the mesh reference",
+            _ => self.name(),
+        };
         let refuse = |what: &str, instead: &str| {
             Err(RenderError::InvalidOptions(format!(
-                "{} {what}; {instead}",
-                self.name()
+                "{who} {what}; {instead}"
             )))
         };
         let mesh = matches!(

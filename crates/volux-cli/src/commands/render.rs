@@ -4,7 +4,9 @@ use std::path::Path;
 
 use volux_core::image::PngOptions;
 use volux_core::{synth, CameraSpec, Image, TransferFunction};
+use volux_io::Dataset;
 use volux_render::engine::{create_renderer, Frame};
+use volux_render::framing::visible_bounds;
 use volux_render::scene::{Scene, Volume};
 use volux_render::tiles::Control;
 
@@ -18,28 +20,79 @@ use crate::settings::RenderPlan;
 pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let plan = RenderPlan::new(args)?;
     let (data, _) = super::common::load(&args.file, &args.load, show)?;
+    let loaded_grid = matches!(data, Dataset::Grid(_));
     let volume = crate::settings::volume(data, args)?;
-    let scene = plan.scene(args, &volume)?;
+    let scene = plan.scene(args, &volume, loaded_grid)?;
+    let invisible = warn_invisible(&volume, &scene);
     let frame = render(&volume, &scene, show)?;
+    if !invisible && frame.image.coverage(0.0) == 0.0 {
+        warn("the image is empty: no ray met a visible sample (check the camera)");
+    }
+    let output = args.output();
+    let replaced = args.output.is_none() && output.exists();
     frame
         .image
-        .write_png(&args.output, &plan.png)
-        .map_err(|e| format!("{}: {e}", args.output.display()))?;
+        .write_png(&output, &plan.png)
+        .map_err(|e| format!("{}: {e}", output.display()))?;
     if let Some(path) = &args.error_map {
-        let (w, h) = plan.size;
-        let zeros;
-        let errors = match &frame.error_map {
-            Some(e) => e.as_slice(),
-            None => {
-                zeros = vec![0.0; w * h];
-                &zeros
-            }
-        };
-        error_image(errors, args.tol, w, h)?
-            .write_png(path, &PngOptions::default())
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        write_error_map(&frame, args.tol, plan.size, path)?;
     }
-    report::frame(args, &frame, &scene);
+    report::frame(args, &frame, &scene, &volume);
+    let note = if replaced {
+        " (replaced the file there; name the output with -o)"
+    } else {
+        ""
+    };
+    eprintln!("wrote {}{note}", output.display());
+    Ok(())
+}
+
+/// A warning on stderr, the render goes on.
+pub fn warn(message: &str) {
+    eprintln!("volux: warning: {message}");
+}
+
+/// Warns when the scene can show nothing (constant data, a TF transparent over the data's
+/// range) or an isosurface lies outside the data; returns whether nothing can show.
+fn warn_invisible(volume: &Volume, scene: &Scene) -> bool {
+    let range = volume.range();
+    for iso in scene.appearance.isosurfaces.as_slice() {
+        let v = iso.value as f64;
+        if v < range[0] || v > range[1] {
+            warn(&format!(
+                "the isosurface at {v} lies outside the data range [{}, {}]",
+                range[0] as f32, range[1] as f32
+            ));
+        }
+    }
+    match visible_bounds(volume, &scene.appearance) {
+        Ok(_) => false,
+        Err(why) => {
+            warn(&format!("the image will be empty: {why}"));
+            true
+        }
+    }
+}
+
+/// Writes the per-pixel estimated error as a heat map with its legend.
+fn write_error_map(
+    frame: &Frame,
+    tol: f64,
+    (w, h): (usize, usize),
+    path: &Path,
+) -> Result<(), CmdError> {
+    let zeros;
+    let errors = match &frame.error_map {
+        Some(e) => e.as_slice(),
+        None => {
+            zeros = vec![0.0; w * h];
+            &zeros
+        }
+    };
+    error_image(errors, tol, w, h)?
+        .write_png(path, &PngOptions::default())
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    eprintln!("wrote {} (estimated error per pixel)", path.display());
     Ok(())
 }
 

@@ -259,7 +259,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             + view.bins.bytes()
             + view.order_bytes;
         stats.bytes_per_tet = per_frame as f64 / stats.tets.max(1) as f64;
-        stats.seconds = start.elapsed().as_secs_f64();
+        stats.seconds = start.elapsed().as_secs_f64() - stats.diagnostics_s;
         let image = Image::from_pixels(opts.width, opts.height, pixels)?;
         Ok(PtRendered { image, stats })
     }
@@ -367,8 +367,14 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         opts.control.check()?;
         let t = Instant::now();
         let need_exact = opts.sort == SortMode::Exact || counting;
+        // What only the violation count needs is timed apart, as diagnostics.
+        let mut diagnostics = 0.0;
         if need_exact && self.adjacency.is_none() {
+            let ta = Instant::now();
             self.adjacency = Some(mesh.face_adjacency());
+            if opts.sort == SortMode::Centroid {
+                diagnostics += ta.elapsed().as_secs_f64();
+            }
         }
         if opts.sort == SortMode::Exact && self.convex.is_none() {
             self.convex = Some(sort::is_convex(mesh));
@@ -377,6 +383,9 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         let centroid = (opts.sort == SortMode::Centroid || counting)
             .then(|| sort::centroid_order(&depths, &ids));
         stats.centroid_sort_s = tc.elapsed().as_secs_f64();
+        if opts.sort == SortMode::Exact {
+            diagnostics += stats.centroid_sort_s;
+        }
         let mut strategy = "";
         let mut cycles = 0;
         let mut per_pixel = false;
@@ -387,6 +396,9 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             let r = sort::mpvo(mesh, adjacency, &view_dir, Some(&ids))
                 .map_err(|e| RenderError::InvalidOptions(format!("visibility sort: {e}")))?;
             stats.exact_sort_s = te.elapsed().as_secs_f64();
+            if opts.sort == SortMode::Centroid {
+                diagnostics += stats.exact_sort_s;
+            }
             let order = r.order;
             cycles = r.cycles_broken as usize;
             if opts.sort == SortMode::Exact {
@@ -402,7 +414,10 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         let violations = match (&centroid, counting) {
             (Some(c), true) => {
                 let adjacency = self.adjacency.as_deref().expect("built above");
-                Some(sort::count_violations(c, adjacency, mesh, &view_dir))
+                let tv = Instant::now();
+                let count = sort::count_violations(c, adjacency, mesh, &view_dir);
+                diagnostics += tv.elapsed().as_secs_f64();
+                Some(count)
             }
             _ => None,
         };
@@ -410,7 +425,8 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             SortMode::Centroid => centroid.unwrap_or_default(),
             SortMode::Exact => exact_order.unwrap_or_default(),
         };
-        stats.sort_s = t.elapsed().as_secs_f64();
+        stats.sort_s = t.elapsed().as_secs_f64() - diagnostics;
+        stats.diagnostics_s = diagnostics;
         opts.control.check()?;
         let t = Instant::now();
         let tiles = tiles(opts.width, opts.height);
