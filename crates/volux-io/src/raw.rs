@@ -11,7 +11,7 @@
 //! ([`volux_core::Buffer::map_file`]), not copied. The file length must match the sidecar
 //! exactly: shorter is [`ErrorKind::Truncated`], longer is a header/data mismatch.
 //!
-//! [`write`] writes the data and the sidecar (gzip when the data name ends in `.gz`);
+//! [`write()`] writes the data and the sidecar (gzip when the data name ends in `.gz`);
 //! [`write_with_progress`] reports progress and [`encoded_size`] tells in advance how many
 //! bytes of data will be written.
 //!
@@ -538,7 +538,7 @@ pub(crate) fn samples_le_bytes(samples: &Samples) -> Vec<u8> {
     }
 }
 
-/// Bytes of data [`write`] produces for `grid` before any compression (values times their
+/// Bytes of data [`write()`] produces for `grid` before any compression (values times their
 /// size; the sidecar is not counted), so a caller can warn before writing a huge file.
 pub fn encoded_size(grid: &Grid) -> u64 {
     (grid.len() as u64).saturating_mul(grid.scalar_type().size() as u64)
@@ -552,7 +552,7 @@ pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
     write_with_progress(grid, path, &|_, _| {})
 }
 
-/// [`write`], reporting `(bytes written, total bytes)` to `progress` as the data goes out:
+/// [`write()`], reporting `(bytes written, total bytes)` to `progress` as the data goes out:
 /// once at the start, every few MiB, and at the end. Bytes are counted before compression,
 /// so the total is [`encoded_size`].
 pub fn write_with_progress(
@@ -578,7 +578,7 @@ pub fn write_with_progress(
     volux_core::image::write_atomically(&sidecar, &text).map_err(werr(&sidecar))
 }
 
-/// The sidecar [`write`] puts beside the data.
+/// The sidecar [`write()`] puts beside the data.
 fn sidecar_json(grid: &Grid, gzip: bool) -> serde_json::Value {
     serde_json::json!({
         "kind": "grid",

@@ -170,7 +170,7 @@ fn decode(path: &Path, body: &[u8], nv: usize, nt: usize) -> Result<TetMesh> {
     TetMesh::new(positions, scalars, tets).map_err(|e| ReadError::new(path, e))
 }
 
-/// Bytes [`write`] produces for `mesh` (header, arrays and checksum): the file's length, so a
+/// Bytes [`write()`] produces for `mesh` (header, arrays and checksum): the file's length, so a
 /// caller can warn before writing a huge file.
 pub fn encoded_size(mesh: &TetMesh) -> u64 {
     let (nv, nt) = (mesh.positions().len() as u64, mesh.tets().len() as u64);
@@ -184,7 +184,7 @@ pub fn write(mesh: &TetMesh, path: &Path) -> Result<(), WriteError> {
     write_with_progress(mesh, path, &|_, _| {})
 }
 
-/// [`write`], reporting `(bytes written, total bytes)` to `progress` as the file goes out:
+/// [`write()`], reporting `(bytes written, total bytes)` to `progress` as the file goes out:
 /// once at the start, every few MiB, and at the end; the total is [`encoded_size`].
 pub fn write_with_progress(
     mesh: &TetMesh,
