@@ -5,7 +5,13 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 /// Volux: accurate, fast volume visualization of regular grids and tetrahedral meshes.
 #[derive(Debug, Parser)]
-#[command(name = "volux", version, about)]
+#[command(
+    name = "volux",
+    version,
+    about,
+    disable_help_subcommand = true,
+    after_help = "Formats: `volux help tf` (transfer functions), `volux help camera`."
+)]
 pub struct Cli {
     /// Silence progress bars.
     #[arg(long, short, global = true)]
@@ -53,7 +59,20 @@ pub enum Command {
         output: PathBuf,
     },
     /// Render a file to PNG.
+    #[command(after_help = "JSON formats: `volux help tf`, `volux help camera`.")]
     Render(Box<RenderArgs>),
+    /// Transfer functions: print a preset as JSON to start from.
+    Tf {
+        /// What to do.
+        #[command(subcommand)]
+        action: TfCommand,
+    },
+    /// Help on a command, or on a format: `tf` (transfer-function JSON), `camera` (camera
+    /// JSON).
+    Help {
+        /// A command or a topic (tf, camera).
+        topic: Option<String>,
+    },
     /// Render a built-in dataset to demo.png in the current folder.
     Demo,
     /// Compare two PNG images: RMSE, largest and mean error per channel (in 0..1), and the
@@ -66,12 +85,14 @@ pub enum Command {
         /// Per-channel error (0..1) above which a pixel counts as different.
         #[arg(long, default_value_t = 1.0 / 255.0)]
         threshold: f64,
-        /// Write the absolute difference, multiplied by --scale, as a PNG.
+        /// Write the largest channel difference of each pixel as a heat map PNG with a
+        /// legend strip (black 0 to yellow at --diff-max, magenta above).
         #[arg(long)]
         diff: Option<PathBuf>,
-        /// Amplification of the difference image.
-        #[arg(long, default_value_t = 10.0)]
-        scale: f32,
+        /// The difference at the top of the heat map's scale (0..1) [default: the largest
+        /// difference in the images].
+        #[arg(long)]
+        diff_max: Option<f32>,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
@@ -127,6 +148,23 @@ pub enum Command {
         /// text (e.g. `marschner riemann h=0.5`, matched word by word).
         #[arg(long)]
         only: Option<String>,
+    },
+}
+
+/// `volux tf` actions.
+#[derive(Debug, Subcommand)]
+pub enum TfCommand {
+    /// Print a preset as JSON (stdout), to edit and pass back with --tf FILE.
+    Show {
+        /// The preset: auto, grayscale, ct-bone, ct-skin, ct-soft-tissue, mr-default,
+        /// viridis, inferno, cool-warm.
+        preset: String,
+        /// Fit the preset to this file (its value range, histogram and voxel size), as
+        /// `volux render` does; `auto` needs it.
+        #[arg(long)]
+        data: Option<PathBuf>,
+        #[command(flatten)]
+        load: LoadArgs,
     },
 }
 

@@ -4,6 +4,7 @@
 mod applicable;
 mod cli;
 mod commands;
+mod numbers;
 mod progress;
 mod settings;
 

@@ -35,3 +35,14 @@ pub fn rows(show: bool, total: usize) -> (ProgressBar, Option<volux_render::tile
         Some(Arc::new(move |done, _| p.set_position(done as u64))),
     )
 }
+
+/// A bar counting bytes written, named after the file.
+pub fn bytes(show: bool, name: String) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    ProgressBar::new(0).with_message(name).with_style(
+        ProgressStyle::with_template("writing {msg} {bar:40} {bytes}/{total_bytes} {eta}")
+            .expect("static template is valid"),
+    )
+}

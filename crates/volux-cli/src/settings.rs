@@ -219,14 +219,19 @@ fn grid_raycast(args: &RenderArgs) -> Result<GridRaycast, CmdError> {
     })
 }
 
+/// The loaded data as a volume.
+pub fn plain_volume(data: Dataset) -> Result<Volume, CmdError> {
+    match data {
+        Dataset::Grid(g) => Ok(Volume::from(g)),
+        Dataset::Mesh(m) => Ok(Volume::from(m)),
+        _ => Err("unsupported dataset kind".into()),
+    }
+}
+
 /// The loaded data as the volume to render: a grid split into tetrahedra for PT
 /// (`--as-tets` with `--method auto|pt`).
 pub fn volume(data: Dataset, args: &RenderArgs) -> Result<Volume, CmdError> {
-    let volume = match data {
-        Dataset::Grid(g) => Volume::from(g),
-        Dataset::Mesh(m) => Volume::from(m),
-        _ => return Err("unsupported dataset kind".into()),
-    };
+    let volume = plain_volume(data)?;
     let pt = matches!(args.method, MethodArg::Auto | MethodArg::Pt);
     if args.as_tets && pt && matches!(volume, Volume::Grid(_)) {
         return Ok(volume.to_tets()?);

@@ -52,6 +52,15 @@ pub struct TransferFunction {
     pub unit_length: f64,
 }
 
+/// A finite number as JSON: the shortest text that reads back the same value.
+fn number(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x}")
+    } else {
+        "null".into()
+    }
+}
+
 fn one() -> f64 {
     1.0
 }
@@ -175,9 +184,41 @@ impl TransferFunction {
         Ok(tf)
     }
 
-    /// The JSON form.
+    /// The JSON form, one control point per line (for people to edit).
     pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a transfer function always serializes")
+        fn points<const N: usize>(name: &str, pts: &[[f64; N]]) -> Option<String> {
+            (!pts.is_empty()).then(|| {
+                let rows: Vec<String> = pts
+                    .iter()
+                    .map(|p| {
+                        let v: Vec<String> = p.iter().map(|x| number(*x)).collect();
+                        format!("    [{}]", v.join(", "))
+                    })
+                    .collect();
+                format!("  \"{name}\": [\n{}\n  ]", rows.join(",\n"))
+            })
+        }
+        let space = match self.space {
+            Space::Value => "value",
+            Space::Normalized => "normalized",
+        };
+        let fields: Vec<String> = [
+            Some(format!("  \"space\": \"{space}\"")),
+            points("color", &self.color),
+            points("extinction", &self.extinction),
+            points("opacity", &self.opacity),
+            (!self.opacity.is_empty())
+                .then(|| format!("  \"opacity_step\": {}", number(self.opacity_step))),
+            Some(format!(
+                "  \"opacity_scale\": {}",
+                number(self.opacity_scale)
+            )),
+            Some(format!("  \"unit_length\": {}", number(self.unit_length))),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        format!("{{\n{}\n}}", fields.join(",\n"))
     }
 
     /// Checks control points: present, finite, sorted, colours in 0..1, tau >= 0, alpha in 0..1.

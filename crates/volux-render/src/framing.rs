@@ -98,7 +98,7 @@ fn opaque_span(tf: &volux_core::TransferFunction) -> Option<[f64; 2]> {
     let lo = bp.iter().copied().find(|&s| positive(s))?;
     let hi = bp.iter().rev().copied().find(|&s| positive(s))?;
     // Extend to the zero breakpoints around them, where the ramp starts and ends.
-    let before = bp.iter().copied().filter(|&s| s < lo).last().unwrap_or(lo);
+    let before = bp.iter().rev().copied().find(|&s| s < lo).unwrap_or(lo);
     let after = bp.iter().copied().find(|&s| s > hi).unwrap_or(hi);
     Some([before, after])
 }

@@ -20,5 +20,41 @@ pub fn load(path: &Path, args: &LoadArgs, show: bool) -> Result<(Dataset, Format
     };
     let out = volux_io::load(path, &opts);
     pb.finish_and_clear();
-    Ok(out?)
+    let (data, format) = out?;
+    check_reader_options(args, format)?;
+    Ok((data, format))
+}
+
+/// The reader options apply to one format each: given for another, they are refused.
+fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError> {
+    let vtk = matches!(format, Format::VtkLegacy | Format::Vti | Format::Vtu);
+    let misplaced = [
+        (
+            "q-variable",
+            args.q_variable.is_some(),
+            format == Format::Plot3d,
+            "PLOT3D",
+        ),
+        (
+            "q-file",
+            args.q_file.is_some(),
+            format == Format::Plot3d,
+            "PLOT3D",
+        ),
+        (
+            "series",
+            args.series.is_some(),
+            format == Format::Dicom,
+            "DICOM",
+        ),
+        ("array", args.array.is_some(), vtk, "VTK"),
+    ];
+    match misplaced.iter().find(|(_, given, fits, _)| *given && !fits) {
+        Some((flag, _, _, owner)) => Err(format!(
+            "--{flag} applies to {owner} files; this one is {}",
+            format.name()
+        )
+        .into()),
+        None => Ok(()),
+    }
 }

@@ -2,8 +2,8 @@
 //! pixels over a threshold), with an optional difference image.
 use std::path::Path;
 
-use volux_core::image::{compare, difference_values, read_png, PngOptions};
-use volux_core::Image;
+use volux_core::heatmap::{heat_map, heat_map_legend_text};
+use volux_core::image::{compare, read_png, PngOptions};
 
 use super::common::CmdError;
 
@@ -13,7 +13,7 @@ pub struct Args<'a> {
     pub b: &'a Path,
     pub threshold: f64,
     pub diff: Option<&'a Path>,
-    pub scale: f32,
+    pub diff_max: Option<f32>,
     pub json: bool,
 }
 
@@ -35,10 +35,8 @@ pub fn run(args: &Args<'_>) -> Result<(), CmdError> {
     }
     let c = compare(&a.rgba, &b.rgba, args.threshold);
     if let Some(path) = args.diff {
-        let pixels = difference_values(&a.rgba, &b.rgba, args.scale);
-        Image::from_pixels(a.width, a.height, pixels)?
-            .write_png(path, &PngOptions::default())
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        crate::settings::png_path(path, "--diff")?;
+        write_diff(&a.rgba, &b.rgba, (a.width, a.height), args.diff_max, path)?;
     }
     if args.json {
         println!(
@@ -58,8 +56,38 @@ pub fn run(args: &Args<'_>) -> Result<(), CmdError> {
             c.max_error,
             c.mean_error,
             100.0 * c.fraction_over,
-            args.threshold
+            crate::numbers::human(args.threshold)
         );
     }
+    Ok(())
+}
+
+/// Writes the per-pixel largest channel difference as a heat map with its legend.
+fn write_diff(
+    a: &[[f64; 4]],
+    b: &[[f64; 4]],
+    (w, h): (usize, usize),
+    max: Option<f32>,
+    path: &Path,
+) -> Result<(), CmdError> {
+    let diffs: Vec<f32> = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| (0..4).map(|c| (p[c] - q[c]).abs()).fold(0.0, f64::max) as f32)
+        .collect();
+    let largest = diffs.iter().copied().fold(0.0f32, f32::max);
+    let max = match max {
+        Some(m) if m.is_finite() && m > 0.0 => m,
+        Some(m) => return Err(format!("--diff-max {m} must be a positive number").into()),
+        None => largest.max(1.0 / 255.0),
+    };
+    heat_map(&diffs, w, h, max)?
+        .write_png(path, &PngOptions::default())
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    eprintln!(
+        "wrote {} (largest channel difference per pixel; {})",
+        path.display(),
+        heat_map_legend_text(max)
+    );
     Ok(())
 }

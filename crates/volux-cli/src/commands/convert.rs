@@ -7,12 +7,23 @@ use volux_io::Dataset;
 
 use super::common::CmdError;
 use crate::cli::{value_name, Generator, LoadArgs};
+use crate::progress;
 
 pub fn run(input: &Path, output: &Path, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
     let (data, _) = super::common::load(input, args, show)?;
-    write(data, output)?;
-    eprintln!("wrote {}", output.display());
+    write(data, output, show)?;
+    said(output);
     Ok(())
+}
+
+/// Says what was written and how large it is.
+fn said(output: &Path) {
+    let size = std::fs::metadata(output).map(|m| m.len()).unwrap_or(0);
+    eprintln!(
+        "wrote {} ({})",
+        output.display(),
+        crate::numbers::bytes(size as f64)
+    );
 }
 
 pub fn generate(kind: Generator, size: usize, output: &Path) -> Result<(), CmdError> {
@@ -31,8 +42,8 @@ pub fn generate(kind: Generator, size: usize, output: &Path) -> Result<(), CmdEr
     } else {
         Dataset::Mesh(synth::generate_mesh(kind, size)?)
     };
-    write(data, output)?;
-    eprintln!("wrote {}", output.display());
+    write(data, output, false)?;
+    said(output);
     Ok(())
 }
 
@@ -42,12 +53,12 @@ fn extension(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-fn write(data: Dataset, output: &Path) -> Result<(), CmdError> {
+fn write(data: Dataset, output: &Path, show: bool) -> Result<(), CmdError> {
     let ext = extension(output);
     match data {
-        Dataset::Grid(g) if ext.ends_with(".vtet") => write_mesh(&grid_to_tets(&g)?, output),
-        Dataset::Grid(g) => write_grid(&g, output, &ext),
-        Dataset::Mesh(m) if ext.ends_with(".vtet") => write_mesh(&m, output),
+        Dataset::Grid(g) if ext.ends_with(".vtet") => write_mesh(&grid_to_tets(&g)?, output, show),
+        Dataset::Grid(g) => write_grid(&g, output, &ext, show),
+        Dataset::Mesh(m) if ext.ends_with(".vtet") => write_mesh(&m, output, show),
         Dataset::Mesh(_) => Err(format!(
             "{}: a tet mesh can only be written as .vtet",
             output.display()
@@ -57,14 +68,33 @@ fn write(data: Dataset, output: &Path) -> Result<(), CmdError> {
     }
 }
 
-fn write_grid(g: &Grid, output: &Path, ext: &str) -> Result<(), CmdError> {
-    if ext.ends_with(".raw") {
-        volux_io::raw::write(g, output)?;
+/// Files above this size are announced before they are written.
+const LARGE: u64 = 256 << 20;
+
+/// A progress bar for writing `total` bytes to `output`, announced when large.
+fn bar(output: &Path, total: u64, show: bool) -> indicatif::ProgressBar {
+    if total >= LARGE {
+        eprintln!(
+            "writing {} ({} uncompressed)",
+            output.display(),
+            crate::numbers::bytes(total as f64)
+        );
+    }
+    let pb = progress::bytes(show, output.display().to_string());
+    pb.set_length(total);
+    pb
+}
+
+fn write_grid(g: &Grid, output: &Path, ext: &str, show: bool) -> Result<(), CmdError> {
+    if ext.ends_with(".raw") || ext.ends_with(".raw.gz") {
+        let pb = bar(output, volux_io::raw::encoded_size(g), show);
+        volux_io::raw::write_with_progress(g, output, &|done, _| pb.set_position(done))?;
+        pb.finish_and_clear();
     } else if ext.ends_with(".nrrd") {
         volux_io::nrrd::write(g, output)?;
     } else {
         return Err(format!(
-            "{}: unknown output format (use .raw, .nrrd or .vtet)",
+            "{}: unknown output format (use .raw, .raw.gz, .nrrd or .vtet)",
             output.display()
         )
         .into());
@@ -72,7 +102,9 @@ fn write_grid(g: &Grid, output: &Path, ext: &str) -> Result<(), CmdError> {
     Ok(())
 }
 
-fn write_mesh(m: &TetMesh, output: &Path) -> Result<(), CmdError> {
-    volux_io::vtet::write(m, output)?;
+fn write_mesh(m: &TetMesh, output: &Path, show: bool) -> Result<(), CmdError> {
+    let pb = bar(output, volux_io::vtet::encoded_size(m), show);
+    volux_io::vtet::write_with_progress(m, output, &|done, _| pb.set_position(done))?;
+    pb.finish_and_clear();
     Ok(())
 }

@@ -8,7 +8,9 @@ use volux_io::{Dataset, Format};
 
 use super::common::CmdError;
 use crate::cli::LoadArgs;
+use crate::numbers::{bytes, human};
 
+/// Describes the file at `path`.
 pub fn run(path: &Path, as_json: bool, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
     let (data, format) = super::common::load(path, args, show)?;
     let value = match &data {
@@ -77,30 +79,82 @@ fn sparkline(h: &Histogram, width: usize) -> String {
         .collect()
 }
 
+/// The order people read a description in: what the file is first, then its shape, values
+/// and memory (keys not listed follow alphabetically).
+const ORDER: [&str; 16] = [
+    "format",
+    "kind",
+    "dims",
+    "vertices",
+    "tets",
+    "dtype",
+    "spacing",
+    "origin",
+    "bounds",
+    "range",
+    "histogram",
+    "boundary_faces",
+    "validation",
+    "memory_bytes",
+    "memory_mapped",
+    "bytes_per_tet",
+];
+
 fn print_text(path: &Path, v: &serde_json::Value) {
     println!("{}", path.display());
     let Some(obj) = v.as_object() else { return };
-    for (k, val) in obj {
+    let rank = |k: &str| ORDER.iter().position(|o| *o == k).unwrap_or(ORDER.len());
+    let mut keys: Vec<&String> = obj.keys().collect();
+    keys.sort_by_key(|k| (rank(k), k.as_str()));
+    for k in keys {
+        let val = &obj[k.as_str()];
         match val {
-            serde_json::Value::Array(a) if a.is_empty() => {}
             serde_json::Value::Array(a) if k == "notes" => {
                 for n in a {
                     println!("  note: {}", n.as_str().unwrap_or_default());
                 }
             }
-            serde_json::Value::Object(o) => {
-                let parts: Vec<String> =
-                    o.iter().map(|(a, b)| format!("{a}={}", plain(b))).collect();
-                println!("  {k:<15} {}", parts.join("  "));
+            _ if k == "memory_bytes" => {
+                println!("  {k:<15} {}", bytes(val.as_f64().unwrap_or(0.0)))
             }
             _ => println!("  {k:<15} {}", plain(val)),
         }
     }
 }
 
+/// A value for people: numbers rounded to five significant digits, lists and objects on
+/// one line (full precision stays in `--json`).
 fn plain(v: &serde_json::Value) -> String {
     match v {
         serde_json::Value::String(s) => s.clone(),
+        serde_json::Value::Number(n) => n.as_f64().map_or_else(|| n.to_string(), human),
+        serde_json::Value::Array(a) => {
+            let parts: Vec<String> = a.iter().map(plain).collect();
+            format!("[{}]", parts.join(", "))
+        }
+        serde_json::Value::Object(o) => {
+            let parts: Vec<String> = o.iter().map(|(k, v)| format!("{k}={}", plain(v))).collect();
+            parts.join("  ")
+        }
         other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::numbers::{bytes, human};
+
+    #[test]
+    fn numbers_are_rounded_for_people() {
+        assert_eq!(human(-1000.50390625), "-1000.5");
+        assert_eq!(human(0.19259999692440033), "0.1926");
+        assert_eq!(human(244.042956), "244.04");
+        assert_eq!(human(-1024.0), "-1024");
+        assert_eq!(human(0.0009570312), "0.00095703");
+        assert_eq!(bytes(14155776.0), "13.5 MiB");
+        assert_eq!(bytes(100.0), "100 bytes");
+        let v = serde_json::json!({"mode": -1000.50390625, "p1": 15.3359375});
+        assert_eq!(plain(&v), "mode=-1000.5  p1=15.336");
     }
 }

@@ -6,11 +6,13 @@ mod bench;
 pub mod common;
 mod compare;
 mod convert;
+mod help;
 mod info;
 mod render;
 mod report;
+mod tf;
 
-use crate::cli::{Cli, Command};
+use crate::cli::{Cli, Command, TfCommand};
 use crate::progress;
 use common::CmdError;
 
@@ -27,19 +29,23 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
         Command::Generate { kind, size, output } => convert::generate(kind, size, &output),
         Command::Render(args) => render::run(&args, show),
         Command::Demo => render::demo(show),
+        Command::Help { topic } => help::run(topic.as_deref()),
+        Command::Tf {
+            action: TfCommand::Show { preset, data, load },
+        } => tf::show(&preset, data.as_deref(), &load, show),
         Command::Compare {
             a,
             b,
             threshold,
             diff,
-            scale,
+            diff_max,
             json,
         } => compare::run(&compare::Args {
             a: &a,
             b: &b,
             threshold,
             diff: diff.as_deref(),
-            scale,
+            diff_max,
             json,
         }),
         Command::Accuracy {

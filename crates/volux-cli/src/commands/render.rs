@@ -2,6 +2,7 @@
 //! rendered through the engine API, written as PNG, its figures reported.
 use std::path::Path;
 
+use volux_core::heatmap::{heat_map, heat_map_legend_text};
 use volux_core::image::PngOptions;
 use volux_core::{synth, CameraSpec, Image, TransferFunction};
 use volux_io::Dataset;
@@ -92,7 +93,11 @@ fn write_error_map(
     error_image(errors, tol, w, h)?
         .write_png(path, &PngOptions::default())
         .map_err(|e| format!("{}: {e}", path.display()))?;
-    eprintln!("wrote {} (estimated error per pixel)", path.display());
+    eprintln!(
+        "wrote {} (estimated error per pixel; {})",
+        path.display(),
+        heat_map_legend_text(tol as f32)
+    );
     Ok(())
 }
 
@@ -109,21 +114,10 @@ pub fn render(volume: &Volume, scene: &Scene, show: bool) -> Result<Frame, CmdEr
     Ok(frame)
 }
 
-/// Per-pixel estimated errors as an image: black (0) to white (`tol`), above `tol` magenta
-/// (as the seed `001`'s figures 5.3 to 5.13).
+/// Per-pixel estimated errors as a heat map from 0 to `tol` (magenta above, as the seed
+/// `001`'s figures 5.3 to 5.13 mark rays over the tolerance), with its legend strip.
 pub fn error_image(errors: &[f32], tol: f64, w: usize, h: usize) -> Result<Image, CmdError> {
-    let pixels = errors
-        .iter()
-        .map(|&e| {
-            if e as f64 > tol {
-                [1.0, 0.0, 1.0, 1.0]
-            } else {
-                let v = (e as f64 / tol) as f32;
-                [v, v, v, 1.0]
-            }
-        })
-        .collect();
-    Ok(Image::from_pixels(w, h, pixels)?)
+    Ok(heat_map(errors, w, h, tol as f32)?)
 }
 
 /// Renders the built-in Marschner-Lobb dataset to `demo.png`.
