@@ -84,10 +84,41 @@ pub fn run(
     };
     let threads = rayon::current_num_threads();
     let mut rows = Vec::new();
+    let datasets = grids(n)?;
+    let cases: Vec<(usize, (usize, usize), Integrator, Mode, String)> = datasets
+        .iter()
+        .enumerate()
+        .flat_map(|(d, (name, _, _))| {
+            sizes.iter().flat_map(move |&size| {
+                integrators()
+                    .into_iter()
+                    .filter_map(move |(integrator, mode)| {
+                        let label = format!("{} {}", integrator.name(), param(&integrator, mode));
+                        selected(&format!("{name} {label}"), only)
+                            .then_some((d, size, integrator, mode, label))
+                    })
+            })
+        })
+        .collect();
+    if cases.is_empty() {
+        return Err(format!(
+            "--only '{}' matches no grid case; cases are named \"DATASET INTEGRATOR PARAMETER\", \
+             e.g. \"marschner riemann h=0.5\" (datasets: {})",
+            only.unwrap_or_default(),
+            datasets
+                .iter()
+                .map(|d| d.0.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+        .into());
+    }
+    let name_w = datasets.iter().map(|d| d.0.len()).max().unwrap_or(0).max(7);
+    let label_w = cases.iter().map(|c| c.4.len()).max().unwrap_or(0).max(10);
     if !as_json {
         println!("threads: {threads}; frames per case: {frames} (median)");
         println!(
-            "{:<22} {:>8} {:<20} {:>10} {:>12} {:>14} {:>16}",
+            "{:<name_w$} {:>9} {:<label_w$} {:>10} {:>12} {:>12} {:>16}",
             "dataset", "size", "integrator", "ms/frame", "samples", "Msamples/s", "Msamples/s/core"
         );
     }
@@ -96,55 +127,53 @@ pub fn run(
         elevation: Some(20.0),
         ..Default::default()
     };
-    for (name, volume, tf) in grids(n)? {
-        let method = Method::GridRaycast(GridRaycast::default());
-        let mut renderer = create_renderer(&volume, &method)?;
-        for &(w, h) in sizes {
-            for (integrator, mode) in integrators() {
-                let param = param(&integrator, mode);
-                let case = format!("{name} {} {param}", integrator.name());
-                if !selected(&case, only) {
-                    continue;
-                }
-                let mut scene = Scene::new(spec.resolve(&volume.bounds())?, w, h, tf.clone());
-                scene.method = Method::GridRaycast(GridRaycast {
-                    integrator,
-                    ..GridRaycast::default()
-                });
-                scene.appearance.shade_volume = mode == Mode::Shaded;
-                scene.appearance.mip = mode == Mode::Mip;
-                // The first frame builds the caches (macrocells, gradients, tables).
-                frame(renderer.as_mut(), &scene)?;
-                let mut times = Vec::new();
-                let mut samples = 0;
-                for _ in 0..frames {
-                    let f = frame(renderer.as_mut(), &scene)?;
-                    times.push(f.stats.ms / 1e3);
-                    if let MethodStats::GridRaycast(s) = f.stats.method {
-                        samples = s.samples;
-                    }
-                }
-                let s = median(&mut times);
-                let rate = samples as f64 / s / 1e6;
-                if !as_json {
-                    println!(
-                        "{:<22} {:>8} {:<20} {:>10.1} {:>12} {:>14.1} {:>16.1}",
-                        name,
-                        format!("{w}x{h}"),
-                        format!("{} {param}", integrator.name()),
-                        s * 1e3,
-                        samples,
-                        rate,
-                        rate / threads as f64
-                    );
-                }
-                rows.push(json!({
-                    "dataset": name, "width": w, "height": h, "integrator": integrator.name(),
-                    "param": param, "ms": s * 1e3, "samples": samples,
-                    "samples_per_s": rate * 1e6, "samples_per_s_per_core": rate * 1e6 / threads as f64,
-                }));
+    let mut renderers = Vec::new();
+    for (_, volume, _) in &datasets {
+        renderers.push(create_renderer(
+            volume,
+            &Method::GridRaycast(GridRaycast::default()),
+        )?);
+    }
+    for (d, (w, h), integrator, mode, label) in cases {
+        let (name, volume, tf) = &datasets[d];
+        let renderer = &mut renderers[d];
+        let mut scene = Scene::new(spec.resolve(&volume.bounds())?, w, h, tf.clone());
+        scene.method = Method::GridRaycast(GridRaycast {
+            integrator,
+            ..GridRaycast::default()
+        });
+        scene.appearance.shade_volume = mode == Mode::Shaded;
+        scene.appearance.mip = mode == Mode::Mip;
+        // The first frame builds the caches (macrocells, gradients, tables).
+        frame(renderer.as_mut(), &scene)?;
+        let mut times = Vec::new();
+        let mut samples = 0;
+        for _ in 0..frames {
+            let f = frame(renderer.as_mut(), &scene)?;
+            times.push(f.stats.ms / 1e3);
+            if let MethodStats::GridRaycast(s) = f.stats.method {
+                samples = s.samples;
             }
         }
+        let s = median(&mut times);
+        let rate = samples as f64 / s / 1e6;
+        if !as_json {
+            println!(
+                "{:<name_w$} {:>9} {:<label_w$} {:>10.1} {:>12} {:>12.1} {:>16.1}",
+                name,
+                format!("{w}x{h}"),
+                label,
+                s * 1e3,
+                samples,
+                rate,
+                rate / threads as f64
+            );
+        }
+        rows.push(json!({
+            "dataset": name, "width": w, "height": h, "integrator": integrator.name(),
+            "param": param(&integrator, mode), "ms": s * 1e3, "samples": samples,
+            "samples_per_s": rate * 1e6, "samples_per_s_per_core": rate * 1e6 / threads as f64,
+        }));
     }
     Ok(rows)
 }

@@ -26,6 +26,9 @@ pub fn run(
     suite: Suite,
     only: Option<&str>,
 ) -> Result<(), CmdError> {
+    if only.is_some() && !matches!(suite, Suite::Grid | Suite::All) {
+        return Err("--only selects cases of the grid suite (--suite grid or all)".into());
+    }
     let rows = match suite {
         Suite::Targets => targets::run(n, frames, as_json)?,
         Suite::Grid => grid::run(quick, frames, n, as_json, only)?,
