@@ -440,3 +440,58 @@ impl RenderPlan {
         Ok(fit_to_box(&camera, &bounds, aspect, args.zoom))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+    use volux_core::Aabb;
+
+    /// Each named view puts the camera on its axis, looking at the centre, with its up.
+    #[test]
+    fn named_views_sit_on_their_axes() {
+        let b = Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        };
+        let cases = [
+            (ViewArg::Front, -DVec3::Y, DVec3::Z),
+            (ViewArg::Back, DVec3::Y, DVec3::Z),
+            (ViewArg::Left, -DVec3::X, DVec3::Z),
+            (ViewArg::Right, DVec3::X, DVec3::Z),
+            (ViewArg::Top, DVec3::Z, DVec3::Y),
+            (ViewArg::Bottom, -DVec3::Z, DVec3::Y),
+        ];
+        for (view, side, up) in cases {
+            let (azimuth, pole) = view_angles(view);
+            let spec = CameraSpec {
+                azimuth,
+                up: pole,
+                ..Default::default()
+            };
+            let cam = spec.resolve(&b).unwrap();
+            let dir = (cam.eye - cam.target).normalize();
+            assert!((dir - side).length() < 1e-9, "{view:?}: eye towards {dir}");
+            assert!(
+                (cam.basis().1 - up).length() < 1e-9,
+                "{view:?}: up {}",
+                cam.basis().1
+            );
+        }
+    }
+
+    #[test]
+    fn up_and_layer_specs_parse_or_say_what_they_expect() {
+        assert_eq!(parse_up("0, 0,-1").unwrap(), [0.0, 0.0, -1.0]);
+        for bad in ["0,0,0", "1,2", "a,b,c", "1,2,inf"] {
+            let e = parse_up(bad).unwrap_err().to_string();
+            assert!(e.contains("expected X,Y,Z"), "{bad}: {e}");
+        }
+        assert_eq!(layer_spec("ct-skin:0.2").unwrap(), ("ct-skin", 0.2));
+        assert_eq!(layer_spec("my:tf.json").unwrap(), ("my:tf.json", 1.0));
+        assert!(layer_spec("ct-bone:-1").is_err());
+        assert!(png_path(Path::new("a.PNG"), "-o").is_ok());
+        assert!(png_path(Path::new("a.jpg"), "-o").is_err());
+        assert!(png_path(Path::new("a"), "-o").is_err());
+    }
+}

@@ -55,9 +55,15 @@ impl std::fmt::Display for Invisible {
     }
 }
 
-/// `v` as people read it: the shortest text of its nearest `f32` (seven digits at most).
+/// `v` as people read it: the shortest text of its nearest `f32` (seven digits at most),
+/// in exponent form when tiny or huge.
 fn round(v: f64) -> String {
-    format!("{}", v as f32)
+    let v = v as f32;
+    if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// The world box of what `appearance` makes visible in `volume` (MIP shows the whole

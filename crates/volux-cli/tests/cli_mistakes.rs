@@ -1,0 +1,416 @@
+//! The mistakes a new user makes, one test per class, each asserting the message: an option
+//! that does not apply to the method or data, negative numbers, a render that comes out
+//! empty, a wrong output extension, a JSON file of the wrong shape; and what the CLI says
+//! about its outputs. Synthetic data in a temporary folder; no shared data needed.
+use std::path::Path;
+use std::process::Output;
+
+mod common;
+use common::volux;
+
+/// A 32^3 Shepp-Logan phantom (values 0..1) and a small smooth tet mesh in `dir`.
+fn data(dir: &Path) {
+    for (kind, size, out) in [
+        ("shepp-logan", "32", "grid.raw"),
+        ("tets-smooth", "3000", "mesh.vtet"),
+    ] {
+        let run = volux(&["generate", kind, "--size", size, "-o", out], dir);
+        assert!(run.status.success(), "{}", stderr(&run));
+    }
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Runs `args` in `dir` and returns the error line, asserting a failure with one line on
+/// stderr and no output file.
+fn refused(args: &[&str], dir: &Path) -> String {
+    let strays = ["out.png", "x.png", "x.jpg"];
+    let before: Vec<bool> = strays.iter().map(|s| dir.join(s).exists()).collect();
+    let out = volux(args, dir);
+    let err = stderr(&out);
+    assert!(!out.status.success(), "{args:?} should fail: {err}");
+    assert_eq!(err.trim().lines().count(), 1, "{args:?}: one line: {err}");
+    assert!(err.starts_with("volux: error: "), "{args:?}: {err}");
+    for (stray, was) in strays.iter().zip(before) {
+        assert!(was || !dir.join(stray).exists(), "{args:?} left {stray}");
+    }
+    err
+}
+
+/// Runs `args` in `dir`, asserting success, and returns stderr.
+fn accepted(args: &[&str], dir: &Path) -> String {
+    let out = volux(args, dir);
+    let err = stderr(&out);
+    assert!(out.status.success(), "{args:?}: {err}");
+    err
+}
+
+#[test]
+fn options_that_do_not_apply_are_refused_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    data(d);
+    let cases: &[(&[&str], &str)] = &[
+        (&["mesh.vtet", "--mip"], "no maximum intensity projection"),
+        (&["mesh.vtet", "--shade"], "does not shade the volume"),
+        (
+            &["mesh.vtet", "--step", "0.3"],
+            "--step does not apply to Projected Tetrahedra",
+        ),
+        (
+            &["mesh.vtet", "--reconstruction", "b-spline"],
+            "--reconstruction does not apply",
+        ),
+        (
+            &["mesh.vtet", "--integrator", "simpson"],
+            "--integrator does not apply to Projected",
+        ),
+        (
+            &[
+                "mesh.vtet",
+                "--method",
+                "raycast",
+                "--integrator",
+                "simpson",
+            ],
+            "exact, psi or adaptive-simpson",
+        ),
+        (
+            &["mesh.vtet", "--method", "raycast", "--sort", "exact"],
+            "--sort does not apply",
+        ),
+        (&["mesh.vtet", "--as-tets"], "tetrahedral mesh already"),
+        (
+            &["grid.raw", "--sort", "exact"],
+            "orders the cells of Projected Tetrahedra",
+        ),
+        (
+            &["grid.raw", "--color", "exact"],
+            "--color does not apply to grid ray casting",
+        ),
+        (
+            &["grid.raw", "--tol", "0.1"],
+            "--integrator adaptive-simpson",
+        ),
+        (
+            &["grid.raw", "--error-map", "e.png"],
+            "--integrator adaptive-simpson",
+        ),
+        (
+            &["grid.raw", "--integrator", "reference", "--step", "1"],
+            "chooses its own steps",
+        ),
+        (
+            &["grid.raw", "--as-tets", "--method", "raycast"],
+            "--method pt",
+        ),
+        (&["grid.raw", "--resample", "64"], "--method resample"),
+        (&["grid.raw", "--json"], "add --stats"),
+        (&["grid.raw", "--ambient", "0.5"], "this render has neither"),
+        (
+            &["grid.raw", "--camera", "cam.json", "--azimuth", "30"],
+            "--camera FILE replaces",
+        ),
+        (
+            &["grid.raw", "--view", "top", "--up", "0,0,1"],
+            "--view sets the up direction",
+        ),
+        (
+            &["grid.raw", "--q-variable", "density"],
+            "applies to PLOT3D files",
+        ),
+    ];
+    std::fs::write(d.join("cam.json"), r#"{"azimuth": 10}"#).unwrap();
+    for (args, message) in cases {
+        let mut full = vec!["render"];
+        full.extend_from_slice(args);
+        let err = refused(&full, d);
+        assert!(
+            err.contains(message),
+            "{args:?}: expected '{message}' in: {err}"
+        );
+    }
+    // The same options where they apply are accepted.
+    accepted(
+        &[
+            "render", "grid.raw", "--mip", "--size", "32x32", "-o", "a.png",
+        ],
+        d,
+    );
+    accepted(
+        &[
+            "render",
+            "mesh.vtet",
+            "--sort",
+            "exact",
+            "--size",
+            "32x32",
+            "-o",
+            "b.png",
+        ],
+        d,
+    );
+    accepted(
+        &[
+            "render",
+            "grid.raw",
+            "--integrator",
+            "adaptive-simpson",
+            "--tol",
+            "0.05",
+            "--size",
+            "32x32",
+            "-o",
+            "c.png",
+        ],
+        d,
+    );
+}
+
+#[test]
+fn negative_numbers_are_values_not_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    data(d);
+    let size = ["--size", "32x32"];
+    // Each is parsed as a value; the ones out of range get the library's reason, not clap's
+    // "unexpected argument".
+    let err = refused(&["render", "grid.raw", "--opacity-scale", "-1"], d);
+    assert!(err.contains("opacity scale -1 must be"), "{err}");
+    let err = refused(&["render", "grid.raw", "--step", "-1"], d);
+    assert!(err.contains("step -1"), "{err}");
+    let mut args = vec!["render", "grid.raw", "--iso", "-0.5:1,1,1,1", "-o", "n.png"];
+    args.extend_from_slice(&size);
+    let err = accepted(&args, d);
+    assert!(
+        err.contains("isosurface at -0.5 lies outside the data range"),
+        "{err}"
+    );
+    let mut args = vec![
+        "render",
+        "grid.raw",
+        "--azimuth",
+        "-30",
+        "--elevation",
+        "-20",
+        "--shade",
+        "--light",
+        "-1,0,0",
+        "--up",
+        "0,0,-1",
+        "-o",
+        "m.png",
+    ];
+    args.extend_from_slice(&size);
+    accepted(&args, d);
+}
+
+#[test]
+fn renders_that_show_nothing_warn_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    data(d);
+    std::fs::write(
+        d.join("far.json"),
+        r#"{"color": [[0, 1, 1, 1]], "extinction": [[100, 0], [200, 1], [300, 0]]}"#,
+    )
+    .unwrap();
+    let err = accepted(
+        &["render", "grid.raw", "--tf", "far.json", "--size", "16x16"],
+        d,
+    );
+    assert!(
+        err.contains("warning: the image will be empty: the transfer function is transparent")
+            && err.contains("(its extinction is non-zero over [100, 300])"),
+        "{err}"
+    );
+    // A constant field.
+    let bytes: Vec<u8> = std::iter::repeat_n(2.5f32.to_le_bytes(), 64)
+        .flatten()
+        .collect();
+    std::fs::write(d.join("flat.raw"), bytes).unwrap();
+    std::fs::write(
+        d.join("flat.raw.json"),
+        r#"{"dims_xyz": [4, 4, 4], "dtype": "float32", "endianness": "little"}"#,
+    )
+    .unwrap();
+    let err = accepted(
+        &["render", "flat.raw", "--size", "16x16", "-o", "flat.png"],
+        d,
+    );
+    assert!(
+        err.contains("every value is 2.5 (a constant field)"),
+        "{err}"
+    );
+}
+
+#[test]
+fn outputs_must_be_png_and_are_always_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    data(d);
+    let err = refused(&["render", "grid.raw", "-o", "x.jpg"], d);
+    assert!(
+        err.contains("Volux writes PNG images; name the file .png, not .jpg"),
+        "{err}"
+    );
+    let err = refused(
+        &[
+            "render",
+            "grid.raw",
+            "--integrator",
+            "adaptive-simpson",
+            "--error-map",
+            "e.bmp",
+        ],
+        d,
+    );
+    assert!(err.contains("--error-map e.bmp"), "{err}");
+    // The default output is named, and replacing it is said.
+    let first = accepted(&["render", "grid.raw", "--size", "16x16"], d);
+    assert!(first.trim_end().ends_with("wrote out.png"), "{first}");
+    let again = accepted(&["render", "grid.raw", "--size", "16x16"], d);
+    assert!(
+        again.contains("wrote out.png (replaced the file there"),
+        "{again}"
+    );
+    // With --stats --json the JSON names the file too.
+    let out = volux(
+        &[
+            "render", "grid.raw", "--size", "16x16", "--stats", "--json", "-o", "s.png",
+        ],
+        d,
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["output"], "s.png");
+    assert!(stderr(&out).contains("wrote s.png"));
+    // compare --diff: a heat map with its legend, its scale said.
+    let out = volux(&["compare", "out.png", "s.png", "--diff", "d.png"], d);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("colour scale: black 0 to yellow"),
+        "{}",
+        stderr(&out)
+    );
+    let (w, h, _) = common::png_pixels(&d.join("d.png"));
+    assert_eq!(w, 16);
+    assert!(h > 16, "the legend strip is below the image");
+    let err = refused(&["compare", "out.png", "s.png", "--diff", "x.jpg"], d);
+    assert!(err.contains("--diff x.jpg"), "{err}");
+    // convert writes what the README lists, sizes said.
+    let err = accepted(&["convert", "grid.raw", "g.raw.gz"], d);
+    assert!(
+        err.contains("wrote g.raw.gz (") && err.contains("KiB)"),
+        "{err}"
+    );
+    accepted(&["info", "g.raw.gz"], d);
+}
+
+#[test]
+fn json_shape_errors_name_the_field_and_the_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    data(d);
+    std::fs::write(d.join("five.json"), r#"{"color": [[0, 1, 1, 1, 1]]}"#).unwrap();
+    let err = refused(&["render", "grid.raw", "--tf", "five.json"], d);
+    assert!(
+        err.contains("color[0]: expected [value, r, g, b] (4 numbers), got 5 numbers"),
+        "{err}"
+    );
+    std::fs::write(d.join("eye.json"), r#"{"eye": [1, 2]}"#).unwrap();
+    let err = refused(&["render", "grid.raw", "--camera", "eye.json"], d);
+    assert!(
+        err.contains("eye: expected [x, y, z] (3 numbers), got 2 numbers"),
+        "{err}"
+    );
+}
+
+#[test]
+fn formats_are_documented_and_presets_print_as_json_that_reads_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    data(d);
+    for (topic, needle) in [("tf", "opacity_step"), ("camera", "fov_y_deg")] {
+        let out = volux(&["help", topic], d);
+        assert!(out.status.success());
+        assert!(
+            String::from_utf8_lossy(&out.stdout).contains(needle),
+            "help {topic}"
+        );
+    }
+    let out = volux(&["tf", "show", "ct-skin"], d);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::write(d.join("skin.json"), &out.stdout).unwrap();
+    let tf: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(tf["color"][0], serde_json::json!([-600, 0.6, 0.35, 0.25]));
+    let err = refused(&["tf", "show", "auto"], d);
+    assert!(err.contains("--data FILE"), "{err}");
+    accepted(&["tf", "show", "auto", "--data", "grid.raw"], d);
+    // Layers: a preset under a weighted file.
+    accepted(
+        &[
+            "render",
+            "grid.raw",
+            "--tf",
+            "grayscale",
+            "--tf",
+            "skin.json:0.5",
+            "--size",
+            "16x16",
+            "-o",
+            "l.png",
+        ],
+        d,
+    );
+    let err = refused(&["render", "grid.raw", "--tf", "grayscale:-1"], d);
+    assert!(err.contains("weight -1 must be >= 0"), "{err}");
+}
+
+#[test]
+fn the_camera_frames_what_the_tf_shows_and_named_views_turn_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = volux(&["generate", "sphere", "--size", "48", "-o", "s.raw"], d);
+    assert!(run.status.success(), "{}", stderr(&run));
+    // Only the top fifth of the range is visible: a ball of radius 0.35 in a box of side 2.
+    std::fs::write(
+        d.join("core.json"),
+        r#"{"space": "normalized", "color": [[0, 1, 1, 1]],
+            "extinction": [[0.78, 0], [0.8, 2], [1, 2]]}"#,
+    )
+    .unwrap();
+    let covered = |frame: &str, view: &str| {
+        let out = format!("{frame}-{view}.png");
+        accepted(
+            &[
+                "render",
+                "s.raw",
+                "--tf",
+                "core.json",
+                "--size",
+                "48x48",
+                "--frame",
+                frame,
+                "--view",
+                view,
+                "-o",
+                &out,
+            ],
+            d,
+        );
+        let (_, _, px) = common::png_pixels(&d.join(&out));
+        common::coverage(&px)
+    };
+    let (visible, all) = (covered("visible", "front"), covered("all", "front"));
+    assert!(
+        visible > 2.0 * all && visible < 0.95,
+        "framed on the ball: {visible} of the image, on the box: {all}"
+    );
+    // The ball looks alike from every side; framing keeps it the same size.
+    for view in ["back", "left", "right", "top", "bottom"] {
+        let c = covered("visible", view);
+        assert!((c - visible).abs() < 0.05, "{view}: {c} vs front {visible}");
+    }
+}
