@@ -68,6 +68,9 @@ fn param(i: &Integrator, mode: Mode) -> String {
     }
 }
 
+/// One case: dataset index, image size, integrator, mode, label.
+type Case = (usize, (usize, usize), Integrator, Mode, String);
+
 /// Runs the grid suite; returns the JSON rows.
 pub fn run(
     quick: bool,
@@ -85,7 +88,7 @@ pub fn run(
     let threads = rayon::current_num_threads();
     let mut rows = Vec::new();
     let datasets = grids(n)?;
-    let cases: Vec<(usize, (usize, usize), Integrator, Mode, String)> = datasets
+    let cases: Vec<Case> = datasets
         .iter()
         .enumerate()
         .flat_map(|(d, (name, _, _))| {
