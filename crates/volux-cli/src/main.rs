@@ -59,14 +59,55 @@ fn given_options(sub: &ArgMatches) -> Vec<String> {
         .collect()
 }
 
-/// A clap error on one line: its first line without clap's own `error: ` prefix, followed by
-/// the accepted values when clap lists them.
+/// A clap error on one line: its first line without clap's own `error: ` prefix, the items
+/// it lists when it ends with a colon, clap's tip, and the accepted values when clap lists
+/// them.
 fn one_line(text: &str) -> String {
-    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
-    let first = lines.next().unwrap_or("invalid arguments");
-    let first = first.strip_prefix("error: ").unwrap_or(first);
-    match lines.find(|l| l.starts_with("[possible values:")) {
-        Some(values) => format!("{first} {values}"),
-        None => format!("{first} (see --help)"),
+    let lines: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .take_while(|l| !l.starts_with("Usage:"))
+        .collect();
+    let first = lines.first().copied().unwrap_or("invalid arguments");
+    let mut out = first.strip_prefix("error: ").unwrap_or(first).to_string();
+    if out.ends_with(':') {
+        let items: Vec<&str> = lines[1..]
+            .iter()
+            .take_while(|l| !l.starts_with("tip:") && !l.starts_with('['))
+            .copied()
+            .collect();
+        out = format!("{} {}", out, items.join(", "));
+    }
+    for extra in lines[1..]
+        .iter()
+        .filter(|l| l.starts_with("tip:") || l.starts_with("[possible values:"))
+    {
+        out = format!("{out}; {extra}");
+    }
+    format!("{out} (see --help)")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line;
+
+    #[test]
+    fn clap_errors_fit_one_line_with_what_they_list() {
+        let missing = "error: the following required arguments were not provided:\n  <FILE>\n\nUsage: volux render <FILE>\n\nFor more information, try '--help'.\n";
+        assert_eq!(
+            one_line(missing),
+            "the following required arguments were not provided: <FILE> (see --help)"
+        );
+        let typo = "error: unexpected argument '--sizee' found\n\n  tip: a similar argument exists: '--size'\n\nUsage: volux render --size <SIZE> <FILE>\n";
+        assert_eq!(
+            one_line(typo),
+            "unexpected argument '--sizee' found; tip: a similar argument exists: '--size' (see --help)"
+        );
+        let value = "error: invalid value 'foo' for '--method <METHOD>'\n  [possible values: auto, pt]\n\nFor more information, try '--help'.\n";
+        assert_eq!(
+            one_line(value),
+            "invalid value 'foo' for '--method <METHOD>'; [possible values: auto, pt] (see --help)"
+        );
     }
 }
