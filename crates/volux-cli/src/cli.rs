@@ -73,8 +73,12 @@ pub enum Command {
         /// A command or a topic (tf, camera).
         topic: Option<String>,
     },
-    /// Render a built-in dataset to demo.png in the current folder.
-    Demo,
+    /// Render a built-in dataset (Marschner-Lobb, 128^3) to demo.png in the current folder.
+    Demo {
+        /// Output PNG.
+        #[arg(long, short, default_value = "demo.png")]
+        output: PathBuf,
+    },
     /// Compare two PNG images: RMSE, largest and mean error per channel (in 0..1), and the
     /// percentage of pixels with a channel off by more than the threshold.
     Compare {

@@ -28,7 +28,7 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
         } => convert::run(&input, &output, &load, show),
         Command::Generate { kind, size, output } => convert::generate(kind, size, &output),
         Command::Render(args) => render::run(&args, show),
-        Command::Demo => render::demo(show),
+        Command::Demo { output } => render::demo(&output, show),
         Command::Help { topic } => help::run(topic.as_deref()),
         Command::Tf {
             action: TfCommand::Show { preset, data, load },

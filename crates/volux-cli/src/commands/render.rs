@@ -120,8 +120,9 @@ pub fn error_image(errors: &[f32], tol: f64, w: usize, h: usize) -> Result<Image
     Ok(heat_map(errors, w, h, tol as f32)?)
 }
 
-/// Renders the built-in Marschner-Lobb dataset to `demo.png`.
-pub fn demo(show: bool) -> Result<(), CmdError> {
+/// Renders the built-in Marschner-Lobb dataset to `out`.
+pub fn demo(out: &Path, show: bool) -> Result<(), CmdError> {
+    crate::settings::png_path(out, "--output")?;
     let volume = Volume::from(synth::marschner_lobb(128)?);
     let spec = CameraSpec {
         azimuth: Some(30.0),
@@ -132,7 +133,6 @@ pub fn demo(show: bool) -> Result<(), CmdError> {
     let tf = TransferFunction::from_json(DEMO_TF)?;
     let scene = Scene::new(spec.resolve(&volume.bounds())?, 512, 512, tf);
     let frame = render(&volume, &scene, show)?;
-    let out = Path::new("demo.png");
     let png = PngOptions {
         background: Some([0.02, 0.02, 0.03]),
         sixteen_bit: false,

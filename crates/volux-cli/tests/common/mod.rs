@@ -36,3 +36,41 @@ pub fn coverage(px: &[Vec<u8>]) -> f64 {
         .count() as f64
         / px.len() as f64
 }
+
+/// Compares two 8-bit PNGs of the same size: mean absolute difference per channel at most
+/// 1.0 (of 255) and at most 1 % of the pixels with a channel off by more than 16; the
+/// baseline must show something (over 100 pixels brighter than 8). Returns the figures, or
+/// what failed.
+pub fn png_close(got: &Path, want: &Path) -> Result<String, String> {
+    let (w, h, a) = png_pixels(got);
+    let (gw, gh, b) = png_pixels(want);
+    if (w, h) != (gw, gh) {
+        return Err(format!("size {w}x{h}, baseline {gw}x{gh}"));
+    }
+    let channels = a.iter().zip(&b).flat_map(|(p, q)| p.iter().zip(q));
+    let (sum, count) = channels.fold((0.0, 0usize), |(s, n), (x, y)| {
+        (s + f64::from(x.abs_diff(*y)), n + 1)
+    });
+    let mean = sum / count.max(1) as f64;
+    let far = a
+        .iter()
+        .zip(&b)
+        .filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 16))
+        .count() as f64
+        / f64::from(w * h);
+    let lit = b
+        .iter()
+        .filter(|p| p.iter().take(3).any(|&c| c > 8))
+        .count();
+    let figures = format!(
+        "mean |diff| {mean:.3}/255, {:.2} % pixels off by > 16, {lit} lit pixels in the baseline",
+        far * 100.0
+    );
+    if lit <= 100 {
+        return Err(format!("the baseline shows nothing: {figures}"));
+    }
+    if mean > 1.0 || far > 0.01 {
+        return Err(figures);
+    }
+    Ok(figures)
+}
