@@ -153,13 +153,14 @@ fn mesh_box(m: &TetMesh, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
     Aabb::from_points(points)
 }
 
-/// `camera` moved along its view axis (perspective) or resized (orthographic) so that the
-/// eight corners of `bounds` fill the image of aspect `aspect` (width / height) to
-/// [`FIT_MARGIN`] on the tighter side, then zoomed by `zoom`. The view direction, target and
-/// up stay; the bounding sphere a plain fit uses leaves a box a third of the frame.
+/// `camera` moved so that the eight corners of `bounds` fill the image of aspect `aspect`
+/// (width / height) to [`FIT_MARGIN`] on the tighter side, centred, then zoomed by `zoom`:
+/// perspective cameras move along and across the view (the target shifts so that the
+/// projected box is centred), orthographic ones are resized. The view direction and up stay;
+/// the bounding sphere a plain fit uses leaves a box a third of the frame.
 pub fn fit_to_box(camera: &Camera, bounds: &Aabb, aspect: f64, zoom: f64) -> Camera {
     let (right, up, forward) = camera.basis();
-    let corners = (0..8).map(|i| {
+    let corners = (0..8usize).map(|i| {
         let pick = |bit: usize, a: f64, b: f64| if i & bit == 0 { a } else { b };
         DVec3::new(
             pick(1, bounds.min.x, bounds.max.x),
@@ -172,17 +173,42 @@ pub fn fit_to_box(camera: &Camera, bounds: &Aabb, aspect: f64, zoom: f64) -> Cam
         Projection::Perspective { fov_y_deg } => {
             let ty = (fov_y_deg.to_radians() * 0.5).tan() * FIT_MARGIN;
             let tx = ty * aspect;
-            // Each corner needs the eye at least this far behind the target along the view
-            // axis: |x| / (depth) <= tx and |y| / (depth) <= ty.
-            let needed = corners
-                .map(|p| {
-                    let d = p - camera.target;
-                    let (x, y, z) = (d.dot(right), d.dot(up), d.dot(forward));
-                    (x.abs() / tx).max(y.abs() / ty) - z
-                })
-                .fold(0.0f64, f64::max);
-            if needed > 0.0 && needed.is_finite() {
-                fitted.eye = camera.target - forward * (needed / zoom);
+            // The distance behind `target` at which every corner fits: |x| / depth <= tx and
+            // |y| / depth <= ty, depth = distance + z.
+            let distance = |target: DVec3| {
+                corners
+                    .clone()
+                    .map(|p| {
+                        let d = p - target;
+                        let (x, y, z) = (d.dot(right), d.dot(up), d.dot(forward));
+                        (x.abs() / tx).max(y.abs() / ty) - z
+                    })
+                    .fold(0.0f64, f64::max)
+            };
+            // Perspective makes the near side larger: shift the target across the view so
+            // that the projected box is centred, then fit again (a few rounds converge).
+            let mut target = camera.target;
+            for _ in 0..4 {
+                let dist = distance(target);
+                if !(dist > 0.0 && dist.is_finite()) {
+                    break;
+                }
+                let eye = target - forward * dist;
+                let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+                for p in corners.clone() {
+                    let d = p - eye;
+                    let depth = d.dot(forward).max(1e-12);
+                    let t = [d.dot(right) / depth, d.dot(up) / depth];
+                    lo = [lo[0].min(t[0]), lo[1].min(t[1])];
+                    hi = [hi[0].max(t[0]), hi[1].max(t[1])];
+                }
+                let centre = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5];
+                target += (right * centre[0] + up * centre[1]) * dist;
+            }
+            let dist = distance(target);
+            if dist > 0.0 && dist.is_finite() {
+                fitted.target = target;
+                fitted.eye = target - forward * (dist / zoom);
             }
         }
         Projection::Orthographic { .. } => {
