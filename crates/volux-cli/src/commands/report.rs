@@ -119,8 +119,23 @@ fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)
         .chain([("other", other)].iter())
         .map(|(n, t)| format!("{n} {:.1}", t * 1e3))
         .collect();
+    let built: Vec<&str> = [
+        (s.rebuilt.data, "data structures (e.g. the ψ table)"),
+        (s.rebuilt.classification, "the TF's kept cells"),
+        (s.rebuilt.view, "the view's projection, order and bins"),
+    ]
+    .iter()
+    .filter(|(b, _)| *b)
+    .map(|(_, what)| *what)
+    .collect();
+    let built = if built.is_empty() {
+        "nothing: all cached".to_string()
+    } else {
+        built.join(", ")
+    };
     eprintln!(
-        "  stages (ms, adding up to the total): {}",
+        "  stages (ms, adding up to the total; other: set-up and caches): {}; this frame \
+         built {built}",
         parts.join(", ")
     );
     if let Some(v) = s.sort_violations {
