@@ -80,7 +80,7 @@ fn every_gallery_picture_is_made_by_its_command() {
         assert!(
             gallery_commands()
                 .iter()
-                .any(|c| c.iter().any(|a| *a == name)),
+                .any(|c| c.contains(&name)),
             "{name} is shown but no gallery command makes it"
         );
     }

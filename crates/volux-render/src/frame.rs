@@ -19,7 +19,8 @@ pub struct Frame {
 /// Figures of a frame: the common ones, and the method's own.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameStats {
-    /// Wall time of the frame in milliseconds.
+    /// Wall time of the frame in milliseconds, without the diagnostics a method times apart
+    /// ([`PtStats::diagnostics_s`]).
     pub ms: f64,
     /// Pixels rendered.
     pub pixels: usize,
