@@ -37,6 +37,13 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
                 .into(),
         );
     }
+    if args.mip && args.error_map.is_some() {
+        return Err(
+            "--error-map shows the integration error of compositing; maximum \
+                    intensity projection (--mip) integrates nothing"
+                .into(),
+        );
+    }
     let lit = args.shade || !args.isos.is_empty();
     if let Some(l) = LIGHTING.iter().find(|l| args.given(l)) {
         if !lit {

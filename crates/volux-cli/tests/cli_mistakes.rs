@@ -121,6 +121,25 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
             &["grid.raw", "--q-variable", "density"],
             "applies to PLOT3D files",
         ),
+        (
+            &["grid.raw", "--mip", "--shade"],
+            "unlit and without isosurfaces",
+        ),
+        (
+            &["grid.raw", "--mip", "--iso", "0.5:1,1,1,1"],
+            "unlit and without isosurfaces",
+        ),
+        (
+            &[
+                "mesh.vtet",
+                "--method",
+                "raycast",
+                "--mip",
+                "--error-map",
+                "e.png",
+            ],
+            "--mip) integrates nothing",
+        ),
     ];
     std::fs::write(d.join("cam.json"), r#"{"azimuth": 10}"#).unwrap();
     for (args, message) in cases {

@@ -78,9 +78,7 @@ fn every_gallery_picture_is_made_by_its_command() {
     for shown in readme.split("(docs/images/").skip(1) {
         let name = format!("docs/images/{}", shown.split(')').next().unwrap());
         assert!(
-            gallery_commands()
-                .iter()
-                .any(|c| c.contains(&name)),
+            gallery_commands().iter().any(|c| c.contains(&name)),
             "{name} is shown but no gallery command makes it"
         );
     }

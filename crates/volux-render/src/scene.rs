@@ -347,6 +347,13 @@ impl Method {
                 "ray cast the mesh for MIP (volux: --method raycast)",
             );
         }
+        if appearance.mip && (appearance.shade_volume || !appearance.isosurfaces.is_empty()) {
+            return refuse(
+                "with maximum intensity projection shows the colour of each ray's largest \
+                 value, unlit and without isosurfaces",
+                "drop MIP to shade the volume or draw isosurfaces",
+            );
+        }
         if appearance.shade_volume && mesh {
             return refuse(
                 "lights isosurfaces but does not shade the volume",
@@ -470,6 +477,12 @@ mod tests {
         assert!(e.contains("does not shade the volume"), "{e}");
         assert!(grid.check_appearance(&mip).is_ok());
         assert!(grid.check_appearance(&shaded).is_ok());
+        let lit_mip = Appearance {
+            shade_volume: true,
+            ..mip.clone()
+        };
+        let e = grid.check_appearance(&lit_mip).unwrap_err().to_string();
+        assert!(e.contains("unlit and without isosurfaces"), "{e}");
         assert!(pt.check_appearance(&Appearance::new(tf)).is_ok());
     }
 
