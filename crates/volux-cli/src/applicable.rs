@@ -37,6 +37,15 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
                 .into(),
         );
     }
+    for flag in ["opacity-scale", "no-early-termination"] {
+        if args.mip && args.given(flag) {
+            return Err(format!(
+                "--{flag} does not apply to --mip: maximum intensity projection shows each \
+                 ray's largest value in the transfer function's colour, with no opacity"
+            )
+            .into());
+        }
+    }
     if args.mip && args.error_map.is_some() {
         return Err(
             "--error-map shows the integration error of compositing; maximum \

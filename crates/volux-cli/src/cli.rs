@@ -19,6 +19,10 @@ pub struct Cli {
     /// The command.
     #[command(subcommand)]
     pub command: Command,
+    /// The long names of the command's options given on the command line (filled after
+    /// parsing), so that an option that would change nothing is refused rather than ignored.
+    #[arg(skip)]
+    pub given: Vec<String>,
 }
 
 /// The commands.

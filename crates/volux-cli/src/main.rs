@@ -38,21 +38,22 @@ fn main() -> ExitCode {
 fn parse() -> Result<cli::Cli, clap::Error> {
     let matches = cli::Cli::command().try_get_matches()?;
     let mut args = cli::Cli::from_arg_matches(&matches)?;
-    if let (cli::Command::Render(r), Some(("render", sub))) =
-        (&mut args.command, matches.subcommand())
-    {
-        r.given = given_options(sub);
+    if let Some((name, sub)) = matches.subcommand() {
+        args.given = given_options(name, sub);
+    }
+    if let cli::Command::Render(r) = &mut args.command {
+        r.given = args.given.clone();
     }
     Ok(args)
 }
 
-/// The long names of the options the user typed.
-fn given_options(sub: &ArgMatches) -> Vec<String> {
-    let render = cli::Cli::command();
-    let Some(render) = render.find_subcommand("render") else {
+/// The long names of the options of subcommand `name` the user typed.
+fn given_options(name: &str, sub: &ArgMatches) -> Vec<String> {
+    let cli = cli::Cli::command();
+    let Some(command) = cli.find_subcommand(name) else {
         return Vec::new();
     };
-    render
+    command
         .get_arguments()
         .filter(|a| sub.value_source(a.get_id().as_str()) == Some(ValueSource::CommandLine))
         .filter_map(|a| a.get_long().map(str::to_string))

@@ -126,6 +126,10 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
             "unlit and without isosurfaces",
         ),
         (
+            &["grid.raw", "--mip", "--opacity-scale", "2"],
+            "with no opacity",
+        ),
+        (
             &["grid.raw", "--mip", "--iso", "0.5:1,1,1,1"],
             "unlit and without isosurfaces",
         ),
@@ -186,6 +190,54 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
         ],
         d,
     );
+}
+
+#[test]
+fn bench_options_that_change_nothing_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (args, message) in [
+        (
+            &["bench", "--quick", "--frames", "5"][..],
+            "drop --quick or --frames",
+        ),
+        (
+            &["bench", "--suite", "targets", "--quick"],
+            "does not apply to --suite targets",
+        ),
+        (
+            &["bench", "--suite", "pt", "--grid-size", "64"],
+            "the mesh suites have none",
+        ),
+        (
+            &["bench", "--suite", "tetray", "--only", "riemann"],
+            "--only selects cases",
+        ),
+        (&["bench", "--frames", "0"], "at least one frame"),
+    ] {
+        let err = refused(args, d);
+        assert!(
+            err.contains(message),
+            "{args:?}: expected '{message}' in: {err}"
+        );
+    }
+    // (The suite says which shared datasets it skips before the error.)
+    let out = volux(
+        &[
+            "bench",
+            "--suite",
+            "grid",
+            "--only",
+            "no such case",
+            "--grid-size",
+            "8",
+        ],
+        d,
+    );
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    let last = err.trim().lines().last().unwrap_or_default();
+    assert!(last.contains("matches no grid case"), "{err}");
 }
 
 #[test]

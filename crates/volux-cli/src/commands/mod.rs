@@ -77,6 +77,9 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             json,
             suite,
             only,
-        } => bench::run(quick, frames, grid_size, json, suite, only.as_deref()),
+        } => {
+            bench::check_options(quick, frames, suite, &cli.given)?;
+            bench::run(quick, frames, grid_size, json, suite, only.as_deref())
+        }
     }
 }

@@ -17,6 +17,39 @@ mod pt;
 mod targets;
 mod tetray;
 
+/// Refuses the options that would change nothing: `--frames` with `--quick` (one frame per
+/// case), `--quick` with the targets (they have no quick form), `--grid-size` with the mesh
+/// suites, and fewer than one frame.
+pub fn check_options(
+    quick: bool,
+    frames: usize,
+    suite: Suite,
+    given: &[String],
+) -> Result<(), CmdError> {
+    let given = |name: &str| given.iter().any(|g| g == name);
+    if frames == 0 {
+        return Err("--frames 0: each case needs at least one frame".into());
+    }
+    if quick && given("frames") {
+        return Err("--quick renders one frame per case; drop --quick or --frames".into());
+    }
+    if quick && suite == Suite::Targets {
+        return Err(
+            "--quick does not apply to --suite targets: the targets are measured at \
+                    their own sizes (use --frames to shorten them)"
+                .into(),
+        );
+    }
+    if given("grid-size") && matches!(suite, Suite::Pt | Suite::Tetray) {
+        return Err(
+            "--grid-size sizes the synthetic grids of the grid and targets suites; \
+                    the mesh suites have none"
+                .into(),
+        );
+    }
+    Ok(())
+}
+
 /// Runs `suite`; prints a table per suite, or one JSON list.
 pub fn run(
     quick: bool,
