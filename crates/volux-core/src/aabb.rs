@@ -21,6 +21,17 @@ impl Aabb {
     pub fn center(&self) -> glam::DVec3 {
         (self.min + self.max) * 0.5
     }
+    /// The eight corners (bit 0 of the index picks max x, bit 1 max y, bit 2 max z).
+    pub fn corners(&self) -> [glam::DVec3; 8] {
+        std::array::from_fn(|i| {
+            let pick = |bit: usize, lo: f64, hi: f64| if i & bit == 0 { lo } else { hi };
+            glam::DVec3::new(
+                pick(1, self.min.x, self.max.x),
+                pick(2, self.min.y, self.max.y),
+                pick(4, self.min.z, self.max.z),
+            )
+        })
+    }
     /// Length of the diagonal.
     pub fn diagonal(&self) -> f64 {
         (self.max - self.min).length()

@@ -160,14 +160,7 @@ fn mesh_box(m: &TetMesh, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
 /// the bounding sphere a plain fit uses leaves a box a third of the frame.
 pub fn fit_to_box(camera: &Camera, bounds: &Aabb, aspect: f64, zoom: f64) -> Camera {
     let (right, up, forward) = camera.basis();
-    let corners = (0..8usize).map(|i| {
-        let pick = |bit: usize, a: f64, b: f64| if i & bit == 0 { a } else { b };
-        DVec3::new(
-            pick(1, bounds.min.x, bounds.max.x),
-            pick(2, bounds.min.y, bounds.max.y),
-            pick(4, bounds.min.z, bounds.max.z),
-        )
-    });
+    let corners = bounds.corners().into_iter();
     let mut fitted = *camera;
     match camera.projection {
         Projection::Perspective { fov_y_deg } => {
@@ -340,12 +333,7 @@ mod tests {
             let cam = fit_to_box(&spec.resolve(&b).unwrap(), &b, aspect, 1.0);
             let (w, h) = ((200.0 * aspect) as usize, 200);
             let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
-            for i in 0..8 {
-                let p = DVec3::new(
-                    if i & 1 == 0 { b.min.x } else { b.max.x },
-                    if i & 2 == 0 { b.min.y } else { b.max.y },
-                    if i & 4 == 0 { b.min.z } else { b.max.z },
-                );
+            for p in b.corners() {
                 let (x, y, _) = cam.project(p, w, h);
                 lo = [lo[0].min(x), lo[1].min(y)];
                 hi = [hi[0].max(x), hi[1].max(y)];

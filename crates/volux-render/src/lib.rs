@@ -29,6 +29,8 @@
 //!   (the common ones and each method's own); [`error`]: the renderers' errors;
 //! - [`tiles`]: the one tile driver (parallel tiles, cancellation, progress) every renderer
 //!   runs on, and [`Control`](tiles::Control).
+//! - [`framing`]: what a scene makes visible (the box a camera frames, or why nothing
+//!   shows), and a camera fitted to a box.
 //!
 //! ## Shared stages
 //!

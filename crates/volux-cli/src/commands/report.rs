@@ -38,10 +38,8 @@ fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize)) {
             "samples_per_s": rate,
             "rays_over_tolerance": s.rays_over_tolerance,
             "integrator": args.integrator.name(),
-            "threads": rayon::current_num_threads(),
-            "output": args.output().display().to_string(),
         });
-        println!("{v}");
+        print_json(args, v);
         return;
     }
     if args.stats {
@@ -89,13 +87,11 @@ fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)
             "other_ms": other * 1e3,
             "diagnostics_ms": s.diagnostics_s * 1e3,
             "bytes_per_tet": s.bytes_per_tet,
-            "threads": rayon::current_num_threads(),
-            "output": args.output().display().to_string(),
         });
         for (name, t) in stages {
             v[format!("{name}_ms")] = json!(t * 1e3);
         }
-        println!("{v}");
+        print_json(args, v);
         return;
     }
     if !args.stats {
@@ -178,10 +174,8 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
             "integrator": mode,
             "isosurfaces": args.isos.len(),
             "mip": args.mip,
-            "threads": rayon::current_num_threads(),
-            "output": args.output().display().to_string(),
         });
-        println!("{v}");
+        print_json(args, v);
         return;
     }
     if args.stats {
@@ -198,4 +192,12 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
             s.bytes_per_tet
         );
     }
+}
+
+/// Prints the stats object of a frame with what every method shares: the threads and the
+/// file written.
+fn print_json(args: &RenderArgs, mut v: serde_json::Value) {
+    v["threads"] = json!(rayon::current_num_threads());
+    v["output"] = json!(args.output().display().to_string());
+    println!("{v}");
 }

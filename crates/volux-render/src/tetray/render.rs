@@ -182,14 +182,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             }
             Projection::Orthographic { .. } => {
                 let depth = |p: DVec3| (p - eye).dot(f);
-                let corners = (0..8).map(|i| {
-                    DVec3::new(
-                        if i & 1 == 0 { b.min.x } else { b.max.x },
-                        if i & 2 == 0 { b.min.y } else { b.max.y },
-                        if i & 4 == 0 { b.min.z } else { b.max.z },
-                    )
-                });
-                if corners.map(depth).all(|z| z > pad) {
+                if b.corners().into_iter().map(depth).all(|z| z > pad) {
                     return Bvh::default();
                 }
                 (0..mesh.tets().len() as u32)
