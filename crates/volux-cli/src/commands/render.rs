@@ -5,9 +5,9 @@ use std::path::Path;
 use volux_core::heatmap::{heat_map, heat_map_legend_text};
 use volux_core::image::PngOptions;
 use volux_core::{synth, CameraSpec, Image, TransferFunction};
-use volux_io::Dataset;
+use volux_io::{Dataset, Format};
 use volux_render::engine::{create_renderer, Frame};
-use volux_render::framing::visible_bounds;
+use volux_render::framing::{visible_bounds, Invisible};
 use volux_render::scene::{Scene, Volume};
 use volux_render::tiles::Control;
 
@@ -20,11 +20,11 @@ use crate::settings::RenderPlan;
 /// Renders the file of `args` and writes the PNG (and the error map).
 pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let plan = RenderPlan::new(args)?;
-    let (data, _) = super::common::load(&args.file, &args.load, show)?;
+    let (data, format) = super::common::load(&args.file, &args.load, show)?;
     let loaded_grid = matches!(data, Dataset::Grid(_));
     let volume = crate::settings::volume(data, args)?;
     let scene = plan.scene(args, &volume, loaded_grid)?;
-    let invisible = warn_invisible(&volume, &scene);
+    let invisible = warn_invisible(&volume, &scene, format);
     let frame = render(&volume, &scene, show)?;
     if !invisible && frame.image.coverage(0.0) == 0.0 {
         warn("the image is empty: no ray met a visible sample (check the camera)");
@@ -55,7 +55,7 @@ pub fn warn(message: &str) {
 
 /// Warns when the scene can show nothing (constant data, a TF transparent over the data's
 /// range) or an isosurface lies outside the data; returns whether nothing can show.
-fn warn_invisible(volume: &Volume, scene: &Scene) -> bool {
+fn warn_invisible(volume: &Volume, scene: &Scene, format: Format) -> bool {
     let range = volume.range();
     for iso in scene.appearance.isosurfaces.as_slice() {
         let v = iso.value as f64;
@@ -69,7 +69,17 @@ fn warn_invisible(volume: &Volume, scene: &Scene) -> bool {
     match visible_bounds(volume, &scene.appearance) {
         Ok(_) => false,
         Err(why) => {
-            warn(&format!("the image will be empty: {why}"));
+            let hint = match (&why, format) {
+                (Invisible::Constant(_), Format::Plot3d) => {
+                    "; pick another --q-variable (density, momentum-x|y|z, energy, \
+                     velocity-magnitude)"
+                }
+                (Invisible::Transparent { .. }, _) => {
+                    "; try --tf auto, or see `volux info` for the data's range"
+                }
+                _ => "",
+            };
+            warn(&format!("the image will be empty: {why}{hint}"));
             true
         }
     }
