@@ -34,6 +34,24 @@ pub enum Error {
         /// The limit.
         limit: u64,
     },
+    /// A structure that would take more memory than the process's budget
+    /// ([`crate::limits::memory_budget`]).
+    #[error(
+        "{what} needs {}, over the memory budget of {} (--memory-budget)",
+        crate::units::format_bytes(*bytes),
+        crate::units::format_bytes(*budget)
+    )]
+    OverBudget {
+        /// What would be allocated ("the gradient volume").
+        what: String,
+        /// Bytes it needs (`u64::MAX` when the size overflows).
+        bytes: u64,
+        /// The budget, in bytes.
+        budget: u64,
+    },
+    /// A memory budget that cannot be set (zero, or set twice).
+    #[error("memory budget: {0}")]
+    MemoryBudget(String),
     /// A tetrahedral mesh that cannot be used.
     #[error("invalid mesh: {0}")]
     InvalidMesh(String),

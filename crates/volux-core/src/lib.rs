@@ -15,7 +15,8 @@
 //! - [`histogram`]: value histograms (the automatic transfer function is fitted on them);
 //! - [`synth`]: synthetic datasets for tests, benchmarks and the demo;
 //! - [`error`]: the typed errors of the data model; [`limits`]: allocation limits checked
-//!   before any large buffer is reserved.
+//!   before any large buffer is reserved, against the process's memory budget; [`units`]: byte
+//!   counts in human units.
 #![deny(missing_docs)]
 #![deny(unsafe_code)]
 
@@ -32,6 +33,7 @@ pub mod mesh;
 pub mod synth;
 pub mod tetrahedralize;
 pub mod transfer;
+pub mod units;
 
 pub use aabb::Aabb;
 pub use camera::{Camera, CameraSpec, Projection, RayGenerator};

@@ -1,37 +1,106 @@
-//! Guards against absurd allocations: sizes are checked before any memory is requested.
+//! Guards against absurd allocations: sizes are checked before any memory is requested,
+//! against one process-wide **memory budget**.
+//!
+//! The budget defaults to [`DEFAULT_BUDGET_FRACTION`] of the memory available when it is
+//! first read (`MemAvailable` in `/proc/meminfo`, else `MemTotal`, else 16 GiB); a front end
+//! may set it once, before any work, with [`set_memory_budget`] (the CLI's
+//! `--memory-budget`). Every large structure (grids read from files, meshes made from grids,
+//! gradient volumes, acceleration structures, images) is checked with [`check_alloc`] before
+//! it is allocated, so a hostile file ends in one error naming the structure rather than in
+//! the allocator aborting the process. [`check_alloc_within`] takes the budget as a
+//! parameter, for callers (and tests) that carry their own.
+use std::sync::OnceLock;
+
 use crate::error::{Error, Result};
 
-/// Bytes this process may reasonably allocate for one object: the machine's total memory
-/// (from `/proc/meminfo`), or 16 GiB where that cannot be read.
-pub fn memory_limit() -> u64 {
-    std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|s| {
-            let line = s.lines().find(|l| l.starts_with("MemTotal:"))?;
-            let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-            Some(kb * 1024)
-        })
-        .unwrap_or(16 << 30)
+/// The fraction of the available memory the budget defaults to: three quarters.
+pub const DEFAULT_BUDGET_FRACTION: (u64, u64) = (3, 4);
+
+/// The memory assumed available where `/proc/meminfo` cannot be read: 16 GiB.
+const FALLBACK_MEMORY: u64 = 16 << 30;
+
+/// The process's budget, fixed on first read or by [`set_memory_budget`].
+static BUDGET: OnceLock<u64> = OnceLock::new();
+
+/// The value in bytes of field `key` (e.g. `MemAvailable`) of `/proc/meminfo` text.
+fn meminfo_field(text: &str, key: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.split(':').next() == Some(key))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kb.checked_mul(1024)
 }
 
-/// Checks that `count` elements of `elem_bytes` each fit in memory; returns the byte count.
-pub fn check_alloc(what: &str, count: u64, elem_bytes: u64) -> Result<u64> {
-    let limit = memory_limit();
-    let bytes = count
-        .checked_mul(elem_bytes)
-        .ok_or_else(|| Error::TooLarge {
-            what: what.to_string(),
-            bytes: u64::MAX,
-            limit,
-        })?;
-    if bytes > limit {
-        return Err(Error::TooLarge {
-            what: what.to_string(),
-            bytes,
-            limit,
-        });
+/// The memory available in `/proc/meminfo` text: `MemAvailable`, else `MemTotal`.
+fn available_in(meminfo: Option<&str>) -> u64 {
+    meminfo
+        .and_then(|t| meminfo_field(t, "MemAvailable").or_else(|| meminfo_field(t, "MemTotal")))
+        .filter(|&b| b > 0)
+        .unwrap_or(FALLBACK_MEMORY)
+}
+
+/// Bytes of memory available to this process now: `MemAvailable` from `/proc/meminfo`,
+/// falling back to `MemTotal`, then to 16 GiB.
+pub fn available_memory() -> u64 {
+    available_in(std::fs::read_to_string("/proc/meminfo").ok().as_deref())
+}
+
+/// The budget [`memory_budget`] defaults to: [`DEFAULT_BUDGET_FRACTION`] of
+/// [`available_memory`].
+pub fn default_memory_budget() -> u64 {
+    let (num, den) = DEFAULT_BUDGET_FRACTION;
+    (available_memory() / den).saturating_mul(num).max(1)
+}
+
+/// Sets the process's memory budget, in bytes. It can be set once, before anything reads it;
+/// zero, a second call, or a call after the first check are errors.
+pub fn set_memory_budget(bytes: u64) -> Result<()> {
+    if bytes == 0 {
+        return Err(Error::MemoryBudget("it must be more than 0 bytes".into()));
     }
-    Ok(bytes)
+    BUDGET.set(bytes).map_err(|_| {
+        Error::MemoryBudget(format!(
+            "it is already {} and can be set only once, before any work",
+            crate::units::format_bytes(memory_budget())
+        ))
+    })
+}
+
+/// The process's memory budget in bytes: what [`set_memory_budget`] set, else
+/// [`default_memory_budget`] (read once, then fixed).
+pub fn memory_budget() -> u64 {
+    *BUDGET.get_or_init(default_memory_budget)
+}
+
+/// The memory budget, under the name readers have used for it.
+pub fn memory_limit() -> u64 {
+    memory_budget()
+}
+
+/// Checks that `count` elements of `elem_bytes` each fit in the process's memory budget;
+/// returns the byte count. `what` names the structure in the error ("the gradient volume").
+pub fn check_alloc(what: &str, count: u64, elem_bytes: u64) -> Result<u64> {
+    check_alloc_within(memory_budget(), what, count, elem_bytes)
+}
+
+/// Checks that `count` elements of `elem_bytes` each fit in `budget` bytes; returns the byte
+/// count, or [`Error::OverBudget`] naming `what` (with `u64::MAX` bytes when the size
+/// overflows).
+pub fn check_alloc_within(budget: u64, what: &str, count: u64, elem_bytes: u64) -> Result<u64> {
+    match count.checked_mul(elem_bytes) {
+        Some(bytes) if bytes <= budget => Ok(bytes),
+        over => Err(Error::OverBudget {
+            what: what.to_string(),
+            bytes: over.unwrap_or(u64::MAX),
+            budget,
+        }),
+    }
+}
+
+/// The product of `dims` as a `u64`, `u64::MAX` when it overflows (which any budget
+/// refuses).
+pub fn count_of(dims: &[usize]) -> u64 {
+    dims.iter()
+        .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64))
+        .unwrap_or(u64::MAX)
 }
 
 /// Validates grid dimensions given as signed integers (as headers store them) and returns the
@@ -66,6 +135,41 @@ mod tests {
         assert!(checked_dims([-3, 1, 1]).is_err());
         assert!(checked_dims([i64::MAX, i64::MAX, 2]).is_err());
         assert_eq!(checked_dims([2, 3, 4]).unwrap().1, 24);
+    }
+    #[test]
+    fn budget_checks_name_the_structure_and_sizes() {
+        assert_eq!(check_alloc_within(1000, "x", 250, 4).unwrap(), 1000);
+        let e = check_alloc_within(6 << 29, "the gradient volume", 1 << 30, 8).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the gradient volume needs 8.0 GiB, over the memory budget of 3.0 GiB (--memory-budget)"
+        );
+        let e = check_alloc_within(1 << 20, "tets", u64::MAX, 16).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::OverBudget {
+                    bytes: u64::MAX,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert_eq!(count_of(&[2, 3, 4]), 24);
+        assert_eq!(count_of(&[usize::MAX, 3]), u64::MAX);
+    }
+    #[test]
+    fn available_memory_reads_meminfo_with_fallbacks() {
+        let both = "MemTotal:       16000 kB\nMemFree: 1 kB\nMemAvailable:    8000 kB\n";
+        assert_eq!(available_in(Some(both)), 8000 * 1024);
+        assert_eq!(available_in(Some("MemTotal: 4 kB\n")), 4096);
+        assert_eq!(available_in(Some("garbage")), FALLBACK_MEMORY);
+        assert_eq!(available_in(None), FALLBACK_MEMORY);
+        assert!(default_memory_budget() > 0);
+    }
+    #[test]
+    fn zero_budget_is_refused() {
+        assert!(set_memory_budget(0).is_err());
     }
     #[test]
     fn rejects_absurd_alloc() {

@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::limits::check_alloc;
+use crate::limits::{check_alloc, check_alloc_within, count_of, memory_budget};
 use crate::mesh::{signed_volume6, TetMesh};
 
 /// Offsets of the 8 corners of a cell, corner `c` at `(c & 1, (c >> 1) & 1, (c >> 2) & 1)`.
@@ -102,7 +102,7 @@ pub fn curvilinear_to_tets(
         });
     }
     let cells = dims.map(|d| d - 1);
-    check_alloc("tets", (cells[0] * cells[1] * cells[2]) as u64 * 5, 16)?;
+    check_alloc("the tets", count_of(&cells).saturating_mul(5), TET_BYTES)?;
     let id = |i: usize, j: usize, k: usize| (i + dims[0] * (j + dims[1] * k)) as u32;
     let keep = |i: usize, j: usize, k: usize| {
         blank.is_none_or(|b| {
@@ -116,10 +116,45 @@ pub fn curvilinear_to_tets(
     TetMesh::new(positions, scalars, tets)
 }
 
-/// A regular grid into 5 tets per cell, vertices at the sample positions.
+/// Bytes of a mesh's vertices: a position (12 bytes) and a scalar (4), plus the flag
+/// [`TetMesh::new`] keeps per vertex while it validates.
+const VERTEX_BYTES: u64 = 12 + 4 + 1;
+/// Bytes of one tet: four `u32` vertex indices.
+const TET_BYTES: u64 = 16;
+
+/// Bytes of the mesh [`grid_to_tets`] makes of a grid of `dims` samples (vertices and
+/// 5 tets per cell), `u64::MAX` when the count overflows.
+pub fn grid_mesh_bytes(dims: [usize; 3]) -> u64 {
+    let vertices = count_of(&dims).saturating_mul(VERTEX_BYTES);
+    let tets = count_of(&dims.map(|d| d.saturating_sub(1)))
+        .saturating_mul(5)
+        .saturating_mul(TET_BYTES);
+    vertices.saturating_add(tets)
+}
+
+/// A regular grid into 5 tets per cell, vertices at the sample positions. The mesh is checked
+/// against the process's memory budget before anything is allocated.
 pub fn grid_to_tets(grid: &Grid) -> Result<TetMesh> {
+    grid_to_tets_within(grid, memory_budget())
+}
+
+/// [`grid_to_tets`] with the memory budget given: [`Error::OverBudget`] when the mesh needs
+/// more than `budget` bytes, [`Error::InvalidMesh`] when it has more vertices than `u32`
+/// indices can number.
+pub fn grid_to_tets_within(grid: &Grid, budget: u64) -> Result<TetMesh> {
     let d = grid.dims();
-    check_alloc("tet vertices", grid.len() as u64, 16)?;
+    check_alloc_within(
+        budget,
+        "the tetrahedral mesh of the grid",
+        grid_mesh_bytes(d),
+        1,
+    )?;
+    if grid.len() as u64 > u64::from(u32::MAX - 1) {
+        return Err(Error::InvalidMesh(format!(
+            "a grid of {} samples has more vertices than a mesh can index (2^32-2)",
+            grid.len()
+        )));
+    }
     let mut positions = Vec::with_capacity(grid.len());
     for k in 0..d[2] {
         for j in 0..d[1] {
@@ -160,5 +195,30 @@ mod tests {
         // Conforming: boundary faces are exactly the 2 triangles of each outer cell face.
         let outer_quads = 2 * (3 * 2 + 3 * 4 + 2 * 4);
         assert_eq!(m.boundary_faces().len(), 2 * outer_quads);
+    }
+
+    /// A grid whose mesh exceeds the budget is refused before anything is allocated, with
+    /// the size and the budget in the message.
+    #[test]
+    fn grid_over_budget_is_an_error_not_an_abort() {
+        let g = Grid::new(
+            [8, 8, 8],
+            [1.0; 3],
+            [0.0; 3],
+            Samples::U8(Buffer::owned(vec![0; 512])),
+        )
+        .unwrap();
+        let need = grid_mesh_bytes([8, 8, 8]);
+        assert_eq!(need, 512 * 17 + 343 * 5 * 16);
+        let e = grid_to_tets_within(&g, need - 1).unwrap_err();
+        assert!(
+            matches!(e, Error::OverBudget { bytes, .. } if bytes == need),
+            "{e}"
+        );
+        assert!(e.to_string().starts_with("the tetrahedral mesh of the grid needs 35.3 KiB, over the memory budget of 35.3 KiB"), "{e}");
+        assert!(grid_to_tets_within(&g, need).is_ok());
+        // A 1024^3 grid (what a 1 MB .raw.gz can inflate to) needs about 33 GiB.
+        assert!(grid_mesh_bytes([1024; 3]) > 32 << 30);
+        assert_eq!(grid_mesh_bytes([usize::MAX, 2, 2]), u64::MAX);
     }
 }
