@@ -301,6 +301,83 @@ impl Samples {
     }
 }
 
+/// The largest magnitude a grid coordinate (origin, far corner) or spacing may have: beyond it
+/// the bounds, camera distances and their squares stop being usable numbers.
+pub const MAX_COORDINATE: f64 = 1e30;
+
+/// The smallest spacing accepted: below it, voxel sizes and their cubes lose all precision.
+pub const MIN_SPACING: f64 = 1e-30;
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// A number for a message: plain when moderate, in exponent form when tiny or huge (so 1e308
+/// does not print 309 digits).
+fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Checks spacing and origin, axis by axis: spacing finite and > 0 ([`Error::InvalidSpacing`]),
+/// then spacing a normal number in [[`MIN_SPACING`], [`MAX_COORDINATE`]], origin finite, and
+/// the origin and far corner within ±[`MAX_COORDINATE`] with the spacing not lost beside the
+/// origin ([`Error::InvalidDims`] naming the field and the value).
+fn check_geometry(dims: [usize; 3], spacing: [f64; 3], origin: [f64; 3]) -> Result<()> {
+    if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
+        return Err(Error::InvalidSpacing(spacing));
+    }
+    let fail = |reason: String| Error::InvalidDims {
+        dims: dims.map(|d| d as i64),
+        reason,
+    };
+    for axis in 0..3 {
+        axis_geometry(AXES[axis], dims[axis], spacing[axis], origin[axis]).map_err(fail)?;
+    }
+    Ok(())
+}
+
+/// The checks of [`check_geometry`] on one axis; the reason of a failure.
+fn axis_geometry(
+    axis: &str,
+    dim: usize,
+    spacing: f64,
+    origin: f64,
+) -> std::result::Result<(), String> {
+    let (lo, hi) = (num(MIN_SPACING), num(MAX_COORDINATE));
+    if !spacing.is_normal() || !(MIN_SPACING..=MAX_COORDINATE).contains(&spacing) {
+        return Err(format!(
+            "spacing along {axis} is {}, outside [{lo}, {hi}]",
+            num(spacing)
+        ));
+    }
+    if !origin.is_finite() || origin.abs() > MAX_COORDINATE {
+        return Err(format!(
+            "origin along {axis} is {}, not a finite number within ±{hi}",
+            num(origin)
+        ));
+    }
+    let steps = dim.saturating_sub(1);
+    let far = origin + spacing * steps as f64;
+    if !far.is_finite() || far.abs() > MAX_COORDINATE {
+        return Err(format!(
+            "the far corner along {axis} is at {} (origin {} + spacing {} x {steps} steps), beyond ±{hi}",
+            num(far),
+            num(origin),
+            num(spacing)
+        ));
+    }
+    if origin + spacing == origin {
+        return Err(format!(
+            "spacing along {axis} ({}) is lost beside the origin {} (below the precision of a 64-bit float)",
+            num(spacing),
+            num(origin)
+        ));
+    }
+    Ok(())
+}
+
 /// A regular grid: dims, anisotropic spacing, origin and native-type samples.
 ///
 /// Built only through [`Grid::new`], which validates sizes, computes the value range, and
@@ -325,15 +402,7 @@ impl Grid {
         samples: Samples,
     ) -> Result<Self> {
         let (dims, count) = checked_dims(dims.map(|d| d as i64))?;
-        if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
-            return Err(Error::InvalidSpacing(spacing));
-        }
-        if origin.iter().any(|o| !o.is_finite()) {
-            return Err(Error::InvalidDims {
-                dims: dims.map(|d| d as i64),
-                reason: format!("origin {origin:?} is not finite"),
-            });
-        }
+        check_geometry(dims, spacing, origin)?;
         if samples.len() as u64 != count {
             return Err(Error::SizeMismatch {
                 expected: count,
@@ -501,6 +570,56 @@ mod tests {
     fn bad_spacing_is_error() {
         let s = Samples::U8(Buffer::owned(vec![0; 8]));
         assert!(Grid::new([2, 2, 2], [1.0, 0.0, 1.0], [0.0; 3], s).is_err());
+    }
+
+    /// The message of the error `Grid::new` gives for this geometry on a 2x2x2 grid.
+    fn geometry_error(spacing: [f64; 3], origin: [f64; 3]) -> String {
+        let s = Samples::U8(Buffer::owned(vec![0; 8]));
+        match Grid::new([2, 2, 2], spacing, origin, s) {
+            Ok(_) => panic!("spacing {spacing:?} origin {origin:?} accepted"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn hostile_geometry_is_refused_with_the_field_and_value() {
+        let m = geometry_error([1.0, f64::NAN, 1.0], [0.0; 3]);
+        assert!(m.contains("spacing") && m.contains("NaN"), "{m}");
+        let m = geometry_error([1.0, 1.0, -2.0], [0.0; 3]);
+        assert!(m.contains("spacing") && m.contains("-2"), "{m}");
+        let m = geometry_error([1e308, 1.0, 1.0], [0.0; 3]);
+        assert!(m.contains("spacing along x is 1e308"), "{m}");
+        let m = geometry_error([1.0, 1e-310, 1.0], [0.0; 3]);
+        assert!(m.contains("spacing along y is 1e-310"), "{m}");
+        let m = geometry_error([1.0, 1.0, 1e-31], [0.0; 3]);
+        assert!(m.contains("spacing along z is 1e-31"), "{m}");
+        let m = geometry_error([1.0; 3], [0.0, f64::INFINITY, 0.0]);
+        assert!(m.contains("origin along y is inf"), "{m}");
+        let m = geometry_error([1.0; 3], [-1e31, 0.0, 0.0]);
+        assert!(m.contains("origin along x is -1e31"), "{m}");
+        let m = geometry_error([1.0, 1.0, 6e29], [0.0, 0.0, 5e29]);
+        assert!(m.contains("far corner along z is at 1.1e30"), "{m}");
+        let m = geometry_error([1.0, 1.0, 1.0], [0.0, 1e20, 0.0]);
+        assert!(
+            m.contains("spacing along y (1) is lost beside the origin 1e20"),
+            "{m}"
+        );
+        assert_eq!(m.lines().count(), 1, "{m}");
+    }
+
+    #[test]
+    fn ordinary_geometry_is_kept() {
+        for (spacing, origin) in [
+            ([0.5, 0.75, 2.0], [-120.0, 30.5, 1e6]),
+            ([1e-6; 3], [1e-3; 3]),
+            ([1e29; 3], [-1e29; 3]),
+        ] {
+            let s = Samples::U8(Buffer::owned(vec![0; 8]));
+            let g = Grid::new([2, 2, 2], spacing, origin, s).unwrap();
+            assert_eq!(g.spacing().to_array(), spacing);
+            assert_eq!(g.origin().to_array(), origin);
+            assert!(g.bounds().diagonal().is_finite());
+        }
     }
 
     #[test]
