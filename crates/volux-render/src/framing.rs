@@ -109,9 +109,13 @@ fn opaque_span(tf: &volux_core::TransferFunction) -> Option<[f64; 2]> {
     Some([before, after])
 }
 
-/// The box of the visible macrocells of `g`.
+/// The box of the visible macrocells of `g` (the whole grid's box when its macrocells do not
+/// fit in the memory budget).
 fn grid_box(g: &Grid, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
     let dims = g.dims();
+    if MacrocellGrid::check_within(volux_core::limits::memory_budget(), dims).is_err() {
+        return Some(g.bounds());
+    }
     let cells = volux_core::with_samples!(g.samples(), |s| MacrocellGrid::build(s, dims));
     let counts = cells.counts();
     let (origin, spacing) = (g.origin(), g.spacing());

@@ -26,10 +26,21 @@ impl MacrocellGrid {
     /// Voxel cells per macrocell along each axis.
     pub const BLOCK: usize = 8;
 
+    /// Macrocells per axis for a grid of `dims` samples.
+    pub fn counts_for(dims: [usize; 3]) -> [usize; 3] {
+        dims.map(|d| d.saturating_sub(1).max(1).div_ceil(Self::BLOCK))
+    }
+
+    /// Checks that the min/max grid of a grid of `dims` samples (8 bytes per macrocell) fits
+    /// in `budget` bytes; the error names the macrocells, their size and the budget.
+    pub fn check_within(budget: u64, dims: [usize; 3]) -> Result<u64, volux_core::Error> {
+        let n = volux_core::limits::count_of(&Self::counts_for(dims));
+        volux_core::limits::check_alloc_within(budget, "the macrocell grid", n, 8)
+    }
+
     /// Builds the min/max grid of `values` laid out x fastest with `dims` samples per axis.
     pub fn build<T: Scalar>(values: &[T], dims: [usize; 3]) -> Self {
-        let cells = dims.map(|d| d.saturating_sub(1).max(1));
-        let counts = cells.map(|c| c.div_ceil(Self::BLOCK));
+        let counts = Self::counts_for(dims);
         let n = counts[0] * counts[1] * counts[2];
         let ranges = (0..n)
             .into_par_iter()

@@ -29,12 +29,19 @@ pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<Rendered, Render
 /// classification table with the macrocells' empty flags and the pre-integration table
 /// (rebuilt when the TF, the isovalues or the step change). An interactive session pays for
 /// each once.
+///
+/// Both data structures are optional, and checked against the memory budget
+/// ([`GridRenderer::with_memory_budget`], by default the process's) before they are built:
+/// over it, gradients are taken on the fly and empty space is not skipped, and the image is
+/// the same.
 pub struct GridRenderer<G: Deref<Target = Grid> = Arc<Grid>> {
     grid: G,
-    macrocells: OnceLock<MacrocellGrid>,
+    macrocells: OnceLock<Option<MacrocellGrid>>,
     classification: Mutex<Option<Arc<Classification>>>,
     preintegration: Mutex<Option<Arc<PreintegrationTable>>>,
     gradients: OnceLock<Option<GradientVolume>>,
+    /// Bytes the derived structures may take each.
+    memory_budget: u64,
     /// Whether tiles may take the lane paths; tests turn it off to compare them with the
     /// ray-by-ray paths, which compute the same sums.
     pub(super) lanes: bool,
@@ -49,18 +56,30 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
             classification: Mutex::new(None),
             preintegration: Mutex::new(None),
             gradients: OnceLock::new(),
+            memory_budget: volux_core::limits::memory_budget(),
             lanes: true,
         }
     }
 
-    /// The macrocell min/max grid, built on first use.
-    pub fn macrocells(&self) -> &MacrocellGrid {
-        self.macrocells.get_or_init(|| {
-            volux_core::with_samples!(self.grid.samples(), |s| MacrocellGrid::build(
-                s,
-                self.grid.dims()
-            ))
-        })
+    /// This renderer with a memory budget of `bytes` for each structure it derives (the
+    /// gradient volume, the macrocells) instead of the process's.
+    pub fn with_memory_budget(mut self, bytes: u64) -> Self {
+        self.memory_budget = bytes;
+        self
+    }
+
+    /// The macrocell min/max grid, built on first use (`None` if it does not fit in the
+    /// memory budget: empty space is then not skipped).
+    pub fn macrocells(&self) -> Option<&MacrocellGrid> {
+        self.macrocells
+            .get_or_init(|| {
+                let dims = self.grid.dims();
+                MacrocellGrid::check_within(self.memory_budget, dims).ok()?;
+                Some(volux_core::with_samples!(self.grid.samples(), |s| {
+                    MacrocellGrid::build(s, dims)
+                }))
+            })
+            .as_ref()
     }
 
     /// The pre-integration table for `opts` (`None` for the other integrators), rebuilt only
@@ -92,12 +111,13 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
     }
 
     /// The precomputed gradient volume, built on the first shaded render (`None` if it does
-    /// not fit in memory: gradients are then computed on the fly).
+    /// not fit in the memory budget: gradients are then computed on the fly).
     pub fn gradients(&self) -> Option<&GradientVolume> {
         self.gradients
             .get_or_init(|| {
                 let g = &*self.grid;
-                volux_core::with_samples!(g.samples(), |s| GradientVolume::build(
+                volux_core::with_samples!(g.samples(), |s| GradientVolume::build_within(
+                    self.memory_budget,
                     &Trilinear::new(s, g.dims()),
                     g.spacing().as_vec3(),
                     0
@@ -133,7 +153,10 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
         let g = &*self.grid;
         let built_data = (opts.empty_space_skipping && self.macrocells.get().is_none())
             || (opts.shading.is_some() && self.gradients.get().is_none());
-        let cells = opts.empty_space_skipping.then(|| self.macrocells());
+        let cells = opts
+            .empty_space_skipping
+            .then(|| self.macrocells())
+            .flatten();
         let (classification, classified) = self.classification(opts, cells);
         let (pre, pre_built) = self.preintegration(opts)?;
         let gradients = opts.shading.as_ref().and_then(|_| self.gradients());

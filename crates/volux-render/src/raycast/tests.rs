@@ -4,7 +4,7 @@ use crate::integrate::{AdaptiveParams, Integrator};
 use crate::isosurface::Isosurfaces;
 use crate::raycast::traverse::worth_skipping;
 use crate::sampling::{Reconstruction, Trilinear};
-use crate::shading::BlinnPhong;
+use crate::shading::{BlinnPhong, GradientVolume};
 use glam::DVec3;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -327,6 +327,43 @@ fn cached_gradients_match_on_the_fly_shading() {
     let d = cached.compare(&fly, 0.0).unwrap().max_error;
     assert!(d < 0.01, "{d}");
     assert!(cached.coverage(0.5) > 0.05);
+}
+
+/// Over the memory budget, the gradient volume is not built and gradients are taken on the
+/// fly: the shaded image is the same (up to the volume's quantization), and so is the image
+/// without macrocells when they do not fit either.
+#[test]
+fn gradient_volume_over_budget_falls_back_to_on_the_fly() {
+    let g = volux_core::synth::sphere(33).unwrap();
+    let tf = TransferFunction::from_json(r#"{"color": [[-2,0.9,0.8,0.7],[1,0.9,0.8,0.7]], "extinction": [[-2,0],[-0.05,0],[0,0.5],[1,0.5]]}"#).unwrap();
+    let mut o = RenderOptions::new(Camera::fit(&g.bounds()), tf);
+    (o.width, o.height, o.shading) = (40, 40, Some(BlinnPhong::default()));
+    let full = GridRenderer::new(&g);
+    let with_volume = full.render(&o).unwrap().image;
+    assert!(full.gradients().is_some());
+    let need = GradientVolume::build_bytes(g.dims());
+    let tight = GridRenderer::new(&g).with_memory_budget(need - 1);
+    let on_the_fly = tight.render(&o).unwrap().image;
+    assert!(tight.gradients().is_none() && tight.macrocells().is_some());
+    let d = with_volume.compare(&on_the_fly, 0.0).unwrap().max_error;
+    assert!(d < 0.01, "{d}");
+    assert!(on_the_fly.coverage(0.5) > 0.05);
+    let tiny = GridRenderer::new(&g).with_memory_budget(8);
+    let bare = tiny.render(&o).unwrap().image;
+    assert!(tiny.macrocells().is_none());
+    assert!(on_the_fly.compare(&bare, 0.0).unwrap().max_error < 1e-6);
+    let e = GradientVolume::build_within(
+        need - 1,
+        &Trilinear::new(&g.to_f32_vec().unwrap(), g.dims()),
+        glam::Vec3::ONE,
+        0,
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("the gradient volume needs 421.1 KiB, over the memory budget"),
+        "{e}"
+    );
 }
 
 /// Tricubic filters render the smooth sphere field like trilinear (a smooth field is

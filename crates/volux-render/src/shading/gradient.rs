@@ -83,6 +83,10 @@ pub fn gradient<F: Field>(field: &F, p_voxel: Vec3, spacing: Vec3) -> Vec3 {
     g
 }
 
+/// Bytes per voxel of a gradient volume while it is built: the `[i16; 4]` gradients and the
+/// temporary `f32` copy of the samples.
+const BUILD_BYTES_PER_VOXEL: u64 = 8 + 4;
+
 /// Identifies the data a [`GradientVolume`] was built from: the grid dimensions and a version
 /// number the caller bumps whenever the samples (or the spacing) change.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -125,12 +129,30 @@ pub struct GradientVolume {
 }
 
 impl GradientVolume {
+    /// Bytes a gradient volume of `dims` needs while it is built (its peak): the 8-byte
+    /// gradients and the temporary 4-byte copy of the samples, `u64::MAX` on overflow.
+    pub fn build_bytes(dims: [usize; 3]) -> u64 {
+        volux_core::limits::count_of(&dims).saturating_mul(BUILD_BYTES_PER_VOXEL)
+    }
+
     /// Builds the gradient volume of `field` (dimensions from [`Field::dims`]) placed with
     /// `spacing` (world units per voxel), tagged with the caller's data `version`.
     ///
-    /// Errors on a zero dimension, a non-positive or non-finite spacing, or a size that does
-    /// not fit in memory.
+    /// Errors on a zero dimension, a non-positive or non-finite spacing, or a size over the
+    /// process's memory budget ([`volux_core::limits::memory_budget`]).
     pub fn build<F: Field>(field: &F, spacing: Vec3, version: u64) -> Result<Self, RenderError> {
+        Self::build_within(volux_core::limits::memory_budget(), field, spacing, version)
+    }
+
+    /// [`GradientVolume::build`] within a memory budget of `budget` bytes: over it, the error
+    /// names the gradient volume, its size and the budget (callers then take gradients on the
+    /// fly, which need no memory).
+    pub fn build_within<F: Field>(
+        budget: u64,
+        field: &F,
+        spacing: Vec3,
+        version: u64,
+    ) -> Result<Self, RenderError> {
         let dims = field.dims();
         if dims.contains(&0) {
             return Err(RenderError::InvalidOptions(format!(
@@ -142,12 +164,13 @@ impl GradientVolume {
                 "gradient volume spacing {spacing} must be finite and > 0"
             )));
         }
-        let count = dims
-            .iter()
-            .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64))
-            .unwrap_or(u64::MAX);
-        // The i16 gradients (with their pad) and the temporary f32 copy of the samples.
-        volux_core::limits::check_alloc("gradient volume", count, 12)?;
+        let count = volux_core::limits::count_of(&dims);
+        volux_core::limits::check_alloc_within(
+            budget,
+            "the gradient volume",
+            count,
+            BUILD_BYTES_PER_VOXEL,
+        )?;
         let n = count as usize;
         let [nx, ny, nz] = dims;
         let slice = nx * ny;
