@@ -2,7 +2,9 @@
 //!
 //! Validation follows what the Projected Tetrahedra and tet ray-casting seeds need
 //! (`000_...txt` ch. 3): indices in range, finite positions, positively oriented tets
-//! (inverted ones are re-oriented by swapping two vertices), zero-volume tets counted.
+//! (inverted ones are re-oriented by swapping two vertices), zero-volume tets counted; a mesh
+//! with nothing to render (all vertices coinciding or in one axis plane, all tets degenerate)
+//! is refused, so the error names the mesh rather than a later stage.
 //! Face adjacency (the neighbour across each face) feeds MPVO sorting and cell-to-cell ray
 //! traversal.
 use glam::{DVec3, Vec3};
@@ -10,6 +12,7 @@ use rayon::prelude::*;
 
 use crate::aabb::Aabb;
 use crate::error::{Error, Result};
+use crate::grid::MAX_COORDINATE;
 
 /// Marks a face with no neighbour (a boundary face) in [`TetMesh::face_adjacency`].
 pub const NO_NEIGHBOR: u32 = u32::MAX;
@@ -48,10 +51,51 @@ pub fn signed_volume6(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> f64 {
     (b - a).cross(c - a).dot(d - a)
 }
 
+/// Errors on the first vertex whose position is not finite or beyond ±[`MAX_COORDINATE`].
+fn check_positions(positions: &[Vec3]) -> Result<()> {
+    let bad = |p: &Vec3| !p.is_finite() || f64::from(p.abs().max_element()) > MAX_COORDINATE;
+    match positions.iter().position(bad) {
+        None => Ok(()),
+        Some(i) if !positions[i].is_finite() => Err(Error::InvalidMesh(format!(
+            "vertex {i} has a non-finite position {}",
+            positions[i]
+        ))),
+        Some(i) => Err(Error::InvalidMesh(format!(
+            "vertex {i} at {} is beyond ±{MAX_COORDINATE:e}",
+            positions[i]
+        ))),
+    }
+}
+
+/// The diagonal of the bounding box of `positions` (not empty, finite); errors when every
+/// vertex coincides or the box is flat (zero extent along an axis).
+fn check_extent(positions: &[Vec3]) -> Result<f64> {
+    let b = Aabb::from_points(positions.iter().map(|p| p.as_dvec3()))
+        .ok_or_else(|| Error::InvalidMesh("no vertices".into()))?;
+    let extent = b.max - b.min;
+    if extent == DVec3::ZERO {
+        return Err(Error::InvalidMesh(format!(
+            "all {} vertices coincide at {}",
+            positions.len(),
+            b.min
+        )));
+    }
+    if let Some(axis) = (0..3).find(|&a| extent[a] == 0.0) {
+        return Err(Error::InvalidMesh(format!(
+            "the mesh is flat: every vertex has {} = {}, so every tet has zero volume",
+            ["x", "y", "z"][axis],
+            b.min[axis]
+        )));
+    }
+    Ok(b.diagonal())
+}
+
 impl TetMesh {
     /// Builds and validates a mesh. Errors on an empty mesh, a length mismatch, a non-finite
-    /// position or an out-of-range index; repairs (and reports) inverted tets and non-finite
-    /// scalars.
+    /// or absurdly large position (beyond ±[`MAX_COORDINATE`]), an out-of-range index, a
+    /// degenerate bounding box (all vertices coincide, or all lie in an axis plane) or tets
+    /// that are all degenerate; repairs (and reports) inverted tets and non-finite scalars, and
+    /// counts the degenerate tets of a mesh that has others.
     pub fn new(
         positions: Vec<Vec3>,
         mut scalars: Vec<f32>,
@@ -74,11 +118,7 @@ impl TetMesh {
         if positions.len() > u32::MAX as usize - 1 {
             return Err(Error::InvalidMesh("more than 2^32-2 vertices".into()));
         }
-        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(Error::InvalidMesh(format!(
-                "vertex {i} has a non-finite position"
-            )));
-        }
+        check_positions(&positions)?;
         let n = positions.len() as u32;
         if let Some((t, tet)) = tets
             .iter()
@@ -101,10 +141,7 @@ impl TetMesh {
             *s = lo;
             report.nonfinite_scalars += 1;
         }
-        let scale = Aabb::from_points(positions.iter().map(|p| p.as_dvec3()))
-            .map(|b| b.diagonal())
-            .unwrap_or(1.0)
-            .max(f64::MIN_POSITIVE);
+        let scale = check_extent(&positions)?;
         let eps = 1e-12 * scale.powi(3);
         let (inverted, degenerate) = tets
             .par_iter_mut()
@@ -130,6 +167,11 @@ impl TetMesh {
                 }
             })
             .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        if degenerate == tets.len() {
+            return Err(Error::InvalidMesh(format!(
+                "all {degenerate} tets are degenerate (zero volume or a repeated vertex): nothing to render"
+            )));
+        }
         report.inverted_reoriented = inverted;
         report.degenerate = degenerate;
         let mut used = vec![false; positions.len()];
@@ -352,8 +394,60 @@ mod tests {
         let mut q = p.clone();
         q[0].x = f32::NAN;
         assert!(TetMesh::new(q, vec![0.0; 4], vec![[0, 1, 2, 3]]).is_err());
-        let m = TetMesh::new(p, vec![0.0, f32::NAN, 1.0, 2.0], vec![[0, 1, 2, 3]]).unwrap();
-        assert_eq!(m.report().degenerate, 1);
+    }
+
+    #[test]
+    fn some_degenerate_tets_are_counted_not_refused() {
+        let mut p = unit_tet();
+        p.push(Vec3::new(0.5, 0.5, 0.0));
+        let s = vec![0.0, f32::NAN, 1.0, 2.0, 3.0];
+        // The second tet's four vertices lie in the plane z = 0; the third repeats a vertex.
+        let m = TetMesh::new(p, s, vec![[0, 1, 2, 3], [0, 1, 2, 4], [0, 0, 1, 3]]).unwrap();
+        assert_eq!(m.report().degenerate, 2);
         assert_eq!(m.report().nonfinite_scalars, 1);
+    }
+
+    fn unit_tet() -> Vec<Vec3> {
+        vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]
+    }
+
+    /// The message of the mesh error for these positions and tets (scalars all 0).
+    fn mesh_error(p: Vec<Vec3>, tets: Vec<[u32; 4]>) -> String {
+        let n = p.len();
+        match TetMesh::new(p, vec![0.0; n], tets) {
+            Ok(_) => panic!("a mesh with nothing to render was accepted"),
+            Err(e) => {
+                assert!(matches!(e, Error::InvalidMesh(_)), "{e}");
+                e.to_string()
+            }
+        }
+    }
+
+    #[test]
+    fn meshes_with_nothing_to_render_are_refused() {
+        let m = mesh_error(vec![Vec3::splat(2.5); 4], vec![[0, 1, 2, 3]]);
+        assert!(
+            m.contains("all 4 vertices coincide at [2.5, 2.5, 2.5]"),
+            "{m}"
+        );
+        let mut flat = unit_tet();
+        flat[3] = Vec3::new(0.3, 0.3, 0.0);
+        let m = mesh_error(flat, vec![[0, 1, 2, 3]]);
+        assert!(m.contains("flat") && m.contains("z = 0"), "{m}");
+        // Coplanar in a slanted plane x + y + z = 1: every tet has zero volume.
+        let slanted = vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::new(0.5, 0.25, 0.25)];
+        let m = mesh_error(slanted, vec![[0, 1, 2, 3], [3, 2, 1, 0]]);
+        assert!(m.contains("all 2 tets are degenerate"), "{m}");
+        let m = mesh_error(unit_tet(), vec![[0, 1, 1, 3]]);
+        assert!(m.contains("all 1 tets are degenerate"), "{m}");
+        let mut huge = unit_tet();
+        huge[2].y = 3e38;
+        let m = mesh_error(huge, vec![[0, 1, 2, 3]]);
+        assert!(m.contains("vertex 2") && m.contains("beyond"), "{m}");
+        let mut inf = unit_tet();
+        inf[1].z = f32::INFINITY;
+        let m = mesh_error(inf, vec![[0, 1, 2, 3]]);
+        assert!(m.contains("vertex 1 has a non-finite position"), "{m}");
+        assert_eq!(m.lines().count(), 1);
     }
 }
