@@ -14,6 +14,7 @@
 
 pub mod data;
 pub mod images;
+pub mod mutate;
 pub mod reference;
 pub mod rng;
 pub mod tf;
