@@ -47,7 +47,7 @@ pub fn create_renderer(volume: &Volume, method: &Method) -> Result<Box<dyn Rende
     Ok(match (method, volume) {
         (Method::GridRaycast(_), Volume::Grid(g)) => Box::new(GridRenderer::new(g.clone())),
         (Method::ProjectedTetrahedra(_), Volume::Mesh(m)) => Box::new(PtRenderer::new(m.clone())),
-        (Method::TetRaycast(_), Volume::Mesh(m)) => Box::new(TetRayCaster::new(m.clone())),
+        (Method::TetRaycast(_), Volume::Mesh(m)) => Box::new(TetRayCaster::new(m.clone())?),
         (Method::Resample { .. }, Volume::Mesh(m)) => Box::new(ResampleRenderer::new(m.clone())),
         (Method::MeshReference, Volume::Mesh(m)) => Box::new(MeshReference::new(m.clone())),
         (m, v) => {

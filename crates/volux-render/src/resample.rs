@@ -10,7 +10,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::DVec3;
-use volux_core::limits::check_alloc;
+use volux_core::limits::{check_alloc, count_of};
 use volux_core::TetMesh;
 
 use crate::error::RenderError;
@@ -36,9 +36,8 @@ pub fn resample_mesh(mesh: &TetMesh, max_dim: usize) -> Result<Resampled, volux_
     let ext = (b.max - b.min).max(DVec3::splat(1e-12));
     let h = ext.max_element() / (max_dim.max(2) - 1) as f64;
     let dims = [0, 1, 2].map(|a| ((ext[a] / h).ceil() as usize + 1).max(2));
-    let n = dims[0] * dims[1] * dims[2];
-    check_alloc("resampled mesh", n as u64, 4)?;
-    let mut values = vec![f32::NAN; n];
+    let bytes = check_alloc("the resampled grid", count_of(&dims), 4)?;
+    let mut values = vec![f32::NAN; (bytes / 4) as usize];
     let pos = mesh.positions();
     let sc = mesh.scalars();
     for tet in mesh.tets() {
@@ -115,7 +114,11 @@ impl Renderer for ResampleRenderer {
         if built {
             self.resampled = Some((samples, resample_mesh(&self.mesh, samples)?));
         }
-        let (_, r) = self.resampled.as_ref().expect("resampled above");
+        let Some((_, r)) = self.resampled.as_ref() else {
+            return Err(RenderError::InvalidOptions(
+                "the resampled grid is missing".into(),
+            ));
+        };
         let field = Trilinear::new(&r.values, r.place.dims);
         let opts = RenderOptions::from_scene(scene, &raycast, control);
         let mut out = render_field(&field, r.place, self.mesh.range(), &opts)?;

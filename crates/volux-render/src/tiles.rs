@@ -175,6 +175,15 @@ pub struct Tiled<P, S> {
     pub per_tile: Vec<S>,
 }
 
+/// Checks that a `width x height` image fits in the memory budget before it is rendered: the
+/// tiles' pixels and the assembled ones (`P` each), and the RGBA `f32` image made of them.
+pub fn check_image_memory<P>(width: usize, height: usize) -> Result<(), RenderError> {
+    let per_pixel = 2 * std::mem::size_of::<P>() as u64 + 16;
+    let pixels = volux_core::limits::count_of(&[width, height]);
+    volux_core::limits::check_alloc("the image", pixels, per_pixel)?;
+    Ok(())
+}
+
 /// Renders the tiles of `grid` in parallel: `tile(i, rect)` returns the pixels of tile `i`
 /// (row-major within `rect`) and a value of its own (e.g. counters). Checks `control` for
 /// cancellation before each tile and reports progress after each; returns
@@ -189,6 +198,7 @@ where
     S: Send,
     F: Fn(usize, Rect) -> (Vec<P>, S) + Sync,
 {
+    check_image_memory::<P>(grid.width, grid.height)?;
     let done = AtomicUsize::new(0);
     let total = grid.count();
     let results: Vec<(Vec<P>, S)> = (0..total)

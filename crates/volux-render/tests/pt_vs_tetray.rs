@@ -32,7 +32,7 @@ fn agree(mesh: &TetMesh, azimuth: f64, elevation: f64, orthographic: bool) {
     let mut rc = TetRayOptions::new(camera, tf());
     (rc.width, rc.height) = (96, 80);
     (rc.color, rc.early_termination) = (SegmentRule::Exact, None);
-    let b = TetRayCaster::new(mesh).render(&rc).unwrap();
+    let b = TetRayCaster::new(mesh).unwrap().render(&rc).unwrap();
     assert_eq!(b.stats.abandoned, 0);
     assert!(a.image.coverage(0.01) > 0.1, "something is drawn");
     let ImageDiff {

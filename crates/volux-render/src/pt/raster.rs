@@ -20,6 +20,7 @@
 //! floor and ceiling divisions; the pixels of the span are then walked with incremental
 //! `E`s. Barycentric coordinates are `E / area`.
 use super::project::{ViewProjection, SUBPIXEL};
+use crate::error::RenderError;
 use crate::tiles::{Rect, TileGrid};
 
 /// Tile edge in pixels of the projection renderer: a tile's bin of tetrahedra is read once
@@ -68,8 +69,14 @@ impl Bins {
 
 /// Bins the tetrahedra of `order` (ids into `tets`) into `tiles`, keeping the order within
 /// every tile (a two-pass counting sort). Tetrahedra whose vertices could not be projected or
-/// whose box covers no pixel centre are left out.
-pub fn bin(order: &[u32], tets: &[[u32; 4]], proj: &ViewProjection, tiles: &TileGrid) -> Bins {
+/// whose box covers no pixel centre are left out. Errors, before the bins are allocated, when
+/// they would exceed the memory budget or hold more entries than `u32` offsets can count.
+pub fn bin(
+    order: &[u32],
+    tets: &[[u32; 4]],
+    proj: &ViewProjection,
+    tiles: &TileGrid,
+) -> Result<Bins, RenderError> {
     use rayon::prelude::*;
     let n = tiles.count();
     // Every tetrahedron's tile range, once and in parallel (the random reads of the vertices
@@ -89,6 +96,7 @@ pub fn bin(order: &[u32], tets: &[[u32; 4]], proj: &ViewProjection, tiles: &Tile
             }
         })
         .collect();
+    check_bins(&ranges)?;
     let mut counts = vec![0u32; n + 1];
     for &[x0, y0, x1, y1] in &ranges {
         for ty in usize::from(y0)..=usize::from(y1) {
@@ -111,10 +119,34 @@ pub fn bin(order: &[u32], tets: &[[u32; 4]], proj: &ViewProjection, tiles: &Tile
             }
         }
     }
-    Bins {
+    Ok(Bins {
         offsets: counts,
         items,
+    })
+}
+
+/// Checks the number of bin entries the tile `ranges` make (one per tile a tetrahedron
+/// overlaps) against the memory budget (4 bytes each) and the `u32` offsets.
+fn check_bins(ranges: &[[u16; 4]]) -> Result<(), RenderError> {
+    let entries: u64 = ranges
+        .iter()
+        .map(|&[x0, y0, x1, y1]| {
+            let w = u64::from(x1)
+                .saturating_add(1)
+                .saturating_sub(u64::from(x0));
+            let h = u64::from(y1)
+                .saturating_add(1)
+                .saturating_sub(u64::from(y0));
+            w * h
+        })
+        .fold(0, u64::saturating_add);
+    volux_core::limits::check_alloc("PT's tile bins", entries, 4)?;
+    if entries > u64::from(u32::MAX) {
+        return Err(RenderError::InvalidOptions(format!(
+            "PT's tile bins would hold {entries} entries, more than 2^32: render a smaller image"
+        )));
     }
+    Ok(())
 }
 
 /// A screen position in fixed point (`SUBPIXEL` units).

@@ -148,6 +148,23 @@ struct ViewData {
     order_bytes: usize,
 }
 
+/// Bytes per tetrahedron of PT's per-frame buffers, at their peak: the fate of each cell
+/// (8), the drawn ids and depths (8), the sorted order and its keys (16), the face adjacency
+/// (16) and the visibility sort's work lists (16).
+const FRAME_BYTES_PER_TET: u64 = 64;
+
+/// Checks PT's per-frame buffers for `mesh` (the projected vertices and the per-cell lists
+/// of [`FRAME_BYTES_PER_TET`]) against the memory budget, before they are allocated.
+fn check_frame_memory(mesh: &TetMesh) -> Result<(), RenderError> {
+    let vertices =
+        (mesh.positions().len() as u64).saturating_mul(ViewProjection::BYTES_PER_VERTEX as u64);
+    let bytes = (mesh.tets().len() as u64)
+        .saturating_mul(FRAME_BYTES_PER_TET)
+        .saturating_add(vertices);
+    volux_core::limits::check_alloc("PT's per-frame buffers", bytes, 1)?;
+    Ok(())
+}
+
 /// A PT renderer for one mesh, holding the caches of the update step.
 pub struct PtRenderer<M: Deref<Target = TetMesh> = Arc<TetMesh>> {
     mesh: M,
@@ -314,6 +331,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         }
         let mesh = &*self.mesh;
         let kept = &self.kept.as_ref().expect("kept set").mask;
+        check_frame_memory(mesh)?;
         let t = Instant::now();
         let proj = ViewProjection::new(mesh, &opts.camera, opts.width, opts.height);
         let view_dir = sort::View::from_camera(&opts.camera);
@@ -430,7 +448,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         opts.control.check()?;
         let t = Instant::now();
         let tiles = tiles(opts.width, opts.height);
-        let bins = bin(&order, mesh.tets(), &proj, &tiles);
+        let bins = bin(&order, mesh.tets(), &proj, &tiles)?;
         stats.bin_s = t.elapsed().as_secs_f64();
         self.spare_view = self.view.take();
         self.view = Some(ViewData {

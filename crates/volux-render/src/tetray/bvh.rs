@@ -141,6 +141,13 @@ impl Bvh {
         Self { nodes, prims }
     }
 
+    /// Peak bytes per cell while [`Bvh::build`] builds: the cell list, its padded box, the
+    /// (cell, box) pairs and the nodes (at most two per leaf).
+    pub fn build_bytes_per_cell() -> u64 {
+        let node = std::mem::size_of::<Node>();
+        (4 + std::mem::size_of::<(DVec3, DVec3)>() + 8 + (2 * node).div_ceil(LEAF)) as u64
+    }
+
     /// Number of primitives.
     pub fn len(&self) -> usize {
         self.prims.len()

@@ -215,6 +215,14 @@ impl Geometry {
         g[0] * p.x + g[1] * p.y + g[2] * p.z + g[3]
     }
 
+    /// Peak bytes per tet while [`Geometry::new`] builds: the four sorted face keys, the
+    /// face table, the adjacency, the cell field and up to two face planes.
+    pub fn build_bytes_per_tet() -> u64 {
+        let keys = 4 * std::mem::size_of::<([u32; 3], u32)>();
+        let planes = 2 * std::mem::size_of::<FacePlane>();
+        (keys + 16 + 16 + 32 + planes) as u64
+    }
+
     /// Bytes of these structures.
     pub fn bytes(&self) -> usize {
         self.faces.len() * std::mem::size_of::<FacePlane>()

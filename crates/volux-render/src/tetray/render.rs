@@ -97,10 +97,26 @@ fn tet_box(mesh: &TetMesh, t: u32) -> (DVec3, DVec3) {
     (lo, hi)
 }
 
+/// Peak bytes of the structures [`TetRayCaster::new`] builds for a mesh of `tets` cells and
+/// `vertices` vertices: the face planes with their build keys, adjacency and cell fields,
+/// the boundary hierarchy (every cell counted) and a flag per vertex.
+pub fn structure_bytes(tets: usize, vertices: usize) -> u64 {
+    let per_tet = Geometry::build_bytes_per_tet() + Bvh::build_bytes_per_cell();
+    (tets as u64)
+        .saturating_mul(per_tet)
+        .saturating_add(vertices as u64)
+}
+
 impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
-    /// Builds the structures of `mesh` (`O(n log n)`).
-    pub fn new(mesh: M) -> Self {
+    /// Builds the structures of `mesh` (`O(n log n)`), after checking that they fit in the
+    /// process's memory budget (the error names them, their size and the budget).
+    pub fn new(mesh: M) -> Result<Self, RenderError> {
         let m = &*mesh;
+        volux_core::limits::check_alloc(
+            "the tet ray caster's acceleration structures",
+            structure_bytes(m.tets().len(), m.positions().len()),
+            1,
+        )?;
         let geo = Geometry::new(m);
         let pad = 1e-7 * geo.scale;
         // Cells owning a boundary face, and every cell with a vertex on the boundary: a ray
@@ -125,7 +141,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             })
             .collect();
         let boundary = Bvh::build(owners, |t| tet_box(m, t), pad);
-        Self {
+        Ok(Self {
             mesh,
             geo,
             boundary,
@@ -135,7 +151,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             tables: Mutex::new(None),
             start: Mutex::new(None),
             first: AtomicBool::new(true),
-        }
+        })
     }
 
     /// The mesh's vertex gradients ([`TetMesh::vertex_gradients`]), computed on first use.

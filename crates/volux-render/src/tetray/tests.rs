@@ -83,7 +83,7 @@ fn orbit(proj: &str, az: f64, el: f64, zoom: f64) -> CameraSpec {
 #[test]
 fn convex_mesh_matches_the_reference_from_several_cameras() {
     let mesh = synth::smooth_tets(3000).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let b = mesh.bounds();
     let cameras = [
         orbit("perspective", 35.0, 20.0, 1.0).resolve(&b).unwrap(),
@@ -111,7 +111,7 @@ fn convex_mesh_matches_the_reference_from_several_cameras() {
 #[test]
 fn orthographic_camera_inside_the_mesh_matches_the_reference() {
     let mesh = synth::smooth_tets(3000).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let cam = Camera {
         eye: DVec3::new(0.5, 0.4, 0.5),
         target: DVec3::new(0.6, 1.0, 0.7),
@@ -125,7 +125,7 @@ fn orthographic_camera_inside_the_mesh_matches_the_reference() {
 #[test]
 fn walked_segments_equal_the_reference_segments() {
     let mesh = synth::smooth_tets(3000).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let cam = orbit("perspective", 20.0, 30.0, 1.0)
         .resolve(&mesh.bounds())
         .unwrap();
@@ -154,7 +154,7 @@ fn walked_segments_equal_the_reference_segments() {
 #[test]
 fn non_convex_torus_matches_the_reference_with_reentries() {
     let mesh = synth::torus_tets(24).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let b = mesh.bounds();
     let cams = [
         orbit("perspective", 10.0, 25.0, 1.0).resolve(&b).unwrap(),
@@ -199,7 +199,7 @@ fn lattice(n: usize) -> TetMesh {
 #[test]
 fn rays_through_lattice_vertices_and_edges_are_walked_exactly() {
     let mesh = lattice(5); // [0, 1]^3, cells 0.25
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     // 16 x 16 orthographic pixels of 1/16 with the eye shifted by half a pixel: pixel rays
     // run along x, z in {1/16, ..., 1}, every fourth exactly on lattice planes, so rays go
     // through vertices, along edges and in (diagonal) faces.
@@ -338,7 +338,7 @@ fn mesh_with_gaps_matches_the_reference() {
         .collect();
     assert!(keep.len() < full.tets().len() * 9 / 10);
     let mesh = TetMesh::new(pos, full.scalars().to_vec(), keep).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let b = mesh.bounds();
     for (i, cam) in [
         orbit("perspective", 80.0, 10.0, 1.0).resolve(&b).unwrap(),
@@ -357,7 +357,7 @@ fn mesh_with_gaps_matches_the_reference() {
 #[test]
 fn psi_colour_is_close_to_exact() {
     let mesh = synth::smooth_tets(3000).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let cam = orbit("perspective", 35.0, 20.0, 1.0)
         .resolve(&mesh.bounds())
         .unwrap();
@@ -385,7 +385,7 @@ fn psi_colour_is_close_to_exact() {
 #[test]
 fn early_termination_stops_rays_within_the_threshold() {
     let mesh = synth::smooth_tets(3000).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let cam = orbit("perspective", 35.0, 20.0, 1.0)
         .resolve(&mesh.bounds())
         .unwrap();
@@ -411,7 +411,7 @@ fn early_termination_stops_rays_within_the_threshold() {
 #[test]
 fn renders_are_deterministic_and_options_are_checked() {
     let mesh = synth::torus_tets(16).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let cam = orbit("perspective", 30.0, 40.0, 1.0)
         .resolve(&mesh.bounds())
         .unwrap();
@@ -475,7 +475,7 @@ fn adaptive_simpson_matches_the_exact_colour_within_the_tolerance() {
         ("smooth", synth::smooth_tets(3000).unwrap()),
         ("torus", synth::torus_tets(24).unwrap()),
     ] {
-        let caster = TetRayCaster::new(&mesh);
+        let caster = TetRayCaster::new(&mesh).unwrap();
         let cam = orbit("perspective", 35.0, 20.0, 1.0)
             .resolve(&mesh.bounds())
             .unwrap();
@@ -523,7 +523,7 @@ fn adaptive_simpson_matches_the_exact_colour_within_the_tolerance() {
 #[test]
 fn adaptive_simpson_converges_and_respects_early_termination() {
     let mesh = synth::smooth_tets(3000).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let cam = orbit("orthographic", -60.0, 45.0, 1.3)
         .resolve(&mesh.bounds())
         .unwrap();
@@ -597,7 +597,7 @@ fn opaque_isosurface_shows_its_lit_colour() {
     // Field s = z / 3 seen from above (orthographic, headlight): the isosurface z = 1.5 faces
     // the viewer, so its lit colour is rgb (ambient + diffuse) + specular exactly.
     let mesh = z_ramp(4);
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let cam = Camera {
         eye: DVec3::new(1.5, 1.5, 10.0),
         target: DVec3::new(1.5, 1.5, 1.5),
@@ -641,7 +641,7 @@ fn opaque_isosurface_shows_its_lit_colour() {
 fn isosurfaces_agree_with_projected_tetrahedra() {
     use crate::pt::{PtOptions, PtRenderer, SortMode};
     let mesh = synth::smooth_tets(3000).unwrap();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let [lo, hi] = mesh.range();
     let at = |f: f64| (lo + f * (hi - lo)) as f32;
     let iso = Isosurfaces::new(vec![
@@ -712,7 +712,7 @@ fn mip_shows_the_colour_of_the_largest_scalar() {
         ("smooth", synth::smooth_tets(3000).unwrap()),
         ("torus", synth::torus_tets(24).unwrap()),
     ] {
-        let caster = TetRayCaster::new(&mesh);
+        let caster = TetRayCaster::new(&mesh).unwrap();
         let b = mesh.bounds();
         for cam in [
             orbit("perspective", 35.0, 20.0, 1.0).resolve(&b).unwrap(),
@@ -770,7 +770,7 @@ fn timing_512_smooth_200k() {
     let mesh = synth::smooth_tets(n).unwrap();
     let gen = t.elapsed().as_secs_f64();
     let t = std::time::Instant::now();
-    let caster = TetRayCaster::new(&mesh);
+    let caster = TetRayCaster::new(&mesh).unwrap();
     let build = t.elapsed().as_secs_f64();
     let cam = orbit("perspective", 35.0, 20.0, 1.0)
         .resolve(&mesh.bounds())
