@@ -377,14 +377,64 @@ fn malformed_files() {
     fails("vox_offset_past_end", &bytes, |k| header(k) || truncated(k));
 }
 
+/// A `bitpix` that disagrees with the datatype is refused, naming both.
 #[test]
-fn bitpix_mismatch_is_noted() {
+fn bitpix_mismatch_is_an_error() {
+    for (code, bitpix) in [(2, 16), (16, 8), (64, 32), (4, 0), (512, -16)] {
+        let spec = Spec::new(true, [2, 1, 1], code, bitpix);
+        let data = vec![0u8; 16];
+        let name = format!("bitpix_{code}_{bitpix}");
+        fails(&name, &spec.file(&data), |k| {
+            let m = k.to_string();
+            matches!(k, ErrorKind::Header(_))
+                && m.contains(&format!("bitpix {bitpix}"))
+                && m.contains(&format!("datatype {code}"))
+                && m.lines().count() == 1
+        });
+    }
+}
+
+/// Data longer than the dims declare is read up to the declared size, with a note giving the
+/// surplus (plain files), or saying there is more (gzip); a matching file has no such note.
+#[test]
+fn data_longer_than_dims_is_noted() {
     let dir = tempfile::tempdir().unwrap();
-    let spec = Spec::new(true, [2, 1, 1], 2, 16);
-    let p = write(dir.path(), "b.nii", &spec.file(&[1, 2]));
-    let g = nifti::read(&p).unwrap();
-    assert_eq!(values(g.samples()), vec![1.0, 2.0]);
-    assert!(g.notes().iter().any(|n| n.contains("bitpix")));
+    let spec = Spec::new(true, [2, 2, 1], 2, 8);
+    let surplus = |p: &Path| {
+        let g = nifti::read(p).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(values(g.samples()), vec![1.0, 2.0, 3.0, 4.0]);
+        g.notes()
+            .iter()
+            .find(|n| n.contains("dims 2x2x1 of uint8 declare"))
+            .cloned()
+    };
+    let exact = write(dir.path(), "exact.nii", &spec.file(&[1, 2, 3, 4]));
+    assert_eq!(surplus(&exact), None);
+    let exact_gz = write(dir.path(), "exact.nii.gz", &spec.file(&[1, 2, 3, 4]));
+    assert_eq!(surplus(&exact_gz), None);
+    let long = spec.file(&[1, 2, 3, 4, 5, 6, 7]);
+    let n = surplus(&write(dir.path(), "long.nii", &long)).unwrap();
+    assert!(n.contains("holds 3 bytes more than the 4"), "{n}");
+    let n = surplus(&write(dir.path(), "long.nii.gz", &long)).unwrap();
+    assert!(n.contains("continues past the 4 bytes"), "{n}");
+    // A time series declared as one volume: the unused dim is named.
+    let mut series = spec.clone();
+    series.dim[4] = 2;
+    let n = surplus(&write(
+        dir.path(),
+        "t.nii",
+        &series.file(&[1, 2, 3, 4, 1, 2, 3, 4]),
+    ))
+    .unwrap();
+    assert!(n.contains("dim[0] is 3 but dim[4] is 2"), "{n}");
+    // The same checks for a .hdr + .img pair.
+    let mut pair = spec.clone();
+    pair.magic = *b"ni1\0";
+    pair.vox_offset = 0.0;
+    let hdr = write(dir.path(), "pair.hdr", &pair.header());
+    write(dir.path(), "pair.img", &[1, 2, 3, 4, 9, 9]);
+    let n = surplus(&hdr).unwrap();
+    assert!(n.contains("holds 2 bytes more"), "{n}");
 }
 
 /// The shared VTK head MR (raw + JSON sidecar) written as `.nii.gz` reads back identically.

@@ -84,11 +84,14 @@ fn unsupported_dtype_name(code: i16) -> &'static str {
 pub(super) struct Header {
     /// Little-endian file (from the `sizeof_hdr` check).
     pub le: bool,
+    /// `dim[0]`, the number of dimensions (1 to 7).
+    pub dim0: i16,
     /// `dim[1..=3]` folded to three dims (`dim[0]` 2 gives z = 1).
     pub dims: [i64; 3],
     pub dtype: Dtype,
-    /// `bitpix`, checked against the datatype by the caller.
-    pub bitpix: i16,
+    /// The first `dim[i]` past `dim[0]` that is above 1, as `(i, dim[i])`: the data may hold
+    /// more than the dims declare (a time series written with `dim[0]` 3, say).
+    pub unused_dim: Option<(usize, i16)>,
     /// `pixdim[1..=3]`.
     pub pixdim: [f32; 3],
     pub vox_offset: f32,
@@ -146,24 +149,17 @@ pub(super) fn parse(path: &Path, raw: &[u8]) -> Result<Header> {
     let le = byte_order(path, b)?;
     let f = Fields { b, le };
     let single_file = check_magic(path, &f.bytes::<4>(344))?;
-    let dims = fold_dims(path, &std::array::from_fn(|i| f.i16(40 + 2 * i)))?;
-    let code = f.i16(70);
-    let dtype = Dtype::from_code(code).ok_or_else(|| {
-        ReadError::new(
-            path,
-            ErrorKind::Unsupported(format!(
-                "NIfTI datatype code {code} ({}); Volux reads uint8, int8, int16, uint16, int32, \
-                 uint32, float32 and float64",
-                unsupported_dtype_name(code)
-            )),
-        )
-    })?;
+    let dim: [i16; 8] = std::array::from_fn(|i| f.i16(40 + 2 * i));
+    let dims = fold_dims(path, &dim)?;
+    let dtype = datatype(path, f.i16(70))?;
+    check_bitpix(path, dtype, f.i16(70), f.i16(72))?;
     let pix: [f32; 8] = f.f32s(76);
     Ok(Header {
         le,
+        dim0: dim[0],
         dims,
         dtype,
-        bitpix: f.i16(72),
+        unused_dim: unused_dim(&dim),
         pixdim: [pix[1], pix[2], pix[3]],
         vox_offset: f.f32(108),
         scl_slope: f.f32(112),
@@ -174,6 +170,42 @@ pub(super) fn parse(path: &Path, raw: &[u8]) -> Result<Header> {
         srow: [f.f32s(280), f.f32s(296), f.f32s(312)],
         single_file,
     })
+}
+
+/// The datatype of `code`; [`ErrorKind::Unsupported`] naming the codes Volux does not read.
+fn datatype(path: &Path, code: i16) -> Result<Dtype> {
+    Dtype::from_code(code).ok_or_else(|| {
+        ReadError::new(
+            path,
+            ErrorKind::Unsupported(format!(
+                "NIfTI datatype code {code} ({}); Volux reads uint8, int8, int16, uint16, int32, \
+                 uint32, float32 and float64",
+                unsupported_dtype_name(code)
+            )),
+        )
+    })
+}
+
+/// `bitpix` must be the bits of one value of the datatype: a header that disagrees with itself
+/// is refused rather than trusting either field.
+fn check_bitpix(path: &Path, dtype: Dtype, code: i16, bitpix: i16) -> Result<()> {
+    let want = dtype.size() * 8;
+    if i64::from(bitpix) == want as i64 {
+        return Ok(());
+    }
+    Err(header_err(
+        path,
+        format!(
+            "bitpix {bitpix} disagrees with datatype {code} ({}, {want} bits per value)",
+            dtype.name()
+        ),
+    ))
+}
+
+/// The first `dim[i]`, `i` past `dim[0]` (valid: 1 to 7), that is above 1.
+fn unused_dim(dim: &[i16; 8]) -> Option<(usize, i16)> {
+    let n = usize::try_from(dim[0]).ok()?;
+    (n + 1..8).map(|i| (i, dim[i])).find(|&(_, d)| d > 1)
 }
 
 /// The byte order: `sizeof_hdr` is 348 in the file's order.

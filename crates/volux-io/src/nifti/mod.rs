@@ -20,7 +20,10 @@
 //!   `qform_code > 0`, else 0. Rotations, shears and flips in the sform / qform are not applied
 //!   (the grid stays in voxel index order; noted).
 //! - The data starts at `vox_offset` (at least 352 in a `.nii`). Sizes are checked before any
-//!   allocation: a file shorter than the dims need is [`ErrorKind::Truncated`].
+//!   allocation: a file shorter than the dims need is [`ErrorKind::Truncated`]; data longer
+//!   than the dims declare is read up to the declared size, with a note (for gzip, one byte
+//!   past the data is probed, so the check costs nothing).
+//! - `bitpix` must match the datatype; a header whose two fields disagree is refused.
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
@@ -43,38 +46,82 @@ pub fn read(path: &Path) -> Result<Grid> {
     let mut notes = Vec::new();
     let (dims, count) =
         volux_core::limits::checked_dims(hdr.dims).map_err(|e| ReadError::new(path, e))?;
-    check_bitpix(&hdr, &mut notes);
     let (data_path, offset) = data_location(path, &hdr, &mut notes)?;
     let bytes = count
         .checked_mul(hdr.dtype.size() as u64)
         .ok_or_else(|| header_err(path, "the data size overflows"))?;
     let scaling = values::scaling(&hdr, &mut notes);
-    let samples = match (scaling, mappable(&hdr)) {
-        (None, Some(ty)) if !is_gzip(&data_path)? => map(&data_path, ty, offset, bytes, count)?,
-        _ => None,
+    let span = Span {
+        offset,
+        bytes,
+        count,
     };
-    let samples = match samples {
-        Some(s) => s,
-        None => {
-            let data = read_data(&data_path, offset, bytes)?;
-            values::decode(&data_path, &hdr, &data, scaling, &mut notes)?
-        }
-    };
+    let (samples, surplus) = load_samples(&data_path, &hdr, span, scaling, &mut notes)?;
+    notes.extend(surplus_note(&hdr, dims, bytes, surplus));
     let spacing = spacing(&hdr, &mut notes);
     let origin = origin(&hdr, &mut notes);
     let grid = Grid::new(dims, spacing, origin, samples).map_err(|e| ReadError::new(path, e))?;
     Ok(notes.into_iter().fold(grid, Grid::with_note))
 }
 
-/// Notes a `bitpix` that disagrees with the datatype (the datatype wins).
-fn check_bitpix(hdr: &Header, notes: &mut Vec<String>) {
-    let want = hdr.dtype.size() * 8;
-    if i64::from(hdr.bitpix) != want as i64 {
-        notes.push(format!(
-            "bitpix {} disagrees with datatype {} ({want} bits); the datatype was used",
-            hdr.bitpix,
-            hdr.dtype.name()
-        ));
+/// Where the voxels lie in the (decompressed) data file: `bytes` bytes holding `count` values
+/// from byte `offset`.
+#[derive(Clone, Copy, Debug)]
+struct Span {
+    offset: u64,
+    bytes: u64,
+    count: u64,
+}
+
+/// What the data file holds past the voxels the dims declare.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Surplus {
+    /// Nothing: the dims explain the data.
+    None,
+    /// This many bytes (an uncompressed file).
+    Bytes(u64),
+    /// Some bytes (a gzip stream, not decompressed further).
+    Some,
+}
+
+/// The voxels of `path` (memory-mapped when possible) and what the file holds after them.
+fn load_samples(
+    path: &Path,
+    hdr: &Header,
+    span: Span,
+    scaling: Option<(f64, f64)>,
+    notes: &mut Vec<String>,
+) -> Result<(Samples, Surplus)> {
+    if is_gzip(path)? {
+        let (data, surplus) = read_gz(path, span, notes)?;
+        return Ok((values::decode(path, hdr, &data, scaling, notes)?, surplus));
+    }
+    let surplus = check_length(path, span.offset, span.bytes)?;
+    if let (None, Some(ty)) = (scaling, mappable(hdr)) {
+        if let Some(samples) = map(path, ty, span)? {
+            return Ok((samples, surplus));
+        }
+    }
+    let data = read_plain(path, span.offset, span.bytes)?;
+    Ok((values::decode(path, hdr, &data, scaling, notes)?, surplus))
+}
+
+/// A note when the data holds more than the dims declare (the extra is not read).
+fn surplus_note(hdr: &Header, dims: [usize; 3], bytes: u64, surplus: Surplus) -> Option<String> {
+    let [x, y, z] = dims;
+    let declared = format!("dims {x}x{y}x{z} of {} declare", hdr.dtype.name());
+    let hint = match hdr.unused_dim {
+        Some((i, d)) => format!(" (dim[0] is {} but dim[{i}] is {d})", hdr.dim0),
+        None => String::new(),
+    };
+    match surplus {
+        Surplus::None => None,
+        Surplus::Bytes(n) => Some(format!(
+            "the data holds {n} bytes more than the {bytes} that {declared}{hint}; they were ignored"
+        )),
+        Surplus::Some => Some(format!(
+            "the data continues past the {bytes} bytes that {declared}{hint}; the rest was ignored"
+        )),
     }
 }
 
@@ -144,17 +191,12 @@ fn mappable(hdr: &Header) -> Option<ScalarType> {
     values::native_type(hdr.dtype)
 }
 
-/// Memory-maps `count` values of `ty` at `offset`; `None` when mapping is not possible.
-fn map(
-    path: &Path,
-    ty: ScalarType,
-    offset: u64,
-    bytes: u64,
-    count: u64,
-) -> Result<Option<Samples>> {
-    check_length(path, offset, bytes)?;
-    let n = usize::try_from(count).map_err(|_| header_err(path, "the voxel count is too large"))?;
+/// Memory-maps the values of `span` as `ty`; `None` when mapping is not possible.
+fn map(path: &Path, ty: ScalarType, span: Span) -> Result<Option<Samples>> {
+    let n = usize::try_from(span.count)
+        .map_err(|_| header_err(path, "the voxel count is too large"))?;
     let err = |e| ReadError::new(path, e);
+    let offset = span.offset;
     Ok(match ty {
         ScalarType::U8 => Buffer::map_file(path, offset, n)
             .map_err(err)?
@@ -171,8 +213,8 @@ fn map(
     })
 }
 
-/// An uncompressed file must hold `offset + bytes` bytes.
-fn check_length(path: &Path, offset: u64, bytes: u64) -> Result<()> {
+/// An uncompressed file must hold `offset + bytes` bytes; returns what it holds beyond them.
+fn check_length(path: &Path, offset: u64, bytes: u64) -> Result<Surplus> {
     let len = std::fs::metadata(path)
         .map_err(|e| ReadError::new(path, e))?
         .len();
@@ -186,19 +228,25 @@ fn check_length(path: &Path, offset: u64, bytes: u64) -> Result<()> {
             },
         ));
     }
-    Ok(())
+    Ok(match found - bytes {
+        0 => Surplus::None,
+        n => Surplus::Bytes(n),
+    })
 }
 
-/// Reads `bytes` bytes of voxel data starting at `offset` (of the decompressed stream).
-fn read_data(path: &Path, offset: u64, bytes: u64) -> Result<Vec<u8>> {
-    if !is_gzip(path)? {
-        check_length(path, offset, bytes)?;
-        let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
-        f.seek(SeekFrom::Start(offset))
-            .map_err(|e| ReadError::new(path, e))?;
-        return read_exact_checked(path, std::io::BufReader::new(f), bytes);
-    }
+/// Reads `bytes` bytes at `offset` of an uncompressed file (its length already checked).
+fn read_plain(path: &Path, offset: u64, bytes: u64) -> Result<Vec<u8>> {
+    let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    f.seek(SeekFrom::Start(offset))
+        .map_err(|e| ReadError::new(path, e))?;
+    read_exact_checked(path, std::io::BufReader::new(f), bytes)
+}
+
+/// Reads the voxels of `span` from a gzip stream, then probes one more byte to tell whether
+/// the stream holds more than the dims declare (a stream that fails there is noted).
+fn read_gz(path: &Path, span: Span, notes: &mut Vec<String>) -> Result<(Vec<u8>, Surplus)> {
     let mut stream = open_maybe_gz(path)?;
+    let offset = span.offset;
     let skipped = std::io::copy(&mut (&mut stream).take(offset), &mut std::io::sink())
         .map_err(|e| ReadError::new(path, e))?;
     if skipped < offset {
@@ -207,7 +255,18 @@ fn read_data(path: &Path, offset: u64, bytes: u64) -> Result<Vec<u8>> {
             format!("vox_offset {offset} is past the end of the data ({skipped} bytes)"),
         ));
     }
-    read_exact_checked(path, stream, bytes)
+    let data = read_exact_checked(path, &mut stream, span.bytes)?;
+    let surplus = match stream.read(&mut [0u8; 1]) {
+        Ok(0) => Surplus::None,
+        Ok(_) => Surplus::Some,
+        Err(e) => {
+            notes.push(format!(
+                "the gzip stream after the voxel data is damaged: {e}"
+            ));
+            Surplus::None
+        }
+    };
+    Ok((data, surplus))
 }
 
 /// Spacing from `|pixdim[1..=3]|`; zero or non-finite entries become 1 (noted for the axes the
