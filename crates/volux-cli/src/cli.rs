@@ -16,6 +16,11 @@ pub struct Cli {
     /// Silence progress bars.
     #[arg(long, short, global = true)]
     pub quiet: bool,
+    /// Memory the process may take for any one structure (grids, meshes, gradient volumes,
+    /// acceleration structures, images): a size such as 4G, 512M or 1.5GiB, or a percentage
+    /// of the available memory such as 50% [default: 75% of the available memory].
+    #[arg(long, global = true, value_name = "SIZE", value_parser = crate::memory::parse_budget)]
+    pub memory_budget: Option<u64>,
     /// The command.
     #[command(subcommand)]
     pub command: Command,

@@ -4,6 +4,8 @@
 mod applicable;
 mod cli;
 mod commands;
+mod memory;
+mod messages;
 mod numbers;
 mod progress;
 mod settings;
@@ -13,6 +15,7 @@ use std::process::ExitCode;
 use clap::error::ErrorKind;
 use clap::parser::ValueSource;
 use clap::{ArgMatches, CommandFactory, FromArgMatches};
+use messages::sanitize;
 
 fn main() -> ExitCode {
     let args = match parse() {
@@ -21,14 +24,18 @@ fn main() -> ExitCode {
             e.exit()
         }
         Err(e) => {
-            eprintln!("volux: error: {}", one_line(&e.to_string()));
+            eprintln!("volux: error: {}", sanitize(&one_line(&e.to_string())));
             return ExitCode::from(2);
         }
     };
+    if let Err(e) = memory::apply(args.memory_budget) {
+        eprintln!("volux: error: {}", sanitize(&e.to_string()));
+        return ExitCode::from(2);
+    }
     match commands::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("volux: error: {e}");
+            eprintln!("volux: error: {}", sanitize(&e.to_string()));
             ExitCode::FAILURE
         }
     }

@@ -50,7 +50,7 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
 
 /// A warning on stderr, the render goes on.
 pub fn warn(message: &str) {
-    eprintln!("volux: warning: {message}");
+    eprintln!("volux: warning: {}", crate::messages::sanitize(message));
 }
 
 /// Warns when the scene can show nothing (constant data, a TF transparent over the data's
