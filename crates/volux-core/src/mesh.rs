@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::aabb::Aabb;
 use crate::error::{Error, Result};
-use crate::grid::MAX_COORDINATE;
+use crate::grid::{MAX_COORDINATE, MIN_SPACING};
 
 /// Marks a face with no neighbour (a boundary face) in [`TetMesh::face_adjacency`].
 pub const NO_NEIGHBOR: u32 = u32::MAX;
@@ -68,7 +68,8 @@ fn check_positions(positions: &[Vec3]) -> Result<()> {
 }
 
 /// The diagonal of the bounding box of `positions` (not empty, finite); errors when every
-/// vertex coincides or the box is flat (zero extent along an axis).
+/// vertex coincides, the box is smaller than [`MIN_SPACING`] across (garbage such as floats
+/// read in the wrong byte order) or flat (zero extent along an axis).
 fn check_extent(positions: &[Vec3]) -> Result<f64> {
     let b = Aabb::from_points(positions.iter().map(|p| p.as_dvec3()))
         .ok_or_else(|| Error::InvalidMesh("no vertices".into()))?;
@@ -78,6 +79,12 @@ fn check_extent(positions: &[Vec3]) -> Result<f64> {
             "all {} vertices coincide at {}",
             positions.len(),
             b.min
+        )));
+    }
+    if b.diagonal() < MIN_SPACING {
+        return Err(Error::InvalidMesh(format!(
+            "the mesh is only {:.3e} across (below {MIN_SPACING:e}): the positions are not usable coordinates",
+            b.diagonal()
         )));
     }
     if let Some(axis) = (0..3).find(|&a| extent[a] == 0.0) {
@@ -440,6 +447,9 @@ mod tests {
         assert!(m.contains("all 2 tets are degenerate"), "{m}");
         let m = mesh_error(unit_tet(), vec![[0, 1, 1, 3]]);
         assert!(m.contains("all 1 tets are degenerate"), "{m}");
+        let tiny = unit_tet().into_iter().map(|p| p * 1e-35).collect();
+        let m = mesh_error(tiny, vec![[0, 1, 2, 3]]);
+        assert!(m.contains("only 1.732e-35 across"), "{m}");
         let mut huge = unit_tet();
         huge[2].y = 3e38;
         let m = mesh_error(huge, vec![[0, 1, 2, 3]]);
