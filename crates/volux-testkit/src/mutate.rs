@@ -222,7 +222,7 @@ fn short(s: &str) -> String {
 
 /// A file-system case: the file named `victim` is replaced by something that is not a
 /// regular file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum FsCase {
     /// A directory (holding one small file).
     Directory,
