@@ -59,6 +59,9 @@ fn ijk(p: usize) -> [f32; 3] {
     [p % 3, (p / 3) % 2, p / 6].map(|c| c as f32)
 }
 
+/// Where a test puts point `p`.
+type Placement = fn(usize) -> [f32; 3];
+
 /// An xyz file whose point `p` is at `at(p)`.
 fn xyz(style: Style, at: impl Fn(usize) -> [f32; 3]) -> Vec<u8> {
     let mut out = Vec::new();
@@ -171,7 +174,7 @@ fn floats_in_the_wrong_byte_order_are_refused() {
 fn unusable_coordinates_are_refused() {
     let style = Style::new(false, false);
     let qb = q(style);
-    let cases: [(&str, fn(usize) -> [f32; 3]); 4] = [
+    let cases: [(&str, Placement); 4] = [
         ("all 12 vertices coincide", |_| [0.0; 3]),
         ("flat", |p| {
             let [i, j, _] = ijk(p);
