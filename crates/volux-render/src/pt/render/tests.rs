@@ -150,21 +150,29 @@ fn single_tets_of_every_class_match_the_exact_ray_integral() {
 
 #[test]
 fn degenerate_tet_is_discarded() {
-    // Seen edge-on: the four vertices project onto one line.
-    let mesh = one_tet(
-        [
-            [0.1, 0.5, 0.0],
-            [0.9, 0.5, 0.0],
-            [0.5, 0.5, 0.8],
-            [0.3, 0.5, 0.3],
-        ],
-        [0.0, 0.4, 0.7, 1.0],
-    );
+    // Seen edge-on: the first four vertices project onto one line (they lie in y = 0.5). A
+    // valid tet far off screen keeps the mesh from being flat, which `TetMesh::new` refuses.
+    let p = [
+        [0.1, 0.5, 0.0],
+        [0.9, 0.5, 0.0],
+        [0.5, 0.5, 0.8],
+        [0.3, 0.5, 0.3],
+        [10.0, 10.0, 0.0],
+        [11.0, 10.0, 0.0],
+        [10.0, 11.0, 0.0],
+        [10.0, 10.0, 1.0],
+    ];
+    let mesh = TetMesh::new(
+        p.iter().map(|v| Vec3::from_array(*v)).collect(),
+        vec![0.0, 0.4, 0.7, 1.0, 0.5, 0.5, 0.5, 0.5],
+        vec![[0, 1, 2, 3], [4, 5, 6, 7]],
+    )
+    .unwrap();
     let out = PtRenderer::new(&mesh)
         .render(&opts(top_view(), tf(), 32))
         .unwrap();
     assert_eq!(out.stats.degenerate, 1);
-    assert_eq!(out.stats.tets_drawn, 0);
+    assert_eq!(out.stats.tets_drawn, 1, "only the off-screen tet");
     assert!(out.image.pixels().iter().all(|p| p[3] == 0.0));
 }
 
