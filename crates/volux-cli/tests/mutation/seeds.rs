@@ -1,6 +1,6 @@
 //! Small valid files of every format Volux reads, written by hand (no shared data, except
 //! the tiny DICOM file of `pydicom_emri_small` when it is present): the seeds of the mutation
-//! harness. Grids are 6 x 5 x 4 with a smooth blob; meshes are a unit cube split into five
+//! harness. Grids are 6 x 5 x 4 with a smooth blob (one NRRD is 256^3); meshes are a unit cube split into five
 //! tetrahedra.
 use volux_testkit::mutate::{compress, gzip, Codec, InputFile, Layout};
 
@@ -193,6 +193,7 @@ fn nrrd_seeds() -> Vec<Seed> {
     let ascii = nrrd_head("ascii", "\n") + &text_values() + "\n";
     let nhdr = nrrd_head("raw", "data file: t.data\n");
     vec![
+        big_nrrd(),
         Seed::grid(
             "nrrd-raw",
             vec![InputFile::new(
@@ -230,6 +231,33 @@ fn nrrd_seeds() -> Vec<Seed> {
             ],
         ),
     ]
+}
+
+/// Edge of the big seed.
+const BIG: usize = 256;
+
+/// A 256^3 8-bit NRRD (16 MiB, gzip: a few kilobytes on disk) holding a cube: big enough
+/// that tetrahedra, gradients and bombs built from it meet the memory limit.
+fn big_nrrd() -> Seed {
+    let head = format!(
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: {BIG} {BIG} {BIG}\nencoding: gzip\n\n"
+    );
+    let mut data = vec![0u8; BIG * BIG * BIG];
+    for z in BIG / 4..3 * BIG / 4 {
+        for y in BIG / 4..3 * BIG / 4 {
+            let row = (z * BIG + y) * BIG;
+            data[row + BIG / 4..row + 3 * BIG / 4].fill(200);
+        }
+    }
+    Seed::grid(
+        "nrrd-gzip-big",
+        vec![InputFile::new(
+            "t.nrrd",
+            with_header(&head, &gzip(&data)),
+            Layout::Text(head.len()),
+        )
+        .with_data_codec(Codec::Gzip)],
+    )
 }
 
 // ------------------------------------------------------------------ MetaImage
