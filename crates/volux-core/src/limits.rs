@@ -38,9 +38,35 @@ fn available_in(meminfo: Option<&str>) -> u64 {
 }
 
 /// Bytes of memory available to this process now: `MemAvailable` from `/proc/meminfo`,
-/// falling back to `MemTotal`, then to 16 GiB.
+/// falling back to `MemTotal`, then to 16 GiB; and no more than the address space left
+/// under the process's own limit (`ulimit -v`, `prlimit --as`), where one is set, so that
+/// the budget refuses what the limit would turn into an abort.
 pub fn available_memory() -> u64 {
-    available_in(std::fs::read_to_string("/proc/meminfo").ok().as_deref())
+    let machine = available_in(std::fs::read_to_string("/proc/meminfo").ok().as_deref());
+    let limits = std::fs::read_to_string("/proc/self/limits").ok();
+    let status = std::fs::read_to_string("/proc/self/status").ok();
+    match address_space_left(limits.as_deref(), status.as_deref()) {
+        Some(left) => machine.min(left),
+        None => machine,
+    }
+}
+
+/// The address space left under the soft `Max address space` limit of `/proc/self/limits`
+/// (`None` when unlimited or unreadable), given the `VmSize` of `/proc/self/status`.
+fn address_space_left(limits: Option<&str>, status: Option<&str>) -> Option<u64> {
+    let line = limits?.lines().find(|l| l.starts_with("Max address space"))?;
+    let soft: u64 = line
+        .trim_start_matches("Max address space")
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
+    let used_kb: u64 = status
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmSize:")))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    Some(soft.saturating_sub(used_kb.saturating_mul(1024)))
 }
 
 /// The budget [`memory_budget`] defaults to: [`DEFAULT_BUDGET_FRACTION`] of
@@ -166,6 +192,19 @@ mod tests {
         assert_eq!(available_in(Some("garbage")), FALLBACK_MEMORY);
         assert_eq!(available_in(None), FALLBACK_MEMORY);
         assert!(default_memory_budget() > 0);
+    }
+    #[test]
+    fn an_address_space_limit_caps_what_is_available() {
+        let limits = "Limit                     Soft Limit           Hard Limit           Units\n\
+                      Max address space         2147483648           unlimited            bytes\n";
+        let status = "Name: volux\nVmSize:\t  524288 kB\n";
+        assert_eq!(
+            address_space_left(Some(limits), Some(status)),
+            Some(2147483648 - 524288 * 1024)
+        );
+        let unlimited = "Max address space         unlimited            unlimited            bytes\n";
+        assert_eq!(address_space_left(Some(unlimited), Some(status)), None);
+        assert_eq!(address_space_left(None, None), None);
     }
     #[test]
     fn zero_budget_is_refused() {
