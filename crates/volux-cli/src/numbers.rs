@@ -1,5 +1,5 @@
-//! Numbers as people read them: rounded values and byte counts (full precision stays in
-//! the JSON outputs).
+//! Numbers as people read them: rounded values (full precision stays in the JSON outputs;
+//! byte counts: [`volux_core::units::format_bytes`]).
 
 /// `x` with five significant digits, without trailing zeros (integers exactly).
 pub fn human(x: f64) -> String {
@@ -14,20 +14,4 @@ pub fn human(x: f64) -> String {
         &text
     };
     text.to_string()
-}
-
-/// A byte count in binary units.
-pub fn bytes(n: f64) -> String {
-    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = n;
-    let mut unit = 0;
-    while v >= 1024.0 && unit + 1 < UNITS.len() {
-        v /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{n} bytes")
-    } else {
-        format!("{v:.1} {}", UNITS[unit])
-    }
 }

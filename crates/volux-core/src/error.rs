@@ -38,8 +38,8 @@ pub enum Error {
     /// ([`crate::limits::memory_budget`]).
     #[error(
         "{what} needs {}, over the memory budget of {} (--memory-budget)",
-        crate::units::format_bytes(*bytes),
-        crate::units::format_bytes(*budget)
+        crate::units::format_bytes_apart(*bytes, *budget).0,
+        crate::units::format_bytes_apart(*bytes, *budget).1
     )]
     OverBudget {
         /// What would be allocated ("the gradient volume").

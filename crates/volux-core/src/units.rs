@@ -19,9 +19,23 @@ pub fn format_bytes(bytes: u64) -> String {
     }
 }
 
+/// `a` and `b` in the unit of [`format_bytes`], with as many decimals (one to three) as it
+/// takes for two different counts to read differently (`1.46 GiB` over `1.45 GiB`, not
+/// `1.5 GiB` over `1.5 GiB`).
+pub fn format_bytes_apart(a: u64, b: u64) -> (String, String) {
+    let with = |bytes: u64, decimals: usize| match UNITS.iter().find(|(_, size)| bytes >= *size) {
+        Some((name, size)) => format!("{:.decimals$} {name}", bytes as f64 / *size as f64),
+        None => format!("{bytes} B"),
+    };
+    (1..=3)
+        .map(|d| (with(a, d), with(b, d)))
+        .find(|(x, y)| x != y || a == b)
+        .unwrap_or_else(|| (with(a, 3), with(b, 3)))
+}
+
 #[cfg(test)]
 mod tests {
-    use super::format_bytes;
+    use super::{format_bytes, format_bytes_apart};
 
     #[test]
     fn bytes_read_in_the_largest_unit() {
@@ -31,5 +45,19 @@ mod tests {
         assert_eq!(format_bytes(3 << 19), "1.5 MiB");
         assert_eq!(format_bytes(8 << 30), "8.0 GiB");
         assert_eq!(format_bytes(u64::MAX), "16.0 EiB");
+    }
+
+    #[test]
+    fn close_counts_read_differently() {
+        let (a, b) = format_bytes_apart(1_570_000_000, 1_560_000_000);
+        assert_ne!(a, b);
+        assert_eq!(
+            format_bytes_apart(8 << 30, 1 << 30),
+            ("8.0 GiB".into(), "1.0 GiB".into())
+        );
+        assert_eq!(
+            format_bytes_apart(100, 100),
+            ("100 B".into(), "100 B".into())
+        );
     }
 }

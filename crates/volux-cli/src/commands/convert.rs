@@ -22,7 +22,7 @@ fn said(output: &Path) {
     eprintln!(
         "wrote {} ({})",
         output.display(),
-        crate::numbers::bytes(size as f64)
+        volux_core::units::format_bytes(size)
     );
 }
 
@@ -77,7 +77,7 @@ fn bar(output: &Path, total: u64, show: bool) -> indicatif::ProgressBar {
         eprintln!(
             "writing {} ({} uncompressed)",
             output.display(),
-            crate::numbers::bytes(total as f64)
+            volux_core::units::format_bytes(total)
         );
     }
     let pb = progress::bytes(show, output.display().to_string());

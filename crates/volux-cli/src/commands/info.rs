@@ -8,7 +8,8 @@ use volux_io::{Dataset, Format};
 
 use super::common::CmdError;
 use crate::cli::LoadArgs;
-use crate::numbers::{bytes, human};
+use crate::numbers::human;
+use volux_core::units::format_bytes;
 
 /// Describes the file at `path`.
 pub fn run(path: &Path, as_json: bool, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
@@ -115,7 +116,7 @@ fn print_text(path: &Path, v: &serde_json::Value) {
                 }
             }
             _ if k == "memory_bytes" => {
-                println!("  {k:<15} {}", bytes(val.as_f64().unwrap_or(0.0)))
+                println!("  {k:<15} {}", format_bytes(val.as_u64().unwrap_or(0)))
             }
             _ => println!("  {k:<15} {}", plain(val)),
         }
@@ -143,7 +144,7 @@ fn plain(v: &serde_json::Value) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::numbers::{bytes, human};
+    use crate::numbers::human;
 
     #[test]
     fn numbers_are_rounded_for_people() {
@@ -152,8 +153,6 @@ mod tests {
         assert_eq!(human(244.042956), "244.04");
         assert_eq!(human(-1024.0), "-1024");
         assert_eq!(human(0.0009570312), "0.00095703");
-        assert_eq!(bytes(14155776.0), "13.5 MiB");
-        assert_eq!(bytes(100.0), "100 bytes");
         let v = serde_json::json!({"mode": -1000.50390625, "p1": 15.3359375});
         assert_eq!(plain(&v), "mode=-1000.5  p1=15.336");
     }
