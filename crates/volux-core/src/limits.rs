@@ -54,7 +54,9 @@ pub fn available_memory() -> u64 {
 /// The address space left under the soft `Max address space` limit of `/proc/self/limits`
 /// (`None` when unlimited or unreadable), given the `VmSize` of `/proc/self/status`.
 fn address_space_left(limits: Option<&str>, status: Option<&str>) -> Option<u64> {
-    let line = limits?.lines().find(|l| l.starts_with("Max address space"))?;
+    let line = limits?
+        .lines()
+        .find(|l| l.starts_with("Max address space"))?;
     let soft: u64 = line
         .trim_start_matches("Max address space")
         .split_whitespace()
@@ -202,7 +204,8 @@ mod tests {
             address_space_left(Some(limits), Some(status)),
             Some(2147483648 - 524288 * 1024)
         );
-        let unlimited = "Max address space         unlimited            unlimited            bytes\n";
+        let unlimited =
+            "Max address space         unlimited            unlimited            bytes\n";
         assert_eq!(address_space_left(Some(unlimited), Some(status)), None);
         assert_eq!(address_space_left(None, None), None);
     }
