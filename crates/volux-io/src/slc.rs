@@ -21,7 +21,7 @@ use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
 use crate::raw::{self, ElemType};
-use crate::util::header_err;
+use crate::util::{header_err, read_regular};
 
 /// The magic number that starts an SLC file.
 pub const MAGIC: &str = "11111";
@@ -192,47 +192,94 @@ fn read_header(c: &mut Cursor<'_>) -> Result<Header> {
     })
 }
 
-/// Reads an SLC file into an 8-bit grid.
-pub fn read(path: &Path) -> Result<Grid> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| ReadError::new(path, e))?
-        .len();
-    volux_core::limits::check_alloc("SLC file", len, 1).map_err(|e| ReadError::new(path, e))?;
-    let bytes = std::fs::read(path).map_err(|e| ReadError::new(path, e))?;
-    let mut c = Cursor {
-        path,
-        bytes: &bytes,
-        at: 0,
-    };
-    let h = read_header(&mut c)?;
+/// Largest output of one run-length pair: a count byte of 127 and the byte it repeats.
+const MAX_RUN: u64 = 127;
+
+/// Most bytes `encoded` run-length bytes can decode to: every byte pair a run of 127.
+fn max_rle_output(encoded: u64) -> u64 {
+    (encoded / 2).saturating_mul(MAX_RUN)
+}
+
+/// An [`ErrorKind::Undeliverable`] unless `encoded` run-length bytes can decode to
+/// `declared` voxels.
+fn check_deliverable(path: &Path, declared: u64, encoded: u64) -> Result<()> {
+    let max = max_rle_output(encoded);
+    if declared > max {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Undeliverable {
+                declared,
+                available: encoded,
+                max,
+                how: "a run-length byte pair expands to at most 127 bytes",
+            },
+        ));
+    }
+    Ok(())
+}
+
+/// Skips the icon (`icon_w icon_h X` and three planes of `icon_w icon_h` bytes).
+fn skip_icon(c: &mut Cursor<'_>) -> Result<()> {
     let icon_w: u64 = c.number("icon width")?;
     let icon_h: u64 = c.number("icon height")?;
     c.marker("the icon size")?;
     let icon = icon_w
         .checked_mul(icon_h)
         .and_then(|n| n.checked_mul(3))
-        .ok_or_else(|| header_err(path, "icon size overflows"))?;
+        .ok_or_else(|| header_err(c.path, "icon size overflows"))?;
     c.take(icon)?;
+    Ok(())
+}
+
+/// Decodes the run-length slices of `h` into a buffer that grows slice by slice; each slice
+/// is checked against the bytes that encode it before it is allocated.
+fn decode_slices(c: &mut Cursor<'_>, h: &Header) -> Result<Vec<u8>> {
+    let path = c.path;
     let plane = h.dims[0] * h.dims[1];
-    let count = plane as u64 * h.dims[2] as u64;
-    volux_core::limits::check_alloc("data", count, 1).map_err(|e| ReadError::new(path, e))?;
-    if !h.compressed {
+    let mut voxels = Vec::new();
+    for z in 0..h.dims[2] {
+        let size: u64 = c.number("compressed slice size")?;
+        c.marker("a compressed slice size")?;
+        let encoded = c.take(size)?;
+        check_deliverable(path, plane as u64, size)?;
+        let start = voxels.len();
+        voxels.resize(start + plane, 0);
+        decode_rle(encoded, &mut voxels[start..])
+            .map_err(|why| ReadError::new(path, ErrorKind::Invalid(format!("slice {z}: {why}"))))?;
+    }
+    Ok(voxels)
+}
+
+/// Reads an SLC file into an 8-bit grid.
+///
+/// The declared volume is bounded by what the file can deliver before anything is
+/// allocated: raw slices need one byte per voxel, run-length slices at least two bytes per
+/// 127 voxels ([`ErrorKind::Undeliverable`] otherwise), and run-length output grows slice by
+/// slice as it is decoded.
+pub fn read(path: &Path) -> Result<Grid> {
+    let limit = volux_core::limits::memory_limit();
+    let bytes = read_regular(path, limit)?;
+    let mut c = Cursor {
+        path,
+        bytes: &bytes,
+        at: 0,
+    };
+    let h = read_header(&mut c)?;
+    skip_icon(&mut c)?;
+    let count = (h.dims[0] * h.dims[1]) as u64 * h.dims[2] as u64;
+    let left = bytes.len().saturating_sub(c.at) as u64;
+    if h.compressed {
+        check_deliverable(path, count, left)?;
+    } else {
         // Raw slices end the file: a short one is refused before allocating.
         c.ensure(count)?;
     }
-    let mut voxels = vec![0u8; count as usize];
-    for (z, slice) in voxels.chunks_exact_mut(plane).enumerate() {
-        if h.compressed {
-            let size: u64 = c.number("compressed slice size")?;
-            c.marker("a compressed slice size")?;
-            decode_rle(c.take(size)?, slice).map_err(|why| {
-                ReadError::new(path, ErrorKind::Invalid(format!("slice {z}: {why}")))
-            })?;
-        } else {
-            slice.copy_from_slice(c.take(plane as u64)?);
-        }
-    }
-    let data = raw::decode(path, ElemType::U8, &voxels, true)?;
+    volux_core::limits::check_alloc("data", count, 1).map_err(|e| ReadError::new(path, e))?;
+    let data = if h.compressed {
+        raw::decode(path, ElemType::U8, &decode_slices(&mut c, &h)?, true)?
+    } else {
+        raw::decode(path, ElemType::U8, c.take(count)?, true)?
+    };
     raw::make_grid(path, h.dims, h.spacing, [0.0; 3], data, Vec::new())
 }
 
@@ -359,6 +406,65 @@ mod tests {
             crate::detect::detect(&p).unwrap(),
             crate::detect::Format::RawJson
         );
+    }
+
+    #[test]
+    fn a_tiny_file_cannot_claim_a_huge_volume() {
+        // 2048^3 voxels (8 GiB) declared by a few hundred bytes of run-length slices: refused
+        // by the size bound before anything is allocated.
+        let bytes = slc([2048, 2048, 2048], 1, &vec![vec![0x7f, 1, 0]; 20]);
+        let p = write("huge.slc", &bytes);
+        let e = read(&p).unwrap_err();
+        assert!(
+            matches!(
+                e.kind,
+                ErrorKind::Undeliverable {
+                    declared: 8589934592,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let msg = e.to_string();
+        assert!(
+            msg.contains("huge.slc") && msg.contains("at most 127 bytes"),
+            "{msg}"
+        );
+        // A single slice that claims more than its bytes can hold is refused the same way.
+        let bytes = slc([2048, 2048, 1], 1, &[vec![0x7f, 1, 0]]);
+        let bytes = [bytes, vec![0; 200_000]].concat();
+        let e = read(&write("slice.slc", &bytes)).unwrap_err();
+        assert!(
+            matches!(
+                e.kind,
+                ErrorKind::Undeliverable {
+                    declared: 4194304,
+                    available: 3,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        // Raw slices need one byte per voxel.
+        let bytes = slc([2048, 2048, 2048], 0, &[vec![1; 100]]);
+        let e = read(&write("rawhuge.slc", &bytes)).unwrap_err();
+        assert!(
+            matches!(e.kind, ErrorKind::Truncated { found: 100, .. }),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn special_files_are_refused() {
+        use crate::util::hostile::*;
+        let dir = tempfile::tempdir().unwrap();
+        let zero = zero_link(dir.path(), "zero.slc");
+        assert_refused(read(&zero), "zero.slc", "(a character device)");
+        assert_refused(read(&link_loop(dir.path(), "l.slc")), "l.slc", "loop");
+        if let Some(f) = fifo(dir.path(), "f.slc") {
+            assert_refused(read(&f), "f.slc", "(a FIFO)");
+            assert_refused(crate::load(&f, &Default::default()), "f.slc", "(a FIFO)");
+        }
     }
 
     trait ReplaceFirst {
