@@ -27,7 +27,8 @@ use crate::error::ReadError;
 use crate::error::Result;
 use crate::error::WriteError;
 use crate::util::{
-    header_err, open_maybe_gz, read_exact_checked, write_chunked, Progress, PROGRESS_STEP,
+    check_inflatable, header_err, io_error, open_gz_input, open_regular, read_exact_checked,
+    read_regular, regular_metadata, write_chunked, Progress, PROGRESS_STEP,
 };
 
 /// Largest sidecar read (a sidecar is a few hundred bytes; anything huge is not one).
@@ -167,9 +168,7 @@ pub(crate) fn read_plain(
     count: u64,
 ) -> Result<Decoded> {
     let need = data_bytes(path, ty, count)?;
-    let file_len = std::fs::metadata(path)
-        .map_err(|e| ReadError::new(path, e))?
-        .len();
+    let file_len = regular_metadata(path)?.len();
     check_section_len(path, file_len, offset, need)?;
     if le {
         if let Some(samples) = try_map(path, offset, ty, count)? {
@@ -179,9 +178,9 @@ pub(crate) fn read_plain(
             });
         }
     }
-    let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    let mut f = open_regular(path)?;
     f.seek(SeekFrom::Start(offset))
-        .map_err(|e| ReadError::new(path, e))?;
+        .map_err(|e| io_error(path, e))?;
     let bytes = read_exact_checked(path, f, need)?;
     decode(path, ty, &bytes, le)
 }
@@ -405,18 +404,9 @@ fn data_and_sidecar(path: &Path) -> (PathBuf, PathBuf) {
     }
 }
 
-/// Reads and parses the sidecar.
+/// Reads and parses the sidecar (a regular file of at most [`MAX_SIDECAR_BYTES`]).
 fn read_sidecar(sidecar: &Path) -> Result<Sidecar> {
-    let len = std::fs::metadata(sidecar)
-        .map_err(|e| ReadError::new(sidecar, e))?
-        .len();
-    if len > MAX_SIDECAR_BYTES {
-        return Err(header_err(
-            sidecar,
-            format!("sidecar is {len} bytes, more than a sidecar can be ({MAX_SIDECAR_BYTES})"),
-        ));
-    }
-    let text = std::fs::read(sidecar).map_err(|e| ReadError::new(sidecar, e))?;
+    let text = read_regular(sidecar, MAX_SIDECAR_BYTES)?;
     let car: Sidecar = serde_json::from_slice(&text)
         .map_err(|e| header_err(sidecar, format!("sidecar JSON: {e}")))?;
     match car.kind.as_deref() {
@@ -488,16 +478,54 @@ fn layout(sidecar: &Path, car: &Sidecar) -> Result<Layout> {
     })
 }
 
+/// Reads gzip data the sidecar describes: the file must be gzip (magic bytes `1f 8b`), and
+/// its compressed length must be able to hold the declared size before anything is inflated.
+fn read_gzip_data(data_path: &Path, l: &Layout) -> Result<Decoded> {
+    let input = open_gz_input(data_path)?;
+    if !input.gzip {
+        return Err(header_err(
+            data_path,
+            "the sidecar says 'compression: gzip', but the data is not gzip (it does not start \
+             with the gzip magic bytes 1f 8b); set 'compression' to 'none'",
+        ));
+    }
+    let need = data_bytes(data_path, l.ty, l.count)?;
+    check_inflatable(data_path, input.file_len, need)?;
+    read_stream(data_path, input.reader, l.ty, l.little_endian, l.count)
+}
+
+/// Replaces a size error on data the sidecar calls uncompressed by a clearer one when the
+/// data is gzip after all (a plain file of exactly the declared size is read whatever its
+/// first bytes are).
+fn gzip_said_none(data_path: &Path, e: ReadError) -> ReadError {
+    let size_error = matches!(e.kind, ErrorKind::Truncated { .. } | ErrorKind::Header(_));
+    if size_error && starts_with_gzip_magic(data_path) {
+        return header_err(
+            data_path,
+            "the sidecar says the data is uncompressed ('compression: none'), but it is gzip \
+             (it starts with the gzip magic bytes 1f 8b); set 'compression' to 'gzip'",
+        );
+    }
+    e
+}
+
+/// Whether the regular file `path` starts with the gzip magic bytes.
+fn starts_with_gzip_magic(path: &Path) -> bool {
+    let mut head = [0u8; 2];
+    open_regular(path)
+        .is_ok_and(|f| f.take(2).read_exact(&mut head).is_ok() && head == [0x1f, 0x8b])
+}
+
 /// Reads a raw grid through its sidecar; `path` is the data file or the sidecar itself.
 pub fn read(path: &Path) -> Result<Grid> {
     let (data_path, sidecar) = data_and_sidecar(path);
     let car = read_sidecar(&sidecar)?;
     let l = layout(&sidecar, &car)?;
     let data = if l.gzip {
-        let reader = open_maybe_gz(&data_path)?;
-        read_stream(&data_path, reader, l.ty, l.little_endian, l.count)?
+        read_gzip_data(&data_path, &l)?
     } else {
-        read_plain(&data_path, 0, l.ty, l.little_endian, l.count)?
+        read_plain(&data_path, 0, l.ty, l.little_endian, l.count)
+            .map_err(|e| gzip_said_none(&data_path, e))?
     };
     let mut notes = Vec::new();
     let spacing = car.spacing.unwrap_or_else(|| {
@@ -623,5 +651,108 @@ fn write_samples(out: &mut impl Write, samples: &Samples) -> std::io::Result<()>
         Samples::U16(b) => write_chunked(out, b, |v, o| o.extend(v.to_le_bytes()), none),
         Samples::I16(b) => write_chunked(out, b, |v, o| o.extend(v.to_le_bytes()), none),
         Samples::F32(b) => write_chunked(out, b, |v, o| o.extend(v.to_le_bytes()), none),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::util::hostile::*;
+
+    /// Writes a sidecar `name.json` for a `dims` uint8 volume with `compression`.
+    fn sidecar(dir: &Path, name: &str, dims: [u64; 3], compression: &str) -> PathBuf {
+        let p = dir.join(format!("{name}.json"));
+        let json = format!(
+            r#"{{"dims_xyz": [{}, {}, {}], "dtype": "uint8", "compression": "{compression}"}}"#,
+            dims[0], dims[1], dims[2]
+        );
+        std::fs::write(&p, json).unwrap();
+        dir.join(name)
+    }
+
+    fn gzip(bytes: &[u8]) -> Vec<u8> {
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+        enc.write_all(bytes).unwrap();
+        enc.finish().unwrap()
+    }
+
+    #[test]
+    fn special_data_and_sidecar_files_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        // A sidecar that is a link to /dev/zero was read until memory ran out.
+        std::fs::write(d.join("z.raw"), [1u8; 8]).unwrap();
+        zero_link(d, "z.raw.json");
+        assert_refused(read(&d.join("z.raw")), "z.raw.json", "(a character device)");
+        let data = sidecar(d, "dz.raw", [2, 2, 2], "none");
+        std::os::unix::fs::symlink("/dev/zero", &data).unwrap();
+        assert_refused(read(&data), "dz.raw", "(a character device)");
+        let data = sidecar(d, "gz.raw.gz", [2, 2, 2], "gzip");
+        std::os::unix::fs::symlink("/dev/zero", &data).unwrap();
+        assert_refused(read(&data), "gz.raw.gz", "(a character device)");
+        link_loop(d, "loop.raw.json");
+        assert_refused(
+            read(&d.join("loop.raw")),
+            "loop.raw.json",
+            "loop of symbolic links",
+        );
+        let data = sidecar(d, "f.raw", [2, 2, 2], "none");
+        if fifo(d, "f.raw").is_some() {
+            assert_refused(read(&data), "f.raw", "(a FIFO)");
+        }
+    }
+
+    #[test]
+    fn compression_mismatches_say_which() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let plain = sidecar(d, "plain.raw", [4, 4, 4], "gzip");
+        std::fs::write(&plain, [7u8; 64]).unwrap();
+        let e = read(&plain).unwrap_err().to_string();
+        assert!(
+            e.contains("plain.raw: ")
+                && e.contains("says 'compression: gzip', but the data is not gzip"),
+            "{e}"
+        );
+        let gz = sidecar(d, "gz.raw", [4, 4, 4], "none");
+        std::fs::write(&gz, gzip(&[7u8; 64])).unwrap();
+        let e = read(&gz).unwrap_err().to_string();
+        assert!(
+            e.contains("gz.raw: ")
+                && e.contains("uncompressed ('compression: none'), but it is gzip"),
+            "{e}"
+        );
+        // Plain data of exactly the declared size is read even if it starts with 1f 8b.
+        let ok = sidecar(d, "ok.raw", [4, 1, 1], "none");
+        std::fs::write(&ok, [0x1f, 0x8b, 0, 0]).unwrap();
+        assert_eq!(read(&ok).unwrap().value(1, 0, 0), 139.0);
+    }
+
+    #[test]
+    fn gzip_bombs_stop_at_the_declared_size() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        // 64 MiB of zeros behind a sidecar declaring 1 KiB: inflation stops after 1 KiB + 1.
+        let bomb = sidecar(d, "bomb.raw.gz", [16, 16, 4], "gzip");
+        std::fs::write(&bomb, gzip(&vec![0u8; 64 << 20])).unwrap();
+        let e = read(&bomb).unwrap_err().to_string();
+        assert!(
+            e.contains("bomb.raw.gz") && e.contains("holds more than the 1024 bytes"),
+            "{e}"
+        );
+        // A tiny file declaring 6 GiB is refused before inflating: deflate cannot expand it so.
+        let tiny = sidecar(d, "tiny.raw.gz", [2048, 2048, 1536], "gzip");
+        std::fs::write(&tiny, gzip(&[0u8; 100])).unwrap();
+        let e = read(&tiny).unwrap_err();
+        assert!(
+            matches!(
+                e.kind,
+                ErrorKind::Undeliverable {
+                    declared: 6442450944,
+                    ..
+                } | ErrorKind::Data(_)
+            ),
+            "{e}"
+        );
     }
 }
