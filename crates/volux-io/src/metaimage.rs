@@ -24,7 +24,9 @@ use crate::error::ReadError;
 use crate::error::Result;
 use crate::nrrd::header_lines;
 use crate::raw::{self, Decoded, ElemType};
-use crate::util::{header_err, read_exact_checked};
+use crate::util::{
+    check_inflatable, header_err, io_error, open_regular, read_exact_checked, regular_metadata,
+};
 
 /// The header fields Volux uses (keys lowercased).
 struct Header {
@@ -271,9 +273,7 @@ fn storage(path: &Path, h: &Header) -> Result<Storage> {
 
 /// Reads the data section that starts at `start` of `file` (before `HeaderSize`).
 fn read_data(file: &Path, s: &Storage, start: u64, count: u64) -> Result<Decoded> {
-    let len = std::fs::metadata(file)
-        .map_err(|e| ReadError::new(file, e))?
-        .len();
+    let len = regular_metadata(file)?.len();
     let need = raw::data_bytes(file, s.ty, count)?;
     let pos = if s.header_size == -1 {
         len.checked_sub(need)
@@ -293,9 +293,9 @@ fn read_data(file: &Path, s: &Storage, start: u64, count: u64) -> Result<Decoded
     if s.binary && !s.compressed {
         return raw::read_plain(file, pos, s.ty, s.little_endian, count);
     }
-    let mut f = std::fs::File::open(file).map_err(|e| ReadError::new(file, e))?;
+    let mut f = open_regular(file)?;
     f.seek(SeekFrom::Start(pos))
-        .map_err(|e| ReadError::new(file, e))?;
+        .map_err(|e| io_error(file, e))?;
     let rest = len.saturating_sub(pos);
     if !s.binary {
         let bytes = read_exact_checked(file, f, rest)?;
@@ -314,6 +314,9 @@ fn read_data(file: &Path, s: &Storage, start: u64, count: u64) -> Result<Decoded
             },
         ));
     }
+    // Refused before inflating when `size` compressed bytes cannot hold the declared data;
+    // inflation stops one byte after the declared size.
+    check_inflatable(file, size, need)?;
     let z = flate2::read::ZlibDecoder::new(BufReader::new(f.take(size)));
     raw::read_stream(file, z, s.ty, s.little_endian, count)
 }
@@ -327,4 +330,76 @@ pub fn read(path: &Path) -> Result<Grid> {
     let (file, start) = data_location(path, &h, header_end)?;
     let data = read_data(&file, &s, start, g.count)?;
     raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::util::hostile::*;
+    use std::io::Write as _;
+
+    /// A MetaImage header for a `dims` uint8 volume stored in `data` (zlib when `zlib`).
+    fn header(dims: [u64; 3], zlib: bool, data: &str) -> String {
+        let compressed = if zlib { "True" } else { "False" };
+        format!(
+            "ObjectType = Image\nNDims = 3\nDimSize = {} {} {}\nElementType = MET_UCHAR\n\
+             CompressedData = {compressed}\nElementDataFile = {data}\n",
+            dims[0], dims[1], dims[2]
+        )
+    }
+
+    fn zlib(bytes: &[u8]) -> Vec<u8> {
+        let mut enc = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+        enc.write_all(bytes).unwrap();
+        enc.finish().unwrap()
+    }
+
+    #[test]
+    fn special_element_data_files_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        zero_link(d, "zero.raw");
+        for zlib in [false, true] {
+            let mhd = d.join(format!("z{zlib}.mhd"));
+            std::fs::write(&mhd, header([2, 2, 2], zlib, "zero.raw")).unwrap();
+            assert_refused(read(&mhd), "zero.raw", "(a character device)");
+        }
+        let mhd = d.join("l.mhd");
+        std::fs::write(&mhd, header([2, 2, 2], false, "l.raw")).unwrap();
+        link_loop(d, "l.raw");
+        assert_refused(read(&mhd), "l.raw", "loop of symbolic links");
+        if let Some(f) = fifo(d, "f.mha") {
+            assert_refused(read(&f), "f.mha", "(a FIFO)");
+        }
+    }
+
+    #[test]
+    fn zlib_data_is_bounded_by_the_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let p = d.join("bomb.mha");
+        let mut bytes = header([16, 16, 4], true, "LOCAL").into_bytes();
+        bytes.extend(zlib(&vec![0u8; 64 << 20]));
+        std::fs::write(&p, bytes).unwrap();
+        let e = read(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("bomb.mha") && e.contains("more than the 1024 bytes"),
+            "{e}"
+        );
+        let p = d.join("huge.mha");
+        let mut bytes = header([2048, 2048, 1536], true, "LOCAL").into_bytes();
+        bytes.extend(zlib(&[0u8; 1000]));
+        std::fs::write(&p, bytes).unwrap();
+        let e = read(&p).unwrap_err();
+        assert!(
+            matches!(
+                e.kind,
+                ErrorKind::Undeliverable {
+                    declared: 6442450944,
+                    ..
+                } | ErrorKind::Data(_)
+            ),
+            "{e}"
+        );
+    }
 }

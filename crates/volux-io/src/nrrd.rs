@@ -23,7 +23,9 @@ use crate::error::ReadError;
 use crate::error::Result;
 use crate::error::WriteError;
 use crate::raw::{self, Decoded, ElemType};
-use crate::util::{header_err, read_exact_checked};
+use crate::util::{
+    check_inflatable, header_err, io_error, open_regular, read_exact_checked, regular_metadata,
+};
 
 /// Largest header read, in bytes.
 pub(crate) const MAX_HEADER_BYTES: u64 = 1 << 20;
@@ -35,7 +37,7 @@ pub(crate) fn header_lines(
     stop: impl Fn(&str) -> bool,
     include_stop: bool,
 ) -> Result<(Vec<String>, u64, bool)> {
-    let file = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    let file = open_regular(path)?;
     let mut reader = BufReader::new(file.take(MAX_HEADER_BYTES));
     let (mut lines, mut offset, mut buf) = (Vec::new(), 0u64, Vec::new());
     loop {
@@ -364,9 +366,9 @@ fn skip_lines(path: &Path, reader: &mut impl BufRead, n: u64) -> Result<u64> {
 
 /// Opens `file` positioned at `offset` plus `line_skip` lines; returns the reader and position.
 fn open_at(path: &Path, offset: u64, line_skip: u64) -> Result<(BufReader<std::fs::File>, u64)> {
-    let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    let mut f = open_regular(path)?;
     f.seek(SeekFrom::Start(offset))
-        .map_err(|e| ReadError::new(path, e))?;
+        .map_err(|e| io_error(path, e))?;
     let mut reader = BufReader::new(f);
     let skipped = skip_lines(path, &mut reader, line_skip)?;
     Ok((reader, offset + skipped))
@@ -414,7 +416,13 @@ fn read_data(
     let (reader, pos) = open_at(file, start, h.line_skip)?;
     match encoding {
         Encoding::Raw => read_raw(file, h.byte_skip, pos, ty, le, count),
-        Encoding::Gzip => read_gzip(file, reader, h.byte_skip as u64, ty, le, count),
+        Encoding::Gzip => {
+            let compressed = regular_metadata(file)?.len().saturating_sub(pos);
+            let skip = h.byte_skip as u64;
+            let need = raw::data_bytes(file, ty, count)?;
+            check_inflatable(file, compressed, need.saturating_add(skip))?;
+            read_gzip(file, reader, skip, ty, le, count)
+        }
         Encoding::Ascii => read_ascii(file, reader, pos, ty, count),
     }
 }
@@ -428,9 +436,7 @@ fn read_raw(
     le: bool,
     count: u64,
 ) -> Result<Decoded> {
-    let len = std::fs::metadata(file)
-        .map_err(|e| ReadError::new(file, e))?
-        .len();
+    let len = regular_metadata(file)?.len();
     let need = raw::data_bytes(file, ty, count)?;
     let offset = if byte_skip == -1 {
         len.checked_sub(need).filter(|&o| o >= pos).ok_or_else(|| {
@@ -448,7 +454,9 @@ fn read_raw(
     raw::read_plain(file, offset, ty, le, count)
 }
 
-/// Gzip data; `skip` bytes of the decompressed stream are skipped first.
+/// Gzip data; `skip` bytes of the decompressed stream are skipped first. The caller has
+/// checked that the compressed bytes can hold what the header declares; inflation stops one
+/// byte after the declared size ([`raw::read_stream`]).
 fn read_gzip(
     file: &Path,
     reader: impl Read,
@@ -480,9 +488,7 @@ fn read_ascii(
     ty: ElemType,
     count: u64,
 ) -> Result<Decoded> {
-    let len = std::fs::metadata(file)
-        .map_err(|e| ReadError::new(file, e))?
-        .len();
+    let len = regular_metadata(file)?.len();
     let bytes = read_exact_checked(file, reader, len.saturating_sub(pos))?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|_| ReadError::new(file, ErrorKind::Invalid("ASCII data is not text".into())))?;
@@ -527,4 +533,83 @@ pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
     let mut bytes = header.into_bytes();
     bytes.extend_from_slice(&raw::samples_le_bytes(grid.samples()));
     volux_core::image::write_atomically(path, &bytes).map_err(werr)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::util::hostile::*;
+    use std::io::Write as _;
+
+    /// An NRRD header for a `dims` uint8 volume with `encoding` and optional `data file`.
+    fn header(dims: [u64; 3], encoding: &str, data_file: Option<&str>) -> String {
+        let detached = data_file
+            .map(|f| format!("data file: {f}\n"))
+            .unwrap_or_default();
+        format!(
+            "NRRD0004\ntype: uint8\ndimension: 3\nsizes: {} {} {}\nencoding: {encoding}\n{detached}\n",
+            dims[0], dims[1], dims[2]
+        )
+    }
+
+    fn gzip(bytes: &[u8]) -> Vec<u8> {
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+        enc.write_all(bytes).unwrap();
+        enc.finish().unwrap()
+    }
+
+    #[test]
+    fn special_headers_and_data_files_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        if let Some(f) = fifo(d, "t.nrrd") {
+            // `volux info` on this blocked forever.
+            assert_refused(read(&f), "t.nrrd", "not a regular file (a FIFO)");
+            assert_refused(crate::load(&f, &Default::default()), "t.nrrd", "(a FIFO)");
+        }
+        let nhdr = d.join("z.nhdr");
+        std::fs::write(&nhdr, header([2, 2, 2], "raw", Some("zero.raw"))).unwrap();
+        zero_link(d, "zero.raw");
+        assert_refused(read(&nhdr), "zero.raw", "(a character device)");
+        let nhdr = d.join("zg.nhdr");
+        std::fs::write(&nhdr, header([2, 2, 2], "gzip", Some("zero.raw"))).unwrap();
+        assert_refused(read(&nhdr), "zero.raw", "(a character device)");
+        let nhdr = d.join("l.nhdr");
+        std::fs::write(&nhdr, header([2, 2, 2], "raw", Some("l.raw"))).unwrap();
+        link_loop(d, "l.raw");
+        assert_refused(read(&nhdr), "l.raw", "loop of symbolic links");
+        assert_refused(read(&link_loop(d, "h.nrrd")), "h.nrrd", "loop");
+    }
+
+    #[test]
+    fn gzip_data_is_bounded_by_the_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        // A bomb: 64 MiB of zeros where the header declares 1 KiB.
+        let p = d.join("bomb.nrrd");
+        let mut bytes = header([16, 16, 4], "gzip", None).into_bytes();
+        bytes.extend(gzip(&vec![0u8; 64 << 20]));
+        std::fs::write(&p, bytes).unwrap();
+        let e = read(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("bomb.nrrd") && e.contains("more than the 1024 bytes"),
+            "{e}"
+        );
+        // A matching header of 6 GiB behind 100 compressed bytes: refused before inflating.
+        let p = d.join("huge.nrrd");
+        let mut bytes = header([2048, 2048, 1536], "gzip", None).into_bytes();
+        bytes.extend(gzip(&[0u8; 1000]));
+        std::fs::write(&p, bytes).unwrap();
+        let e = read(&p).unwrap_err();
+        assert!(
+            matches!(
+                e.kind,
+                ErrorKind::Undeliverable {
+                    declared: 6442450944,
+                    ..
+                } | ErrorKind::Data(_)
+            ),
+            "{e}"
+        );
+    }
 }
