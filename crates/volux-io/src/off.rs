@@ -9,32 +9,33 @@
 //! ```
 //!
 //! Blank lines and `#` comments are skipped; gzip is detected by its magic bytes
-//! (`flate2`). Parsing is a hand-written tokenizer over the bytes (integers parsed by hand,
+//! (`flate2`). OFF declares no byte size, so gzip is inflated into a growing buffer capped at
+//! [`MAX_GZ_RATIO`] times the compressed size and at the memory limit: OFF text compresses
+//! about 4:1 (the shared meshes: 4.1 to 4.4), so 64:1 leaves a wide margin for valid meshes
+//! while a decompression bomb (deflate reaches 1032:1) stops early with an error. Parsing is a hand-written tokenizer over the bytes (integers parsed by hand,
 //! floats by the standard library) because the benchmark meshes have over half a million tets:
 //! no parser crate is needed for a format this small. Counts are checked against the bytes
 //! actually present before anything is reserved, and every syntax error names its line.
-use std::io::Read;
 use std::path::Path;
 
 use glam::Vec3;
 use volux_core::limits::{check_alloc, memory_limit};
+
+/// Most bytes a gzip OFF file may inflate to, per compressed byte (see the module docs).
+pub const MAX_GZ_RATIO: u64 = 64;
 use volux_core::TetMesh;
 
 use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
-use crate::util::open_maybe_gz;
+use crate::util::{open_gz_input, read_to_limit};
 
 /// Shortest possible vertex or tet line: 4 one-character tokens, 3 separators, a newline.
 const MIN_LINE_BYTES: u64 = 8;
 
 /// Reads an OFF tetrahedral mesh (plain or gzip).
 pub fn read(path: &Path) -> Result<TetMesh> {
-    let mut bytes = Vec::new();
-    open_maybe_gz(path)?
-        .take(memory_limit())
-        .read_to_end(&mut bytes)
-        .map_err(|e| ReadError::new(path, e))?;
+    let bytes = read_text(path)?;
     parse(&bytes)
         .map_err(|m| ReadError::new(path, ErrorKind::Invalid(m)))
         .and_then(|(p, s, t, notes)| {
@@ -44,6 +45,32 @@ pub fn read(path: &Path) -> Result<TetMesh> {
             }
             Ok(mesh)
         })
+}
+
+/// The bytes of the file, inflated when gzip: plain files up to their length, gzip up to
+/// [`MAX_GZ_RATIO`] times the compressed size; both within the memory limit.
+fn read_text(path: &Path) -> Result<Vec<u8>> {
+    let input = open_gz_input(path)?;
+    let memory = memory_limit();
+    if !input.gzip {
+        check_alloc("OFF file", input.file_len, 1).map_err(|e| ReadError::new(path, e))?;
+        return read_to_limit(path, input.reader, input.file_len, "the file", || {
+            "it grew while being read".into()
+        });
+    }
+    let ratio_cap = input.file_len.saturating_mul(MAX_GZ_RATIO);
+    let limit = ratio_cap.min(memory);
+    read_to_limit(path, input.reader, limit, "gzip data", || {
+        if ratio_cap <= memory {
+            format!(
+                "{MAX_GZ_RATIO} times its {} compressed bytes; OFF text compresses about 4:1, \
+                 so this looks like a decompression bomb",
+                input.file_len
+            )
+        } else {
+            "the memory limit".into()
+        }
+    })
 }
 
 /// Positions, scalars, tets and notes.
@@ -237,6 +264,40 @@ mod tests {
         assert_eq!(s, vec![1.0, 2.0, 3.0, 4.0]);
         assert_eq!(t, vec![[0, 1, 2, 3]]);
         assert!(notes.is_empty());
+    }
+
+    #[test]
+    fn special_files_are_refused() {
+        use crate::util::hostile::*;
+        let dir = tempfile::tempdir().unwrap();
+        assert_refused(
+            read(&zero_link(dir.path(), "z.off")),
+            "z.off",
+            "(a character device)",
+        );
+        assert_refused(read(&link_loop(dir.path(), "l.off")), "l.off", "loop");
+        if let Some(f) = fifo(dir.path(), "f.off.gz") {
+            assert_refused(read(&f), "f.off.gz", "(a FIFO)");
+        }
+    }
+
+    #[test]
+    fn gzip_bombs_stop_at_the_ratio_cap() {
+        use std::io::Write as _;
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bomb.off.gz");
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+        enc.write_all(b"4 1\n").unwrap();
+        enc.write_all(&vec![b' '; 256 << 20]).unwrap();
+        let gz = enc.finish().unwrap();
+        std::fs::write(&p, &gz).unwrap();
+        let e = read(&p).unwrap_err();
+        let limit = gz.len() as u64 * MAX_GZ_RATIO;
+        assert!(
+            matches!(e.kind, ErrorKind::Inflates { limit: l, .. } if l == limit),
+            "{e}"
+        );
+        assert!(e.to_string().contains("decompression bomb"), "{e}");
     }
 
     #[test]
