@@ -95,7 +95,9 @@ impl Encoding<'_> {
         self.inflate(b, data)
     }
 
-    /// Decompresses the zlib blocks described by the header at `b`.
+    /// Decompresses the zlib blocks described by the header at `b`. The declared sizes are
+    /// checked against what the compressed bytes can hold before anything is inflated, the
+    /// output grows block by block, and a block inflating to more than announced stops.
     fn inflate(&self, b: &[u8], mut data: &[u8]) -> R<Vec<u8>> {
         let nb = self.word_at(b, 0)? as usize;
         let block = self.word_at(b, 1)?;
@@ -108,7 +110,8 @@ impl Encoding<'_> {
         };
         volux_core::limits::check_alloc("decompressed array", total, 1)
             .map_err(|e| e.to_string())?;
-        let mut out = Vec::with_capacity(total.min(64 << 20) as usize);
+        check_inflatable(total, self.data_len(b)?)?;
+        let mut out = Vec::with_capacity(total.min(FIRST_CHUNK) as usize);
         for i in 0..nb {
             let c = self.word_at(b, 3 + i)? as usize;
             let want = if i + 1 == nb && last != 0 {
@@ -118,18 +121,48 @@ impl Encoding<'_> {
             };
             let (chunk, rest) = data.split_at(c.min(data.len()));
             data = rest;
-            let got = ZlibDecoder::new(chunk)
-                .take(want)
-                .read_to_end(&mut out)
-                .map_err(|e| format!("zlib block {i}: {e}"))?;
-            if got as u64 != want {
-                return Err(format!(
-                    "zlib block {i} holds {got} bytes, the header announces {want}"
-                ));
-            }
+            inflate_block(chunk, want, &mut out).map_err(|m| format!("zlib block {i}: {m}"))?;
         }
         Ok(out)
     }
+}
+
+/// Appends the `want` bytes the zlib `chunk` inflates to onto `out`; fewer or more is an
+/// error, and inflation stops one byte after `want`.
+fn inflate_block(chunk: &[u8], want: u64, out: &mut Vec<u8>) -> R<()> {
+    check_inflatable(want, chunk.len() as u64)?;
+    let mut z = ZlibDecoder::new(chunk);
+    let got = (&mut z)
+        .take(want)
+        .read_to_end(out)
+        .map_err(|e| e.to_string())?;
+    if got as u64 != want {
+        return Err(format!("holds {got} bytes, the header announces {want}"));
+    }
+    let mut more = [0u8; 1];
+    if z.read(&mut more).map_err(|e| e.to_string())? > 0 {
+        return Err(format!(
+            "inflates to more than the {want} bytes the header announces; decoding stopped there"
+        ));
+    }
+    Ok(())
+}
+
+/// First capacity of an inflated array; it grows as blocks are inflated.
+const FIRST_CHUNK: u64 = 4 << 20;
+
+/// An error unless `compressed` bytes of zlib data can inflate to `declared` bytes (deflate
+/// expands at most 1032:1): a size header claiming 1 GiB for a few bytes is refused before
+/// anything is inflated.
+fn check_inflatable(declared: u64, compressed: u64) -> R<()> {
+    let max = crate::util::max_inflated(compressed);
+    if declared > max {
+        return Err(format!(
+            "the size header declares {declared} bytes, but {compressed} bytes of zlib data \
+             inflate to at most {max} (deflate expands at most 1032:1)"
+        ));
+    }
+    Ok(())
 }
 
 fn b64(chars: &[u8]) -> R<Vec<u8>> {

@@ -34,11 +34,7 @@ use tree::Elem;
 
 /// Reads a `.vti` or `.vtu` file; `array` picks a data array by name.
 pub fn read(path: &Path, array: Option<&str>) -> Result<Dataset> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| ReadError::new(path, e))?
-        .len();
-    volux_core::limits::check_alloc("VTK XML file", len, 1).map_err(|e| ReadError::new(path, e))?;
-    let bytes = std::fs::read(path).map_err(|e| ReadError::new(path, e))?;
+    let bytes = crate::util::read_regular(path, volux_core::limits::memory_limit())?;
     let header = |m: String| ReadError::new(path, ErrorKind::Header(m));
     let (xml, appended) = split_appended(&bytes).map_err(header)?;
     let root = tree::parse(xml).map_err(header)?;
@@ -271,4 +267,87 @@ fn cell_set(p: &Elem, enc: &Encoding, nc: usize) -> std::result::Result<CellSet,
         ));
     }
     Ok(set)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::util::hostile::*;
+    use base64::Engine as _;
+    use std::io::Write as _;
+
+    /// A 2 x 2 x 2 zlib-compressed `.vti` whose one block of `zlib` bytes is announced as
+    /// `declared` bytes (header and data as two base64 streams, as VTK writes them).
+    fn vti(declared: u32, zlib: &[u8]) -> Vec<u8> {
+        let b64 = base64::engine::general_purpose::STANDARD;
+        let header: Vec<u8> = [1, declared, declared, zlib.len() as u32]
+            .iter()
+            .flat_map(|w| w.to_le_bytes())
+            .collect();
+        format!(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"1.0\" \
+             byte_order=\"LittleEndian\" header_type=\"UInt32\" \
+             compressor=\"vtkZLibDataCompressor\">\n<ImageData WholeExtent=\"0 1 0 1 0 1\" \
+             Origin=\"0 0 0\" Spacing=\"1 1 1\">\n<Piece Extent=\"0 1 0 1 0 1\">\n\
+             <PointData Scalars=\"s\">\n<DataArray type=\"UInt8\" Name=\"s\" format=\"binary\">\
+             {}{}</DataArray>\n</PointData>\n</Piece>\n</ImageData>\n</VTKFile>\n",
+            b64.encode(header),
+            b64.encode(zlib)
+        )
+        .into_bytes()
+    }
+
+    fn zlib(bytes: &[u8]) -> Vec<u8> {
+        let mut enc = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+        enc.write_all(bytes).unwrap();
+        enc.finish().unwrap()
+    }
+
+    #[test]
+    fn a_valid_zlib_vti_reads() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("ok.vti");
+        std::fs::write(&p, vti(8, &zlib(&[1, 2, 3, 4, 5, 6, 7, 8]))).unwrap();
+        let Dataset::Grid(g) = read(&p, None).unwrap() else {
+            panic!("not a grid")
+        };
+        assert_eq!(g.value(1, 1, 1), 8.0);
+    }
+
+    #[test]
+    fn zlib_blocks_are_bounded_by_their_bytes_and_header() {
+        let dir = tempfile::tempdir().unwrap();
+        // A size header claiming 1 GiB for a few bytes: refused before inflating.
+        let p = dir.path().join("claim.vti");
+        std::fs::write(&p, vti(1 << 30, &zlib(&[0; 8]))).unwrap();
+        let e = read(&p, None).unwrap_err().to_string();
+        assert!(
+            e.contains("claim.vti")
+                && e.contains("declares 1073741824 bytes")
+                && e.contains("1032:1"),
+            "{e}"
+        );
+        // A block inflating to 64 MiB where 8 bytes are announced: stops after 9 bytes.
+        let p = dir.path().join("bomb.vti");
+        std::fs::write(&p, vti(8, &zlib(&vec![0; 64 << 20]))).unwrap();
+        let e = read(&p, None).unwrap_err().to_string();
+        assert!(
+            e.contains("bomb.vti") && e.contains("more than the 8 bytes"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn special_files_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        assert_refused(
+            read(&zero_link(dir.path(), "z.vti"), None),
+            "z.vti",
+            "(a character device)",
+        );
+        assert_refused(read(&link_loop(dir.path(), "l.vtu"), None), "l.vtu", "loop");
+        if let Some(f) = fifo(dir.path(), "f.vti") {
+            assert_refused(read(&f, None), "f.vti", "(a FIFO)");
+        }
+    }
 }
