@@ -71,15 +71,17 @@ fn stem_without_gz(path: &Path) -> (String, bool) {
     }
 }
 
-/// Detects the format of `path` (a file, or a folder of DICOM slices).
+/// Detects the format of `path` (a file, or a folder of DICOM slices). Only regular files
+/// are opened to sniff their magic bytes: a FIFO, a device or a socket is refused by type
+/// ([`ErrorKind::NotRegular`]).
 pub fn detect(path: &Path) -> Result<Format> {
-    let meta = std::fs::metadata(path).map_err(|e| ReadError::new(path, e))?;
+    let meta = crate::util::data_metadata(path)?;
     if meta.is_dir() {
         return Ok(Format::Dicom);
     }
     let mut head = [0u8; 512];
     let n = {
-        let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+        let mut f = crate::util::open_regular(path)?;
         let mut n = 0;
         while n < head.len() {
             match f

@@ -26,7 +26,9 @@ use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
 use crate::error::WriteError;
-use crate::util::{header_err, read_exact_checked, write_chunked, Progress, PROGRESS_STEP};
+use crate::util::{
+    file_len, header_err, open_regular, read_exact_checked, write_chunked, Progress, PROGRESS_STEP,
+};
 
 /// Magic bytes of the format.
 pub const MAGIC: &[u8] = b"VOLUXTET";
@@ -109,10 +111,8 @@ fn f32s(bytes: &[u8]) -> impl Iterator<Item = f32> + '_ {
 
 /// Reads a `.vtet` mesh.
 pub fn read(path: &Path) -> Result<TetMesh> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| ReadError::new(path, e))?
-        .len();
-    let file = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    let file = open_regular(path)?;
+    let len = file_len(path, &file)?;
     let mut file = std::io::BufReader::new(file);
     let head = read_exact_checked(path, &mut file, HEADER_BYTES.min(len))?;
     if (head.len() as u64) < HEADER_BYTES {
@@ -236,6 +236,19 @@ fn write_mesh(out: &mut impl Write, mesh: &TetMesh) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn special_files_are_refused() {
+        use crate::util::hostile::*;
+        let dir = tempfile::tempdir().unwrap();
+        let zero = zero_link(dir.path(), "zm.vtet");
+        assert_refused(read(&zero), "zm.vtet", "(a character device)");
+        let looped = link_loop(dir.path(), "lm.vtet");
+        assert_refused(read(&looped), "lm.vtet", "loop");
+        if let Some(f) = fifo(dir.path(), "fm.vtet") {
+            assert_refused(read(&f), "fm.vtet", "(a FIFO)");
+        }
+    }
 
     #[test]
     fn fnv1a_is_the_reference_hash_and_chains() {

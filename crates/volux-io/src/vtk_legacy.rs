@@ -33,11 +33,7 @@ type R<T> = std::result::Result<T, ErrorKind>;
 
 /// Reads a legacy VTK file; `array` picks a data array by name.
 pub fn read(path: &Path, array: Option<&str>) -> Result<Dataset> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| ReadError::new(path, e))?
-        .len();
-    volux_core::limits::check_alloc("VTK file", len, 1).map_err(|e| ReadError::new(path, e))?;
-    let bytes = std::fs::read(path).map_err(|e| ReadError::new(path, e))?;
+    let bytes = crate::util::read_regular(path, volux_core::limits::memory_limit())?;
     let parsed = parse(&bytes).map_err(|k| ReadError::new(path, k))?;
     build(path, parsed, array)
 }
@@ -476,6 +472,19 @@ fn build_grid(path: &Path, p: Parsed, want: Option<&str>) -> Result<Grid> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn special_files_are_refused() {
+        use crate::util::hostile::*;
+        let dir = tempfile::tempdir().unwrap();
+        let zero = zero_link(dir.path(), "zm.vtk");
+        assert_refused(read(&zero, None), "zm.vtk", "(a character device)");
+        let looped = link_loop(dir.path(), "lm.vtk");
+        assert_refused(read(&looped, None), "lm.vtk", "loop");
+        if let Some(f) = fifo(dir.path(), "fm.vtk") {
+            assert_refused(read(&f, None), "fm.vtk", "(a FIFO)");
+        }
+    }
 
     #[test]
     fn classic_cells_reject_overruns() {
