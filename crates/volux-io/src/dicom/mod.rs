@@ -27,7 +27,10 @@
 //! The orientation is not applied: the grid is axis-aligned in (column, row, slice) order with
 //! its origin at the first slice's ImagePositionPatient (noted when the orientation is not the
 //! identity). `dicom-parser` allocates each element's declared length (at most 4 GiB, a `u32`)
-//! before reading it; Volux's own buffers are checked with `check_alloc`.
+//! before reading it, so every element length is first checked against the bytes left in
+//! the file ([`bounds`]); Volux's own buffers are checked with `check_alloc`. Only regular
+//! files are opened ([`crate::util::open_regular`]); in a folder, anything else (a FIFO, a
+//! device, a link to one) is skipped.
 use std::collections::BTreeMap;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
@@ -43,6 +46,7 @@ use crate::error::ReadError;
 use crate::error::Result;
 
 mod attrs;
+mod bounds;
 mod geometry;
 mod pixels;
 
@@ -52,7 +56,7 @@ use geometry::{Stack, StackInput};
 /// Reads a DICOM folder (one series) or file. `series_uid` picks the series in a folder
 /// holding several (default: the one with the most slices).
 pub fn read(path: &Path, series_uid: Option<&str>) -> Result<Grid> {
-    let meta = std::fs::metadata(path).map_err(|e| ReadError::new(path, e))?;
+    let meta = crate::util::data_metadata(path)?;
     if meta.is_dir() {
         read_folder(path, series_uid)
     } else {
@@ -67,7 +71,7 @@ fn invalid(path: &Path, msg: impl Into<String>) -> ReadError {
 /// Whether the file has the `DICM` marker after the 128-byte preamble.
 fn has_dicm(path: &Path) -> Result<bool> {
     let mut head = [0u8; 132];
-    let f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    let f = crate::util::open_regular(path)?;
     let n = f
         .take(132)
         .read(&mut head)
@@ -80,6 +84,7 @@ fn scan(path: &Path) -> Result<Option<ImageInfo>> {
     if !path.is_file() || !has_dicm(path)? {
         return Ok(None);
     }
+    bounds::check(path)?;
     let obj = OpenFileOptions::new()
         .read_until(tags::PIXEL_DATA)
         .open_file(path)
@@ -88,8 +93,9 @@ fn scan(path: &Path) -> Result<Option<ImageInfo>> {
     Ok(ImageInfo::from_obj(path.to_path_buf(), ts, &obj))
 }
 
-/// Parses a whole file (with its pixel data).
+/// Parses a whole file (with its pixel data), its element lengths checked first.
 fn open_full(path: &Path) -> Result<DefaultDicomObject> {
+    bounds::check(path)?;
     OpenFileOptions::new()
         .open_file(path)
         .map_err(|e| parse_error(path, &e))
@@ -115,7 +121,7 @@ fn parse_error(path: &Path, e: &dyn std::error::Error) -> ReadError {
 
 /// The transfer syntax from the file meta group, if readable.
 fn meta_transfer_syntax(path: &Path) -> Option<String> {
-    let mut f = std::io::BufReader::new(std::fs::File::open(path).ok()?);
+    let mut f = std::io::BufReader::new(crate::util::open_regular(path).ok()?);
     f.seek(SeekFrom::Start(128)).ok()?;
     let meta = dicom_object::meta::FileMetaTable::from_reader(f).ok()?;
     Some(meta.transfer_syntax().to_string())

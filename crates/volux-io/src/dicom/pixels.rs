@@ -212,7 +212,7 @@ fn shifted_i16(raw: &Samples, rescale: &[(f64, f64)], slice_len: usize) -> Optio
 /// For a file the parser could not read: the declared and present bytes of its PixelData
 /// when the file ends inside it (found by scanning for the PixelData element header).
 pub(super) fn truncation(path: &Path, transfer_syntax: &str) -> Option<(u64, u64)> {
-    let data = std::fs::read(path).ok()?;
+    let data = crate::util::read_regular(path, volux_core::limits::memory_limit()).ok()?;
     let (tag, explicit, le): (&[u8], bool, bool) = match transfer_syntax {
         IMPLICIT_LE => (&[0xE0, 0x7F, 0x10, 0x00], false, true),
         EXPLICIT_BE => (&[0x7F, 0xE0, 0x00, 0x10], true, false),
