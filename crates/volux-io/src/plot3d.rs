@@ -31,6 +31,7 @@ use crate::error::ErrorKind;
 use crate::error::ReadError;
 
 use crate::error::Result;
+use crate::util::read_regular;
 
 /// The names of the q variables, in file order, then the derived one.
 pub const VARIABLES: [&str; 6] = [
@@ -298,12 +299,10 @@ fn floats(bytes: &[u8], at: usize, n: usize, little: bool) -> Vec<f32> {
         .collect()
 }
 
+/// The whole file, if it is a regular file ([`read_regular`]: FIFOs and devices are refused
+/// before opening) that fits in memory.
 fn read_file(path: &Path) -> Result<Vec<u8>> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| ReadError::new(path, e))?
-        .len();
-    volux_core::limits::check_alloc("PLOT3D file", len, 1).map_err(|e| ReadError::new(path, e))?;
-    std::fs::read(path).map_err(|e| ReadError::new(path, e))
+    read_regular(path, u64::MAX)
 }
 
 fn trailing_note(what: &str, extra: usize) -> Option<String> {

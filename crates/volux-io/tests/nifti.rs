@@ -437,6 +437,26 @@ fn data_longer_than_dims_is_noted() {
     assert!(n.contains("holds 2 bytes more"), "{n}");
 }
 
+/// A FIFO as the `.img` of a pair is refused by its type, without opening it.
+#[cfg(unix)]
+#[test]
+fn fifo_image_file_is_refused_without_blocking() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = dir.path().join("pipe.img");
+    let made = std::process::Command::new("mkfifo").arg(&img).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo unavailable: skipped");
+        return;
+    }
+    let mut spec = Spec::new(true, [2, 2, 1], 2, 8);
+    spec.magic = *b"ni1\0";
+    spec.vox_offset = 0.0;
+    let hdr = write(dir.path(), "pipe.hdr", &spec.header());
+    let e = nifti::read(&hdr).unwrap_err();
+    assert!(matches!(e.kind, ErrorKind::NotRegular(_)), "{e}");
+    assert!(e.path.ends_with("pipe.img"), "{e}");
+}
+
 /// The shared VTK head MR (raw + JSON sidecar) written as `.nii.gz` reads back identically.
 #[test]
 fn shared_head_mr_as_nii_gz() {

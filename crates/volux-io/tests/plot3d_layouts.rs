@@ -242,3 +242,24 @@ fn q_with_other_dims_is_refused() {
     assert!(e.path.ends_with("gridq.bin"), "{e}");
     assert!(e.to_string().contains("q dims [2, 3, 2] differ"), "{e}");
 }
+
+/// A FIFO given as the xyz or q file is refused by its type, without opening it (opening a
+/// FIFO with no writer would block forever).
+#[cfg(unix)]
+#[test]
+fn fifo_inputs_are_refused_without_blocking() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifoxyz.bin");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo unavailable: skipped");
+        return;
+    }
+    let style = Style::new(false, false);
+    let good = files(dir.path(), &xyz(style, ijk), &q(style));
+    for (x, qf) in [(&fifo, dir.path().join("gridq.bin")), (&good, fifo.clone())] {
+        let e = plot3d::read(x, Some(&qf), None).unwrap_err();
+        assert!(matches!(e.kind, ErrorKind::NotRegular(_)), "{e}");
+        assert!(e.path.ends_with("fifoxyz.bin"), "{e}");
+    }
+}

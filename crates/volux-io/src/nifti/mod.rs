@@ -32,7 +32,9 @@ use volux_core::{Buffer, Grid, Samples, ScalarType};
 use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
-use crate::util::{header_err, open_maybe_gz, read_exact_checked};
+use crate::util::{
+    header_err, io_error, open_maybe_gz, open_regular, read_exact_checked, regular_metadata,
+};
 
 mod header;
 mod values;
@@ -163,7 +165,7 @@ fn image_file(path: &Path) -> Result<PathBuf> {
     candidates
         .iter()
         .map(|c| path.with_file_name(c))
-        .find(|p| p.is_file())
+        .find(|p| p.exists())
         .ok_or_else(|| {
             ReadError::new(
                 path,
@@ -178,8 +180,8 @@ fn image_file(path: &Path) -> Result<PathBuf> {
 /// Whether the file starts with the gzip magic bytes.
 fn is_gzip(path: &Path) -> Result<bool> {
     let mut magic = [0u8; 2];
-    let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
-    let n = f.read(&mut magic).map_err(|e| ReadError::new(path, e))?;
+    let mut f = open_regular(path)?;
+    let n = f.read(&mut magic).map_err(|e| io_error(path, e))?;
     Ok(n == 2 && magic == [0x1f, 0x8b])
 }
 
@@ -215,9 +217,7 @@ fn map(path: &Path, ty: ScalarType, span: Span) -> Result<Option<Samples>> {
 
 /// An uncompressed file must hold `offset + bytes` bytes; returns what it holds beyond them.
 fn check_length(path: &Path, offset: u64, bytes: u64) -> Result<Surplus> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| ReadError::new(path, e))?
-        .len();
+    let len = regular_metadata(path)?.len();
     let found = len.saturating_sub(offset);
     if found < bytes {
         return Err(ReadError::new(
@@ -236,9 +236,9 @@ fn check_length(path: &Path, offset: u64, bytes: u64) -> Result<Surplus> {
 
 /// Reads `bytes` bytes at `offset` of an uncompressed file (its length already checked).
 fn read_plain(path: &Path, offset: u64, bytes: u64) -> Result<Vec<u8>> {
-    let mut f = std::fs::File::open(path).map_err(|e| ReadError::new(path, e))?;
+    let mut f = open_regular(path)?;
     f.seek(SeekFrom::Start(offset))
-        .map_err(|e| ReadError::new(path, e))?;
+        .map_err(|e| io_error(path, e))?;
     read_exact_checked(path, std::io::BufReader::new(f), bytes)
 }
 
