@@ -121,9 +121,68 @@ fn folder_skips_non_dicom_files() {
     let dir = copy_series(&series);
     std::fs::copy(series.join("series.json"), dir.path().join("series.json")).unwrap();
     std::fs::write(dir.path().join("notes.txt"), "hello").unwrap();
-    std::fs::create_dir(dir.path().join("sub")).unwrap();
     let g = dicom::read(dir.path(), None).unwrap();
     assert_eq!(g.dims(), [512, 512, 3]);
+    assert!(
+        g.notes().is_empty(),
+        "other files pass quietly: {:?}",
+        g.notes()
+    );
+    // Empty files and folders among the slices are said (a damaged copy of a series).
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    std::fs::write(dir.path().join("1-4.dcm"), b"").unwrap();
+    std::fs::write(dir.path().join("1-5.dcm"), b"").unwrap();
+    let g = dicom::read(dir.path(), None).unwrap();
+    assert_eq!(g.dims(), [512, 512, 3]);
+    assert!(
+        g.notes()
+            .iter()
+            .any(|n| n == "skipped 2 empty files and 1 folder among the series' files"),
+        "{:?}",
+        g.notes()
+    );
+}
+
+#[test]
+fn frame_counts_that_disagree_with_the_data_are_refused_or_noted() {
+    let Some(emri) = shared(EMRI) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    for bad in ["0", "-1"] {
+        let out = dir.path().join(format!("frames{bad}.dcm"));
+        edit(&emri, &out, |o| {
+            o.put_str(tags::NUMBER_OF_FRAMES, VR::IS, bad);
+        });
+        let e = dicom::read(&out, None).unwrap_err().to_string();
+        assert!(e.contains(&format!("NumberOfFrames is {bad}")), "{e}");
+    }
+    // No NumberOfFrames: one frame is read and the rest of the pixel data is said.
+    let out = dir.path().join("missing.dcm");
+    edit(&emri, &out, |o| {
+        o.remove_element(tags::NUMBER_OF_FRAMES);
+    });
+    let g = dicom::read(&out, None).unwrap();
+    assert_eq!(g.dims()[2], 1);
+    assert!(
+        g.notes()
+            .iter()
+            .any(|n| n.contains("more than the") && n.contains("the rest is not read")),
+        "{:?}",
+        g.notes()
+    );
+    // A NumberOfFrames smaller than the data: the same note.
+    let out = dir.path().join("rows.dcm");
+    edit(&emri, &out, |o| {
+        o.put_str(tags::NUMBER_OF_FRAMES, VR::IS, "2");
+    });
+    let g = dicom::read(&out, None).unwrap();
+    assert_eq!(g.dims()[2], 2);
+    assert!(
+        g.notes().iter().any(|n| n.contains("the rest is not read")),
+        "{:?}",
+        g.notes()
+    );
 }
 
 #[test]

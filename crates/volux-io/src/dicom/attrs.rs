@@ -97,6 +97,9 @@ pub(super) struct ImageInfo {
     pub samples_per_pixel: u32,
     pub photometric: String,
     pub frames: u32,
+    /// NumberOfFrames as the file states it (`None`: absent), to tell a missing count from
+    /// an invalid one.
+    pub frames_stated: Option<i64>,
     pub position: Option<DVec3>,
     pub orientation: Option<[f64; 6]>,
     pub instance: Option<i64>,
@@ -124,6 +127,7 @@ impl ImageInfo {
             samples_per_pixel: u32_of(tags::SAMPLES_PER_PIXEL).unwrap_or(1),
             photometric: string(obj, tags::PHOTOMETRIC_INTERPRETATION).unwrap_or_default(),
             frames: u32_of(tags::NUMBER_OF_FRAMES).unwrap_or(1),
+            frames_stated: int(obj, tags::NUMBER_OF_FRAMES),
             position: grouped(obj, frame0, tags::PLANE_POSITION_SEQUENCE, position),
             orientation: grouped(obj, frame0, tags::PLANE_ORIENTATION_SEQUENCE, |o| {
                 f64s(o, tags::IMAGE_ORIENTATION_PATIENT)?.try_into().ok()

@@ -138,13 +138,19 @@ fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
     let info = scan(path)?.ok_or_else(|| invalid(path, "not a DICOM image (no Rows / Columns)"))?;
     pixels::check_format(&info).map_err(|k| ReadError::new(path, k))?;
     let obj = open_full(path)?;
+    if let Some(n) = info.frames_stated.filter(|&n| n < 1) {
+        return Err(invalid(
+            path,
+            format!("NumberOfFrames is {n}: a multi-frame image has at least one frame"),
+        ));
+    }
     let frames = info.frames.max(1) as usize;
     // The pixel data must hold every frame before per-frame tables are built.
     let frame = frame_len(path, &info)?;
     let total = frame
         .checked_mul(frames as u64)
         .ok_or_else(|| invalid(path, "the pixel data size overflows"))?;
-    let bytes = pixels::le_bytes(path, &obj, total)?;
+    let bytes = pixels::le_bytes(path, &obj, total, &mut notes)?;
     let (positions, rescale) = frame_geometry(&obj, &info, frames);
     let labels = (1..=frames).map(|i| format!("frame {i}")).collect();
     let stack = order(
@@ -267,6 +273,37 @@ fn build_grid(
     Ok(notes.into_iter().fold(grid, Grid::with_note))
 }
 
+/// A note naming the empty files and folders among a series' files, so that a damaged
+/// series is not read short without a word (other files, such as a JSON sidecar or a
+/// DICOMDIR, are skipped quietly).
+fn skipped_note(skipped: &[&Path]) -> Option<String> {
+    let (mut empty, mut folders) = (0, 0);
+    for p in skipped {
+        match std::fs::metadata(p) {
+            Ok(m) if m.is_dir() => folders += 1,
+            Ok(m) if m.is_file() && m.len() == 0 => empty += 1,
+            _ => {}
+        }
+    }
+    let plural = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+    match (empty, folders) {
+        (0, 0) => None,
+        (e, 0) => Some(format!(
+            "skipped {} among the series' files",
+            plural(e, "empty file")
+        )),
+        (0, f) => Some(format!(
+            "skipped {} among the series' files",
+            plural(f, "folder")
+        )),
+        (e, f) => Some(format!(
+            "skipped {} and {} among the series' files",
+            plural(e, "empty file"),
+            plural(f, "folder")
+        )),
+    }
+}
+
 /// Reads the DICOM images of a folder, groups them by series and loads one.
 fn read_folder(dir: &Path, series_uid: Option<&str>) -> Result<Grid> {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -275,12 +312,14 @@ fn read_folder(dir: &Path, series_uid: Option<&str>) -> Result<Grid> {
         .collect();
     entries.sort();
     let mut series: BTreeMap<String, Vec<ImageInfo>> = BTreeMap::new();
+    let mut skipped = Vec::new();
     for p in &entries {
-        if let Some(info) = scan(p)? {
-            series
+        match scan(p)? {
+            Some(info) => series
                 .entry(info.series_uid.clone())
                 .or_default()
-                .push(info);
+                .push(info),
+            None => skipped.push(p.as_path()),
         }
     }
     if series.is_empty() {
@@ -292,7 +331,8 @@ fn read_folder(dir: &Path, series_uid: Option<&str>) -> Result<Grid> {
             ),
         ));
     }
-    let (slices, notes) = select(dir, series, series_uid)?;
+    let (slices, mut notes) = select(dir, series, series_uid)?;
+    notes.extend(skipped_note(&skipped));
     match slices.as_slice() {
         [one] if one.frames > 1 => read_file(&one.path, notes),
         _ => load_series(dir, &slices, notes),
@@ -402,7 +442,7 @@ fn load_series(dir: &Path, slices: &[ImageInfo], mut notes: Vec<String>) -> Resu
     let mut rescale = Vec::with_capacity(slices.len());
     for s in stack.order.iter().filter_map(|&i| slices.get(i)) {
         let obj = open_full(&s.path)?;
-        data.extend_from_slice(&pixels::le_bytes(&s.path, &obj, frame)?);
+        data.extend_from_slice(&pixels::le_bytes(&s.path, &obj, frame, &mut notes)?);
         rescale.push(attrs::rescale(&obj, None));
     }
     notes.extend(stack.notes.iter().cloned());

@@ -68,8 +68,15 @@ pub(super) fn frame_bytes(info: &ImageInfo) -> Option<u64> {
         .checked_mul(u64::from(info.bits / 8))
 }
 
-/// The PixelData of `obj` as a little-endian byte stream, exactly `expected` bytes long.
-pub(super) fn le_bytes<'a>(path: &Path, obj: &'a Obj, expected: u64) -> Result<Cow<'a, [u8]>> {
+/// The PixelData of `obj` as a little-endian byte stream, exactly `expected` bytes long;
+/// a note in `notes` when the element holds more (Rows, Columns or NumberOfFrames smaller
+/// than the data: the header may be wrong).
+pub(super) fn le_bytes<'a>(
+    path: &Path,
+    obj: &'a Obj,
+    expected: u64,
+    notes: &mut Vec<String>,
+) -> Result<Cow<'a, [u8]>> {
     let err = |k: ErrorKind| ReadError::new(path, k);
     let elem = obj
         .element_opt(tags::PIXEL_DATA)
@@ -92,6 +99,18 @@ pub(super) fn le_bytes<'a>(path: &Path, obj: &'a Obj, expected: u64) -> Result<C
     let found = bytes.len() as u64;
     if found < expected {
         return Err(err(ErrorKind::Truncated { expected, found }));
+    }
+    // An odd length is padded to even by one byte; more than that is data the header does
+    // not describe.
+    if found > expected + 1 {
+        notes.push(format!(
+            "{}: the pixel data holds {found} bytes, more than the {expected} that Rows x \
+             Columns x NumberOfFrames x BitsAllocated describe; the rest is not read",
+            path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned()
+            )
+        ));
     }
     Ok(match bytes {
         Cow::Borrowed(b) => Cow::Borrowed(b.get(..expected as usize).unwrap_or(b)),
