@@ -362,7 +362,7 @@ pub(crate) mod hostile {
     }
 
     /// The message of an error that must be one about the path's type or a link loop.
-    pub(crate) fn assert_refused<T>(r: crate::Result<T>, name: &str, expect: &str) {
+    pub(crate) fn assert_refused<T>(r: crate::error::Result<T>, name: &str, expect: &str) {
         let e = match r {
             Ok(_) => panic!("{name}: a hostile file was read"),
             Err(e) => e.to_string(),
