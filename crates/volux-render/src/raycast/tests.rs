@@ -361,7 +361,7 @@ fn gradient_volume_over_budget_falls_back_to_on_the_fly() {
     .unwrap_err();
     assert!(
         e.to_string()
-            .starts_with("the gradient volume needs 421.1 KiB, over the memory budget"),
+            .starts_with("the gradient volume needs 421.137 KiB, over the memory budget"),
         "{e}"
     );
 }
