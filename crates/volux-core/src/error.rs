@@ -13,6 +13,11 @@ pub enum Error {
         /// Why they are invalid.
         reason: String,
     },
+    /// Spacing or origin a grid cannot be placed with: subnormal or absurd spacing, an
+    /// origin or far corner beyond the coordinates Volux handles, spacing lost beside the
+    /// origin.
+    #[error("invalid grid geometry: {0}")]
+    InvalidGeometry(String),
     /// Spacing that is not finite and positive.
     #[error("invalid spacing {0:?}: must be finite and > 0")]
     InvalidSpacing([f64; 3]),

@@ -323,17 +323,14 @@ fn num(v: f64) -> String {
 /// Checks spacing and origin, axis by axis: spacing finite and > 0 ([`Error::InvalidSpacing`]),
 /// then spacing a normal number in [[`MIN_SPACING`], [`MAX_COORDINATE`]], origin finite, and
 /// the origin and far corner within ±[`MAX_COORDINATE`] with the spacing not lost beside the
-/// origin ([`Error::InvalidDims`] naming the field and the value).
+/// origin ([`Error::InvalidGeometry`] naming the field and the value).
 fn check_geometry(dims: [usize; 3], spacing: [f64; 3], origin: [f64; 3]) -> Result<()> {
     if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
         return Err(Error::InvalidSpacing(spacing));
     }
-    let fail = |reason: String| Error::InvalidDims {
-        dims: dims.map(|d| d as i64),
-        reason,
-    };
     for axis in 0..3 {
-        axis_geometry(AXES[axis], dims[axis], spacing[axis], origin[axis]).map_err(fail)?;
+        axis_geometry(AXES[axis], dims[axis], spacing[axis], origin[axis])
+            .map_err(Error::InvalidGeometry)?;
     }
     Ok(())
 }

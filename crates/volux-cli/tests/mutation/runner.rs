@@ -93,9 +93,7 @@ fn limited(args: &[String]) -> Command {
     let prlimit = Path::new("/usr/bin/prlimit");
     if prlimit.exists() {
         let mut c = Command::new(prlimit);
-        c.arg(format!("--as={limit}"))
-            .arg("--")
-            .arg(volux_bin());
+        c.arg(format!("--as={limit}")).arg("--").arg(volux_bin());
         c.args(args);
         c
     } else {
