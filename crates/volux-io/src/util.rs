@@ -26,8 +26,9 @@ pub const MAX_DEFLATE_RATIO: u64 = 1032;
 const DEFLATE_SLACK: u64 = 4096;
 
 /// The first capacity of buffers filled from a stream; they grow as data actually arrives, so
-/// a lying header costs no memory up front.
-const FIRST_CHUNK: u64 = 4 << 20;
+/// a lying header costs no more than this up front. 32 MiB holds the typical scan whole (no
+/// regrowth and copy: a 14 MiB CT read 3 % slower from a 4 MiB start).
+const FIRST_CHUNK: u64 = 32 << 20;
 
 /// `ELOOP` ("too many levels of symbolic links") on this system.
 #[cfg(any(target_os = "linux", target_os = "android"))]
