@@ -263,3 +263,19 @@ fn fifo_inputs_are_refused_without_blocking() {
         assert!(e.path.ends_with("fifoxyz.bin"), "{e}");
     }
 }
+
+/// A q file that is a link to `/dev/zero` is refused by its type before any byte is read
+/// (it used to be read until 4 GiB were used: the size cap trusted the metadata length, 0
+/// for devices).
+#[cfg(unix)]
+#[test]
+fn a_q_file_linked_to_dev_zero_is_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = Style::new(false, false);
+    let good = files(dir.path(), &xyz(style, ijk), &q(style));
+    let zero = dir.path().join("zeroq.bin");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let e = plot3d::read(&good, Some(&zero), None).unwrap_err();
+    assert!(matches!(e.kind, ErrorKind::NotRegular(_)), "{e}");
+    assert!(e.to_string().contains("not a regular file"), "{e}");
+}
