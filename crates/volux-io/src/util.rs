@@ -19,7 +19,7 @@ use crate::error::Result;
 
 /// Deflate (zlib, gzip) expands at most 1032:1 (a 258-byte match coded in about 2 bits), so
 /// `n` compressed bytes never inflate to more than `n * MAX_DEFLATE_RATIO` bytes (plus
-/// [`DEFLATE_SLACK`]). A header declaring more is refused before anything is inflated.
+/// `DEFLATE_SLACK`). A header declaring more is refused before anything is inflated.
 pub const MAX_DEFLATE_RATIO: u64 = 1032;
 
 /// Bytes of output allowed on top of [`MAX_DEFLATE_RATIO`] times the input, for tiny streams.

@@ -8,6 +8,7 @@ use volux_io::{Dataset, Format};
 
 use super::common::CmdError;
 use crate::cli::LoadArgs;
+use crate::messages::sanitize;
 use crate::numbers::human;
 use volux_core::units::format_bytes;
 
@@ -112,13 +113,13 @@ fn print_text(path: &Path, v: &serde_json::Value) {
         match val {
             serde_json::Value::Array(a) if k == "notes" => {
                 for n in a {
-                    println!("  note: {}", n.as_str().unwrap_or_default());
+                    println!("  note: {}", sanitize(n.as_str().unwrap_or_default()));
                 }
             }
             _ if k == "memory_bytes" => {
                 println!("  {k:<15} {}", format_bytes(val.as_u64().unwrap_or(0)))
             }
-            _ => println!("  {k:<15} {}", plain(val)),
+            _ => println!("  {k:<15} {}", sanitize(&plain(val))),
         }
     }
 }

@@ -28,7 +28,7 @@
 //! its origin at the first slice's ImagePositionPatient (noted when the orientation is not the
 //! identity). `dicom-parser` allocates each element's declared length (at most 4 GiB, a `u32`)
 //! before reading it, so every element length is first checked against the bytes left in
-//! the file ([`bounds`]); Volux's own buffers are checked with `check_alloc`. Only regular
+//! the file (module `bounds`); Volux's own buffers are checked with `check_alloc`. Only regular
 //! files are opened ([`crate::util::open_regular`]); in a folder, anything else (a FIFO, a
 //! device, a link to one) is skipped.
 use std::collections::BTreeMap;
