@@ -336,7 +336,7 @@ pub fn read(path: &Path) -> Result<Grid> {
 mod tests {
     use super::*;
     use crate::util::hostile::*;
-    use std::io::Write as _;
+    use volux_testkit::mutate::zlib;
 
     /// A MetaImage header for a `dims` uint8 volume stored in `data` (zlib when `zlib`).
     fn header(dims: [u64; 3], zlib: bool, data: &str) -> String {
@@ -346,12 +346,6 @@ mod tests {
              CompressedData = {compressed}\nElementDataFile = {data}\n",
             dims[0], dims[1], dims[2]
         )
-    }
-
-    fn zlib(bytes: &[u8]) -> Vec<u8> {
-        let mut enc = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
-        enc.write_all(bytes).unwrap();
-        enc.finish().unwrap()
     }
 
     #[test]

@@ -539,7 +539,7 @@ pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
 mod tests {
     use super::*;
     use crate::util::hostile::*;
-    use std::io::Write as _;
+    use volux_testkit::mutate::gzip;
 
     /// An NRRD header for a `dims` uint8 volume with `encoding` and optional `data file`.
     fn header(dims: [u64; 3], encoding: &str, data_file: Option<&str>) -> String {
@@ -550,12 +550,6 @@ mod tests {
             "NRRD0004\ntype: uint8\ndimension: 3\nsizes: {} {} {}\nencoding: {encoding}\n{detached}\n",
             dims[0], dims[1], dims[2]
         )
-    }
-
-    fn gzip(bytes: &[u8]) -> Vec<u8> {
-        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
-        enc.write_all(bytes).unwrap();
-        enc.finish().unwrap()
     }
 
     #[test]

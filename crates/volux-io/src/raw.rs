@@ -658,6 +658,7 @@ fn write_samples(out: &mut impl Write, samples: &Samples) -> std::io::Result<()>
 mod tests {
     use super::*;
     use crate::util::hostile::*;
+    use volux_testkit::mutate::gzip;
 
     /// Writes a sidecar `name.json` for a `dims` uint8 volume with `compression`.
     fn sidecar(dir: &Path, name: &str, dims: [u64; 3], compression: &str) -> PathBuf {
@@ -668,12 +669,6 @@ mod tests {
         );
         std::fs::write(&p, json).unwrap();
         dir.join(name)
-    }
-
-    fn gzip(bytes: &[u8]) -> Vec<u8> {
-        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
-        enc.write_all(bytes).unwrap();
-        enc.finish().unwrap()
     }
 
     #[test]

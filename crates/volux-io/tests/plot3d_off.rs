@@ -1,7 +1,7 @@
 //! OFF and PLOT3D readers: small files written here (every variant and malformed input) and
 //! the real NASA Blunt Fin / LOx Post and VTK post data checked against their sidecars.
-use std::io::Write;
 use std::path::{Path, PathBuf};
+use volux_testkit::mutate::gzip;
 
 use serde_json::Value;
 use volux_io::{off, plot3d, ErrorKind, ReadError};
@@ -28,12 +28,6 @@ fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, bytes).unwrap();
     p
-}
-
-fn gzip(bytes: &[u8]) -> Vec<u8> {
-    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-    e.write_all(bytes).unwrap();
-    e.finish().unwrap()
 }
 
 fn msg(e: &ReadError) -> String {

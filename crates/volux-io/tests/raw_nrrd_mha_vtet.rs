@@ -1,6 +1,6 @@
 //! Raw + sidecar, NRRD, MetaImage and .vtet: round trips, format variants and malformed input.
-use std::io::Write;
 use std::path::{Path, PathBuf};
+use volux_testkit::mutate::{gzip, zlib};
 
 use glam::Vec3;
 use proptest::prelude::*;
@@ -8,18 +8,6 @@ use volux_core::{Buffer, Grid, Samples, ScalarType, TetMesh};
 use volux_io::{load, metaimage, nrrd, raw, vtet, Dataset, ErrorKind, LoadOptions, ReadError};
 
 // ---------- helpers ----------
-
-fn gzip(bytes: &[u8]) -> Vec<u8> {
-    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-    e.write_all(bytes).unwrap();
-    e.finish().unwrap()
-}
-
-fn zlib(bytes: &[u8]) -> Vec<u8> {
-    let mut e = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
-    e.write_all(bytes).unwrap();
-    e.finish().unwrap()
-}
 
 fn values(g: &Grid) -> Vec<f32> {
     g.to_f32_vec().unwrap()

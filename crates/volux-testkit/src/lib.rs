@@ -9,6 +9,9 @@
 //!   difference images on failure (the metrics are [`volux_core::image::compare`]'s);
 //! - [`reference`](mod@reference): brute-force integrals used as independent references (composite
 //!   Simpson of a linear ray segment).
+//! - [`mutate`]: seeded mutations of input files for the hostile-input tests (bit flips,
+//!   header and sidecar edits, bombs, file-system cases), and the gzip/zlib encoders the
+//!   readers' tests share.
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 

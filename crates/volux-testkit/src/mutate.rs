@@ -691,12 +691,15 @@ fn deep_xml(content: &mut Vec<u8>, depth: usize, closed: bool) {
 pub fn compress(codec: Codec, bytes: &[u8]) -> Vec<u8> {
     match codec {
         Codec::Gzip => gzip(bytes),
-        Codec::Zlib => {
-            let mut e = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
-            e.write_all(bytes).expect("writing to memory");
-            e.finish().expect("writing to memory")
-        }
+        Codec::Zlib => zlib(bytes),
     }
+}
+
+/// `bytes` as a zlib stream.
+pub fn zlib(bytes: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).expect("writing to memory");
+    e.finish().expect("writing to memory")
 }
 
 /// `bytes` as a gzip stream.

@@ -274,7 +274,7 @@ mod tests {
     use super::*;
     use crate::util::hostile::*;
     use base64::Engine as _;
-    use std::io::Write as _;
+    use volux_testkit::mutate::zlib;
 
     /// A 2 x 2 x 2 zlib-compressed `.vti` whose one block of `zlib` bytes is announced as
     /// `declared` bytes (header and data as two base64 streams, as VTK writes them).
@@ -295,12 +295,6 @@ mod tests {
             b64.encode(zlib)
         )
         .into_bytes()
-    }
-
-    fn zlib(bytes: &[u8]) -> Vec<u8> {
-        let mut enc = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
-        enc.write_all(bytes).unwrap();
-        enc.finish().unwrap()
     }
 
     #[test]
