@@ -362,6 +362,19 @@ pub(crate) mod hostile {
         a
     }
 
+    /// Asserts that `e` refuses a header declaring `declared` bytes the file cannot deliver
+    /// (or the memory budget refuses it first).
+    pub(crate) fn assert_undeliverable(e: &crate::error::ReadError, declared: u64) {
+        use crate::error::ErrorKind;
+        assert!(
+            matches!(
+                e.kind,
+                ErrorKind::Undeliverable { declared: d, .. } if d == declared
+            ) || matches!(e.kind, ErrorKind::Data(_)),
+            "{e}"
+        );
+    }
+
     /// The message of an error that must be one about the path's type or a link loop.
     pub(crate) fn assert_refused<T>(r: crate::error::Result<T>, name: &str, expect: &str) {
         let e = match r {
