@@ -130,6 +130,22 @@ impl Image {
         out
     }
 
+    /// The image over `background` as opaque 8-bit sRGB RGBA, as [`Image::encode_png`] writes
+    /// it with that background: what a viewer puts on screen is what a screenshot saves.
+    pub fn to_srgba8(&self, background: [f32; 3]) -> Vec<u8> {
+        let opts = PngOptions {
+            background: Some(background),
+            sixteen_bit: false,
+        };
+        let rgb = self.display_values(&opts);
+        let mut out = Vec::with_capacity(self.pixels.len() * 4);
+        for p in rgb.chunks_exact(3) {
+            out.extend(p.iter().map(|v| (v * 255.0).round() as u8));
+            out.push(255);
+        }
+        out
+    }
+
     /// Encodes the image as PNG bytes.
     pub fn encode_png(&self, opts: &PngOptions) -> Result<Vec<u8>> {
         let values = self.display_values(opts);

@@ -13,6 +13,14 @@ pub enum RenderError {
     /// An error of the data model.
     #[error("{0}")]
     Data(#[from] volux_core::Error),
+    /// A session file that cannot be read, or that describes no valid scene.
+    #[error("session {path}: {reason}")]
+    Session {
+        /// The session file.
+        path: String,
+        /// What is wrong with it.
+        reason: String,
+    },
 }
 
 /// Largest image side accepted by the renderers.

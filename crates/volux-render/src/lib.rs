@@ -79,6 +79,7 @@ pub mod renderer;
 pub mod resample;
 pub mod sampling;
 pub mod scene;
+pub mod session;
 pub mod shading;
 pub mod tetray;
 pub mod tiles;

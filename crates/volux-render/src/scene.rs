@@ -152,7 +152,8 @@ impl View {
 }
 
 /// How the data looks: classification, lighting, isosurfaces, projection mode.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Appearance {
     /// The transfer function (colour and extinction per unit length of its own).
     pub tf: TransferFunction,
@@ -194,7 +195,8 @@ impl Appearance {
 }
 
 /// Grid ray casting settings (steps in the volume's unit length: voxels).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct GridRaycast {
     /// How each ray is integrated.
     pub integrator: Integrator,
@@ -216,7 +218,8 @@ impl Default for GridRaycast {
 }
 
 /// Visibility order of Projected Tetrahedra ([`crate::pt::sort`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum SortMode {
     /// Centroid depth, radix sorted (the seeds' order; approximate).
     #[default]
@@ -226,7 +229,8 @@ pub enum SortMode {
 }
 
 /// Projected Tetrahedra settings.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PtSettings {
     /// Visibility order.
     pub sort: SortMode,
@@ -238,7 +242,8 @@ pub struct PtSettings {
 }
 
 /// Which renderer draws the volume, with its settings.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "name", content = "settings", rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum Method {
     /// The library's choice: grids are ray cast, meshes drawn with Projected Tetrahedra, each

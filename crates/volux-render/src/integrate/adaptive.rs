@@ -24,7 +24,8 @@
 use super::medium::{Medium, RayIntegral, RayMedium};
 
 /// How the steps of the inner and outer integrals are controlled (`001_...txt` sec. 4).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 #[non_exhaustive]
 pub enum StepControl {
     /// One step for both integrals.
@@ -34,7 +35,8 @@ pub enum StepControl {
 }
 
 /// Parameters of [`adaptive_simpson`]; lengths in world units.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct AdaptiveParams {
     /// Absolute error tolerance per channel for the whole ray.
     pub tol: f64,

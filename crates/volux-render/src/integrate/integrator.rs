@@ -3,7 +3,8 @@ use super::adaptive::{AdaptiveParams, StepControl};
 
 /// How rays are integrated; lengths are in voxel units (of the smallest grid spacing), as in
 /// the seed, and converted to world units by the traversal.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum Integrator {
     /// Left Riemann sum with step-corrected opacity.

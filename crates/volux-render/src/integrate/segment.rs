@@ -73,7 +73,8 @@ use super::adaptive::AdaptiveParams;
 
 /// How the colour and opacity of a linear segment `(s_f, s_b, l)` are computed: a PT
 /// fragment, a segment of the tet ray caster, or (adaptive) a whole ray through a mesh.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum SegmentRule {
     /// Shirley and Tuchman's averaged colour and extinction (seed `000` §2.3, eqs. 2.2-2.3;
