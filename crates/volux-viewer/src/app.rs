@@ -1,0 +1,571 @@
+//! The viewer's state and its frame loop: jobs polled, frames taken from the render thread,
+//! panels drawn ([`crate::panels`], [`crate::view3d`], [`crate::slice_views`]), and the
+//! scene handed to the render thread whenever it changed. Nothing here waits for a render
+//! or a file.
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use eframe::egui;
+use glam::DVec3;
+use volux_core::image::PngOptions;
+use volux_core::{Camera, TransferFunction};
+use volux_render::scene::{Method, Scene, Volume};
+use volux_render::session::{DatasetRef, Session, SliceState};
+
+use crate::dataset::{self, Loaded};
+use crate::file_dialog::{FileDialog, Purpose};
+use crate::jobs::{Job, Poll};
+use crate::navigation;
+use crate::render_service::{Event, RenderService, Rendered};
+use crate::tf_editor::{in_value_space, TfEditor};
+
+/// How the viewer was started.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// A dataset or a session file to open.
+    pub open: Option<PathBuf>,
+    /// Write the first fully refined frame here and exit.
+    pub screenshot: Option<PathBuf>,
+    /// Render size for screenshots (default: the 3D view's size).
+    pub size: Option<(usize, usize)>,
+    /// With `screenshot`: also save the session here.
+    pub save_session: Option<PathBuf>,
+}
+
+/// The default background (dark blue-grey, as the CLI's demo).
+pub const BACKGROUND: [f32; 3] = [0.02, 0.02, 0.03];
+
+/// What the 3D view shows now.
+pub struct Shown {
+    /// The texture.
+    pub texture: egui::TextureHandle,
+    /// The frame's figures and kind.
+    pub frame: Rendered,
+}
+
+/// The viewer.
+pub struct ViewerApp {
+    pub(crate) ctx: egui::Context,
+    pub(crate) service: RenderService,
+    /// The dataset on screen.
+    pub data: Option<Loaded>,
+    pub(crate) load_job: Option<Job<Loaded>>,
+    pub(crate) split_job: Option<(Job<Loaded>, Method)>,
+    pub(crate) export_job: Option<Job<String>>,
+    /// The error shown in the window (the viewer stays usable).
+    pub error: Option<String>,
+    /// A passing message (what was saved).
+    pub status: Option<String>,
+    /// Camera, appearance and method (the image size follows the 3D view).
+    pub scene: Scene,
+    /// Colour under the volume.
+    pub background: [f32; 3],
+    /// Slice window (values shown black to white).
+    pub window: [f64; 2],
+    /// The point the slices pass through (world).
+    pub crosshair: DVec3,
+    /// Outline the three slice planes in the 3D view.
+    pub show_planes: bool,
+    /// The TF editor (with a dataset).
+    pub editor: Option<TfEditor>,
+    pub(crate) shown: Option<Shown>,
+    pub(crate) slice_textures: Vec<Option<egui::TextureHandle>>,
+    pub(crate) slices_key: Option<(u64, [f64; 2], [usize; 3])>,
+    pub(crate) submitted: Option<(u64, Scene, bool)>,
+    pub(crate) interacting: bool,
+    pub(crate) frame_times: VecDeque<Instant>,
+    /// Size of the 3D view in pixels.
+    pub view_size: (usize, usize),
+    pub(crate) options: Options,
+    pub(crate) dialog: FileDialog,
+    pub(crate) pending_session: Option<Session>,
+    pub(crate) export_size: (usize, usize),
+    /// Set once `--screenshot` wrote its file.
+    pub finished: bool,
+}
+
+impl ViewerApp {
+    /// A viewer on `ctx`, opening what `options` name.
+    pub fn new(ctx: &egui::Context, options: Options) -> Self {
+        let wake_ctx = ctx.clone();
+        let service = RenderService::start(move || wake_ctx.request_repaint());
+        let camera = Camera::fit(&volux_core::Aabb {
+            min: DVec3::ZERO,
+            max: DVec3::ONE,
+        });
+        let placeholder_tf = TransferFunction::from_json(
+            r#"{"color": [[0, 1, 1, 1], [1, 1, 1, 1]], "opacity": [[0, 0], [1, 1]]}"#,
+        )
+        .expect("a valid TF");
+        let mut app = Self {
+            ctx: ctx.clone(),
+            service,
+            data: None,
+            load_job: None,
+            split_job: None,
+            export_job: None,
+            error: None,
+            status: None,
+            scene: Scene::new(camera, 640, 480, placeholder_tf),
+            background: BACKGROUND,
+            window: [0.0, 1.0],
+            crosshair: DVec3::ZERO,
+            show_planes: false,
+            editor: None,
+            shown: None,
+            slice_textures: vec![None, None, None],
+            slices_key: None,
+            submitted: None,
+            interacting: false,
+            frame_times: VecDeque::new(),
+            view_size: options.size.unwrap_or((640, 480)),
+            options: options.clone(),
+            dialog: FileDialog::default(),
+            pending_session: None,
+            export_size: (1920, 1080),
+            finished: false,
+        };
+        if let Some(path) = &options.open {
+            app.open(path);
+        }
+        app
+    }
+
+    /// Opens a dataset or (a `.json` with a session version) a session, in the background.
+    pub fn open(&mut self, path: &Path) {
+        self.error = None;
+        if is_session_file(path) {
+            match Session::load(path) {
+                Ok(s) => {
+                    let source = s.dataset.clone();
+                    self.pending_session = Some(s);
+                    self.start_load(source);
+                }
+                Err(e) => self.error = Some(e.to_string()),
+            }
+            return;
+        }
+        self.pending_session = None;
+        self.start_load(DatasetRef {
+            path: path.to_path_buf(),
+            ..Default::default()
+        });
+    }
+
+    fn start_load(&mut self, source: DatasetRef) {
+        if !source.path.exists() {
+            self.error = Some(format!(
+                "{}: no such file or folder",
+                source.path.display()
+            ));
+            self.pending_session = None;
+            return;
+        }
+        let label = format!("loading {}", dataset::title_name(&source.path));
+        self.load_job = Some(Job::spawn(label, move || dataset::load(&source)));
+    }
+
+    /// Drops the running load: the window is free at once.
+    pub fn cancel_load(&mut self) {
+        self.load_job = None;
+        self.pending_session = None;
+        self.status = Some("loading cancelled".into());
+    }
+
+    /// Whether background work (loading, splitting) is under way.
+    pub fn busy(&self) -> bool {
+        self.load_job.is_some() || self.split_job.is_some()
+    }
+
+    /// The window title: the file's name.
+    pub fn title(&self) -> String {
+        match &self.data {
+            Some(d) => format!("{} — volux-view", dataset::title_name(&d.source.path)),
+            None => "volux-view".into(),
+        }
+    }
+
+    /// One frame of the window: poll, draw, submit.
+    pub fn frame(&mut self, ctx: &egui::Context) {
+        self.poll_jobs();
+        self.take_dropped_files(ctx);
+        self.take_frames(ctx);
+        crate::panels::show(self, ctx);
+        if let Some((purpose, path)) = self.dialog.show(ctx) {
+            self.chosen(purpose, &path);
+        }
+        crate::slice_views::show(self, ctx);
+        crate::view3d::show(self, ctx);
+        self.submit_if_changed();
+        self.finish_screenshot(ctx);
+        if self.busy() || self.export_job.is_some() {
+            ctx.request_repaint_after(Duration::from_millis(100));
+        }
+    }
+
+    fn poll_jobs(&mut self) {
+        if let Some(job) = &mut self.load_job {
+            if let Poll::Done(r) = job.poll() {
+                self.load_job = None;
+                match r {
+                    Ok(loaded) => self.set_data(loaded),
+                    Err(e) => {
+                        self.error = Some(e);
+                        self.pending_session = None;
+                    }
+                }
+            }
+        }
+        if let Some((job, method)) = &mut self.split_job {
+            let method = *method;
+            if let Poll::Done(r) = job.poll() {
+                self.split_job = None;
+                match r {
+                    Ok(loaded) => {
+                        self.data = Some(loaded);
+                        self.scene.method = method;
+                    }
+                    Err(e) => self.error = Some(e),
+                }
+            }
+        }
+        if let Some(job) = &mut self.export_job {
+            if let Poll::Done(r) = job.poll() {
+                self.export_job = None;
+                match r {
+                    Ok(m) => self.status = Some(m),
+                    Err(e) => self.error = Some(e),
+                }
+            }
+        }
+    }
+
+    /// Shows a newly loaded dataset: the session's view when one was opened, otherwise the
+    /// home camera, the automatic TF, the crosshair at the centre.
+    pub(crate) fn set_data(&mut self, loaded: Loaded) {
+        let volume = loaded.volume.volume.clone();
+        let range = volume.range();
+        let tf = volume
+            .preset_tf("auto")
+            .map(|tf| in_value_space(&tf, range))
+            .unwrap_or_else(|_| self.scene.appearance.tf.clone());
+        let aspect = self.view_size.0 as f64 / self.view_size.1.max(1) as f64;
+        self.scene = Scene::new(
+            navigation::home(&volume.bounds(), aspect),
+            self.view_size.0,
+            self.view_size.1,
+            tf,
+        );
+        self.scene.method = Method::Auto.resolve(&volume).unwrap_or(Method::Auto);
+        self.window = [
+            loaded.histogram.quantile(0.01),
+            loaded.histogram.quantile(0.99).max(loaded.histogram.quantile(0.01) + 1e-9),
+        ];
+        self.crosshair = loaded.slices.centre();
+        self.editor = Some(TfEditor::new(loaded.histogram.clone(), &self.scene.appearance.tf));
+        self.shown = None;
+        self.slices_key = None;
+        self.error = None;
+        self.data = Some(loaded);
+        if let Some(s) = self.pending_session.take() {
+            self.apply_session(&s);
+        }
+        self.ctx
+            .send_viewport_cmd(egui::ViewportCommand::Title(self.title()));
+    }
+
+    fn apply_session(&mut self, s: &Session) {
+        self.scene = s.scene();
+        self.scene.appearance.tf = in_value_space(&s.appearance.tf, self.range());
+        self.background = s.background.unwrap_or(BACKGROUND);
+        if self.options.size.is_none() {
+            self.options.size = Some((s.width, s.height));
+        }
+        if let Some(sl) = s.slices {
+            self.window = sl.window;
+            self.crosshair = DVec3::from_array(sl.crosshair);
+        }
+        if let Some(e) = &mut self.editor {
+            e.fit_height(&self.scene.appearance.tf);
+        }
+    }
+
+    /// The data's value range.
+    pub fn range(&self) -> [f64; 2] {
+        self.data
+            .as_ref()
+            .map_or([0.0, 1.0], |d| d.volume.volume.range())
+    }
+
+    /// The session of what is on screen (the render size as the 3D view or `--size`).
+    pub fn session(&self) -> Option<Session> {
+        let data = self.data.as_ref()?;
+        let mut s = Session::new(data.source.clone(), &self.render_scene(), Some(self.background));
+        s.slices = Some(SliceState {
+            window: self.window,
+            crosshair: self.crosshair.to_array(),
+        });
+        Some(s)
+    }
+
+    /// The scene at the render size.
+    pub fn render_scene(&self) -> Scene {
+        let (w, h) = self.options.size.unwrap_or(self.view_size);
+        let mut scene = self.scene.clone();
+        scene.view.width = w.max(1);
+        scene.view.height = h.max(1);
+        scene
+    }
+
+    /// Asks for a new frame when the scene (or the interaction state) changed.
+    fn submit_if_changed(&mut self) {
+        let Some(data) = &self.data else { return };
+        if self.split_job.is_some() {
+            return;
+        }
+        let scene = self.render_scene();
+        let mesh_method = matches!(
+            scene.method,
+            Method::ProjectedTetrahedra(_) | Method::TetRaycast(_) | Method::MeshReference
+        );
+        let Some(volume) = data.volume_for(mesh_method).cloned() else {
+            return;
+        };
+        let same = self.submitted.as_ref().is_some_and(|(id, s, interacting)| {
+            *id == volume.id && *s == scene && *interacting == self.interacting
+        });
+        // Once the drag ends, the same scene is asked for again without `interacting`, and
+        // the full frame follows the preview.
+        if same {
+            return;
+        }
+        if let Err(e) = scene
+            .validate()
+            .and_then(|_| scene.method.resolve(&volume.volume))
+            .and_then(|m| m.check_appearance(&scene.appearance))
+        {
+            self.error = Some(e.to_string());
+            self.submitted = Some((volume.id, scene, self.interacting));
+            return;
+        }
+        self.service.submit(&volume, &scene, self.interacting);
+        self.submitted = Some((volume.id, scene, self.interacting));
+    }
+
+    fn take_frames(&mut self, ctx: &egui::Context) {
+        for event in self.service.poll() {
+            match event {
+                Event::Frame(f) => {
+                    if f.generation != self.service.generation() && self.shown.is_some() {
+                        continue;
+                    }
+                    let image = &f.image;
+                    let rgba = image.to_srgba8(self.background);
+                    let color = egui::ColorImage::from_rgba_unmultiplied(
+                        [image.width(), image.height()],
+                        &rgba,
+                    );
+                    let texture =
+                        ctx.load_texture("volux-3d", color, egui::TextureOptions::LINEAR);
+                    self.frame_times.push_back(Instant::now());
+                    while self.frame_times.len() > 30 {
+                        self.frame_times.pop_front();
+                    }
+                    if f.generation == self.service.generation() {
+                        self.error = None;
+                    }
+                    self.shown = Some(Shown { texture, frame: *f });
+                }
+                Event::Failed {
+                    generation,
+                    message,
+                } => {
+                    if generation == self.service.generation() {
+                        self.error = Some(message);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Frames per second over the last frames shown.
+    pub fn fps(&self) -> f64 {
+        match (self.frame_times.front(), self.frame_times.back()) {
+            (Some(a), Some(b)) if self.frame_times.len() > 1 => {
+                (self.frame_times.len() - 1) as f64 / (*b - *a).as_secs_f64().max(1e-9)
+            }
+            _ => 0.0,
+        }
+    }
+
+    fn take_dropped_files(&mut self, ctx: &egui::Context) {
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        if let Some(path) = dropped.into_iter().find_map(|f| f.path) {
+            self.open(&path);
+        }
+    }
+
+    /// Opens the file dialog for `purpose`.
+    pub fn open_dialog(&mut self, purpose: Purpose) {
+        let folder = self
+            .data
+            .as_ref()
+            .and_then(|d| d.source.path.parent().map(Path::to_path_buf))
+            .filter(|p| p.is_dir())
+            .or_else(|| std::env::current_dir().ok())
+            .unwrap_or_else(|| PathBuf::from("."));
+        let name = match purpose {
+            Purpose::SaveTf => "tf.json",
+            Purpose::SaveSession => "session.json",
+            Purpose::SaveScreenshot => "screenshot.png",
+            _ => "",
+        };
+        self.dialog.open(purpose, &folder, name);
+    }
+
+    fn chosen(&mut self, purpose: Purpose, path: &Path) {
+        let result = match purpose {
+            Purpose::Open => {
+                self.open(path);
+                Ok(None)
+            }
+            Purpose::LoadTf => self.load_tf(path).map(|_| None),
+            Purpose::SaveTf => {
+                let text = self.scene.appearance.tf.to_json();
+                volux_core::image::write_atomically(path, text.as_bytes())
+                    .map(|_| Some(format!("saved {}", path.display())))
+                    .map_err(|e| format!("{}: {e}", path.display()))
+            }
+            Purpose::SaveSession => self.save_session(path).map(Some),
+            Purpose::SaveScreenshot => {
+                self.export_screenshot(path, self.export_size);
+                Ok(None)
+            }
+        };
+        match result {
+            Ok(m) => self.status = m,
+            Err(e) => self.error = Some(e),
+        }
+    }
+
+    /// Replaces the TF with one read from `path` (any format `volux render --tf` reads).
+    pub fn load_tf(&mut self, path: &Path) -> Result<(), String> {
+        let tf = crate::tf_files::read(path)?;
+        self.scene.appearance.tf = in_value_space(&tf, self.range());
+        if let Some(e) = &mut self.editor {
+            e.fit_height(&self.scene.appearance.tf);
+        }
+        Ok(())
+    }
+
+    /// Saves the session to `path`.
+    pub fn save_session(&self, path: &Path) -> Result<String, String> {
+        let s = self.session().ok_or("no dataset to save a session of")?;
+        s.save(path).map_err(|e| e.to_string())?;
+        Ok(format!("saved {}", path.display()))
+    }
+
+    /// Renders the current scene at `size` on a thread of its own and writes it to `path`.
+    pub fn export_screenshot(&mut self, path: &Path, size: (usize, usize)) {
+        let Some(data) = &self.data else {
+            self.error = Some("no dataset to take a screenshot of".into());
+            return;
+        };
+        if let Err(e) = crate::png_path(path) {
+            self.error = Some(e);
+            return;
+        }
+        let mut scene = self.scene.clone();
+        scene.view.width = size.0.max(1);
+        scene.view.height = size.1.max(1);
+        let mesh_method = !matches!(scene.method, Method::GridRaycast(_) | Method::Resample { .. });
+        let Some(volume) = data.volume_for(mesh_method).cloned() else {
+            return;
+        };
+        let png = PngOptions {
+            background: Some(self.background),
+            sixteen_bit: false,
+        };
+        let path = path.to_path_buf();
+        self.export_job = Some(Job::spawn("screenshot", move || {
+            let control = volux_render::tiles::Control::default();
+            let frame = volux_render::engine::render_once(&volume.volume, &scene, &control)
+                .map_err(|e| e.to_string())?;
+            frame
+                .image
+                .write_png(&path, &png)
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            Ok(format!("saved {} ({}x{})", path.display(), size.0, size.1))
+        }));
+    }
+
+    /// `--screenshot`: once the full frame of the current scene is on screen and nothing is
+    /// loading, write it (and the session) and close the window.
+    fn finish_screenshot(&mut self, ctx: &egui::Context) {
+        let Some(path) = self.options.screenshot.clone() else {
+            return;
+        };
+        if self.finished {
+            return;
+        }
+        if self.load_job.is_none() && self.data.is_none() && self.error.is_some() {
+            self.finished = true;
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            return;
+        }
+        let Some(shown) = &self.shown else { return };
+        let current = self.submitted.as_ref().map(|s| &s.1);
+        if !shown.frame.full
+            || shown.frame.generation != self.service.generation()
+            || current != Some(&shown.frame.scene)
+            || self.busy()
+        {
+            return;
+        }
+        let png = PngOptions {
+            background: Some(self.background),
+            sixteen_bit: false,
+        };
+        let result = shown.frame.image.write_png(&path, &png).map_err(|e| e.to_string());
+        let result = result.and_then(|_| match &self.options.save_session {
+            Some(s) => self.save_session(s).map(|_| ()),
+            None => Ok(()),
+        });
+        match result {
+            Ok(()) => eprintln!("wrote {}", path.display()),
+            Err(e) => {
+                eprintln!("volux-view: {}: {e}", path.display());
+                self.error = Some(e);
+            }
+        }
+        self.finished = true;
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+    }
+
+    /// The volume on screen (as loaded).
+    pub fn volume(&self) -> Option<&Volume> {
+        self.data.as_ref().map(|d| &d.volume.volume)
+    }
+}
+
+/// A `.json` file whose text names a session version.
+fn is_session_file(path: &Path) -> bool {
+    let json = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    json && path.is_file()
+        && std::fs::File::open(path)
+            .and_then(|f| {
+                use std::io::Read;
+                let mut head = String::new();
+                f.take(4096).read_to_string(&mut head).map(|_| head)
+            })
+            .is_ok_and(|h| h.contains("\"volux_session\""))
+}
+
+impl eframe::App for ViewerApp {
+    fn update(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        self.frame(ctx);
+    }
+}

@@ -1,0 +1,164 @@
+//! A file dialog drawn with egui (no system dialog dependency): the folder's entries,
+//! folders first, a path field, and the action's button. Opening a DICOM folder is opening
+//! the folder itself.
+use std::path::{Path, PathBuf};
+
+use eframe::egui;
+
+/// What the chosen path is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Purpose {
+    /// Open a dataset (file or DICOM folder) or a session.
+    Open,
+    /// Load a transfer function (Volux JSON, ParaView JSON, Slicer `.vp`).
+    LoadTf,
+    /// Save the transfer function as Volux JSON.
+    SaveTf,
+    /// Save the session.
+    SaveSession,
+    /// Save a screenshot PNG.
+    SaveScreenshot,
+}
+
+impl Purpose {
+    fn title(self) -> &'static str {
+        match self {
+            Purpose::Open => "Open a dataset or session",
+            Purpose::LoadTf => "Load a transfer function",
+            Purpose::SaveTf => "Save the transfer function",
+            Purpose::SaveSession => "Save the session",
+            Purpose::SaveScreenshot => "Save a screenshot",
+        }
+    }
+
+    fn saves(self) -> bool {
+        matches!(
+            self,
+            Purpose::SaveTf | Purpose::SaveSession | Purpose::SaveScreenshot
+        )
+    }
+}
+
+/// The dialog's state; `None` purpose: closed.
+#[derive(Clone, Debug, Default)]
+pub struct FileDialog {
+    purpose: Option<Purpose>,
+    folder: PathBuf,
+    path_text: String,
+    entries: Vec<(String, bool)>,
+    listing_error: Option<String>,
+}
+
+impl FileDialog {
+    /// Opens the dialog in `folder` for `purpose`, with `name` proposed when saving.
+    pub fn open(&mut self, purpose: Purpose, folder: &Path, name: &str) {
+        self.purpose = Some(purpose);
+        self.enter(folder.to_path_buf());
+        self.path_text = if purpose.saves() {
+            self.folder.join(name).display().to_string()
+        } else {
+            self.folder.display().to_string()
+        };
+    }
+
+    /// Whether it is open.
+    pub fn is_open(&self) -> bool {
+        self.purpose.is_some()
+    }
+
+    fn enter(&mut self, folder: PathBuf) {
+        self.folder = folder;
+        self.entries.clear();
+        self.listing_error = None;
+        match std::fs::read_dir(&self.folder) {
+            Ok(rd) => {
+                for e in rd.flatten().take(10_000) {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    if name.starts_with('.') {
+                        continue;
+                    }
+                    let dir = e.file_type().map(|t| t.is_dir()).unwrap_or(false);
+                    self.entries.push((name, dir));
+                }
+                self.entries
+                    .sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+            }
+            Err(e) => self.listing_error = Some(format!("{}: {e}", self.folder.display())),
+        }
+    }
+
+    /// Draws the dialog; returns the purpose and path when the user confirms.
+    pub fn show(&mut self, ctx: &egui::Context) -> Option<(Purpose, PathBuf)> {
+        let purpose = self.purpose?;
+        let mut chosen = None;
+        let mut open = true;
+        egui::Window::new(purpose.title())
+            .open(&mut open)
+            .default_size([520.0, 420.0])
+            .collapsible(false)
+            .show(ctx, |ui| {
+                chosen = self.contents(ui, purpose);
+            });
+        if !open || chosen.is_some() {
+            self.purpose = None;
+        }
+        chosen.map(|p| (purpose, p))
+    }
+
+    fn contents(&mut self, ui: &mut egui::Ui, purpose: Purpose) -> Option<PathBuf> {
+        let mut chosen = None;
+        ui.horizontal(|ui| {
+            if ui.button("⬆ up").clicked() {
+                if let Some(p) = self.folder.parent().map(Path::to_path_buf) {
+                    self.enter(p);
+                }
+            }
+            ui.label(self.folder.display().to_string());
+        });
+        if let Some(e) = &self.listing_error {
+            ui.colored_label(egui::Color32::LIGHT_RED, e);
+        }
+        let mut go = None;
+        egui::ScrollArea::vertical().max_height(280.0).show(ui, |ui| {
+            for (name, dir) in &self.entries {
+                let label = if *dir { format!("📁 {name}") } else { name.clone() };
+                let r = ui.selectable_label(false, label);
+                if r.clicked() {
+                    self.path_text = self.folder.join(name).display().to_string();
+                }
+                if r.double_clicked() {
+                    go = Some((self.folder.join(name), *dir));
+                }
+            }
+        });
+        if let Some((path, dir)) = go {
+            if dir && !(purpose == Purpose::Open && is_dicom_folder(&path)) {
+                self.enter(path.clone());
+                self.path_text = path.display().to_string();
+            } else {
+                chosen = Some(path);
+            }
+        }
+        ui.horizontal(|ui| {
+            ui.add(egui::TextEdit::singleline(&mut self.path_text).desired_width(380.0));
+            let action = if purpose.saves() { "Save" } else { "Open" };
+            if ui.button(action).clicked() && !self.path_text.trim().is_empty() {
+                chosen = Some(PathBuf::from(self.path_text.trim()));
+            }
+        });
+        chosen
+    }
+}
+
+/// A folder holding `.dcm` files (or files without extension, as DICOM exports often are).
+fn is_dicom_folder(path: &Path) -> bool {
+    std::fs::read_dir(path)
+        .map(|rd| {
+            rd.flatten().take(64).any(|e| {
+                e.path()
+                    .extension()
+                    .is_some_and(|x| x.eq_ignore_ascii_case("dcm"))
+            })
+        })
+        .unwrap_or(false)
+}

@@ -1,0 +1,36 @@
+//! `volux-view`, the interactive viewer of Volux: open a file, turn it with the mouse, shape
+//! the transfer function over the histogram, look at slices, save pictures and sessions.
+//!
+//! The window ([`app::ViewerApp`], eframe/egui with the glow back end: the picture is the
+//! CPU engine's, shown as a texture) builds a [`volux_render::scene::Scene`] and hands it to
+//! the render thread ([`render_service`]), which renders through the engine API like every
+//! other front end: reduced-resolution previews while the user drags, the full frame when
+//! input stops. Sessions ([`volux_render::session`]) are shared with `volux render
+//! --session`, so a view found by hand renders in batch to the same pixels.
+pub mod app;
+pub mod bench;
+pub mod dataset;
+pub mod file_dialog;
+pub mod jobs;
+pub mod navigation;
+pub mod panels;
+pub mod render_service;
+pub mod slice_views;
+pub mod slices;
+pub mod tf_editor;
+pub mod tf_files;
+pub mod view3d;
+
+use std::path::Path;
+
+/// Screenshots are PNG: any other extension is an error (nothing is written).
+pub fn png_path(path: &Path) -> Result<(), String> {
+    let png = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if png {
+        Ok(())
+    } else {
+        Err(format!("{}: screenshots are PNG files (name it .png)", path.display()))
+    }
+}

@@ -1,0 +1,97 @@
+//! `volux-view [FILE|SESSION.json]`: the interactive viewer (see the crate documentation
+//! and the README's viewer guide); `--screenshot OUT.png` renders the fully refined view and
+//! exits; `--bench` runs the viewer benchmark without a window.
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Parser;
+use eframe::egui;
+use volux_viewer::app::{Options, ViewerApp};
+
+/// The interactive viewer of Volux.
+#[derive(Parser, Debug)]
+#[command(name = "volux-view", version, about)]
+struct Args {
+    /// A dataset (any format `volux` reads, or a DICOM folder) or a session JSON.
+    path: Option<PathBuf>,
+    /// Write the fully refined 3D view to this PNG and exit.
+    #[arg(long, value_name = "OUT.png")]
+    screenshot: Option<PathBuf>,
+    /// Render size of the 3D view for --screenshot and --bench, WxH.
+    #[arg(long, value_name = "WxH")]
+    size: Option<String>,
+    /// With --screenshot: also save the session here.
+    #[arg(long, value_name = "S.json")]
+    save_session: Option<PathBuf>,
+    /// Run the viewer benchmark on the given dataset(s) without a window; JSON lines out.
+    #[arg(long)]
+    bench: bool,
+    /// Seconds of scripted orbit in --bench.
+    #[arg(long, default_value_t = 3.0)]
+    bench_seconds: f64,
+}
+
+fn parse_size(s: &str) -> Result<(usize, usize), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("--size '{s}': expected WxH, e.g. 800x600"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|n| (1..=16384).contains(n))
+            .ok_or_else(|| format!("--size '{s}': sides are whole numbers from 1 to 16384"))
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("volux-view: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> Result<(), String> {
+    let size = args.size.as_deref().map(parse_size).transpose()?;
+    if let Some(p) = &args.screenshot {
+        volux_viewer::png_path(p)?;
+    }
+    if args.bench {
+        let path = args.path.ok_or("--bench needs a dataset")?;
+        let size = size.unwrap_or((800, 600));
+        let report = volux_viewer::bench::run(&path, size, args.bench_seconds)?;
+        println!("{}", serde_json::to_string(&report).map_err(|e| e.to_string())?);
+        return Ok(());
+    }
+    let options = Options {
+        open: args.path,
+        screenshot: args.screenshot,
+        size,
+        save_session: args.save_session,
+    };
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title("volux-view")
+            .with_inner_size([1280.0, 900.0])
+            .with_drag_and_drop(true),
+        ..Default::default()
+    };
+    let screenshot = options.screenshot.clone();
+    eframe::run_native(
+        "volux-view",
+        native,
+        Box::new(move |cc| Ok(Box::new(ViewerApp::new(&cc.egui_ctx, options)))),
+    )
+    .map_err(|e| format!("cannot open a window: {e} (is a display available? set DISPLAY)"))?;
+    if let Some(p) = screenshot {
+        if !p.exists() {
+            return Err(format!("{}: no screenshot was written", p.display()));
+        }
+    }
+    Ok(())
+}

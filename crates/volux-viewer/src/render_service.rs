@@ -1,0 +1,418 @@
+//! The render thread: progressive refinement off the UI thread.
+//!
+//! The window hands each new scene to [`RenderService::submit`] and never waits. The thread
+//! keeps only the newest request (a mailbox, not a queue), cancels the frame in flight when a
+//! newer one arrives (the engine's [`Control::cancel`]), and answers each request with a
+//! reduced-resolution **preview** first (sized so that it takes about
+//! [`PREVIEW_BUDGET_MS`]), then, once the user stops interacting, the **full** frame with the
+//! scene's own integrator (for adaptive integration, the error-controlled one). Renderers are
+//! kept per method between requests, so their caches (macrocells, gradients, PT's kept set
+//! and projection, the tet ray caster's hierarchy) survive camera and TF changes.
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use volux_core::Image;
+use volux_render::engine::{create_renderer, FrameStats, Renderer};
+use volux_render::integrate::integrator::Integrator;
+use volux_render::integrate::segment::SegmentRule;
+use volux_render::scene::{Method, Scene, Volume};
+use volux_render::tiles::Control;
+use volux_render::RenderError;
+
+/// Time a preview frame aims at (ms): the divisor of the resolution adapts to meet it.
+pub const PREVIEW_BUDGET_MS: f64 = 25.0;
+
+/// Coarsest preview: 1/8 of the resolution on each side.
+pub const MAX_DIVISOR: usize = 8;
+
+/// A volume with an identity, so that renderers built for it are reused.
+#[derive(Clone, Debug)]
+pub struct VolumeRef {
+    /// Distinct for every volume the window loads (or derives, like a tetrahedral split).
+    pub id: u64,
+    /// The data.
+    pub volume: Volume,
+}
+
+/// What the window asks for.
+struct Request {
+    volume: VolumeRef,
+    scene: Scene,
+    interacting: bool,
+    generation: u64,
+    submitted: Instant,
+    cancel: Arc<AtomicBool>,
+}
+
+/// A frame the thread finished.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The picture.
+    pub image: Image,
+    /// The engine's figures of the frame.
+    pub stats: FrameStats,
+    /// The request it answers ([`RenderService::submit`]'s number).
+    pub generation: u64,
+    /// Full resolution with the scene's own integrator (`false`: a preview).
+    pub full: bool,
+    /// The preview's resolution divisor (1 for full frames).
+    pub divisor: usize,
+    /// From the request's submission to this frame being ready.
+    pub latency: Duration,
+    /// The scene it shows (at full size).
+    pub scene: Scene,
+}
+
+/// What comes back from the thread.
+#[derive(Clone, Debug)]
+pub enum Event {
+    /// A frame.
+    Frame(Box<Rendered>),
+    /// The request failed; the message is for the user.
+    Failed {
+        /// The request.
+        generation: u64,
+        /// Why.
+        message: String,
+    },
+}
+
+/// The newest request, shared by the window and the thread.
+#[derive(Default)]
+struct Mailbox {
+    slot: Mutex<Option<Request>>,
+    ready: Condvar,
+    closed: AtomicBool,
+}
+
+/// The render thread, its mailbox and the frames it sends back.
+pub struct RenderService {
+    mailbox: Arc<Mailbox>,
+    events: Receiver<Event>,
+    in_flight: Mutex<Arc<AtomicBool>>,
+    generation: u64,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl RenderService {
+    /// Starts the thread; `wake` is called after each event (a window requests a repaint).
+    pub fn start(wake: impl Fn() + Send + 'static) -> Self {
+        let mailbox = Arc::new(Mailbox::default());
+        let (tx, events) = channel();
+        let worker = Worker {
+            mailbox: mailbox.clone(),
+            tx,
+            wake: Box::new(wake),
+            renderers: HashMap::new(),
+            ns_per_pixel: None,
+            previewed: None,
+        };
+        let thread = std::thread::Builder::new()
+            .name("volux-render".into())
+            .spawn(move || worker.run())
+            .expect("the render thread starts");
+        Self {
+            mailbox,
+            events,
+            in_flight: Mutex::new(Arc::new(AtomicBool::new(false))),
+            generation: 0,
+            thread: Some(thread),
+        }
+    }
+
+    /// Asks for `scene` of `volume`: cancels what is rendering, replaces what waits, and
+    /// returns at once with the request's number. `interacting`: the user is still dragging,
+    /// so only a preview is wanted.
+    pub fn submit(&mut self, volume: &VolumeRef, scene: &Scene, interacting: bool) -> u64 {
+        self.generation += 1;
+        let cancel = Arc::new(AtomicBool::new(false));
+        let previous = std::mem::replace(&mut *lock(&self.in_flight), cancel.clone());
+        previous.store(true, Ordering::Relaxed);
+        let request = Request {
+            volume: volume.clone(),
+            scene: scene.clone(),
+            interacting,
+            generation: self.generation,
+            submitted: Instant::now(),
+            cancel,
+        };
+        *lock(&self.mailbox.slot) = Some(request);
+        self.mailbox.ready.notify_one();
+        self.generation
+    }
+
+    /// The number of the newest request.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Events that arrived since the last call, oldest first.
+    pub fn poll(&self) -> Vec<Event> {
+        self.events.try_iter().collect()
+    }
+
+    /// Waits up to `timeout` for the next event (tests and benchmarks; a window polls).
+    pub fn wait(&self, timeout: Duration) -> Option<Event> {
+        self.events.recv_timeout(timeout).ok()
+    }
+}
+
+impl Drop for RenderService {
+    fn drop(&mut self) {
+        lock(&self.in_flight).store(true, Ordering::Relaxed);
+        self.mailbox.closed.store(true, Ordering::Relaxed);
+        self.mailbox.ready.notify_one();
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// A poisoned lock only means another thread panicked while holding it; the data (a
+/// request slot, a flag) is still whole.
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The thread's side.
+struct Worker {
+    mailbox: Arc<Mailbox>,
+    tx: Sender<Event>,
+    wake: Box<dyn Fn() + Send>,
+    renderers: HashMap<(u64, &'static str), Box<dyn Renderer>>,
+    /// Preview cost measured on the last preview, to size the next one.
+    ns_per_pixel: Option<f64>,
+    /// The last scene previewed: when the same scene comes back without interaction (the
+    /// drag ended), only the full frame is rendered.
+    previewed: Option<(u64, Scene)>,
+}
+
+impl Worker {
+    fn run(mut self) {
+        while let Some(request) = self.next_request() {
+            self.serve(request);
+        }
+    }
+
+    /// Blocks until a request arrives (`None`: the service was dropped).
+    fn next_request(&self) -> Option<Request> {
+        let mut slot = lock(&self.mailbox.slot);
+        loop {
+            if self.mailbox.closed.load(Ordering::Relaxed) {
+                return None;
+            }
+            if let Some(r) = slot.take() {
+                return Some(r);
+            }
+            slot = self
+                .mailbox
+                .ready
+                .wait(slot)
+                .unwrap_or_else(|e| e.into_inner());
+        }
+    }
+
+    fn newer_waiting(&self) -> bool {
+        lock(&self.mailbox.slot).is_some()
+    }
+
+    fn serve(&mut self, request: Request) {
+        let divisor = self.preview_divisor(&request.scene);
+        let seen = self.previewed.as_ref() == Some(&(request.volume.id, request.scene.clone()));
+        if !(seen && !request.interacting) || divisor == 1 {
+            match self.render(&request, divisor) {
+                Ok(()) => {}
+                Err(RenderError::Cancelled) => return,
+                Err(e) => return self.fail(&request, e),
+            }
+            self.previewed = Some((request.volume.id, request.scene.clone()));
+        }
+        if request.interacting || divisor == 1 || self.newer_waiting() {
+            return;
+        }
+        match self.render(&request, 1) {
+            Ok(()) | Err(RenderError::Cancelled) => {}
+            Err(e) => self.fail(&request, e),
+        }
+    }
+
+    fn fail(&self, request: &Request, e: RenderError) {
+        let _ = self.tx.send(Event::Failed {
+            generation: request.generation,
+            message: e.to_string(),
+        });
+        (self.wake)();
+    }
+
+    /// Renders the request at `1 / divisor` (a preview with a cheap integrator) or in full,
+    /// and sends the frame.
+    fn render(&mut self, request: &Request, divisor: usize) -> Result<(), RenderError> {
+        let full = divisor == 1;
+        let mut scene = request.scene.clone();
+        if !full {
+            scene.method = preview_method(&scene.method);
+        }
+        let resolved = scene.method.resolve(&request.volume.volume)?;
+        let key = (request.volume.id, resolved.name());
+        if !self.renderers.contains_key(&key) {
+            self.renderers
+                .retain(|(id, _), _| *id == request.volume.id);
+            let r = create_renderer(&request.volume.volume, &resolved)?;
+            self.renderers.insert(key, r);
+        }
+        let renderer = self.renderers.get_mut(&key).expect("inserted above");
+        let control = Control {
+            cancel: Some(request.cancel.clone()),
+            progress: None,
+        };
+        let frame = if full {
+            renderer.render(&scene, &control)?
+        } else {
+            renderer.render_preview(&scene, &control, divisor)?
+        };
+        if !full {
+            let px = (frame.stats.pixels.max(1)) as f64;
+            self.ns_per_pixel = Some(frame.stats.ms * 1e6 / px);
+        }
+        let rendered = Rendered {
+            image: frame.image,
+            stats: frame.stats,
+            generation: request.generation,
+            full,
+            divisor,
+            latency: request.submitted.elapsed(),
+            scene: request.scene.clone(),
+        };
+        let _ = self.tx.send(Event::Frame(Box::new(rendered)));
+        (self.wake)();
+        Ok(())
+    }
+
+    /// The divisor whose preview meets [`PREVIEW_BUDGET_MS`] at the last measured cost.
+    fn preview_divisor(&self, scene: &Scene) -> usize {
+        let pixels = (scene.view.width * scene.view.height) as f64;
+        match self.ns_per_pixel {
+            None => 4,
+            Some(ns) => {
+                let ms_full = pixels * ns * 1e-6;
+                let k = (ms_full / PREVIEW_BUDGET_MS).sqrt().ceil() as usize;
+                k.clamp(1, MAX_DIVISOR)
+            }
+        }
+    }
+}
+
+/// The method a preview uses: the scene's, with adaptive or reference integration replaced
+/// by fixed steps of one unit (the error-controlled frame follows when input stops).
+pub fn preview_method(method: &Method) -> Method {
+    match *method {
+        Method::GridRaycast(mut g) => {
+            if matches!(
+                g.integrator,
+                Integrator::AdaptiveSimpson(_) | Integrator::Reference
+            ) {
+                g.integrator = Integrator::Riemann { step: 1.0 };
+            }
+            Method::GridRaycast(g)
+        }
+        Method::TetRaycast(SegmentRule::AdaptiveSimpson(_)) => Method::TetRaycast(SegmentRule::Psi),
+        m => m,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use volux_core::{synth, CameraSpec};
+
+    fn volume() -> VolumeRef {
+        VolumeRef {
+            id: 1,
+            volume: Volume::from(synth::marschner_lobb(24).unwrap()),
+        }
+    }
+
+    fn scene(v: &VolumeRef, w: usize) -> Scene {
+        let camera = CameraSpec::default().resolve(&v.volume.bounds()).unwrap();
+        Scene::new(camera, w, w, v.volume.preset_tf("auto").unwrap())
+    }
+
+    fn next_frame(s: &RenderService) -> Rendered {
+        match s.wait(Duration::from_secs(60)).expect("a frame") {
+            Event::Frame(f) => *f,
+            Event::Failed { message, .. } => panic!("{message}"),
+        }
+    }
+
+    /// A request gets a preview, then the full frame, equal to a one-off render.
+    #[test]
+    fn preview_then_full_frame() {
+        let v = volume();
+        let s = scene(&v, 64);
+        let mut service = RenderService::start(|| {});
+        let g = service.submit(&v, &s, false);
+        let preview = next_frame(&service);
+        assert!(!preview.full && preview.generation == g);
+        assert_eq!(preview.image.width(), 64 / preview.divisor);
+        let full = next_frame(&service);
+        assert!(full.full && full.image.width() == 64);
+        let once = volux_render::engine::render_once(&v.volume, &s, &Control::default()).unwrap();
+        assert_eq!(full.image, once.image);
+    }
+
+    /// While interacting only previews come; a newer request supersedes older ones.
+    #[test]
+    fn interaction_gets_previews_and_newest_wins() {
+        let v = volume();
+        let mut service = RenderService::start(|| {});
+        for w in [40, 48, 56] {
+            service.submit(&v, &scene(&v, w), true);
+        }
+        let last = service.submit(&v, &scene(&v, 64), false);
+        let mut frames = vec![];
+        while let Some(Event::Frame(f)) = service.wait(Duration::from_secs(5)) {
+            let done = f.full;
+            frames.push(*f);
+            if done {
+                break;
+            }
+        }
+        let full = frames.last().unwrap();
+        assert!(full.full && full.generation == last);
+        assert!(frames.iter().all(|f| f.full == (f.divisor == 1)));
+        assert!(frames.iter().filter(|f| f.full).count() == 1);
+    }
+
+    /// A failing request is reported, and the thread serves the next one.
+    #[test]
+    fn errors_are_reported_and_the_thread_lives_on() {
+        let v = volume();
+        let mut service = RenderService::start(|| {});
+        let mut bad = scene(&v, 32);
+        bad.method = Method::TetRaycast(SegmentRule::Psi);
+        service.submit(&v, &bad, false);
+        match service.wait(Duration::from_secs(10)) {
+            Some(Event::Failed { message, .. }) => assert!(message.contains("tet"), "{message}"),
+            other => panic!("expected a failure, got {other:?}"),
+        }
+        service.submit(&v, &scene(&v, 32), false);
+        assert!(!next_frame(&service).full);
+    }
+
+    /// The preview integrator is fixed-step where the scene's is adaptive.
+    #[test]
+    fn previews_use_fixed_steps() {
+        let adaptive = Method::GridRaycast(volux_render::scene::GridRaycast {
+            integrator: Integrator::Reference,
+            ..Default::default()
+        });
+        let Method::GridRaycast(g) = preview_method(&adaptive) else {
+            panic!()
+        };
+        assert_eq!(g.integrator, Integrator::Riemann { step: 1.0 });
+    }
+}

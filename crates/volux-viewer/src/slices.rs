@@ -1,0 +1,286 @@
+//! The slice views: three orthogonal planes of the data through the crosshair point
+//! (axial, coronal, sagittal in the grid's index planes), grey-scale through a window, with
+//! the patient or axis letters on their edges. Meshes are resampled onto a grid once
+//! ([`volux_render::resample::resample_mesh`]); outside the mesh a slice is dark blue.
+use std::sync::Arc;
+
+use glam::DVec3;
+use volux_core::{Grid, TetMesh};
+use volux_render::resample::resample_mesh;
+
+/// Samples along the longest side of a mesh's resampled slice grid.
+pub const MESH_SLICE_SAMPLES: usize = 256;
+
+/// What the slices are cut from.
+#[derive(Clone, Debug)]
+enum Values {
+    Grid(Arc<Grid>),
+    Resampled(Arc<Vec<f32>>),
+}
+
+/// A grid to slice: the data's own, or a mesh resampled.
+#[derive(Clone, Debug)]
+pub struct SliceVolume {
+    dims: [usize; 3],
+    origin: DVec3,
+    spacing: DVec3,
+    values: Values,
+}
+
+/// The three planes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Plane {
+    /// k fixed: i across, j down (LPS data: patient left on the right, anterior at the top,
+    /// the radiological convention).
+    Axial,
+    /// j fixed: i across, k up.
+    Coronal,
+    /// i fixed: j across, k up.
+    Sagittal,
+}
+
+impl Plane {
+    /// The three, in display order.
+    pub const ALL: [Plane; 3] = [Plane::Axial, Plane::Coronal, Plane::Sagittal];
+
+    /// The index axis held fixed, the one across and the one down the image, and whether
+    /// the down axis runs upwards (row 0 = its last index).
+    fn axes(self) -> (usize, usize, usize, bool) {
+        match self {
+            Plane::Axial => (2, 0, 1, false),
+            Plane::Coronal => (1, 0, 2, true),
+            Plane::Sagittal => (0, 1, 2, true),
+        }
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Plane::Axial => "axial",
+            Plane::Coronal => "coronal",
+            Plane::Sagittal => "sagittal",
+        }
+    }
+}
+
+/// The patient side a world direction points to, in LPS (DICOM) coordinates: +x left, +y
+/// posterior, +z superior; the dominant component decides.
+pub fn patient_letter(d: DVec3) -> char {
+    let a = d.abs();
+    if a.x >= a.y && a.x >= a.z {
+        if d.x >= 0.0 {
+            'L'
+        } else {
+            'R'
+        }
+    } else if a.y >= a.z {
+        if d.y >= 0.0 {
+            'P'
+        } else {
+            'A'
+        }
+    } else if d.z >= 0.0 {
+        'S'
+    } else {
+        'I'
+    }
+}
+
+/// The axis name of a world direction (`+X` ... `-Z`) for data without patient axes.
+pub fn axis_label(d: DVec3) -> &'static str {
+    let a = d.abs();
+    match (a.x >= a.y && a.x >= a.z, a.y >= a.z, d.max_element() >= -d.min_element()) {
+        (true, _, true) => "+X",
+        (true, _, false) => "-X",
+        (false, true, true) => "+Y",
+        (false, true, false) => "-Y",
+        (false, false, true) => "+Z",
+        (false, false, false) => "-Z",
+    }
+}
+
+/// A slice image: 8-bit RGBA rows, top first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SliceImage {
+    /// Width in samples.
+    pub width: usize,
+    /// Height in samples.
+    pub height: usize,
+    /// RGBA bytes.
+    pub rgba: Vec<u8>,
+    /// World size of the image (for its aspect on screen).
+    pub world_size: [f64; 2],
+}
+
+impl SliceVolume {
+    /// Slices of a grid.
+    pub fn of_grid(grid: Arc<Grid>) -> Self {
+        Self {
+            dims: grid.dims(),
+            origin: grid.origin(),
+            spacing: grid.spacing(),
+            values: Values::Grid(grid),
+        }
+    }
+
+    /// Slices of a mesh, resampled onto a grid of [`MESH_SLICE_SAMPLES`] along its longest
+    /// side.
+    pub fn of_mesh(mesh: &TetMesh) -> Result<Self, volux_core::Error> {
+        let r = resample_mesh(mesh, MESH_SLICE_SAMPLES)?;
+        Ok(Self {
+            dims: r.place.dims,
+            origin: r.place.origin,
+            spacing: r.place.spacing,
+            values: Values::Resampled(Arc::new(r.values)),
+        })
+    }
+
+    /// Samples per axis.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// The value at an index (NaN outside a resampled mesh).
+    pub fn value(&self, idx: [usize; 3]) -> f32 {
+        match &self.values {
+            Values::Grid(g) => g.value(idx[0], idx[1], idx[2]),
+            Values::Resampled(v) => v[idx[0] + self.dims[0] * (idx[1] + self.dims[1] * idx[2])],
+        }
+    }
+
+    /// The sample nearest to a world point, clamped into the grid.
+    pub fn index_of(&self, p: DVec3) -> [usize; 3] {
+        let t = (p - self.origin) / self.spacing;
+        [0, 1, 2].map(|a| (t[a].round().max(0.0) as usize).min(self.dims[a] - 1))
+    }
+
+    /// The world position of a sample.
+    pub fn world_of(&self, idx: [usize; 3]) -> DVec3 {
+        self.origin + self.spacing * DVec3::new(idx[0] as f64, idx[1] as f64, idx[2] as f64)
+    }
+
+    /// The centre sample's position (the first crosshair).
+    pub fn centre(&self) -> DVec3 {
+        self.world_of(self.dims.map(|d| d / 2))
+    }
+
+    /// The world width and height of a slice of `plane`.
+    pub fn world_size(&self, plane: Plane) -> [f64; 2] {
+        let (_, across, down, _) = plane.axes();
+        [
+            self.spacing[across] * self.dims[across] as f64,
+            self.spacing[down] * self.dims[down] as f64,
+        ]
+    }
+
+    /// The plane through `crosshair`, grey from `window[0]` (black) to `window[1]` (white).
+    pub fn slice(&self, plane: Plane, crosshair: DVec3, window: [f64; 2]) -> SliceImage {
+        let (fixed, across, down, upward) = plane.axes();
+        let at = self.index_of(crosshair);
+        let (w, h) = (self.dims[across], self.dims[down]);
+        let mut rgba = Vec::with_capacity(w * h * 4);
+        let width = (window[1] - window[0]).max(1e-300);
+        for row in 0..h {
+            let d = if upward { h - 1 - row } else { row };
+            for col in 0..w {
+                let mut idx = [0; 3];
+                idx[fixed] = at[fixed];
+                idx[across] = col;
+                idx[down] = d;
+                let v = self.value(idx);
+                if v.is_nan() {
+                    rgba.extend([10, 14, 40, 255]);
+                } else {
+                    let g = (((v as f64 - window[0]) / width).clamp(0.0, 1.0) * 255.0).round();
+                    rgba.extend([g as u8, g as u8, g as u8, 255]);
+                }
+            }
+        }
+        SliceImage {
+            width: w,
+            height: h,
+            rgba,
+            world_size: self.world_size(plane),
+        }
+    }
+
+    /// The crosshair moved to the point at fraction (`u`, `v`) across and down a slice of
+    /// `plane` (the fixed coordinate stays).
+    pub fn pick(&self, plane: Plane, crosshair: DVec3, u: f64, v: f64) -> DVec3 {
+        let (_, across, down, upward) = plane.axes();
+        let mut idx = self.index_of(crosshair);
+        let cell = |f: f64, n: usize| ((f.clamp(0.0, 1.0) * n as f64) as usize).min(n - 1);
+        idx[across] = cell(u, self.dims[across]);
+        let d = cell(v, self.dims[down]);
+        idx[down] = if upward { self.dims[down] - 1 - d } else { d };
+        self.world_of(idx)
+    }
+
+    /// The letters at the right and top edges of a slice of `plane` (the sides the index
+    /// axes point to; identity direction: LPS).
+    pub fn edge_letters(&self, plane: Plane) -> (char, char) {
+        let (_, across, down, upward) = plane.axes();
+        let axis = |a: usize| DVec3::AXES[a];
+        let top = if upward { axis(down) } else { -axis(down) };
+        (patient_letter(axis(across)), patient_letter(top))
+    }
+
+    /// The four world corners of a slice of `plane` through `crosshair` (for outlines in
+    /// the 3D view).
+    pub fn plane_corners(&self, plane: Plane, crosshair: DVec3) -> [DVec3; 4] {
+        let (fixed, across, down, _) = plane.axes();
+        let at = self.index_of(crosshair);
+        let corner = |a: usize, d: usize| {
+            let mut idx = [0; 3];
+            idx[fixed] = at[fixed];
+            idx[across] = a;
+            idx[down] = d;
+            self.world_of(idx)
+        };
+        let (na, nd) = (self.dims[across] - 1, self.dims[down] - 1);
+        [corner(0, 0), corner(na, 0), corner(na, nd), corner(0, nd)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use volux_core::grid::Samples;
+
+    fn ramp() -> SliceVolume {
+        // value = i + 10 j + 100 k on a 4 x 3 x 2 grid
+        let v: Vec<f32> = (0..24)
+            .map(|n| (n % 4 + 10 * ((n / 4) % 3) + 100 * (n / 12)) as f32)
+            .collect();
+        let g = Grid::new([4, 3, 2], [1.0; 3], [0.0; 3], Samples::F32(volux_core::grid::Buffer::owned(v))).unwrap();
+        SliceVolume::of_grid(Arc::new(g))
+    }
+
+    /// Each plane holds its fixed index and lays the others out as documented.
+    #[test]
+    fn planes_cut_where_the_crosshair_is() {
+        let s = ramp();
+        let c = s.world_of([2, 1, 1]);
+        let ax = s.slice(Plane::Axial, c, [0.0, 255.0]);
+        assert_eq!((ax.width, ax.height), (4, 3));
+        // top-left of the axial slice: i = 0, j = 0, k = 1 -> 100
+        assert_eq!(ax.rgba[0], 100);
+        let sag = s.slice(Plane::Sagittal, c, [0.0, 255.0]);
+        assert_eq!((sag.width, sag.height), (3, 2));
+        // top-left of the sagittal slice: i = 2, j = 0, k = 1 (upward) -> 102
+        assert_eq!(sag.rgba[0], 102);
+        let p = s.pick(Plane::Coronal, c, 0.99, 0.99);
+        assert_eq!(s.index_of(p), [3, 1, 0]);
+    }
+
+    /// LPS letters: +x left, -y anterior, +z superior.
+    #[test]
+    fn letters_follow_lps() {
+        assert_eq!(patient_letter(DVec3::X), 'L');
+        assert_eq!(patient_letter(-DVec3::Y), 'A');
+        assert_eq!(patient_letter(DVec3::new(0.1, 0.2, -0.9)), 'I');
+        assert_eq!(ramp().edge_letters(Plane::Axial), ('L', 'A'));
+        assert_eq!(ramp().edge_letters(Plane::Coronal), ('L', 'S'));
+        assert_eq!(axis_label(-DVec3::Z), "-Z");
+    }
+}

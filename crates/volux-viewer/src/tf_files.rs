@@ -1,0 +1,20 @@
+//! Transfer functions from files, as `volux render --tf FILE` reads them.
+use std::path::Path;
+
+use volux_core::TransferFunction;
+
+/// Largest TF file read.
+pub const MAX_TF_BYTES: u64 = 16 << 20;
+
+/// Reads a transfer function file (Volux TF JSON).
+pub fn read(path: &Path) -> Result<TransferFunction, String> {
+    let shown = path.display();
+    let len = std::fs::metadata(path)
+        .map_err(|e| format!("{shown}: {e}"))?
+        .len();
+    if len > MAX_TF_BYTES {
+        return Err(format!("{shown}: {len} bytes, more than a transfer function holds"));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{shown}: {e}"))?;
+    TransferFunction::from_json(&text).map_err(|e| format!("{shown}: {e}"))
+}
