@@ -33,6 +33,10 @@
 //! with a note); `"Diverging"`, `"Lab"`, `"CIELAB"`, `"HSV"`, `"Lab/CIEDE2000"` and `"Step"`
 //! are refused with an error naming the field.
 //!
+//! Positions are used as written (ParaView's "use preset range"): ParaView rescales a preset
+//! to the data range when it is applied, and its built-in presets span 0..1 or -1..1, so
+//! those need `space` set to normalized (or their positions rescaled) to look as in ParaView.
+//!
 //! Not applied, recorded in [`Imported::notes`]: Slicer's gradient opacity when it is not the
 //! constant 1 (Volux has no gradient opacity), Slicer's shading and interpolation settings,
 //! ParaView's `NanColor`. Refused: ParaView's categorical presets (`IndexedColors` without
