@@ -49,6 +49,9 @@ use serde_json::{Map, Value};
 use crate::error::{Error, Result};
 use crate::transfer::{Space, TransferFunction};
 
+mod color_space;
+pub use color_space::{vtk_color_value, ColorSpace, VtkColorNode};
+
 /// The most control points one imported function may hold.
 pub const MAX_POINTS: usize = 65_536;
 /// The largest difference, at the bisection's check points, between the imported curve and
@@ -245,58 +248,83 @@ impl Representation<3> for DisplayColor {
     }
 }
 
-/// Curves given per channel by VTK nodes (all channels share the positions and shapes).
+/// A VTK curve with `N` values per position, to be sampled: the nodes' positions and
+/// shapes, their values, and the curve of each segment.
 struct Curves<'a, const N: usize> {
-    nodes: [&'a [VtkNode]; N],
+    /// Positions, midpoints and sharpnesses of the nodes (`y` unused).
+    shape: &'a [VtkNode],
+    /// The value at each node.
+    values: Vec<[f64; N]>,
+    /// The curve of segment `i` (nodes `i` and `i + 1`) at a position in it, ends included.
+    segment: &'a dyn Fn(usize, f64) -> [f64; N],
+    /// Every segment (but one with sharpness > 0.99) holds its right node's value (VTK's
+    /// `Step` colour space).
+    step_right: bool,
 }
 
 impl<const N: usize> Curves<'_, N> {
-    fn at(&self, x: f64) -> [f64; N] {
-        self.nodes.map(|n| vtk_piecewise_value(n, x))
-    }
-
     /// Samples of the curves, `[x, values...]`, close to the original within [`TOLERANCE`]
-    /// when represented by `R`; `what` names the function in errors.
+    /// when represented by `R`; `what` names the function in errors. At each node the value
+    /// VTK gives there (the end of the segment before it; the node's own value at the first
+    /// node), then, where it differs, the start of the segment after it (VTK's colour-space
+    /// round trips are not exact) and after the last node its own value (VTK's clamping).
     fn sample<R: Representation<N>>(&self, what: &'static str) -> Result<Vec<(f64, [f64; N])>> {
-        let nodes = self.nodes[0];
+        let nodes = self.shape;
+        let n = nodes.len();
+        let live = |j: usize| j + 1 < n && nodes[j + 1].x > nodes[j].x;
         let mut out: Vec<(f64, [f64; N])> = Vec::new();
-        for (i, a) in nodes.iter().enumerate() {
-            let ya = self.nodes.map(|n| n[i].y);
-            out.push((a.x, ya));
-            let Some(b) = nodes.get(i + 1) else { break };
-            if b.x <= a.x {
-                continue;
+        let push = |out: &mut Vec<(f64, [f64; N])>, x: f64, y: [f64; N]| {
+            if out.last() != Some(&(x, y)) {
+                out.push((x, y));
             }
-            self.sample_segment::<R>(i, &mut out, what)?;
+        };
+        for (i, a) in nodes.iter().enumerate() {
+            if i == 0 {
+                push(&mut out, a.x, self.values[0]);
+            } else if live(i - 1) {
+                push(&mut out, a.x, (self.segment)(i - 1, a.x));
+            }
+            if live(i) {
+                let start = (self.segment)(i, a.x);
+                push(&mut out, a.x, start);
+                self.sample_segment::<R>(i, start, &mut out, what)?;
+            } else if i + 1 == n {
+                push(&mut out, a.x, self.values[i]);
+            }
         }
         Ok(out)
     }
 
-    /// The inner samples of segment `i`: split at the midpoint (a step there for sharpness
-    /// > 0.99), then bisected.
+    /// The inner samples of segment `i` starting at value `ya`: none for `step_right`, else
+    /// split at the midpoint (a step there for sharpness > 0.99), then bisected.
     fn sample_segment<R: Representation<N>>(
         &self,
         i: usize,
+        ya: [f64; N],
         out: &mut Vec<(f64, [f64; N])>,
         what: &'static str,
     ) -> Result<()> {
-        let (a, b) = (self.nodes[0][i], self.nodes[0][i + 1]);
+        let (a, b) = (self.shape[i], self.shape[i + 1]);
         let xm = a.x + a.midpoint.clamp(0.00001, 0.99999) * (b.x - a.x);
-        let ya = self.nodes.map(|n| n[i].y);
-        let yb = self.nodes.map(|n| n[i + 1].y);
         if a.sharpness > 0.99 {
-            out.extend([(xm, ya), (xm, yb)]);
+            out.extend([(xm, ya), (xm, self.values[i + 1])]);
             return Ok(());
         }
-        let ym = self.at(xm);
-        self.bisect::<R>((a.x, ya), (xm, ym), 0, out, what)?;
+        if self.step_right {
+            return Ok(());
+        }
+        let at = |x| (self.segment)(i, x);
+        let (ym, yb) = (at(xm), at(b.x));
+        self.bisect::<R>(i, (a.x, ya), (xm, ym), 0, out, what)?;
         out.push((xm, ym));
-        self.bisect::<R>((xm, ym), (b.x, yb), 0, out, what)
+        self.bisect::<R>(i, (xm, ym), (b.x, yb), 0, out, what)
     }
 
     /// Adds the samples strictly inside `(p, q)` that the representation needs.
+    #[allow(clippy::too_many_arguments)]
     fn bisect<R: Representation<N>>(
         &self,
+        i: usize,
         p: (f64, [f64; N]),
         q: (f64, [f64; N]),
         depth: u32,
@@ -304,7 +332,7 @@ impl<const N: usize> Curves<'_, N> {
         what: &'static str,
     ) -> Result<()> {
         let close = [0.25, 0.5, 0.75].iter().all(|&t| {
-            let want = self.at(p.0 + t * (q.0 - p.0));
+            let want = (self.segment)(i, p.0 + t * (q.0 - p.0));
             let got = R::between(&p.1, &q.1, t);
             (0..N).all(|k| (want[k] - got[k]).abs() <= TOLERANCE)
         });
@@ -317,34 +345,52 @@ impl<const N: usize> Curves<'_, N> {
             )));
         }
         let xm = 0.5 * (p.0 + q.0);
-        let m = (xm, self.at(xm));
-        self.bisect::<R>(p, m, depth + 1, out, what)?;
+        let m = (xm, (self.segment)(i, xm));
+        self.bisect::<R>(i, p, m, depth + 1, out, what)?;
         out.push(m);
-        self.bisect::<R>(m, q, depth + 1, out, what)
+        self.bisect::<R>(i, m, q, depth + 1, out, what)
     }
 }
 
 /// Volux opacity points following VTK's scalar opacity `nodes` (opacity per unit distance).
 pub fn opacity_points(nodes: &[VtkNode]) -> Result<Vec<[f64; 2]>> {
-    let curves = Curves { nodes: [nodes] };
+    let segment = |i: usize, x| [segment_value(&nodes[i], &nodes[i + 1], x)];
+    let curves = Curves {
+        shape: nodes,
+        values: nodes.iter().map(|n| [n.y]).collect(),
+        segment: &segment,
+        step_right: false,
+    };
     let samples = curves.sample::<Opacity>("scalar opacity")?;
     Ok(samples.into_iter().map(|(x, [a])| [x, a]).collect())
 }
 
-/// Volux (linear RGB) colour points following VTK's RGB colour transfer function, given as
-/// one node list per channel with display (sRGB-encoded) values.
-pub fn color_points(channels: [&[VtkNode]; 3]) -> Result<Vec<[f64; 4]>> {
-    let curves = Curves { nodes: channels };
+/// Volux (linear RGB) colour points following VTK's colour transfer function `nodes`
+/// (display, i.e. sRGB-encoded, values) interpolated in `space`.
+pub fn color_points(nodes: &[VtkColorNode], space: ColorSpace) -> Result<Vec<[f64; 4]>> {
+    let shape: Vec<VtkNode> = nodes
+        .iter()
+        .map(|n| VtkNode {
+            x: n.x,
+            y: 0.0,
+            midpoint: n.midpoint,
+            sharpness: n.sharpness,
+        })
+        .collect();
+    let segment = |i: usize, x| color_space::segment_color(&nodes[i], &nodes[i + 1], space, x);
+    let curves = Curves {
+        shape: &shape,
+        values: nodes.iter().map(|n| n.rgb).collect(),
+        segment: &segment,
+        step_right: space == ColorSpace::Step,
+    };
     let samples = curves.sample::<DisplayColor>("colour transfer function")?;
     Ok(samples
         .into_iter()
+        // VTK's linear branch does not clamp: HSV rounding can give 1 + 1e-15.
         .map(|(x, c)| {
-            [
-                x,
-                srgb_to_linear(c[0]),
-                srgb_to_linear(c[1]),
-                srgb_to_linear(c[2]),
-            ]
+            let [r, g, b] = c.map(|v| srgb_to_linear(v.clamp(0.0, 1.0)));
+            [x, r, g, b]
         })
         .collect())
 }
@@ -445,21 +491,20 @@ fn nodes_of(v: &[f64], width: usize, k: usize) -> Vec<VtkNode> {
         .collect()
 }
 
-/// Colour points of a flat `[x, r, g, b, ...]` list of display values (checked).
-fn color_from_flat(v: &[f64]) -> Result<Vec<[f64; 4]>> {
-    let (r, g, b) = (nodes_of(v, 4, 1), nodes_of(v, 4, 2), nodes_of(v, 4, 3));
-    // Colour nodes are linear (midpoint 0.5, sharpness 0) in both formats.
-    let linear = |n: Vec<VtkNode>| -> Vec<VtkNode> {
-        n.into_iter()
-            .map(|n| VtkNode {
-                midpoint: 0.5,
-                sharpness: 0.0,
-                ..n
-            })
-            .collect()
-    };
-    let (r, g, b) = (linear(r), linear(g), linear(b));
-    color_points([&r, &g, &b])
+/// Colour points of a flat `[x, r, g, b, ...]` list of display values (checked),
+/// interpolated in `space`. Colour nodes are linear (midpoint 0.5, sharpness 0) in both
+/// formats.
+fn color_from_flat(v: &[f64], space: ColorSpace) -> Result<Vec<[f64; 4]>> {
+    let nodes: Vec<VtkColorNode> = v
+        .chunks_exact(4)
+        .map(|c| VtkColorNode {
+            x: c[0],
+            rgb: [c[1], c[2], c[3]],
+            midpoint: 0.5,
+            sharpness: 0.0,
+        })
+        .collect();
+    color_points(&nodes, space)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -522,7 +567,7 @@ fn paraview_preset(obj: &Map<String, Value>, mut notes: Vec<String>) -> Result<I
             ))
         }
     };
-    check_color_space(obj, &mut notes)?;
+    let space = color_space(obj, &mut notes)?;
     if obj.get("UseLogScale").and_then(Value::as_bool) == Some(true) {
         return Err(pv_err(
             "UseLogScale",
@@ -541,7 +586,7 @@ fn paraview_preset(obj: &Map<String, Value>, mut notes: Vec<String>) -> Result<I
     let err = |at: String, why: String| pv_err(format!("RGBPoints{at}"), why);
     let unit = (0.0, 1.0, "colour component");
     check_flat(&rgb, 4, &[unit, unit, unit], &err)?;
-    let color = color_from_flat(&rgb)?;
+    let color = color_from_flat(&rgb, space)?;
     let opacity = match pv_numbers(obj, "Points")? {
         Some(points) => paraview_opacity(&points)?,
         None => {
@@ -581,19 +626,35 @@ fn paraview_opacity(points: &[f64]) -> Result<Vec<[f64; 2]>> {
     opacity_points(&nodes_of(points, 4, 1))
 }
 
-/// `ColorSpace`: only RGB is interpolated; missing counts as RGB (noted).
-fn check_color_space(obj: &Map<String, Value>, notes: &mut Vec<String>) -> Result<()> {
+/// `ColorSpace`: see [`ColorSpace::from_paraview`]; missing counts as RGB (noted).
+fn color_space(obj: &Map<String, Value>, notes: &mut Vec<String>) -> Result<ColorSpace> {
     match obj.get("ColorSpace") {
         None => {
             notes.push("no ColorSpace: colours are interpolated in RGB".into());
-            Ok(())
+            Ok(ColorSpace::Rgb)
         }
-        Some(Value::String(s)) if s == "RGB" => Ok(()),
-        Some(Value::String(s)) => Err(pv_err(
+        Some(Value::String(s)) => ColorSpace::from_paraview(s).ok_or_else(|| {
+            let why = match s.as_str() {
+                "Lab/CIEDE2000" => {
+                    " (VTK interpolates it along a shortest path through a grid of Lab colours)"
+                }
+                _ => "",
+            };
+            pv_err(
+                "ColorSpace",
+                format!(
+                    "{s:?} is not supported{why}; supported: \"RGB\", \"HSV\", \"Lab\" \
+                     (or \"CIELAB\"), \"Diverging\", \"Step\""
+                ),
+            )
+        }),
+        Some(other) => Err(pv_err(
             "ColorSpace",
-            format!("{s:?} is not supported (only \"RGB\"); save the preset with the RGB colour space in ParaView"),
+            format!(
+                "expected a string, got {}",
+                crate::json_shape::describe(other)
+            ),
         )),
-        Some(other) => Err(pv_err("ColorSpace", format!("expected a string, got {}", crate::json_shape::describe(other)))),
     }
 }
 
@@ -690,7 +751,7 @@ pub fn from_slicer_vp(text: &str) -> Result<Imported> {
     let unit = (0.0, 1.0, "colour component");
     check_flat(&rgb, 4, &[unit, unit, unit], &err)?;
     let tf = build(
-        color_from_flat(&rgb)?,
+        color_from_flat(&rgb, ColorSpace::Rgb)?,
         opacity_points(&nodes_of(&opacity, 2, 1))?,
     )?;
     Ok(Imported {

@@ -367,9 +367,14 @@ fn bad_paraview_presets_name_the_field() {
         ),
         (r#"{"ColorSpace": "RGB"}"#.into(), "RGBPoints", "missing"),
         (
-            r#"{"ColorSpace": "Diverging", "RGBPoints": [0, 0, 0, 0]}"#.into(),
+            r#"{"ColorSpace": "Lab/CIEDE2000", "RGBPoints": [0, 0, 0, 0]}"#.into(),
             "ColorSpace",
-            "\"Diverging\" is not supported",
+            "\"Lab/CIEDE2000\" is not supported (VTK interpolates it along a shortest path",
+        ),
+        (
+            r#"{"ColorSpace": "Prolab", "RGBPoints": [0, 0, 0, 0]}"#.into(),
+            "ColorSpace",
+            "\"Prolab\" is not supported; supported: \"RGB\", \"HSV\"",
         ),
         (
             r#"{"ColorSpace": 3, "RGBPoints": [0, 0, 0, 0]}"#.into(),
@@ -500,5 +505,443 @@ fn bad_vp_files_name_the_line() {
         let e = vp_error(&text);
         assert!(e.starts_with("Slicer .vp transfer function: "), "{e}");
         assert!(e.contains(want), "{text:?}: {e}, want {want}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Colour spaces, against vtkColorTransferFunction::GetTable and vtkMath transcribed here.
+
+/// `vtkMath::RGBToHSV`, statement for statement.
+fn ref_rgb_to_hsv(r: f64, g: f64, b: f64) -> [f64; 3] {
+    let (onethird, onesixth, twothird) = (1.0 / 3.0, 1.0 / 6.0, 2.0 / 3.0);
+    let (mut cmax, mut cmin) = (r, r);
+    if g > cmax {
+        cmax = g;
+    } else if g < cmin {
+        cmin = g;
+    }
+    if b > cmax {
+        cmax = b;
+    } else if b < cmin {
+        cmin = b;
+    }
+    let v = cmax;
+    let s = if v > 0.0 { (cmax - cmin) / cmax } else { 0.0 };
+    let mut h;
+    if s > 0.0 {
+        if r == cmax {
+            h = onesixth * (g - b) / (cmax - cmin);
+        } else if g == cmax {
+            h = onethird + onesixth * (b - r) / (cmax - cmin);
+        } else {
+            h = twothird + onesixth * (r - g) / (cmax - cmin);
+        }
+        if h < 0.0 {
+            h += 1.0;
+        }
+    } else {
+        h = 0.0;
+    }
+    [h, s, v]
+}
+
+/// `vtkMath::HSVToRGB`, statement for statement.
+fn ref_hsv_to_rgb(h: f64, s: f64, v: f64) -> [f64; 3] {
+    let (onethird, onesixth, twothird, fivesixth) = (1.0 / 3.0, 1.0 / 6.0, 2.0 / 3.0, 5.0 / 6.0);
+    let (r, g, b);
+    if h > onesixth && h <= onethird {
+        (g, r, b) = (1.0, (onethird - h) / onesixth, 0.0);
+    } else if h > onethird && h <= 0.5 {
+        (g, b, r) = (1.0, (h - onethird) / onesixth, 0.0);
+    } else if h > 0.5 && h <= twothird {
+        (b, g, r) = (1.0, (twothird - h) / onesixth, 0.0);
+    } else if h > twothird && h <= fivesixth {
+        (b, r, g) = (1.0, (h - twothird) / onesixth, 0.0);
+    } else if h > fivesixth && h <= 1.0 {
+        (r, b, g) = (1.0, (1.0 - h) / onesixth, 0.0);
+    } else {
+        (r, g, b) = (1.0, h / onesixth, 0.0);
+    }
+    [r, g, b].map(|c| (s * c + (1.0 - s)) * v)
+}
+
+/// `vtkMath::RGBToLab` (RGBToXYZ then XYZToLab), statement for statement.
+fn ref_rgb_to_lab(rgb: [f64; 3]) -> [f64; 3] {
+    let [r, g, b] = rgb.map(|c| {
+        if c > 0.04045 {
+            ((c + 0.055) / 1.055).powf(2.4)
+        } else {
+            c / 12.92
+        }
+    });
+    let x = r * 0.4124 + g * 0.3576 + b * 0.1805;
+    let y = r * 0.2126 + g * 0.7152 + b * 0.0722;
+    let z = r * 0.0193 + g * 0.1192 + b * 0.9505;
+    let f = |v: f64| {
+        if v > 0.008856 {
+            v.powf(1.0 / 3.0)
+        } else {
+            (7.787 * v) + (16.0 / 116.0)
+        }
+    };
+    let (vx, vy, vz) = (f(x / 0.9505), f(y / 1.000), f(z / 1.089));
+    [(116.0 * vy) - 16.0, 500.0 * (vx - vy), 200.0 * (vy - vz)]
+}
+
+/// `vtkMath::LabToRGB` (LabToXYZ then XYZToRGB with its gamut clipping).
+fn ref_lab_to_rgb(lab: [f64; 3]) -> [f64; 3] {
+    let vy = (lab[0] + 16.0) / 116.0;
+    let vx = lab[1] / 500.0 + vy;
+    let vz = vy - lab[2] / 200.0;
+    let f = |v: f64| {
+        if v.powf(3.0) > 0.008856 {
+            v.powf(3.0)
+        } else {
+            (v - 16.0 / 116.0) / 7.787
+        }
+    };
+    let (x, y, z) = (0.9505 * f(vx), 1.000 * f(vy), 1.089 * f(vz));
+    let mut rgb = [
+        x * 3.2406 + y * -1.5372 + z * -0.4986,
+        x * -0.9689 + y * 1.8758 + z * 0.0415,
+        x * 0.0557 + y * -0.2040 + z * 1.0570,
+    ]
+    .map(|c| {
+        if c > 0.0031308 {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        } else {
+            12.92 * c
+        }
+    });
+    let max = rgb[0].max(rgb[1]).max(rgb[2]);
+    if max > 1.0 {
+        rgb = rgb.map(|c| c / max);
+    }
+    rgb.map(|c| c.max(0.0))
+}
+
+/// `vtkColorTransferFunctionInterpolateDiverging` with its helpers inlined.
+fn ref_diverging(mut s: f64, rgb1: [f64; 3], rgb2: [f64; 3]) -> [f64; 3] {
+    use std::f64::consts::PI;
+    let msh_of = |lab: [f64; 3]| {
+        let m = (lab[0] * lab[0] + lab[1] * lab[1] + lab[2] * lab[2]).sqrt();
+        let sat = if m > 0.001 {
+            (lab[0] / m).min(1.0).acos()
+        } else {
+            0.0
+        };
+        let h = if sat > 0.001 {
+            lab[2].atan2(lab[1])
+        } else {
+            0.0
+        };
+        [m, sat, h]
+    };
+    let angle = |a1: f64, a2: f64| {
+        let mut d = a1 - a2;
+        if d >= 0.0 {
+            while d >= 2.0 * PI {
+                d -= 2.0 * PI;
+            }
+            if d > PI {
+                d = 2.0 * PI - d;
+            }
+        } else {
+            while d <= -2.0 * PI {
+                d += 2.0 * PI;
+            }
+            if d < -PI {
+                d += 2.0 * PI;
+            }
+        }
+        d
+    };
+    let adjust = |msh: [f64; 3], unsat_m: f64| {
+        if msh[0] >= unsat_m - 0.1 {
+            msh[2]
+        } else {
+            let spin =
+                msh[1] * (unsat_m * unsat_m - msh[0] * msh[0]).sqrt() / (msh[0] * msh[1].sin());
+            if msh[2] > -0.3 * PI {
+                msh[2] + spin
+            } else {
+                msh[2] - spin
+            }
+        }
+    };
+    let mut msh1 = msh_of(ref_rgb_to_lab(rgb1));
+    let mut msh2 = msh_of(ref_rgb_to_lab(rgb2));
+    if msh1[1] > 0.05 && msh2[1] > 0.05 && angle(msh1[2], msh2[2]).abs() > 0.33 * PI {
+        let mmid = msh1[0].max(msh2[0]).max(88.0);
+        if s < 0.5 {
+            msh2 = [mmid, 0.0, 0.0];
+            s *= 2.0;
+        } else {
+            msh1 = [mmid, 0.0, 0.0];
+            s = 2.0 * s - 1.0;
+        }
+    }
+    if msh1[1] < 0.05 && msh2[1] > 0.05 {
+        msh1[2] = adjust(msh2, msh1[0]);
+    } else if msh2[1] < 0.05 && msh1[1] > 0.05 {
+        msh2[2] = adjust(msh1, msh2[0]);
+    }
+    let m = (1.0 - s) * msh1[0] + s * msh2[0];
+    let sat = (1.0 - s) * msh1[1] + s * msh2[1];
+    let h = msh1[2] + s * angle(msh2[2], msh1[2]);
+    ref_lab_to_rgb([
+        m * sat.cos(),
+        m * sat.sin() * h.cos(),
+        m * sat.sin() * h.sin(),
+    ])
+}
+
+/// `vtkColorTransferFunction::GetTable` at one `x` for linear nodes (midpoint 0.5,
+/// sharpness 0, as presets hold them), clamping on; nodes `[x, r, g, b]`.
+fn vtk_color_reference(nodes: &[[f64; 4]], space: &str, x: f64) -> [f64; 3] {
+    let mut idx = 0;
+    let (mut x1, mut x2, mut rgb1, mut rgb2) = (0.0, 0.0, [0.0; 3], [0.0; 3]);
+    while idx < nodes.len() && x > nodes[idx][0] {
+        idx += 1;
+        if idx < nodes.len() {
+            (x1, x2) = (nodes[idx - 1][0], nodes[idx][0]);
+            rgb1 = [nodes[idx - 1][1], nodes[idx - 1][2], nodes[idx - 1][3]];
+            rgb2 = [nodes[idx][1], nodes[idx][2], nodes[idx][3]];
+        }
+    }
+    let node = |n: &[f64; 4]| [n[1], n[2], n[3]];
+    if idx >= nodes.len() {
+        return node(&nodes[nodes.len() - 1]);
+    }
+    if idx == 0 {
+        return node(&nodes[0]);
+    }
+    let mut s = if x2 != x1 { (x - x1) / (x2 - x1) } else { 0.0 };
+    let midpoint = 0.5;
+    s = if s < midpoint {
+        0.5 * s / midpoint
+    } else {
+        0.5 + 0.5 * (s - midpoint) / (1.0 - midpoint)
+    };
+    match space {
+        "RGB" => [0, 1, 2].map(|j| (1.0 - s) * rgb1[j] + s * rgb2[j]),
+        "Step" => rgb2,
+        "HSV" => {
+            let mut hsv1 = ref_rgb_to_hsv(rgb1[0], rgb1[1], rgb1[2]);
+            let mut hsv2 = ref_rgb_to_hsv(rgb2[0], rgb2[1], rgb2[2]);
+            if hsv1[0] - hsv2[0] > 0.5 || hsv2[0] - hsv1[0] > 0.5 {
+                if hsv1[0] > hsv2[0] {
+                    hsv1[0] -= 1.0;
+                } else {
+                    hsv2[0] -= 1.0;
+                }
+            }
+            let mut h = (1.0 - s) * hsv1[0] + s * hsv2[0];
+            if h < 0.0 {
+                h += 1.0;
+            }
+            ref_hsv_to_rgb(
+                h,
+                (1.0 - s) * hsv1[1] + s * hsv2[1],
+                (1.0 - s) * hsv1[2] + s * hsv2[2],
+            )
+        }
+        "Lab" | "CIELAB" => {
+            let (lab1, lab2) = (ref_rgb_to_lab(rgb1), ref_rgb_to_lab(rgb2));
+            ref_lab_to_rgb([0, 1, 2].map(|j| (1.0 - s) * lab1[j] + s * lab2[j]))
+        }
+        "Diverging" => ref_diverging(s, rgb1, rgb2),
+        other => panic!("no reference for {other}"),
+    }
+}
+
+/// The largest difference between the imported colours (re-encoded) and VTK's display
+/// colours over many positions, away from the nodes and the positions in `skip`; asserts
+/// it is below 1e-4 and returns it. (At a node VTK can jump: its colour-space round trip
+/// is not exact, and the first node's own colour is used at it, the round trip right after.)
+fn max_colour_error(tf: &TransferFunction, nodes: &[[f64; 4]], space: &str, skip: &[f64]) -> f64 {
+    let (lo, hi) = (nodes[0][0], nodes[nodes.len() - 1][0]);
+    let mut worst: f64 = 0.0;
+    let away = |x: f64| {
+        let near = |s: f64| (x - s).abs() <= 1e-9;
+        !skip.iter().any(|&s| near(s)) && !nodes.iter().any(|n| near(n[0]))
+    };
+    for x in probes(lo, hi).filter(|&x| away(x)) {
+        let c = tf.color_at(x);
+        let want = vtk_color_reference(nodes, space, x);
+        for k in 0..3 {
+            let e = (srgb_encode(c[k]) - want[k]).abs();
+            assert!(
+                e < 1e-4,
+                "{space}: x {x} channel {k}: got {}, VTK {want:?}",
+                srgb_encode(c[k])
+            );
+            worst = worst.max(e);
+        }
+    }
+    eprintln!(
+        "{space}: max colour error {worst:.2e} over {} points",
+        tf.color.len()
+    );
+    worst
+}
+
+/// Imports `nodes` as a ParaView preset in `space`, checks it against VTK, and returns the
+/// imported TF.
+fn check_space(nodes: &[[f64; 4]], space: &str, skip: &[f64]) -> TransferFunction {
+    let text = format!(
+        r#"{{"ColorSpace": "{space}", "RGBPoints": [{}], "Points": [0, 0.5, 0.5, 0]}}"#,
+        flat(nodes)
+    );
+    let tf = from_paraview_json(&text).unwrap().tf;
+    max_colour_error(&tf, nodes, space, skip);
+    tf
+}
+
+/// Colours that exercise the spaces: a hue wrap (red to magenta), greys, a saturated pair
+/// far apart in hue, out-of-gamut Lab mixtures, equal positions (a step).
+const MIXED: [[f64; 4]; 8] = [
+    [-1.0, 1.0, 0.0, 0.0],
+    [-0.5, 1.0, 0.0, 1.0],
+    [0.0, 0.2, 0.9, 0.1],
+    [0.3, 0.5, 0.5, 0.5],
+    [0.6, 0.0, 0.1, 0.9],
+    [0.6, 0.95, 0.8, 0.1],
+    [0.8, 0.0, 0.0, 0.0],
+    [1.0, 0.9, 0.3, 0.05],
+];
+
+#[test]
+fn rgb_colours_match_vtk() {
+    check_space(&MIXED, "RGB", &[0.6]);
+}
+
+#[test]
+fn hsv_colours_match_vtk_with_hue_wrap() {
+    check_space(&MIXED, "HSV", &[0.6]);
+    // Red (hue 0) to magenta (hue 5/6) goes through hue 11/12, not through green.
+    let tf = check_space(&[[0.0, 1.0, 0.0, 0.0], [1.0, 1.0, 0.0, 1.0]], "HSV", &[]);
+    let mid = tf.color_at(0.5).map(srgb_encode);
+    assert!((mid[0] - 1.0).abs() < 1e-4 && mid[1] < 1e-4 && (mid[2] - 0.5).abs() < 1e-4);
+}
+
+#[test]
+fn lab_colours_match_vtk() {
+    check_space(&MIXED, "Lab", &[0.6]);
+    check_space(&MIXED, "CIELAB", &[0.6]);
+}
+
+#[test]
+fn diverging_colours_match_vtk() {
+    check_space(&MIXED, "Diverging", &[0.6]);
+    // Two saturated colours far apart in hue: white (M 88 or more) inserted halfway.
+    let tf = check_space(
+        &[[0.0, 0.0, 0.0, 1.0], [1.0, 1.0, 0.0, 0.0]],
+        "Diverging",
+        &[],
+    );
+    let lab = ref_rgb_to_lab(tf.color_at(0.5).map(srgb_encode));
+    assert!(
+        lab[0] > 87.9 && lab[1].abs() < 0.1 && lab[2].abs() < 0.1,
+        "{lab:?}"
+    );
+}
+
+#[test]
+fn step_colours_are_the_right_nodes_as_in_vtk() {
+    // VTK's own test (TestColorTransferFunction): red at 0, blue at 1, Step: blue at 0.5.
+    let nodes = [[0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 1.0]];
+    let tf = check_space(&nodes, "Step", &[0.0]);
+    let blue = tf.color_at(0.5).map(srgb_encode);
+    assert!((blue[2] - 1.0).abs() < 1e-12 && blue[0] == 0.0 && blue[1] == 0.0);
+    // A step is two points at one position: the left node's colour, then the right one's.
+    assert_eq!(
+        tf.color,
+        vec![
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0, 1.0]
+        ]
+    );
+    tf.validate().unwrap();
+    check_space(&MIXED, "Step", &[-1.0, -0.5, 0.0, 0.3, 0.6, 0.8]);
+}
+
+fn example(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../docs/examples")
+        .join(name);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn cool_to_warm_example_matches_vtk() {
+    let imported = from_paraview_json(&example("paraview-cool-to-warm.json")).unwrap();
+    assert_eq!(imported.name.as_deref(), Some("Cool to Warm"));
+    let nodes = [
+        [0.0, 0.23137254902, 0.298039215686, 0.752941176471],
+        [0.5, 0.865, 0.865, 0.865],
+        [1.0, 0.705882352941, 0.0156862745098, 0.149019607843],
+    ];
+    max_colour_error(&imported.tf, &nodes, "Diverging", &[]);
+    // The grey node is the map's white: VTK gives it after its Lab round trip, about
+    // (0.865006, 0.865021, 0.865006); its L* is about 88, Moreland's white magnitude.
+    let grey = imported.tf.color_at(0.5).map(srgb_encode);
+    let want = vtk_color_reference(&nodes, "Diverging", 0.5);
+    assert!(
+        (0..3).all(|k| (grey[k] - want[k]).abs() < 1e-4),
+        "{grey:?} {want:?}"
+    );
+    assert!(grey.iter().all(|c| (c - 0.865).abs() < 1e-4), "{grey:?}");
+    assert!((ref_rgb_to_lab(grey)[0] - 88.0).abs() < 0.1);
+    // Diverging differs from RGB interpolation by more than the tolerance here.
+    let rgb = vtk_color_reference(&nodes, "RGB", 0.25);
+    let div = imported.tf.color_at(0.25).map(srgb_encode);
+    assert!(
+        (0..3).any(|k| (rgb[k] - div[k]).abs() > 0.01),
+        "{rgb:?} {div:?}"
+    );
+}
+
+#[test]
+fn paraview_example_still_imports() {
+    let imported = from_paraview_json(&example("paraview-preset.json")).unwrap();
+    assert_eq!(imported.name.as_deref(), Some("Volux example ramp"));
+    let nodes = [
+        [0.2, 0.1, 0.05, 0.3],
+        [0.5, 0.9, 0.4, 0.1],
+        [1.0, 1.0, 1.0, 0.8],
+    ];
+    max_colour_error(&imported.tf, &nodes, "RGB", &[]);
+}
+
+#[test]
+fn module_colour_evaluation_agrees_with_the_reference() {
+    let vtk: Vec<VtkColorNode> = MIXED
+        .iter()
+        .map(|n| VtkColorNode {
+            x: n[0],
+            rgb: [n[1], n[2], n[3]],
+            midpoint: 0.5,
+            sharpness: 0.0,
+        })
+        .collect();
+    for (name, space) in [
+        ("RGB", ColorSpace::Rgb),
+        ("HSV", ColorSpace::Hsv),
+        ("Lab", ColorSpace::Lab),
+        ("Diverging", ColorSpace::Diverging),
+        ("Step", ColorSpace::Step),
+    ] {
+        for x in probes(-1.0, 1.0) {
+            let (got, want) = (
+                vtk_color_value(&vtk, space, x),
+                vtk_color_reference(&MIXED, name, x),
+            );
+            assert!(
+                (0..3).all(|k| (got[k] - want[k]).abs() < 1e-12),
+                "{name} {x}: {got:?} {want:?}"
+            );
+        }
     }
 }
