@@ -29,9 +29,19 @@
 //! the screen without a transfer curve, i.e. sRGB-encoded. Volux's colours are linear RGB
 //! (the PNG writer encodes to sRGB), so each colour is decoded with the sRGB curve, and the
 //! colour curve is sampled the same way until the re-encoded colour is within [`TOLERANCE`]
-//! of VTK's display value. Only `ColorSpace` `"RGB"` is interpolated (missing counts as RGB,
-//! with a note); `"Diverging"`, `"Lab"`, `"CIELAB"`, `"HSV"`, `"Lab/CIEDE2000"` and `"Step"`
-//! are refused with an error naming the field.
+//! of VTK's display value. `ColorSpace` is interpolated as `vtkColorTransferFunction::
+//! GetTable` does ([`ColorSpace`], [`vtk_color_value`]; missing counts as `"RGB"`, with a
+//! note): `"RGB"`; `"HSV"` with the hue the short way round (VTK's default `HSVWrap`);
+//! `"Lab"` (and `"CIELAB"`) in CIE L*a*b* with `vtkMath`'s conversions (D65 white
+//! 0.9505/1/1.089, out-of-gamut colours scaled and clamped); `"Diverging"`, Moreland's Msh
+//! interpolation (white of magnitude 88 or more between two distinct saturated colours, the
+//! hue of an unsaturated end adjusted, the hue along the signed shorter angle as current VTK
+//! does); `"Step"`, where VTK gives each segment the colour of its *right* node (a step at
+//! the left node, two points at one position). VTK's round trip through HSV or Lab is not
+//! exact, so at interior nodes the result holds VTK's round-tripped colour and at the first
+//! and last node a step of up to about 2e-4 to the node's own colour, as VTK has.
+//! `"Lab/CIEDE2000"` (a shortest path through a grid of Lab colours) and other names are
+//! refused with an error naming the field.
 //!
 //! Positions are used as written (ParaView's "use preset range"): ParaView rescales a preset
 //! to the data range when it is applied, and its built-in presets span 0..1 or -1..1, so
