@@ -154,7 +154,7 @@ fn a_bad_imported_file_is_one_error_line_naming_the_field() {
     std::fs::write(d.join("bad.vp"), "1\n0\n1\n0\n0\n1\n4 0 0 1\n").unwrap();
     std::fs::write(
         d.join("bad.json"),
-        r#"[{"ColorSpace": "Lab", "RGBPoints": [0, 0, 0, 0]}]"#,
+        r#"[{"ColorSpace": "Lab/CIEDE2000", "RGBPoints": [0, 0, 0, 0]}]"#,
     )
     .unwrap();
     for (file, want) in [
@@ -162,7 +162,7 @@ fn a_bad_imported_file_is_one_error_line_naming_the_field() {
             "bad.vp",
             "line 8 (gradient opacity): missing: the file ends after 7 lines of 9",
         ),
-        ("bad.json", "ColorSpace: \"Lab\" is not supported"),
+        ("bad.json", "ColorSpace: \"Lab/CIEDE2000\" is not supported"),
     ] {
         let run = volux(&["tf", "show", file], d);
         let err = String::from_utf8_lossy(&run.stderr);
