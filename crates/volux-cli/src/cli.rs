@@ -170,7 +170,8 @@ pub enum TfCommand {
     /// Print a preset as JSON (stdout), to edit and pass back with --tf FILE.
     Show {
         /// The preset: auto, grayscale, ct-bone, ct-skin, ct-soft-tissue, mr-default,
-        /// viridis, inferno, cool-warm.
+        /// viridis, inferno, cool-warm; or a file (a ParaView preset or Slicer .vp prints as
+        /// Volux JSON).
         preset: String,
         /// Fit the preset to this file (its value range, histogram and voxel size), as
         /// `volux render` does; `auto` needs it.
@@ -207,7 +208,8 @@ pub struct RenderArgs {
     #[arg(long, short)]
     pub output: Option<PathBuf>,
     /// Transfer function: a preset (auto, grayscale, ct-bone, ct-skin, ct-soft-tissue,
-    /// mr-default, viridis, inferno, cool-warm) or a JSON file (`volux help tf`); repeat it
+    /// mr-default, viridis, inferno, cool-warm) or a file: Volux JSON, a ParaView preset or a
+    /// Slicer .vp (`volux help tf`); repeat it
     /// to layer several, each optionally weighted as NAME:WEIGHT (`--tf ct-bone --tf
     /// ct-skin:0.2`: bone under a faint skin) [default: auto].
     #[arg(long)]

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use volux_core::image::PngOptions;
-use volux_core::{Camera, CameraSpec, TransferFunction};
+use volux_core::{transfer_import, Camera, CameraSpec, TransferFunction};
 use volux_io::Dataset;
 use volux_render::framing::{fit_to_box, visible_bounds};
 use volux_render::integrate::{AdaptiveParams, Integrator, SegmentRule, StepControl};
@@ -50,15 +50,33 @@ fn parse_background(s: &str) -> Result<Option<[f32; 3]>, CmdError> {
     }
 }
 
-/// A preset name or a JSON file; presets are fitted to `volume` and scaled to its unit
-/// length.
+/// A preset name or a file; presets are fitted to `volume` and scaled to its unit length.
 pub fn transfer_function(spec: &str, volume: &Volume) -> Result<TransferFunction, CmdError> {
-    let path = Path::new(spec);
-    if spec.ends_with(".json") || path.is_file() {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{spec}: {e}"))?;
-        return Ok(TransferFunction::from_json(&text).map_err(|e| format!("{spec}: {e}"))?);
+    if is_tf_file(spec) {
+        return tf_file(spec);
     }
     Ok(volume.preset_tf(spec)?)
+}
+
+/// Whether `--tf SPEC` names a file rather than a preset.
+pub fn is_tf_file(spec: &str) -> bool {
+    let lower = spec.to_ascii_lowercase();
+    lower.ends_with(".json") || lower.ends_with(".vp") || Path::new(spec).is_file()
+}
+
+/// A transfer-function file: Volux JSON, a ParaView preset or a Slicer `.vp`
+/// ([`transfer_import::import`] tells them apart); what an imported file sets that Volux
+/// does not apply is printed as warnings.
+pub fn tf_file(spec: &str) -> Result<TransferFunction, CmdError> {
+    let text = std::fs::read_to_string(spec).map_err(|e| format!("{spec}: {e}"))?;
+    let imported = transfer_import::import(spec, &text).map_err(|e| format!("{spec}: {e}"))?;
+    for note in &imported.notes {
+        eprintln!(
+            "volux: warning: {}",
+            crate::messages::sanitize(&format!("{spec}: {note}"))
+        );
+    }
+    Ok(imported.tf)
 }
 
 /// `NAME` or `NAME:WEIGHT` (a weight multiplies the layer's extinction).

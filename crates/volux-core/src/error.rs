@@ -63,6 +63,17 @@ pub enum Error {
     /// A transfer function that cannot be used.
     #[error("invalid transfer function: {0}")]
     InvalidTransferFunction(String),
+    /// A transfer function from another program ([`crate::transfer_import`]) that cannot be
+    /// read: `format` names the program's format, `field` the field or line at fault.
+    #[error("{format} transfer function: {field}: {reason}")]
+    TfImport {
+        /// The format ("ParaView preset", "Slicer .vp").
+        format: &'static str,
+        /// The field or line at fault (`RGBPoints[7]`, `line 7 (scalar opacity)`).
+        field: String,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// A camera that cannot be used.
     #[error("invalid camera: {0}")]
     InvalidCamera(String),

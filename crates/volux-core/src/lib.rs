@@ -9,6 +9,8 @@
 //!   face adjacency and per-vertex gradients;
 //! - [`tetrahedralize`]: regular and curvilinear grids split into conforming tetrahedra;
 //! - [`transfer::TransferFunction`]: piecewise-linear colour and extinction, presets, JSON;
+//! - [`transfer_import`]: ParaView presets and 3D Slicer `.vp` volume properties read into a
+//!   transfer function;
 //! - [`camera::Camera`]: perspective and orthographic cameras, JSON;
 //! - [`image::Image`]: the RGBA f32 linear framebuffer and PNG output;
 //! - [`heatmap`]: heat-map images of per-pixel values with a colour-scale legend;
@@ -33,6 +35,7 @@ pub mod mesh;
 pub mod synth;
 pub mod tetrahedralize;
 pub mod transfer;
+pub mod transfer_import;
 pub mod units;
 
 pub use aabb::Aabb;

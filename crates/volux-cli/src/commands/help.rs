@@ -38,7 +38,7 @@ pub fn run(topic: Option<&str>) -> Result<(), CmdError> {
 }
 
 /// `volux help tf`.
-const TF_HELP: &str = r#"Transfer functions (--tf PRESET|FILE.json, repeatable)
+const TF_HELP: &str = r#"Transfer functions (--tf PRESET|FILE, repeatable)
 
 A transfer function gives each data value a colour and an extinction (absorption per unit
 length); both are piecewise linear between control points.
@@ -69,6 +69,15 @@ Presets: auto (fitted to the histogram), grayscale, ct-bone, ct-skin, ct-soft-ti
 Hounsfield units), mr-default, viridis, inferno, cool-warm (normalized). Start from one:
   volux tf show ct-skin > skin.json                 # edit, then --tf skin.json
   volux tf show auto --data head.nrrd > mine.json   # fitted to this file's values and voxels
+
+Files from other programs are read too (told apart by extension and content):
+  ParaView presets (.json with "RGBPoints", "Points"; ColorSpace RGB, HSV, Lab/CIELAB,
+  Diverging or Step; Lab/CIEDE2000 is refused) and 3D Slicer volume properties (.vp).
+  Opacity is per 1 world unit (neither file stores a unit distance), VTK's colour-space and
+  midpoint/sharpness curves are followed within 1e-4; gradient opacity and shading are not
+  applied (a warning says so). Examples: docs/examples/paraview-preset.json,
+  docs/examples/paraview-cool-to-warm.json (ParaView's default map, Diverging) and
+  docs/examples/slicer-volume-property.vp; `volux tf show FILE` prints one as Volux JSON.
 
 Layers: repeat --tf to add transfer functions; NAME:WEIGHT multiplies a layer's extinction.
 Extinctions add, colours mix weighted by extinction:

@@ -18,6 +18,7 @@ pub fn show(
     show: bool,
 ) -> Result<(), CmdError> {
     let tf = match data {
+        _ if crate::settings::is_tf_file(preset) => crate::settings::tf_file(preset)?,
         Some(path) => {
             let (dataset, _) = super::common::load(path, load, show)?;
             crate::settings::plain_volume(dataset)?.preset_tf(preset)?
