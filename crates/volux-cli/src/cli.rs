@@ -82,6 +82,14 @@ pub enum Command {
         /// A command or a topic (tf, camera).
         topic: Option<String>,
     },
+    /// Open the interactive viewer (volux-view) on a file, DICOM folder or session.
+    View {
+        /// What to open.
+        path: Option<PathBuf>,
+        /// Options passed on to volux-view (e.g. --screenshot OUT.png --size 800x600).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        rest: Vec<String>,
+    },
     /// Render a built-in dataset (Marschner-Lobb, 128^3) to demo.png in the current folder.
     Demo {
         /// Output PNG.
@@ -202,8 +210,13 @@ pub struct LoadArgs {
 /// `volux render` options.
 #[derive(Debug, Args, Clone)]
 pub struct RenderArgs {
-    /// The file (or DICOM folder) to render.
-    pub file: PathBuf,
+    /// The file (or DICOM folder) to render (none with --session: the session names it).
+    #[arg(required_unless_present = "session")]
+    pub file: Option<PathBuf>,
+    /// Render a session saved by volux-view (dataset, camera, TF, method, size,
+    /// background): the viewer's picture, to the pixel; only -o goes with it.
+    #[arg(long, value_name = "S.json", conflicts_with = "file")]
+    pub session: Option<PathBuf>,
     /// Output PNG [default: out.png, and it says so when it replaces a file].
     #[arg(long, short)]
     pub output: Option<PathBuf>,

@@ -223,7 +223,7 @@ impl Worker {
     fn serve(&mut self, request: Request) {
         let divisor = self.preview_divisor(&request.scene);
         let seen = self.previewed.as_ref() == Some(&(request.volume.id, request.scene.clone()));
-        if !(seen && !request.interacting) || divisor == 1 {
+        if !seen || request.interacting || divisor == 1 {
             match self.render(&request, divisor) {
                 Ok(()) => {}
                 Err(RenderError::Cancelled) => return,

@@ -128,7 +128,7 @@ impl TfEditor {
         let top = curve(tf).iter().map(|p| p[1]).fold(0.0, f64::max);
         self.y_max = if top > 0.0 { top / 0.9 } else { 1.0 };
         if tf.extinction.is_empty() {
-            self.y_max = self.y_max.min(1.0 / 0.9).max(1.0);
+            self.y_max = self.y_max.clamp(1.0, 1.0 / 0.9);
         }
     }
 

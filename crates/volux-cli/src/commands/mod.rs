@@ -10,7 +10,9 @@ mod help;
 mod info;
 mod render;
 mod report;
+mod session;
 mod tf;
+mod view;
 
 use crate::cli::{Cli, Command, TfCommand};
 use crate::progress;
@@ -29,6 +31,7 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
         Command::Generate { kind, size, output } => convert::generate(kind, size, &output),
         Command::Render(args) => render::run(&args, show),
         Command::Demo { output } => render::demo(&output, show),
+        Command::View { path, rest } => view::run(path.as_deref(), &rest),
         Command::Help { topic } => help::run(topic.as_deref()),
         Command::Tf {
             action: TfCommand::Show { preset, data, load },

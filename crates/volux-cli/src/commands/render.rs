@@ -19,8 +19,12 @@ use crate::settings::RenderPlan;
 
 /// Renders the file of `args` and writes the PNG (and the error map).
 pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
+    if let Some(session) = &args.session {
+        return super::session::run(args, session, show);
+    }
     let plan = RenderPlan::new(args)?;
-    let (data, format) = super::common::load(&args.file, &args.load, show)?;
+    let file = args.file.as_deref().ok_or("give the file to render, or --session S.json")?;
+    let (data, format) = super::common::load(file, &args.load, show)?;
     let loaded_grid = matches!(data, Dataset::Grid(_));
     let volume = crate::settings::volume(data, args)?;
     let scene = plan.scene(args, &volume, loaded_grid)?;
