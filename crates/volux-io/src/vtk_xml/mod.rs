@@ -267,6 +267,45 @@ fn cell_set(p: &Elem, enc: &Encoding, nc: usize) -> std::result::Result<CellSet,
     Ok(set)
 }
 
+/// The ImageData `Direction` attribute: nine numbers, the 3x3 matrix row by row (VTK's
+/// `vtkImageData::GetDirectionMatrix`), whose columns are the world directions of the index
+/// axes; `None` for the identity or when absent; a note when it is malformed or not a
+/// rotation (then the grid is read axis-aligned).
+fn image_direction(attr: Option<&str>) -> (Option<glam::DMat3>, Option<String>) {
+    let Some(text) = attr else {
+        return (None, None);
+    };
+    let v: Option<Vec<f64>> = text
+        .split_ascii_whitespace()
+        .map(|t| t.parse().ok())
+        .collect();
+    let m = match v.as_deref() {
+        Some(&[a, b, c, d, e, f, g, h, i]) => {
+            glam::DMat3::from_cols_array(&[a, d, g, b, e, h, c, f, i])
+        }
+        _ => {
+            return (
+                None,
+                Some(format!(
+                    "Direction '{text}' is not nine numbers: ignored (axis-aligned grid)"
+                )),
+            )
+        }
+    };
+    if m == glam::DMat3::IDENTITY {
+        return (None, None);
+    }
+    match volux_core::orientation::validate_direction(m) {
+        Ok(d) => (Some(d), None),
+        Err(e) => (
+            None,
+            Some(format!(
+                "Direction is not usable ({e}): ignored (axis-aligned grid)"
+            )),
+        ),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -341,44 +380,5 @@ mod tests {
         if let Some(f) = fifo(dir.path(), "f.vti") {
             assert_refused(read(&f, None), "f.vti", "(a FIFO)");
         }
-    }
-}
-
-/// The ImageData `Direction` attribute: nine numbers, the 3x3 matrix row by row (VTK's
-/// `vtkImageData::GetDirectionMatrix`), whose columns are the world directions of the index
-/// axes; `None` for the identity or when absent; a note when it is malformed or not a
-/// rotation (then the grid is read axis-aligned).
-fn image_direction(attr: Option<&str>) -> (Option<glam::DMat3>, Option<String>) {
-    let Some(text) = attr else {
-        return (None, None);
-    };
-    let v: Option<Vec<f64>> = text
-        .split_ascii_whitespace()
-        .map(|t| t.parse().ok())
-        .collect();
-    let m = match v.as_deref() {
-        Some(&[a, b, c, d, e, f, g, h, i]) => {
-            glam::DMat3::from_cols_array(&[a, d, g, b, e, h, c, f, i])
-        }
-        _ => {
-            return (
-                None,
-                Some(format!(
-                    "Direction '{text}' is not nine numbers: ignored (axis-aligned grid)"
-                )),
-            )
-        }
-    };
-    if m == glam::DMat3::IDENTITY {
-        return (None, None);
-    }
-    match volux_core::orientation::validate_direction(m) {
-        Ok(d) => (Some(d), None),
-        Err(e) => (
-            None,
-            Some(format!(
-                "Direction is not usable ({e}): ignored (axis-aligned grid)"
-            )),
-        ),
     }
 }
