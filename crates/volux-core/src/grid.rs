@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 use crate::aabb::Aabb;
 use crate::error::{Error, Result};
@@ -375,15 +375,20 @@ fn axis_geometry(
     Ok(())
 }
 
-/// A regular grid: dims, anisotropic spacing, origin and native-type samples.
+/// A regular grid: dims, anisotropic spacing, origin, direction and native-type samples.
 ///
 /// Built only through [`Grid::new`], which validates sizes, computes the value range, and
 /// replaces non-finite values (reported in [`Grid::notes`]) so renderers never see NaN.
+///
+/// World coordinates are LPS millimetres (DICOM, ITK; see [`crate::orientation`]): sample
+/// (i, j, k) lies at `origin + D * (spacing ∘ (i, j, k))`, where `D` is the
+/// [direction matrix](Grid::direction) (identity unless set by [`Grid::with_direction`]).
 #[derive(Clone, Debug)]
 pub struct Grid {
     dims: [usize; 3],
     spacing: DVec3,
     origin: DVec3,
+    direction: DMat3,
     samples: Samples,
     range: [f64; 2],
     notes: Vec<String>,
@@ -410,6 +415,7 @@ impl Grid {
             dims,
             spacing: DVec3::from(spacing),
             origin: DVec3::from(origin),
+            direction: DMat3::IDENTITY,
             samples,
             range: [0.0, 0.0],
             notes: Vec::new(),
@@ -510,21 +516,87 @@ impl Grid {
     pub fn value(&self, i: usize, j: usize, k: usize) -> f32 {
         self.samples.get_f32(self.index(i, j, k))
     }
-    /// World position of sample (i, j, k).
+    /// World position (LPS mm) of sample (i, j, k).
     pub fn position(&self, i: usize, j: usize, k: usize) -> DVec3 {
-        self.origin + self.spacing * DVec3::new(i as f64, j as f64, k as f64)
+        self.index_to_world(DVec3::new(i as f64, j as f64, k as f64))
     }
-    /// World bounding box of the sample positions.
+    /// This grid with the direction matrix `direction` (columns: the unit LPS world directions
+    /// of the index axes i, j, k, as ITK's `Direction` and DICOM's direction cosines), about
+    /// the same origin. Columns within 1e-3 of unit length are normalized; a non-finite,
+    /// non-unit or non-orthogonal matrix is refused with [`Error::InvalidGeometry`]
+    /// ([`crate::orientation::validate_direction`]); so is one that puts a corner beyond
+    /// ±[`MAX_COORDINATE`].
+    pub fn with_direction(mut self, direction: DMat3) -> Result<Self> {
+        self.direction = crate::orientation::validate_direction(direction)?;
+        let b = self.bounds();
+        if !(b.min.abs().max_element() <= MAX_COORDINATE
+            && b.max.abs().max_element() <= MAX_COORDINATE)
+        {
+            return Err(Error::InvalidGeometry(format!(
+                "the rotated grid reaches {} .. {}, beyond ±{}",
+                b.min,
+                b.max,
+                num(MAX_COORDINATE)
+            )));
+        }
+        Ok(self)
+    }
+    /// The direction matrix: columns are the unit world (LPS) directions of the index axes.
+    pub fn direction(&self) -> DMat3 {
+        self.direction
+    }
+    /// Whether the direction is exactly the identity (index axes along world x, y, z).
+    pub fn is_axis_aligned(&self) -> bool {
+        self.direction == DMat3::IDENTITY
+    }
+    /// The orientation code ("LPS" for the identity, "RAS", "PIL", ...): the patient
+    /// direction each index axis points towards ([`crate::orientation::orientation_code`]).
+    pub fn orientation_code(&self) -> String {
+        crate::orientation::orientation_code(&self.direction)
+    }
+    /// The world point (LPS mm) of a continuous index position:
+    /// `origin + D * (spacing ∘ index)`.
+    pub fn index_to_world(&self, index: DVec3) -> DVec3 {
+        let local = self.spacing * index;
+        if self.is_axis_aligned() {
+            self.origin + local
+        } else {
+            self.origin + self.direction * local
+        }
+    }
+    /// The continuous index position of a world point (LPS mm), the inverse of
+    /// [`Grid::index_to_world`]: `(Dᵀ (p - origin)) / spacing` (D is orthonormal).
+    pub fn world_to_index(&self, p: DVec3) -> DVec3 {
+        let rel = p - self.origin;
+        if self.is_axis_aligned() {
+            rel / self.spacing
+        } else {
+            (self.direction.transpose() * rel) / self.spacing
+        }
+    }
+    /// World (LPS) axis-aligned bounding box of the sample positions: the box of the eight
+    /// corners of the index box, rotated by the direction matrix.
     pub fn bounds(&self) -> Aabb {
         let d = DVec3::new(
             (self.dims[0] - 1) as f64,
             (self.dims[1] - 1) as f64,
             (self.dims[2] - 1) as f64,
         );
-        Aabb {
-            min: self.origin,
-            max: self.origin + d * self.spacing,
+        if self.is_axis_aligned() {
+            return Aabb {
+                min: self.origin,
+                max: self.origin + d * self.spacing,
+            };
         }
+        let index_box = Aabb {
+            min: DVec3::ZERO,
+            max: d,
+        };
+        let corners = index_box.corners().map(|c| self.index_to_world(c));
+        Aabb::from_points(corners).unwrap_or(Aabb {
+            min: self.origin,
+            max: self.origin,
+        })
     }
     /// Bytes held by the samples.
     pub fn memory_bytes(&self) -> usize {
@@ -636,5 +708,49 @@ mod tests {
         let s = Samples::from_bytes(ScalarType::I16, &[0xFF, 0xFE, 0x00, 0x01], false).unwrap();
         assert_eq!(s.get_f32(0), -2.0);
         assert_eq!(s.get_f32(1), 1.0);
+    }
+
+    fn grid_4x3x2() -> Grid {
+        let s = Samples::U8(Buffer::owned(vec![0; 24]));
+        Grid::new([4, 3, 2], [1.0, 2.0, 3.0], [10.0, 20.0, 30.0], s).unwrap()
+    }
+
+    #[test]
+    fn oblique_direction_bounds_are_the_rotated_corners() {
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let rot = DMat3::from_cols(DVec3::new(c, s, 0.0), DVec3::new(-s, c, 0.0), DVec3::Z);
+        let g = grid_4x3x2().with_direction(rot).unwrap();
+        // Extents 3, 4, 3 along i, j, k; corners (3c, 3s), (-4s, 4c), (3c-4s, 3s+4c).
+        let b = g.bounds();
+        let want_min = DVec3::new(10.0 - 4.0 * s, 20.0, 30.0);
+        let want_max = DVec3::new(10.0 + 3.0 * c, 20.0 + 3.0 * s + 4.0 * c, 33.0);
+        assert!((b.min - want_min).abs().max_element() < 1e-12, "{b:?}");
+        assert!((b.max - want_max).abs().max_element() < 1e-12, "{b:?}");
+        let p = DVec3::new(1.5, 0.25, 1.0);
+        let w = g.index_to_world(p);
+        assert!((g.world_to_index(w) - p).abs().max_element() < 1e-12);
+        assert_eq!(g.orientation_code(), "LPS");
+    }
+
+    #[test]
+    fn identity_direction_changes_nothing() {
+        let g = grid_4x3x2();
+        assert!(g.is_axis_aligned());
+        assert_eq!(g.direction(), DMat3::IDENTITY);
+        assert_eq!(g.position(3, 2, 1), DVec3::new(13.0, 24.0, 33.0));
+        assert_eq!(g.bounds().max, DVec3::new(13.0, 24.0, 33.0));
+        let sag = DMat3::from_cols(DVec3::Y, -DVec3::Z, DVec3::X);
+        let g = g.with_direction(sag).unwrap();
+        assert_eq!(g.orientation_code(), "PIL");
+        assert_eq!(g.position(3, 2, 1), DVec3::new(13.0, 23.0, 26.0));
+    }
+
+    #[test]
+    fn non_orthogonal_direction_is_refused() {
+        let shear = DMat3::from_cols(DVec3::X, DVec3::new(0.05, 1.0, 0.0).normalize(), DVec3::Z);
+        match grid_4x3x2().with_direction(shear) {
+            Err(Error::InvalidGeometry(m)) => assert!(m.contains("not orthogonal"), "{m}"),
+            other => panic!("accepted or wrong error: {other:?}"),
+        }
     }
 }

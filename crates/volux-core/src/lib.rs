@@ -4,7 +4,9 @@
 //! (**data** -> sampling -> classification -> integration -> traversal -> compositing -> image):
 //!
 //! - [`aabb::Aabb`]: world-space bounding boxes;
-//! - [`grid::Grid`]: a regular grid of scalars kept in their native type, possibly memory-mapped;
+//! - [`grid::Grid`]: a regular grid of scalars kept in their native type, possibly memory-mapped,
+//!   placed in LPS world millimetres by an origin, spacing and direction matrix;
+//! - [`orientation`]: direction matrices and their patient-orientation letters (LPS, RAS);
 //! - [`mesh::TetMesh`]: a tetrahedral mesh with one scalar per vertex, validation, boundary faces,
 //!   face adjacency and per-vertex gradients;
 //! - [`tetrahedralize`]: regular and curvilinear grids split into conforming tetrahedra;
@@ -32,6 +34,7 @@ pub mod image;
 mod json_shape;
 pub mod limits;
 pub mod mesh;
+pub mod orientation;
 pub mod synth;
 pub mod tetrahedralize;
 pub mod transfer;

@@ -9,14 +9,20 @@
 //! `CompressedData = True` (a zlib stream, decoded with `flate2`), `CompressedDataSize`,
 //! `HeaderSize` (bytes skipped in the data file; -1 = the data ends the file),
 //! `ElementNumberOfChannels` (must be 1) and `ElementDataFile` (`LOCAL` or a file name relative
-//! to the header's folder; it must be the last header line). A rotated `TransformMatrix` is
-//! reduced to an axis-aligned grid, with a note. The data section must match the header.
+//! to the header's folder; it must be the last header line). `TransformMatrix` (or
+//! `Rotation` / `Orientation`) is the direction matrix as ITK writes it, axis by axis (the first
+//! `NDims` values are the world direction of the first axis), in ITK's LPS world, as `Offset`;
+//! a non-orthonormal matrix is noted and the grid read axis-aligned. `AnatomicalOrientation`
+//! is informational and not used, as in ITK's reader (the matrix is authoritative). The data
+//! section must match the header.
 //!
 //! No MetaImage crate is used: none on crates.io is maintained, and the header is a few
 //! `Key = Value` lines; compression goes through `flate2`.
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
+use glam::{DMat3, DVec3};
+use volux_core::orientation::validate_direction;
 use volux_core::Grid;
 
 use crate::error::ErrorKind;
@@ -168,7 +174,24 @@ struct Geometry {
     count: u64,
     spacing: [f64; 3],
     origin: [f64; 3],
+    direction: DMat3,
     notes: Vec<String>,
+}
+
+/// The direction matrix of `TransformMatrix` values `v` for `n` axes (2 or 3): axis `a`'s world
+/// direction is `v[n a .. n a + n]` (ITK's `MetaImageIO` order); a 2-D image's third axis is
+/// the normal of the other two.
+fn direction_of(v: &[f64], n: usize) -> std::result::Result<DMat3, String> {
+    if !(2..=3).contains(&n) || v.len() != n * n {
+        return Err(format!("{} values for NDims = {n}", v.len()));
+    }
+    let axis = |a: usize| {
+        let c = &v[n * a..n * a + n];
+        DVec3::new(c[0], c[1], c.get(2).copied().unwrap_or(0.0))
+    };
+    let (x, y) = (axis(0), axis(1));
+    let z = if n == 3 { axis(2) } else { x.cross(y) };
+    validate_direction(DMat3::from_cols(x, y, z)).map_err(|e| e.to_string())
 }
 
 fn geometry(path: &Path, h: &Header, n: usize) -> Result<Geometry> {
@@ -191,23 +214,21 @@ fn geometry(path: &Path, h: &Header, n: usize) -> Result<Geometry> {
     let origin = per_axis(path, "Offset", or, n, 0.0)?;
     let mut notes = Vec::new();
     let m: Option<Vec<f64>> = h.numbers(path, &["transformmatrix", "rotation", "orientation"])?;
-    let identity = |v: &Vec<f64>| {
-        v.iter().enumerate().all(|(i, &x)| {
-            let diag = i % (n + 1) == 0;
-            x == if diag { 1.0 } else { 0.0 }
-        })
+    let direction = match m.map(|v| direction_of(&v, n)).transpose() {
+        Ok(d) => d.unwrap_or(DMat3::IDENTITY),
+        Err(why) => {
+            notes.push(format!(
+                "TransformMatrix is not usable ({why}): read as an axis-aligned grid with the same spacing"
+            ));
+            DMat3::IDENTITY
+        }
     };
-    if m.as_ref().is_some_and(|v| !identity(v)) {
-        notes.push(
-            "TransformMatrix is not the identity: read as an axis-aligned grid with the same spacing"
-                .into(),
-        );
-    }
     Ok(Geometry {
         dims,
         count,
         spacing,
         origin,
+        direction,
         notes,
     })
 }
@@ -329,7 +350,9 @@ pub fn read(path: &Path) -> Result<Grid> {
     let s = storage(path, &h)?;
     let (file, start) = data_location(path, &h, header_end)?;
     let data = read_data(&file, &s, start, g.count)?;
-    raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)
+    raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)?
+        .with_direction(g.direction)
+        .map_err(|e| ReadError::new(&file, e))
 }
 
 #[cfg(test)]

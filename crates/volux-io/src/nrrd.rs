@@ -3,8 +3,10 @@
 //! Read: magic `NRRD000X`; fields `type` (every NRRD name of int8, uint8, int16, uint16,
 //! int32, uint32, float, double; the types a [`volux_core::Grid`] does not hold are converted
 //! to `f32` with a note), `dimension` (3; 2 is a single slice with z = 1; 4 when one axis has
-//! size 1), `sizes`, `spacings` or `space directions` (spacing = length of each direction;
-//! a rotated or flipped frame is reduced to an axis-aligned grid, with a note), `space origin`,
+//! size 1), `sizes`, `spacings` or `space directions` (spacing = length of each direction,
+//! direction = the unit vectors), `space` (`left-posterior-superior`/`LPS`,
+//! `right-anterior-superior`/`RAS`, `left-anterior-superior`/`LAS`: turned into Volux's LPS
+//! world by negating the axes that differ; any other space is taken as it is), `space origin`,
 //! `endian`, `encoding` (`raw`, `gzip`/`gz`, `ascii`/`text`/`txt`), `data file` (detached
 //! `.nhdr` header, path relative to the header's folder), `line skip` and `byte skip` (-1 = the
 //! data ends the file). Comments (`#`) and key/value lines (`:=`) are ignored. Attached data
@@ -16,6 +18,8 @@
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
+use glam::{DMat3, DVec3};
+use volux_core::orientation::split_scaled_axes;
 use volux_core::{Grid, ScalarType};
 
 use crate::error::ErrorKind;
@@ -85,6 +89,8 @@ struct Header {
     spacings: Vec<f64>,
     directions: Vec<Option<Vec<f64>>>,
     origin: Option<Vec<f64>>,
+    /// The signs that turn `space` coordinates into LPS (`None`: no anatomical space).
+    space_to_lps: Option<[f64; 3]>,
     little_endian: Option<bool>,
     encoding: Option<Encoding>,
     data_file: Option<String>,
@@ -184,6 +190,7 @@ fn apply_field(path: &Path, h: &mut Header, field: &str, value: &str) -> Result<
                 .collect::<Result<_>>()?
         }
         "space origin" => h.origin = parse_vector(path, value)?,
+        "space" => h.space_to_lps = space_signs(value),
         "endian" => {
             h.little_endian = Some(match value.to_ascii_lowercase().as_str() {
                 "little" => true,
@@ -290,12 +297,26 @@ fn spatial_axes(path: &Path, h: &Header) -> Result<Vec<usize>> {
     }
 }
 
-/// Geometry of the grid: dims, spacing, origin and notes.
+/// The signs that turn coordinates of the NRRD `space` named `value` into LPS: x negated for
+/// right-, y for anterior-; `None` for a non-anatomical space (scanner-xyz, 3D-right-handed).
+fn space_signs(value: &str) -> Option<[f64; 3]> {
+    let v = value.trim().to_ascii_lowercase();
+    let (lr, ap) = match v.as_str() {
+        "left-posterior-superior" | "lps" => (1.0, 1.0),
+        "right-anterior-superior" | "ras" => (-1.0, -1.0),
+        "left-anterior-superior" | "las" => (1.0, -1.0),
+        _ => return None,
+    };
+    Some([lr, ap, 1.0])
+}
+
+/// Geometry of the grid: dims, spacing, origin, direction and notes.
 struct Geometry {
     dims: [usize; 3],
     count: u64,
     spacing: [f64; 3],
     origin: [f64; 3],
+    direction: DMat3,
     notes: Vec<String>,
 }
 
@@ -304,24 +325,25 @@ fn geometry(path: &Path, h: &Header) -> Result<Geometry> {
     let mut dims = [1i64; 3];
     let mut spacing = [1.0f64; 3];
     let mut notes = Vec::new();
-    let mut rotated = false;
     for (k, &a) in axes.iter().enumerate() {
         dims[k] = h.sizes.get(a).copied().unwrap_or(1);
         if let Some(Some(d)) = h.directions.get(a) {
             spacing[k] = d.iter().map(|x| x * x).sum::<f64>().sqrt();
-            rotated |= d
-                .iter()
-                .enumerate()
-                .any(|(j, &x)| (j != k && x != 0.0) || (j == k && x < 0.0));
         } else if let Some(s) = h.spacings.get(a).filter(|s| s.is_finite()) {
             spacing[k] = s.abs();
         }
     }
-    if rotated {
-        notes.push(
-            "space directions are rotated or flipped: read as an axis-aligned grid with the same spacing"
-                .to_string(),
-        );
+    let signs = DVec3::from(h.space_to_lps.unwrap_or([1.0; 3]));
+    let mut direction = DMat3::IDENTITY;
+    if let Some(m) = direction_vectors(h, &axes) {
+        let m = DMat3::from_cols(m.x_axis * signs, m.y_axis * signs, m.z_axis * signs);
+        match split_scaled_axes(m) {
+            Ok((s, d)) => (spacing, direction) = (s, d),
+            Err(e) => notes.push(format!(
+                "space directions are not usable as a rotation ({e}): read as an axis-aligned \
+                 grid with the same spacing"
+            )),
+        }
     }
     let (dims, count) =
         volux_core::limits::checked_dims(dims).map_err(|e| ReadError::new(path, e))?;
@@ -329,13 +351,32 @@ fn geometry(path: &Path, h: &Header) -> Result<Geometry> {
     for (o, v) in origin.iter_mut().zip(h.origin.iter().flatten()) {
         *o = *v;
     }
+    if h.origin.as_ref().is_some_and(|o| o.len() == 3) {
+        origin = (DVec3::from(origin) * signs).to_array();
+    }
     Ok(Geometry {
         dims,
         count,
         spacing,
         origin,
+        direction,
         notes,
     })
+}
+
+/// The `space directions` of the three spatial axes as matrix columns, when every one is a
+/// 3-vector (a 2-D image's missing third axis is the unit normal of the other two).
+fn direction_vectors(h: &Header, axes: &[usize]) -> Option<DMat3> {
+    let vec3 = |a: usize| match h.directions.get(a) {
+        Some(Some(d)) if d.len() == 3 => Some(DVec3::new(d[0], d[1], d[2])),
+        _ => None,
+    };
+    let cols: Vec<DVec3> = axes.iter().map(|&a| vec3(a)).collect::<Option<_>>()?;
+    match cols[..] {
+        [x, y, z] => Some(DMat3::from_cols(x, y, z)),
+        [x, y] => Some(DMat3::from_cols(x, y, x.cross(y).normalize_or_zero())),
+        _ => None,
+    }
 }
 
 /// Skips `n` lines of `reader`, returning the bytes skipped.
@@ -501,7 +542,9 @@ pub fn read(path: &Path) -> Result<Grid> {
     let mut g = geometry(path, &h)?;
     let (file, start) = data_location(path, &h, attached_at)?;
     let data = read_data(&file, &h, start, g.count, &mut g.notes)?;
-    raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)
+    raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)?
+        .with_direction(g.direction)
+        .map_err(|e| ReadError::new(&file, e))
 }
 
 /// The NRRD type name of a grid type.
@@ -514,7 +557,8 @@ fn type_name(t: ScalarType) -> &'static str {
     }
 }
 
-/// Writes `grid` as an NRRD file with attached, raw, little-endian data (written atomically).
+/// Writes `grid` as an NRRD file with attached, raw, little-endian data (written atomically),
+/// placed in `left-posterior-superior` space by its spacing, direction and origin.
 pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
     let werr = |source| WriteError {
         path: path.to_path_buf(),
@@ -522,13 +566,18 @@ pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
     };
     volux_core::limits::check_alloc("NRRD output", grid.len() as u64, 4).map_err(werr)?;
     let [x, y, z] = grid.dims();
-    let [sx, sy, sz] = grid.spacing().to_array();
     let [ox, oy, oz] = grid.origin().to_array();
+    let (d, s) = (grid.direction(), grid.spacing());
+    let axis = |c: DVec3| format!("({},{},{})", c.x, c.y, c.z);
+    let dirs = [d.x_axis * s.x, d.y_axis * s.y, d.z_axis * s.z].map(axis);
     let header = format!(
-        "NRRD0004\n# written by Volux\ntype: {}\ndimension: 3\nspace dimension: 3\n\
-         sizes: {x} {y} {z}\nspace directions: ({sx},0,0) (0,{sy},0) (0,0,{sz})\n\
+        "NRRD0004\n# written by Volux\ntype: {}\ndimension: 3\nspace: left-posterior-superior\n\
+         sizes: {x} {y} {z}\nspace directions: {} {} {}\n\
          space origin: ({ox},{oy},{oz})\nendian: little\nencoding: raw\n\n",
-        type_name(grid.scalar_type())
+        type_name(grid.scalar_type()),
+        dirs[0],
+        dirs[1],
+        dirs[2]
     );
     let mut bytes = header.into_bytes();
     bytes.extend_from_slice(&raw::samples_le_bytes(grid.samples()));

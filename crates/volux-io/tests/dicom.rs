@@ -186,6 +186,41 @@ fn frame_counts_that_disagree_with_the_data_are_refused_or_noted() {
 }
 
 #[test]
+fn sagittal_series_gets_its_direction_matrix() {
+    let Some(series) = shared(SERIES) else {
+        return;
+    };
+    let dir = copy_series(&series);
+    // Rows along +y (P), columns along -z (I), slices at x = 12, 0, -12: the normal is -x.
+    for (f, x) in FILES.iter().zip([12.0, 0.0, -12.0]) {
+        let p = dir.path().join(f);
+        edit(&p, &p, |o| {
+            o.put_str(tags::IMAGE_ORIENTATION_PATIENT, VR::DS, "0\\1\\0\\0\\0\\-1");
+            o.put_str(
+                tags::IMAGE_POSITION_PATIENT,
+                VR::DS,
+                format!("{x}\\-250\\250"),
+            );
+        });
+    }
+    let g = dicom::read(dir.path(), None).unwrap();
+    assert_eq!(g.orientation_code(), "PIR");
+    let d = g.direction();
+    assert_eq!(
+        [d.x_axis, d.y_axis, d.z_axis].map(|c| c.to_array()),
+        [[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]]
+    );
+    assert_eq!(g.origin().to_array(), [12.0, -250.0, 250.0]);
+    assert!((g.spacing().z - 12.0).abs() < 1e-9);
+    assert!(g.notes().is_empty(), "{:?}", g.notes());
+    // The last sample sits at the far corner in the world: +y rows, -z columns, -x slices.
+    let far = g.position(511, 511, 2);
+    let s = g.spacing();
+    let want = [12.0 - 24.0, -250.0 + 511.0 * s.x, 250.0 - 511.0 * s.y];
+    assert!((far - glam::DVec3::from(want)).length() < 1e-9, "{far}");
+}
+
+#[test]
 fn uneven_gap_is_a_missing_slice() {
     let Some(series) = shared(SERIES) else {
         return;

@@ -23,6 +23,7 @@ struct Spec {
     qform: i16,
     sform: i16,
     qoffset: [f32; 3],
+    quatern: [f32; 3],
     srow: [[f32; 4]; 3],
     magic: [u8; 4],
 }
@@ -42,6 +43,7 @@ impl Spec {
             qform: 0,
             sform: 0,
             qoffset: [0.0; 3],
+            quatern: [0.0; 3],
             srow: [[0.0; 4]; 3],
             magic: *b"n+1\0",
         }
@@ -71,6 +73,9 @@ impl Spec {
         put(116, &self.inter.to_le_bytes());
         put(252, &self.qform.to_le_bytes());
         put(254, &self.sform.to_le_bytes());
+        for (i, q) in self.quatern.iter().enumerate() {
+            put(256 + 4 * i, &q.to_le_bytes());
+        }
         for (i, q) in self.qoffset.iter().enumerate() {
             put(268 + 4 * i, &q.to_le_bytes());
         }
@@ -217,6 +222,16 @@ fn scl_slope_applied_as_f32() {
     }
 }
 
+/// The direction matrix of `g` as its columns.
+fn columns(g: &volux_core::Grid) -> [[f64; 3]; 3] {
+    let d = g.direction();
+    [d.x_axis, d.y_axis, d.z_axis].map(|c| c.to_array())
+}
+
+fn close(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> bool {
+    (0..3).all(|c| (0..3).all(|r| (a[c][r] - b[c][r]).abs() < 1e-6))
+}
+
 #[test]
 fn geometry_sform_qform_pixdim() {
     let dir = tempfile::tempdir().unwrap();
@@ -228,7 +243,9 @@ fn geometry_sform_qform_pixdim() {
     let p = write(dir.path(), "q.nii", &spec.file(&data));
     let g = nifti::read(&p).unwrap();
     assert_eq!(g.spacing().to_array(), [1.5, 1.0, 3.0]);
-    assert_eq!(g.origin().to_array(), [7.0, 8.0, 9.0]);
+    // RAS (7, 8, 9) is LPS (-7, -8, 9); the identity quaternion is RAS+ storage.
+    assert_eq!(g.origin().to_array(), [-7.0, -8.0, 9.0]);
+    assert_eq!(g.orientation_code(), "RAS");
     assert!(g.notes().iter().any(|n| n.contains("pixdim[2]")));
     // The sform wins over the qform.
     spec.sform = 2;
@@ -239,18 +256,68 @@ fn geometry_sform_qform_pixdim() {
     ];
     let p = write(dir.path(), "s.nii", &spec.file(&data));
     let g = nifti::read(&p).unwrap();
-    assert_eq!(g.origin().to_array(), [-10.0, -20.0, -30.0]);
+    assert_eq!(g.origin().to_array(), [10.0, 20.0, -30.0]);
+    assert_eq!(g.spacing().to_array(), [1.5, 1.0, 3.0]);
+    let ras = [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]];
+    assert_eq!(columns(&g), ras);
     assert!(!g.notes().iter().any(|n| n.contains("sform")));
-    // A flipped sform is noted as not applied.
+    // A flipped sform is applied: i now runs to the left.
     spec.srow[0][0] = -1.5;
     let p = write(dir.path(), "f.nii", &spec.file(&data));
     let g = nifti::read(&p).unwrap();
-    assert!(g.notes().iter().any(|n| n.contains("sform")));
-    // Neither: origin 0.
+    assert_eq!(g.orientation_code(), "LAS");
+    assert_eq!(g.spacing().to_array(), [1.5, 1.0, 3.0]);
+    // Neither: origin 0, identity.
     spec.sform = 0;
     spec.qform = 0;
     let p = write(dir.path(), "o.nii", &spec.file(&data));
-    assert_eq!(nifti::read(&p).unwrap().origin().to_array(), [0.0; 3]);
+    let g = nifti::read(&p).unwrap();
+    assert_eq!(g.origin().to_array(), [0.0; 3]);
+    assert!(g.is_axis_aligned());
+}
+
+#[test]
+fn qform_quaternion_and_qfac_and_oblique_sform() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = [0u8; 8];
+    let mut spec = Spec::new(true, [2, 2, 2], 2, 8);
+    // 90 degrees about z (b = c = 0, d = sin 45), qfac -1: RAS columns (0,1,0), (-1,0,0),
+    // (0,0,-1); in LPS (0,-1,0) A, (1,0,0) L, (0,0,-1) I.
+    spec.qform = 1;
+    spec.quatern = [0.0, 0.0, std::f32::consts::FRAC_1_SQRT_2];
+    spec.pixdim[0] = -1.0;
+    let p = write(dir.path(), "q.nii", &spec.file(&data));
+    let g = nifti::read(&p).unwrap();
+    assert_eq!(g.orientation_code(), "ALI");
+    let want = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]];
+    assert!(close(columns(&g), want), "{:?}", columns(&g));
+    // An oblique sform, 30 degrees about x (RAS), spacing 2 along j.
+    let (c, s) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
+    spec.sform = 1;
+    spec.srow = [
+        [1.0, 0.0, 0.0, 5.0],
+        [0.0, 2.0 * c, -s, 6.0],
+        [0.0, 2.0 * s, c, 7.0],
+    ];
+    let p = write(dir.path(), "s.nii", &spec.file(&data));
+    let g = nifti::read(&p).unwrap();
+    let (c, s) = (f64::from(c), f64::from(s));
+    let want = [[-1.0, 0.0, 0.0], [0.0, -c, s], [0.0, s, c]];
+    assert!(close(columns(&g), want), "{:?}", columns(&g));
+    assert!((g.spacing().y - 2.0).abs() < 1e-6);
+    assert_eq!(g.origin().to_array(), [-5.0, -6.0, 7.0]);
+    // A sheared sform is noted and the qform used instead.
+    spec.srow[0][1] = 0.5;
+    let p = write(dir.path(), "shear.nii", &spec.file(&data));
+    let g = nifti::read(&p).unwrap();
+    assert_eq!(g.orientation_code(), "ALI");
+    assert!(
+        g.notes()
+            .iter()
+            .any(|n| n.contains("sform is not usable") && n.contains("not orthogonal")),
+        "{:?}",
+        g.notes()
+    );
 }
 
 #[test]

@@ -472,8 +472,37 @@ fn nrrd_detached_with_skips_and_directions() {
     let g = nrrd::read(&p).unwrap();
     assert_eq!(g.spacing().to_array(), [2.0, 1.5, 3.0]);
     assert_eq!(g.origin().to_array(), [10.0, -20.0, 30.5]);
-    assert!(g.notes().iter().any(|n| n.contains("rotated")));
+    // i runs along +y (P), j along -x (R), k along +z (S).
+    assert_eq!(g.orientation_code(), "PRS");
+    let dm = g.direction();
+    assert_eq!(
+        [dm.x_axis, dm.y_axis, dm.z_axis].map(|c| c.to_array()),
+        [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+    );
+    assert!(g.notes().is_empty(), "{:?}", g.notes());
     assert_eq!(values(&g)[0], -1024.0);
+    // The same directions in RAS space: x and y negated into LPS.
+    let ras = head.replace("left-posterior-superior", "RAS");
+    let g = nrrd::read(&nrrd_file(d, "ras.nhdr", &ras, b"")).unwrap();
+    assert_eq!(g.orientation_code(), "ALS");
+    assert_eq!(g.origin().to_array(), [-10.0, 20.0, 30.5]);
+    // A sheared frame is noted and read axis-aligned.
+    let shear = head.replace("(-1.5, 0, 0)", "(-1.5, 1, 0)");
+    let g = nrrd::read(&nrrd_file(d, "shear.nhdr", &shear, b"")).unwrap();
+    assert!(g.is_axis_aligned());
+    assert!(
+        g.notes().iter().any(|n| n.contains("not orthogonal")),
+        "{:?}",
+        g.notes()
+    );
+    // Written and read back, the placement survives.
+    let g = nrrd::read(&p).unwrap();
+    let out = d.join("w.nrrd");
+    nrrd::write(&g, &out).unwrap();
+    let back = nrrd::read(&out).unwrap();
+    assert_eq!(back.direction(), g.direction());
+    assert_eq!(back.origin(), g.origin());
+    assert_eq!(back.spacing(), g.spacing());
     // byte skip -1: the data ends the file.
     let head2 = head.replace("line skip: 2\nbyte skip: 4", "byte skip: -1");
     let p = nrrd_file(d, "v2.nhdr", &head2, b"");
@@ -703,9 +732,27 @@ fn metaimage_2d_wide_types_and_aliases() {
         assert_eq!(values(&g), want, "{ty}");
         assert!(g.notes().iter().any(|n| n.contains("converted")), "{ty}");
     }
+    // Axis by axis, as ITK writes it: i along +y (P), j along +x (L), k along +z (S).
     let rot = format!("{MHA_I16}TransformMatrix = 0 1 0 1 0 0 0 0 1\n");
     let g = metaimage::read(&mha(d, "r.mha", &rot, "LOCAL", &le_i16(&I16_VALS))).unwrap();
-    assert!(g.notes().iter().any(|n| n.contains("TransformMatrix")));
+    assert_eq!(g.orientation_code(), "PLS");
+    assert_eq!(g.origin().to_array(), [1.0, 2.0, 3.0]);
+    assert!(g.notes().is_empty(), "{:?}", g.notes());
+    // Oblique: 30 degrees about z.
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let obl = format!("{MHA_I16}TransformMatrix = {c} {s} 0 {} {c} 0 0 0 1\n", -s);
+    let g = metaimage::read(&mha(d, "o.mha", &obl, "LOCAL", &le_i16(&I16_VALS))).unwrap();
+    let m = g.direction();
+    assert!((m.x_axis - glam::DVec3::new(c, s, 0.0)).length() < 1e-12);
+    assert!((m.y_axis - glam::DVec3::new(-s, c, 0.0)).length() < 1e-12);
+    // Sheared: noted, read axis-aligned.
+    let bad = format!("{MHA_I16}TransformMatrix = 1 0 0 0.5 1 0 0 0 1\n");
+    let g = metaimage::read(&mha(d, "b.mha", &bad, "LOCAL", &le_i16(&I16_VALS))).unwrap();
+    assert!(g.is_axis_aligned());
+    assert!(g
+        .notes()
+        .iter()
+        .any(|n| n.contains("TransformMatrix is not usable")));
     let id = format!("{MHA_I16}TransformMatrix = 1 0 0 0 1 0 0 0 1\n");
     let g = metaimage::read(&mha(d, "i.mha", &id, "LOCAL", &le_i16(&I16_VALS))).unwrap();
     assert!(g.notes().is_empty());

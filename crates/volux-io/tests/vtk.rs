@@ -475,6 +475,31 @@ fn vti_every_encoding() {
     }
 }
 
+#[test]
+fn vti_direction_is_applied() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut x = Xml::new(Mode::Ascii, false, false, false);
+    // Row by row: i along +y, j along -x, k along +z (90 degrees about z).
+    let text = String::from_utf8(vti(&mut x))
+        .unwrap()
+        .replace("Spacing=", "Direction=\"0 -1 0 1 0 0 0 0 1\" Spacing=");
+    let p = write(dir.path(), "d.vti", text.as_bytes());
+    let g = grid(vtk_xml::read(&p, None).unwrap());
+    assert_eq!(g.orientation_code(), "PRS");
+    // Extent starts at i = 1: the first sample is 0.5 along +y from Origin.
+    assert_eq!(g.origin().to_array(), [10.0, 20.5, 30.0]);
+    assert!(
+        !g.notes().iter().any(|n| n.contains("Direction")),
+        "{:?}",
+        g.notes()
+    );
+    let sheared = text.replace("0 -1 0 1 0 0", "0.3 -1 0 1 0 0");
+    let p = write(dir.path(), "s.vti", sheared.as_bytes());
+    let g = grid(vtk_xml::read(&p, None).unwrap());
+    assert!(g.is_axis_aligned());
+    assert!(g.notes().iter().any(|n| n.contains("Direction")));
+}
+
 fn vtu(x: &mut Xml, point_data: bool) -> Vec<u8> {
     let pts: Vec<f64> = [
         [0., 0., 0.],

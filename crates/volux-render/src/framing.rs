@@ -118,8 +118,7 @@ fn grid_box(g: &Grid, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
     }
     let cells = volux_core::with_samples!(g.samples(), |s| MacrocellGrid::build(s, dims));
     let counts = cells.counts();
-    let (origin, spacing) = (g.origin(), g.spacing());
-    let corner = |i: [usize; 3]| origin + DVec3::from(i.map(|v| v as f64)) * spacing;
+    let index = |i: [usize; 3]| DVec3::from(i.map(|v| v as f64));
     let mut lo = [usize::MAX; 3];
     let mut hi = [0usize; 3];
     for (m, r) in cells.ranges().iter().enumerate() {
@@ -136,10 +135,15 @@ fn grid_box(g: &Grid, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
             hi[a] = hi[a].max(((c[a] + 1) * MacrocellGrid::BLOCK).min(dims[a] - 1));
         }
     }
-    (lo[0] != usize::MAX).then(|| Aabb {
-        min: corner(lo),
-        max: corner(hi),
-    })
+    if lo[0] == usize::MAX {
+        return None;
+    }
+    // The world box of the visible index box's eight corners, turned by the direction.
+    let visible = Aabb {
+        min: index(lo),
+        max: index(hi),
+    };
+    Aabb::from_points(visible.corners().map(|c| g.index_to_world(c)))
 }
 
 /// The box of the visible tetrahedra of `m`.

@@ -78,6 +78,7 @@ pub fn resample_mesh(mesh: &TetMesh, max_dim: usize) -> Result<Resampled, volux_
             origin: b.min,
             spacing: DVec3::splat(h),
             dims,
+            direction: glam::DMat3::IDENTITY,
         },
     })
 }

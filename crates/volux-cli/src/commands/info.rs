@@ -31,12 +31,17 @@ pub fn run(path: &Path, as_json: bool, args: &LoadArgs, show: bool) -> Result<()
 fn grid_json(g: &Grid, format: Format) -> serde_json::Value {
     let h = Histogram::of_grid(g, 256);
     let b = g.bounds();
+    let d = g.direction();
     json!({
         "kind": "grid",
         "format": format.name(),
         "dims": g.dims(),
         "spacing": g.spacing().to_array(),
         "origin": g.origin().to_array(),
+        // LPS world (DICOM/ITK); the letters each index axis points towards, and the
+        // direction matrix's columns (the world directions of i, j, k).
+        "orientation": g.orientation_code(),
+        "direction": [d.x_axis.to_array(), d.y_axis.to_array(), d.z_axis.to_array()],
         "bounds": [b.min.to_array(), b.max.to_array()],
         "dtype": g.scalar_type().name(),
         "range": g.range(),
@@ -83,7 +88,7 @@ fn sparkline(h: &Histogram, width: usize) -> String {
 
 /// The order people read a description in: what the file is first, then its shape, values
 /// and memory (keys not listed follow alphabetically).
-const ORDER: [&str; 16] = [
+const ORDER: [&str; 18] = [
     "format",
     "kind",
     "dims",
@@ -92,6 +97,8 @@ const ORDER: [&str; 16] = [
     "dtype",
     "spacing",
     "origin",
+    "orientation",
+    "direction",
     "bounds",
     "range",
     "histogram",

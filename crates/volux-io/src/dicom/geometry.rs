@@ -1,6 +1,6 @@
 //! Ordering slices (or frames) along the slice normal, z spacing, and the stack checks:
 //! duplicate positions and missing slices.
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// Where each slice is and what to fall back on when positions are missing.
 pub(super) struct StackInput<'a> {
@@ -29,6 +29,9 @@ pub(super) struct Stack {
     pub order: Vec<usize>,
     pub z_spacing: f64,
     pub origin: DVec3,
+    /// Columns: the row direction (i), the column direction (j) of ImageOrientationPatient
+    /// and the slice normal (k, the order of the stack); identity without an orientation.
+    pub direction: DMat3,
     pub notes: Vec<String>,
 }
 
@@ -50,24 +53,41 @@ fn normal(orientation: Option<[f64; 6]>, notes: &mut Vec<String>) -> DVec3 {
         ));
         return DVec3::Z;
     }
-    if (r - DVec3::X).length() > 1e-4 || (c - DVec3::Y).length() > 1e-4 {
-        notes.push(format!(
-            "ImageOrientationPatient {o:?} is not applied: the grid is axis-aligned in \
-             (column, row, slice) order"
-        ));
-    }
     n.normalize()
+}
+
+/// The direction matrix of the stack (DICOM PS3.3 C.7.6.2.1.1): i along the row cosines
+/// (ImageOrientationPatient[0..3], the direction of increasing column index), j along the
+/// column cosines ([3..6]), k along the slice normal `n`, in which the stack is ordered.
+/// Identity without an orientation; a non-orthonormal one is noted and not applied.
+fn direction(orientation: Option<[f64; 6]>, n: DVec3, notes: &mut Vec<String>) -> DMat3 {
+    let Some(o) = orientation else {
+        return DMat3::IDENTITY;
+    };
+    let (r, c) = (DVec3::new(o[0], o[1], o[2]), DVec3::new(o[3], o[4], o[5]));
+    match volux_core::orientation::validate_direction(DMat3::from_cols(r, c, n)) {
+        Ok(d) => d,
+        Err(e) => {
+            notes.push(format!(
+                "ImageOrientationPatient {o:?} is not applied ({e}): the grid is axis-aligned \
+                 in (column, row, slice) order"
+            ));
+            DMat3::IDENTITY
+        }
+    }
 }
 
 /// Orders the stack and derives the z spacing; `Err` names a duplicate or missing slice.
 pub(super) fn stack(input: &StackInput) -> Result<Stack, String> {
     let mut notes = Vec::new();
     let n = normal(input.orientation, &mut notes);
+    let direction = direction(input.orientation, n, &mut notes);
     let positions: Option<Vec<DVec3>> = input.positions.iter().copied().collect();
-    match positions {
-        Some(p) if !p.is_empty() => by_position(input, &p, n, notes),
-        _ => Ok(by_instance(input, notes)),
-    }
+    let stack = match positions {
+        Some(p) if !p.is_empty() => by_position(input, &p, n, notes)?,
+        _ => by_instance(input, notes),
+    };
+    Ok(Stack { direction, ..stack })
 }
 
 /// Sorts by the projection of the positions on the normal and checks the gaps.
@@ -96,6 +116,7 @@ fn by_position(
     let Some(median) = median(&gaps) else {
         let z = fallback_z(input, false, &mut notes);
         return Ok(Stack {
+            direction: DMat3::IDENTITY,
             order,
             z_spacing: z,
             origin,
@@ -123,6 +144,7 @@ fn by_position(
         ));
     }
     Ok(Stack {
+        direction: DMat3::IDENTITY,
         order,
         z_spacing: median,
         origin,
@@ -157,6 +179,7 @@ fn by_instance(input: &StackInput, mut notes: Vec<String>) -> Stack {
         .unwrap_or(DVec3::ZERO);
     let z = fallback_z(input, len > 1, &mut notes);
     Stack {
+        direction: DMat3::IDENTITY,
         order,
         z_spacing: z,
         origin,
@@ -216,6 +239,43 @@ mod tests {
         assert_eq!(s.z_spacing, 12.0);
         assert_eq!(s.origin.z, -12.0);
         assert!(s.notes.is_empty());
+    }
+
+    #[test]
+    fn sagittal_orientation_gives_the_direction_and_origin() {
+        // Rows along +y (P), columns along -z (I): the normal is -x (R).
+        let mut i = input(&[0.0; 3]);
+        i.orientation = Some([0.0, 1.0, 0.0, 0.0, 0.0, -1.0]);
+        i.positions = [12.0, 0.0, -12.0]
+            .iter()
+            .map(|&x| Some(DVec3::new(x, -250.0, 250.0)))
+            .collect();
+        let s = stack(&i).unwrap();
+        assert_eq!(s.order, vec![0, 1, 2], "increasing along -x");
+        assert_eq!(s.origin, DVec3::new(12.0, -250.0, 250.0));
+        assert_eq!(s.z_spacing, 12.0);
+        assert_eq!(
+            s.direction,
+            DMat3::from_cols(DVec3::Y, -DVec3::Z, -DVec3::X)
+        );
+        assert_eq!(
+            volux_core::orientation::orientation_code(&s.direction),
+            "PIR"
+        );
+        assert!(s.notes.is_empty(), "{:?}", s.notes);
+        // A sheared orientation is noted and not applied.
+        i.orientation = Some([1.0, 0.0, 0.0, 0.1, 0.995, 0.0]);
+        i.positions = [0.0, 1.0, 2.0]
+            .iter()
+            .map(|&z| Some(DVec3::new(0.0, 0.0, z)))
+            .collect();
+        let s = stack(&i).unwrap();
+        assert_eq!(s.direction, DMat3::IDENTITY);
+        assert!(
+            s.notes.iter().any(|n| n.contains("not orthogonal")),
+            "{:?}",
+            s.notes
+        );
     }
 
     #[test]

@@ -24,9 +24,10 @@
 //!   Rows x Columns x frames x bytes before use; a file that ends inside its pixel data is
 //!   [`ErrorKind::Truncated`].
 //!
-//! The orientation is not applied: the grid is axis-aligned in (column, row, slice) order with
-//! its origin at the first slice's ImagePositionPatient (noted when the orientation is not the
-//! identity). `dicom-parser` allocates each element's declared length (at most 4 GiB, a `u32`)
+//! Placement (LPS, the DICOM patient coordinate system, PS3.3 C.7.6.2.1.1): the grid is in
+//! (column, row, slice) order with its origin at the first slice's ImagePositionPatient, and
+//! its direction matrix has as columns the ImageOrientationPatient row cosines, its column
+//! cosines and the slice normal (row x column), the direction in which slices are ordered. `dicom-parser` allocates each element's declared length (at most 4 GiB, a `u32`)
 //! before reading it, so every element length is first checked against the bytes left in
 //! the file (module `bounds`); Volux's own buffers are checked with `check_alloc`. Only regular
 //! files are opened ([`crate::util::open_regular`]); in a folder, anything else (a FIFO, a
@@ -269,6 +270,7 @@ fn build_grid(
         stack.origin.into(),
         samples,
     )
+    .and_then(|g| g.with_direction(stack.direction))
     .map_err(err)?;
     Ok(notes.into_iter().fold(grid, Grid::with_note))
 }

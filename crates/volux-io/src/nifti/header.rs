@@ -100,6 +100,10 @@ pub(super) struct Header {
     pub qform_code: i16,
     pub sform_code: i16,
     pub qoffset: [f32; 3],
+    /// `quatern_b`, `quatern_c`, `quatern_d`.
+    pub quatern: [f32; 3],
+    /// `pixdim[0]`, the qform's `qfac` (-1: the third axis is reflected).
+    pub qfac: f32,
     /// `srow_x`, `srow_y`, `srow_z`.
     pub srow: [[f32; 4]; 3],
     /// `n+1` (single file) rather than `ni1` (`.hdr` + `.img`).
@@ -167,6 +171,8 @@ pub(super) fn parse(path: &Path, raw: &[u8]) -> Result<Header> {
         qform_code: f.i16(252),
         sform_code: f.i16(254),
         qoffset: f.f32s(268),
+        quatern: f.f32s(256),
+        qfac: pix[0],
         srow: [f.f32s(280), f.f32s(296), f.f32s(312)],
         single_file,
     })

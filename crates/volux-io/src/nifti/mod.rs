@@ -15,10 +15,13 @@
 //!   is memory-mapped); int8, int32, uint32 and float64 are converted to float32 with a note.
 //! - `scl_slope` / `scl_inter` are applied when the slope is non-zero and not (1, 0); the values
 //!   then become float32, with a note.
-//! - Spacing is `|pixdim[1..=3]|` (zero or non-finite entries become 1, with a note); the origin
-//!   is the sform translation when `sform_code > 0`, else the quaternion offset when
-//!   `qform_code > 0`, else 0. Rotations, shears and flips in the sform / qform are not applied
-//!   (the grid stays in voxel index order; noted).
+//! - Placement (LPS world, see [`volux_core::orientation`]): the sform when `sform_code > 0`
+//!   (spacing = its column lengths, direction = its unit columns, origin = its translation),
+//!   else the qform when `qform_code > 0` (quaternion rotation with `qfac`, spacing
+//!   `|pixdim[1..=3]|`, origin `qoffset`), else axis-aligned at 0 with spacing
+//!   `|pixdim[1..=3]|` (zero or non-finite entries become 1, with a note). NIfTI's RAS
+//!   coordinates are turned into LPS by negating x and y (`affine.rs`); a sheared or
+//!   degenerate affine is noted and the next method used.
 //! - The data starts at `vox_offset` (at least 352 in a `.nii`). Sizes are checked before any
 //!   allocation: a file shorter than the dims need is [`ErrorKind::Truncated`]; data longer
 //!   than the dims declare is read up to the declared size, with a note (for gzip, one byte
@@ -36,6 +39,7 @@ use crate::util::{
     header_err, io_error, open_maybe_gz, open_regular, read_exact_checked, regular_metadata,
 };
 
+mod affine;
 mod header;
 mod values;
 
@@ -60,9 +64,10 @@ pub fn read(path: &Path) -> Result<Grid> {
     };
     let (samples, surplus) = load_samples(&data_path, &hdr, span, scaling, &mut notes)?;
     notes.extend(surplus_note(&hdr, dims, bytes, surplus));
-    let spacing = spacing(&hdr, &mut notes);
-    let origin = origin(&hdr, &mut notes);
-    let grid = Grid::new(dims, spacing, origin, samples).map_err(|e| ReadError::new(path, e))?;
+    let place = affine::placement(&hdr, spacing(&hdr, &mut notes), &mut notes);
+    let grid = Grid::new(dims, place.spacing, place.origin, samples)
+        .and_then(|g| g.with_direction(place.direction))
+        .map_err(|e| ReadError::new(path, e))?;
     Ok(notes.into_iter().fold(grid, Grid::with_note))
 }
 
@@ -285,42 +290,4 @@ fn spacing(hdr: &Header, notes: &mut Vec<String>) -> [f64; 3] {
         }
     }
     out
-}
-
-/// Origin from the sform translation, else the qform offset, else 0.
-fn origin(hdr: &Header, notes: &mut Vec<String>) -> [f64; 3] {
-    let (o, which) = if hdr.sform_code > 0 {
-        note_sform_rotation(hdr, notes);
-        (hdr.srow.map(|r| r[3]), "sform")
-    } else if hdr.qform_code > 0 {
-        (hdr.qoffset, "qform")
-    } else {
-        return [0.0; 3];
-    };
-    let o = o.map(f64::from);
-    if o.iter().all(|v| v.is_finite()) {
-        o
-    } else {
-        notes.push(format!(
-            "the {which} origin {o:?} is not finite; (0, 0, 0) was used"
-        ));
-        [0.0; 3]
-    }
-}
-
-/// Notes an sform whose 3x3 part is not diagonal with positive entries (not applied).
-fn note_sform_rotation(hdr: &Header, notes: &mut Vec<String>) {
-    let axis_aligned = hdr.srow.iter().enumerate().all(|(r, row)| {
-        row.iter()
-            .take(3)
-            .enumerate()
-            .all(|(c, &v)| if r == c { v > 0.0 } else { v == 0.0 })
-    });
-    if !axis_aligned {
-        notes.push(
-            "the sform has a rotation, shear or flip, which is not applied: the grid is in voxel \
-             index order with spacing from pixdim"
-                .into(),
-        );
-    }
 }

@@ -179,19 +179,17 @@ fn image_data(path: &Path, file: &Elem, enc: &Encoding, want: Option<&str>) -> R
     let attrs = attributes(p, enc).map_err(|m| err(ErrorKind::Invalid(m)))?;
     let (samples, notes) =
         cells::grid_samples(&attrs, want, n as usize).map_err(|m| err(ErrorKind::Invalid(m)))?;
-    let mut g = Grid::new(dims, spacing, origin, samples).map_err(|e| err(e.into()))?;
-    let identity = "1 0 0 0 1 0 0 0 1";
-    if let Some(d) = ds.attr("Direction") {
-        let d: Vec<&str> = d.split_ascii_whitespace().collect();
-        if d.join(" ") != identity
-            && d.iter()
-                .map(|t| t.trim_end_matches(".0"))
-                .collect::<Vec<_>>()
-                .join(" ")
-                != identity
-        {
-            g = g.with_note("Direction matrix is not the identity: ignored (axis-aligned grid)");
-        }
+    let (direction, note) = image_direction(ds.attr("Direction"));
+    let origin = match direction {
+        Some(d) => (glam::DVec3::from(o) + d * (glam::DVec3::from(origin) - glam::DVec3::from(o)))
+            .to_array(),
+        None => origin,
+    };
+    let mut g = Grid::new(dims, spacing, origin, samples)
+        .and_then(|g| g.with_direction(direction.unwrap_or(glam::DMat3::IDENTITY)))
+        .map_err(|e| err(e.into()))?;
+    if let Some(n) = note {
+        g = g.with_note(n);
     }
     for n in notes {
         g = g.with_note(n);
@@ -267,6 +265,45 @@ fn cell_set(p: &Elem, enc: &Encoding, nc: usize) -> std::result::Result<CellSet,
         ));
     }
     Ok(set)
+}
+
+/// The ImageData `Direction` attribute: nine numbers, the 3x3 matrix row by row (VTK's
+/// `vtkImageData::GetDirectionMatrix`), whose columns are the world directions of the index
+/// axes; `None` for the identity or when absent; a note when it is malformed or not a
+/// rotation (then the grid is read axis-aligned).
+fn image_direction(attr: Option<&str>) -> (Option<glam::DMat3>, Option<String>) {
+    let Some(text) = attr else {
+        return (None, None);
+    };
+    let v: Option<Vec<f64>> = text
+        .split_ascii_whitespace()
+        .map(|t| t.parse().ok())
+        .collect();
+    let m = match v.as_deref() {
+        Some(&[a, b, c, d, e, f, g, h, i]) => {
+            glam::DMat3::from_cols_array(&[a, d, g, b, e, h, c, f, i])
+        }
+        _ => {
+            return (
+                None,
+                Some(format!(
+                    "Direction '{text}' is not nine numbers: ignored (axis-aligned grid)"
+                )),
+            )
+        }
+    };
+    if m == glam::DMat3::IDENTITY {
+        return (None, None);
+    }
+    match volux_core::orientation::validate_direction(m) {
+        Ok(d) => (Some(d), None),
+        Err(e) => (
+            None,
+            Some(format!(
+                "Direction is not usable ({e}): ignored (axis-aligned grid)"
+            )),
+        ),
+    }
 }
 
 #[cfg(test)]

@@ -37,7 +37,8 @@ pub fn voxel_crossings(o_v: DVec3, d_v: DVec3, t0: f64, t1: f64) -> Vec<f64> {
     ts
 }
 
-/// The voxel-space position of a world point (for tests and tools).
+/// The voxel-space position of a world point (for tests and tools), through the placement's
+/// direction.
 pub fn to_voxel(place: &Placement, p: DVec3) -> Vec3 {
-    ((p - place.origin) / place.spacing).as_vec3()
+    ((place.point_to_local(p) - place.origin) / place.spacing).as_vec3()
 }

@@ -2,7 +2,7 @@
 //! ([`RayContext`]), the medium along one ray ([`GridRay`]), a pixel's result, the derived
 //! data a render uses and the classification renderers keep between frames.
 use glam::{DVec3, Vec3};
-use volux_core::camera::RayGenerator;
+use volux_core::camera::{Ray, RayGenerator};
 use volux_core::transfer::TransferFunction;
 
 use super::options::{Placement, RenderOptions};
@@ -123,9 +123,31 @@ pub(crate) struct RayContext<'a, F> {
     pub(crate) breakpoint_ranks: Option<BreakpointRanks>,
     pub(crate) tf: TransferFunction,
     pub(crate) breakpoints: Vec<f64>,
-    /// The camera's rays for this image size.
-    pub(crate) rays: RayGenerator,
+    /// The camera's rays for this image size, in the grid's local frame.
+    pub(crate) rays: LocalRays,
     pub(crate) opts: &'a RenderOptions,
+}
+
+/// The camera's world rays turned into a grid's local frame ([`Placement`]): the one place
+/// where rays enter the grid, so every path (lane streams, ray by ray, MIP) clips them against
+/// the axis-aligned box and samples in index space unchanged.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LocalRays {
+    pub(crate) world: RayGenerator,
+    pub(crate) place: Placement,
+}
+
+impl LocalRays {
+    /// The ray through pixel coordinates (`px`, `py`), in the local frame (the world ray
+    /// itself for an axis-aligned grid).
+    #[inline]
+    pub(crate) fn ray(&self, px: f64, py: f64) -> Ray {
+        let r = self.world.ray(px, py);
+        Ray {
+            origin: self.place.point_to_local(r.origin),
+            dir: self.place.vector_to_local(r.dir),
+        }
+    }
 }
 
 /// The classified medium along one ray through a grid, in voxel space.

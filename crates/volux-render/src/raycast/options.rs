@@ -1,5 +1,5 @@
 //! Options and results of the grid ray caster.
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
 use crate::error::RenderError;
@@ -132,7 +132,13 @@ pub struct Rendered {
     pub error_map: Vec<f32>,
 }
 
-/// Placement of a field in the world: sample (i, j, k) at `origin + spacing * (i, j, k)`.
+/// Placement of a field in the world: sample (i, j, k) at
+/// `origin + direction * (spacing ∘ (i, j, k))` (LPS world, see [`volux_core::orientation`]).
+///
+/// Rays are traced in the grid's *local frame*: the world turned about `origin` by
+/// `directionᵀ`, where the grid's box is axis-aligned (`[origin, origin + extent]`). The
+/// direction is orthonormal, so distances (steps in world units, optical depths) are the same
+/// in both frames.
 #[derive(Clone, Copy, Debug)]
 pub struct Placement {
     /// World position of sample (0, 0, 0).
@@ -141,6 +147,8 @@ pub struct Placement {
     pub spacing: DVec3,
     /// Samples per axis.
     pub dims: [usize; 3],
+    /// Unit world directions of the index axes (columns); identity for axis-aligned grids.
+    pub direction: DMat3,
 }
 
 impl Placement {
@@ -150,7 +158,39 @@ impl Placement {
             origin: grid.origin(),
             spacing: grid.spacing(),
             dims: grid.dims(),
+            direction: grid.direction(),
         }
+    }
+
+    /// Whether the index axes are the world axes (no turn into the local frame).
+    pub fn is_axis_aligned(&self) -> bool {
+        self.direction == DMat3::IDENTITY
+    }
+
+    /// A world point in the local frame: `origin + directionᵀ (p - origin)` (the point itself
+    /// when axis-aligned, bit for bit).
+    pub fn point_to_local(&self, p: DVec3) -> DVec3 {
+        if self.is_axis_aligned() {
+            return p;
+        }
+        self.origin + self.direction.transpose() * (p - self.origin)
+    }
+
+    /// A world direction (ray direction, light direction) in the local frame:
+    /// `directionᵀ v`.
+    pub fn vector_to_local(&self, v: DVec3) -> DVec3 {
+        if self.is_axis_aligned() {
+            return v;
+        }
+        self.direction.transpose() * v
+    }
+
+    /// A local-frame vector (a gradient taken along the index axes) in the world: `direction v`.
+    pub fn vector_to_world(&self, v: DVec3) -> DVec3 {
+        if self.is_axis_aligned() {
+            return v;
+        }
+        self.direction * v
     }
     pub(super) fn extent(&self) -> DVec3 {
         DVec3::new(

@@ -4,7 +4,7 @@ use std::time::Instant;
 
 use volux_core::image::Image;
 
-use super::context::{Classification, Derived, RayContext};
+use super::context::{Classification, Derived, LocalRays, RayContext};
 use super::options::{Placement, RenderOptions, Rendered};
 use crate::error::RenderError;
 use crate::frame::{Rebuilt, RenderStats};
@@ -87,6 +87,14 @@ pub(crate) fn render_with<F: Field>(
 ) -> Result<Rendered, RenderError> {
     opts.validate()?;
     let start = Instant::now();
+    let turned;
+    let opts = match lights_to_local(opts, &place) {
+        Some(o) => {
+            turned = o;
+            &turned
+        }
+        None => opts,
+    };
     let owned;
     let classification = match derived.classification {
         Some(c) if c.is_for(opts, range, derived.macrocells) => c,
@@ -129,7 +137,10 @@ pub(crate) fn render_with<F: Field>(
         breakpoint_ranks,
         tf: opts.tf.resolved(range),
         breakpoints,
-        rays: opts.camera.rays(opts.width, opts.height),
+        rays: LocalRays {
+            world: opts.camera.rays(opts.width, opts.height),
+            place,
+        },
         opts,
     };
     let grid = TileGrid::new(opts.width, opts.height, TILE);
@@ -168,4 +179,25 @@ pub(crate) fn render_with<F: Field>(
         stats,
         error_map,
     })
+}
+
+/// `opts` with its directional lights turned into the local frame of `place` (`None` when
+/// nothing changes: an axis-aligned grid, or headlights only). Lighting a local-frame
+/// gradient `g` with the local light `Dᵀ L` is lighting the world normal `D g` with `L`
+/// (dot products are kept by the orthonormal `D`), so samples are shaded as in the world.
+fn lights_to_local(opts: &RenderOptions, place: &Placement) -> Option<RenderOptions> {
+    use crate::shading::blinn_phong::Light;
+    let turn = |m: &mut Option<crate::shading::blinn_phong::BlinnPhong>| {
+        if let Some(Light::Direction(l)) = m.as_mut().map(|m| &mut m.light) {
+            *l = place.vector_to_local(l.as_dvec3()).as_vec3();
+        }
+    };
+    let directional = |m: &Option<crate::shading::blinn_phong::BlinnPhong>| matches!(m, Some(b) if matches!(b.light, Light::Direction(_)));
+    if place.is_axis_aligned() || !(directional(&opts.shading) || directional(&opts.iso_lighting)) {
+        return None;
+    }
+    let mut o = opts.clone();
+    turn(&mut o.shading);
+    turn(&mut o.iso_lighting);
+    Some(o)
 }
