@@ -38,9 +38,11 @@ pub struct Loaded {
 }
 
 impl Loaded {
-    /// Whether the data is a patient scan (its axes are LPS): DICOM, NIfTI.
+    /// Whether the data is a patient scan, whose world axes are LPS: DICOM, NIfTI, or a
+    /// grid that carries direction cosines.
     pub fn is_medical(&self) -> bool {
-        matches!(self.format, Format::Dicom | Format::Nifti)
+        let oriented = matches!(&self.volume.volume, Volume::Grid(g) if !g.is_axis_aligned());
+        oriented || matches!(self.format, Format::Dicom | Format::Nifti)
     }
 
     /// The volume a method draws: the tetrahedral split of a grid for the mesh methods.

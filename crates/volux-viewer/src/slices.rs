@@ -4,8 +4,8 @@
 //! ([`volux_render::resample::resample_mesh`]); outside the mesh a slice is dark blue.
 use std::sync::Arc;
 
-use glam::DVec3;
-use volux_core::{Grid, TetMesh};
+use glam::{DMat3, DVec3};
+use volux_core::{orientation, Grid, TetMesh};
 use volux_render::resample::resample_mesh;
 
 /// Samples along the longest side of a mesh's resampled slice grid.
@@ -24,6 +24,8 @@ pub struct SliceVolume {
     dims: [usize; 3],
     origin: DVec3,
     spacing: DVec3,
+    /// World directions of the index axes (a grid's direction cosines; identity for meshes).
+    direction: DMat3,
     values: Values,
 }
 
@@ -63,27 +65,10 @@ impl Plane {
     }
 }
 
-/// The patient side a world direction points to, in LPS (DICOM) coordinates: +x left, +y
-/// posterior, +z superior; the dominant component decides.
+/// The LPS patient letter of a world direction ([`orientation::patient_letter`]; `?` for
+/// a zero vector).
 pub fn patient_letter(d: DVec3) -> char {
-    let a = d.abs();
-    if a.x >= a.y && a.x >= a.z {
-        if d.x >= 0.0 {
-            'L'
-        } else {
-            'R'
-        }
-    } else if a.y >= a.z {
-        if d.y >= 0.0 {
-            'P'
-        } else {
-            'A'
-        }
-    } else if d.z >= 0.0 {
-        'S'
-    } else {
-        'I'
-    }
+    orientation::patient_letter(d).unwrap_or('?')
 }
 
 /// The axis name of a world direction (`+X` ... `-Z`) for data without patient axes.
@@ -119,6 +104,7 @@ impl SliceVolume {
             dims: grid.dims(),
             origin: grid.origin(),
             spacing: grid.spacing(),
+            direction: grid.direction(),
             values: Values::Grid(grid),
         }
     }
@@ -131,6 +117,7 @@ impl SliceVolume {
             dims: r.place.dims,
             origin: r.place.origin,
             spacing: r.place.spacing,
+            direction: r.place.direction,
             values: Values::Resampled(Arc::new(r.values)),
         })
     }
@@ -150,13 +137,14 @@ impl SliceVolume {
 
     /// The sample nearest to a world point, clamped into the grid.
     pub fn index_of(&self, p: DVec3) -> [usize; 3] {
-        let t = (p - self.origin) / self.spacing;
+        let t = self.direction.transpose() * (p - self.origin) / self.spacing;
         [0, 1, 2].map(|a| (t[a].round().max(0.0) as usize).min(self.dims[a] - 1))
     }
 
     /// The world position of a sample.
     pub fn world_of(&self, idx: [usize; 3]) -> DVec3 {
-        self.origin + self.spacing * DVec3::new(idx[0] as f64, idx[1] as f64, idx[2] as f64)
+        let local = self.spacing * DVec3::new(idx[0] as f64, idx[1] as f64, idx[2] as f64);
+        self.origin + self.direction * local
     }
 
     /// The centre sample's position (the first crosshair).
@@ -216,11 +204,11 @@ impl SliceVolume {
         self.world_of(idx)
     }
 
-    /// The letters at the right and top edges of a slice of `plane` (the sides the index
-    /// axes point to; identity direction: LPS).
+    /// The letters at the right and top edges of a slice of `plane`: the patient sides
+    /// (LPS) the index axes point to through the direction cosines.
     pub fn edge_letters(&self, plane: Plane) -> (char, char) {
         let (_, across, down, upward) = plane.axes();
-        let axis = |a: usize| DVec3::AXES[a];
+        let axis = |a: usize| self.direction.col(a);
         let top = if upward { axis(down) } else { -axis(down) };
         (patient_letter(axis(across)), patient_letter(top))
     }
