@@ -77,6 +77,8 @@ pub struct ViewerApp {
     pub(crate) frame_times: VecDeque<Instant>,
     /// Size of the 3D view in pixels.
     pub view_size: (usize, usize),
+    /// Where the 3D view was last drawn (points).
+    pub view_rect: egui::Rect,
     pub(crate) options: Options,
     pub(crate) dialog: FileDialog,
     pub(crate) pending_session: Option<Session>,
@@ -120,6 +122,7 @@ impl ViewerApp {
             interacting: false,
             frame_times: VecDeque::new(),
             view_size: options.size.unwrap_or((640, 480)),
+            view_rect: egui::Rect::NOTHING,
             options: options.clone(),
             dialog: FileDialog::default(),
             pending_session: None,
@@ -387,6 +390,18 @@ impl ViewerApp {
                 }
             }
         }
+    }
+
+    /// Whether the frame on screen is the full-resolution frame of the newest request.
+    pub fn shown_full(&self) -> bool {
+        self.shown.as_ref().is_some_and(|s| {
+            s.frame.full && s.frame.generation == self.service.generation() && !self.busy()
+        })
+    }
+
+    /// The scene of the frame on screen.
+    pub fn shown_scene(&self) -> Option<&Scene> {
+        self.shown.as_ref().map(|s| &s.frame.scene)
     }
 
     /// Frames per second over the last frames shown.

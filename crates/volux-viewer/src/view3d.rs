@@ -19,6 +19,7 @@ pub fn show(app: &mut ViewerApp, ctx: &egui::Context) {
             }
             let rect = ui.available_rect_before_wrap();
             let response = ui.allocate_rect(rect, Sense::click_and_drag());
+            app.view_rect = rect;
             let ppp = ctx.pixels_per_point();
             app.view_size = (
                 ((rect.width() * ppp) as usize).max(16),
