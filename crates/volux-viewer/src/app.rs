@@ -1,10 +1,10 @@
-//! The viewer's state and its frame loop: jobs polled, frames taken from the render thread,
-//! panels drawn ([`crate::panels`], [`crate::view3d`], [`crate::slice_views`]), and the
-//! scene handed to the render thread whenever it changed. Nothing here waits for a render
-//! or a file.
+//! The viewer's state and what acts on it: jobs polled, frames taken from the render
+//! thread, the scene handed to the render thread whenever it changed, files opened and
+//! saved. The window ([`crate::window`]) draws the panels over it each frame. Nothing here
+//! waits for a render or a file.
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use eframe::egui;
 use glam::DVec3;
@@ -158,10 +158,7 @@ impl ViewerApp {
 
     fn start_load(&mut self, source: DatasetRef) {
         if !source.path.exists() {
-            self.error = Some(format!(
-                "{}: no such file or folder",
-                source.path.display()
-            ));
+            self.error = Some(format!("{}: no such file or folder", source.path.display()));
             self.pending_session = None;
             return;
         }
@@ -189,25 +186,8 @@ impl ViewerApp {
         }
     }
 
-    /// One frame of the window: poll, draw, submit.
-    pub fn frame(&mut self, ctx: &egui::Context) {
-        self.poll_jobs();
-        self.take_dropped_files(ctx);
-        self.take_frames(ctx);
-        crate::panels::show(self, ctx);
-        if let Some((purpose, path)) = self.dialog.show(ctx) {
-            self.chosen(purpose, &path);
-        }
-        crate::slice_views::show(self, ctx);
-        crate::view3d::show(self, ctx);
-        self.submit_if_changed();
-        self.finish_screenshot(ctx);
-        if self.busy() || self.export_job.is_some() {
-            ctx.request_repaint_after(Duration::from_millis(100));
-        }
-    }
-
-    fn poll_jobs(&mut self) {
+    /// Takes the results of finished background jobs.
+    pub(crate) fn poll_jobs(&mut self) {
         if let Some(job) = &mut self.load_job {
             if let Poll::Done(r) = job.poll() {
                 self.load_job = None;
@@ -263,10 +243,16 @@ impl ViewerApp {
         self.scene.method = Method::Auto.resolve(&volume).unwrap_or(Method::Auto);
         self.window = [
             loaded.histogram.quantile(0.01),
-            loaded.histogram.quantile(0.99).max(loaded.histogram.quantile(0.01) + 1e-9),
+            loaded
+                .histogram
+                .quantile(0.99)
+                .max(loaded.histogram.quantile(0.01) + 1e-9),
         ];
         self.crosshair = loaded.slices.centre();
-        self.editor = Some(TfEditor::new(loaded.histogram.clone(), &self.scene.appearance.tf));
+        self.editor = Some(TfEditor::new(
+            loaded.histogram.clone(),
+            &self.scene.appearance.tf,
+        ));
         self.shown = None;
         self.slices_key = None;
         self.error = None;
@@ -304,7 +290,11 @@ impl ViewerApp {
     /// The session of what is on screen (the render size as the 3D view or `--size`).
     pub fn session(&self) -> Option<Session> {
         let data = self.data.as_ref()?;
-        let mut s = Session::new(data.source.clone(), &self.render_scene(), Some(self.background));
+        let mut s = Session::new(
+            data.source.clone(),
+            &self.render_scene(),
+            Some(self.background),
+        );
         s.slices = Some(SliceState {
             window: self.window,
             crosshair: self.crosshair.to_array(),
@@ -322,7 +312,7 @@ impl ViewerApp {
     }
 
     /// Asks for a new frame when the scene (or the interaction state) changed.
-    fn submit_if_changed(&mut self) {
+    pub(crate) fn submit_if_changed(&mut self) {
         let Some(data) = &self.data else { return };
         if self.split_job.is_some() {
             return;
@@ -356,7 +346,8 @@ impl ViewerApp {
         self.submitted = Some((volume.id, scene, self.interacting));
     }
 
-    fn take_frames(&mut self, ctx: &egui::Context) {
+    /// Shows the frames the render thread finished.
+    pub(crate) fn take_frames(&mut self, ctx: &egui::Context) {
         for event in self.service.poll() {
             match event {
                 Event::Frame(f) => {
@@ -369,8 +360,7 @@ impl ViewerApp {
                         [image.width(), image.height()],
                         &rgba,
                     );
-                    let texture =
-                        ctx.load_texture("volux-3d", color, egui::TextureOptions::LINEAR);
+                    let texture = ctx.load_texture("volux-3d", color, egui::TextureOptions::LINEAR);
                     self.frame_times.push_back(Instant::now());
                     while self.frame_times.len() > 30 {
                         self.frame_times.pop_front();
@@ -414,7 +404,8 @@ impl ViewerApp {
         }
     }
 
-    fn take_dropped_files(&mut self, ctx: &egui::Context) {
+    /// Opens a file dropped on the window.
+    pub(crate) fn take_dropped_files(&mut self, ctx: &egui::Context) {
         let dropped = ctx.input(|i| i.raw.dropped_files.clone());
         if let Some(path) = dropped.into_iter().find_map(|f| f.path) {
             self.open(&path);
@@ -439,7 +430,8 @@ impl ViewerApp {
         self.dialog.open(purpose, &folder, name);
     }
 
-    fn chosen(&mut self, purpose: Purpose, path: &Path) {
+    /// Acts on a path chosen in the file dialog.
+    pub(crate) fn chosen(&mut self, purpose: Purpose, path: &Path) {
         let result = match purpose {
             Purpose::Open => {
                 self.open(path);
@@ -494,7 +486,10 @@ impl ViewerApp {
         let mut scene = self.scene.clone();
         scene.view.width = size.0.max(1);
         scene.view.height = size.1.max(1);
-        let mesh_method = !matches!(scene.method, Method::GridRaycast(_) | Method::Resample { .. });
+        let mesh_method = !matches!(
+            scene.method,
+            Method::GridRaycast(_) | Method::Resample { .. }
+        );
         let Some(volume) = data.volume_for(mesh_method).cloned() else {
             return;
         };
@@ -517,7 +512,7 @@ impl ViewerApp {
 
     /// `--screenshot`: once the full frame of the current scene is on screen and nothing is
     /// loading, write it (and the session) and close the window.
-    fn finish_screenshot(&mut self, ctx: &egui::Context) {
+    pub(crate) fn finish_screenshot(&mut self, ctx: &egui::Context) {
         let Some(path) = self.options.screenshot.clone() else {
             return;
         };
@@ -542,7 +537,11 @@ impl ViewerApp {
             background: Some(self.background),
             sixteen_bit: false,
         };
-        let result = shown.frame.image.write_png(&path, &png).map_err(|e| e.to_string());
+        let result = shown
+            .frame
+            .image
+            .write_png(&path, &png)
+            .map_err(|e| e.to_string());
         let result = result.and_then(|_| match &self.options.save_session {
             Some(s) => self.save_session(s).map(|_| ()),
             None => Ok(()),
@@ -577,10 +576,4 @@ fn is_session_file(path: &Path) -> bool {
                 f.take(4096).read_to_string(&mut head).map(|_| head)
             })
             .is_ok_and(|h| h.contains("\"volux_session\""))
-}
-
-impl eframe::App for ViewerApp {
-    fn update(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
-        self.frame(ctx);
-    }
 }

@@ -53,15 +53,26 @@ pub fn run(path: &Path, size: (usize, usize), seconds: f64) -> Result<ViewerBenc
     let loaded = dataset::load(&source)?;
     let volume = loaded.volume.clone();
     let range = volume.volume.range();
-    let tf = in_value_space(&volume.volume.preset_tf("auto").map_err(|e| e.to_string())?, range);
+    let tf = in_value_space(
+        &volume.volume.preset_tf("auto").map_err(|e| e.to_string())?,
+        range,
+    );
     let aspect = size.0 as f64 / size.1 as f64;
-    let mut scene = Scene::new(navigation::home(&volume.volume.bounds(), aspect), size.0, size.1, tf);
-    scene.method = Method::Auto.resolve(&volume.volume).map_err(|e| e.to_string())?;
+    let mut scene = Scene::new(
+        navigation::home(&volume.volume.bounds(), aspect),
+        size.0,
+        size.1,
+        tf,
+    );
+    scene.method = Method::Auto
+        .resolve(&volume.volume)
+        .map_err(|e| e.to_string())?;
     let mut service = RenderService::start(|| {});
     // Warm up: the first frame builds the caches (as opening a file does).
     service.submit(&volume, &scene, false);
     wait_full(&service, Duration::from_secs(600))?;
-    let degrees_per_input = 360.0 / (seconds / INPUT_INTERVAL.as_secs_f64()) / navigation::ORBIT_DEG_PER_PIXEL;
+    let degrees_per_input =
+        360.0 / (seconds / INPUT_INTERVAL.as_secs_f64()) / navigation::ORBIT_DEG_PER_PIXEL;
     let orbit = drive(&mut service, &volume, &mut scene, seconds, |s, _| {
         s.view.camera = navigation::orbit(&s.view.camera, degrees_per_input, 0.0);
     })?;
@@ -69,14 +80,27 @@ pub fn run(path: &Path, size: (usize, usize), seconds: f64) -> Result<ViewerBenc
     service.submit(&volume, &scene, false);
     wait_full(&service, Duration::from_secs(600))?;
     let full_after = last_input.elapsed().as_secs_f64() * 1e3;
-    let tf_drag = drive(&mut service, &volume, &mut scene, seconds.min(2.0), |s, k| {
-        let tf = &mut s.appearance.tf;
-        let pts = if tf.extinction.is_empty() { &mut tf.opacity } else { &mut tf.extinction };
-        let i = pts.len() / 2;
-        pts[i][1] *= if (k / 30) % 2 == 0 { 1.01 } else { 1.0 / 1.01 };
-    })?;
+    let tf_drag = drive(
+        &mut service,
+        &volume,
+        &mut scene,
+        seconds.min(2.0),
+        |s, k| {
+            let tf = &mut s.appearance.tf;
+            let pts = if tf.extinction.is_empty() {
+                &mut tf.opacity
+            } else {
+                &mut tf.extinction
+            };
+            let i = pts.len() / 2;
+            pts[i][1] *= if (k / 30) % 2 == 0 { 1.01 } else { 1.0 / 1.01 };
+        },
+    )?;
     let latencies = |frames: &[Rendered]| {
-        let mut v: Vec<f64> = frames.iter().map(|f| f.latency.as_secs_f64() * 1e3).collect();
+        let mut v: Vec<f64> = frames
+            .iter()
+            .map(|f| f.latency.as_secs_f64() * 1e3)
+            .collect();
         v.sort_by(f64::total_cmp);
         (percentile(&v, 0.5), percentile(&v, 0.95))
     };
@@ -89,7 +113,8 @@ pub fn run(path: &Path, size: (usize, usize), seconds: f64) -> Result<ViewerBenc
         orbit_latency_p50_ms: o50,
         orbit_latency_p95_ms: o95,
         preview_fps: orbit.len() as f64 / seconds,
-        mean_divisor: orbit.iter().map(|f| f.divisor as f64).sum::<f64>() / orbit.len().max(1) as f64,
+        mean_divisor: orbit.iter().map(|f| f.divisor as f64).sum::<f64>()
+            / orbit.len().max(1) as f64,
         full_after_input_ms: full_after,
         tf_latency_p50_ms: t50,
         tf_latency_p95_ms: t95,
@@ -129,7 +154,9 @@ fn wait_full(service: &RenderService, timeout: Duration) -> Result<Rendered, Str
     loop {
         let left = end.saturating_duration_since(Instant::now());
         match service.wait(left) {
-            Some(Event::Frame(f)) if f.full && f.generation == service.generation() => return Ok(*f),
+            Some(Event::Frame(f)) if f.full && f.generation == service.generation() => {
+                return Ok(*f)
+            }
             Some(Event::Frame(_)) => {}
             Some(Event::Failed { message, .. }) => return Err(message),
             None => return Err("no full frame in time".into()),

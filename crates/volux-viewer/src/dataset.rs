@@ -64,7 +64,12 @@ impl Loaded {
             Volume::Mesh(m) => format!("{} tets", m.tets().len()),
             _ => "volume".into(),
         };
-        format!("{} · {what} · range [{}, {}]", self.format.name(), r[0] as f32, r[1] as f32)
+        format!(
+            "{} · {what} · range [{}, {}]",
+            self.format.name(),
+            r[0] as f32,
+            r[1] as f32
+        )
     }
 }
 

@@ -119,18 +119,24 @@ impl FileDialog {
             ui.colored_label(egui::Color32::LIGHT_RED, e);
         }
         let mut go = None;
-        egui::ScrollArea::vertical().max_height(280.0).show(ui, |ui| {
-            for (name, dir) in &self.entries {
-                let label = if *dir { format!("📁 {name}") } else { name.clone() };
-                let r = ui.selectable_label(false, label);
-                if r.clicked() {
-                    self.path_text = self.folder.join(name).display().to_string();
+        egui::ScrollArea::vertical()
+            .max_height(280.0)
+            .show(ui, |ui| {
+                for (name, dir) in &self.entries {
+                    let label = if *dir {
+                        format!("📁 {name}")
+                    } else {
+                        name.clone()
+                    };
+                    let r = ui.selectable_label(false, label);
+                    if r.clicked() {
+                        self.path_text = self.folder.join(name).display().to_string();
+                    }
+                    if r.double_clicked() {
+                        go = Some((self.folder.join(name), *dir));
+                    }
                 }
-                if r.double_clicked() {
-                    go = Some((self.folder.join(name), *dir));
-                }
-            }
-        });
+            });
         if let Some((path, dir)) = go {
             if dir && !(purpose == Purpose::Open && is_dicom_folder(&path)) {
                 self.enter(path.clone());

@@ -20,6 +20,7 @@ pub mod slices;
 pub mod tf_editor;
 pub mod tf_files;
 pub mod view3d;
+pub mod window;
 
 use std::path::Path;
 
@@ -31,6 +32,9 @@ pub fn png_path(path: &Path) -> Result<(), String> {
     if png {
         Ok(())
     } else {
-        Err(format!("{}: screenshots are PNG files (name it .png)", path.display()))
+        Err(format!(
+            "{}: screenshots are PNG files (name it .png)",
+            path.display()
+        ))
     }
 }

@@ -65,7 +65,10 @@ fn run(args: Args) -> Result<(), String> {
         let path = args.path.ok_or("--bench needs a dataset")?;
         let size = size.unwrap_or((800, 600));
         let report = volux_viewer::bench::run(&path, size, args.bench_seconds)?;
-        println!("{}", serde_json::to_string(&report).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            serde_json::to_string(&report).map_err(|e| e.to_string())?
+        );
         return Ok(());
     }
     let options = Options {

@@ -225,7 +225,12 @@ mod tests {
             o = orbit(&o, 10.0, 0.0);
             assert!(((o.eye - o.target).length() - d0).abs() < 1e-9 * d0);
         }
-        assert!((o.eye - c.eye).length() < 1e-9 * d0, "{:?} vs {:?}", o.eye, c.eye);
+        assert!(
+            (o.eye - c.eye).length() < 1e-9 * d0,
+            "{:?} vs {:?}",
+            o.eye,
+            c.eye
+        );
         let tilted = orbit(&c, 0.0, 50.0);
         assert!((tilted.eye - c.eye).length() > 0.1 * d0);
     }

@@ -44,19 +44,30 @@ fn menu(app: &mut ViewerApp, ui: &mut egui::Ui) {
         });
         if let Some(job) = &app.load_job {
             ui.spinner();
-            ui.label(format!("{} ({:.1} s)", job.label, job.elapsed().as_secs_f64()));
+            ui.label(format!(
+                "{} ({:.1} s)",
+                job.label,
+                job.elapsed().as_secs_f64()
+            ));
             if ui.button("Cancel").clicked() {
                 app.cancel_load();
             }
         }
         if let Some((job, _)) = &app.split_job {
             ui.spinner();
-            ui.label(format!("{} ({:.1} s)", job.label, job.elapsed().as_secs_f64()));
+            ui.label(format!(
+                "{} ({:.1} s)",
+                job.label,
+                job.elapsed().as_secs_f64()
+            ));
         }
     });
     if let Some(e) = &app.error {
         ui.horizontal(|ui| {
-            ui.colored_label(egui::Color32::from_rgb(255, 120, 110), format!("error: {e}"));
+            ui.colored_label(
+                egui::Color32::from_rgb(255, 120, 110),
+                format!("error: {e}"),
+            );
         });
         if ui.small_button("dismiss").clicked() {
             app.error = None;
@@ -89,26 +100,44 @@ fn method_choices(volume: &Volume) -> Vec<(&'static str, Method)> {
     match volume {
         Volume::Grid(_) => vec![
             ("Ray casting", Method::GridRaycast(grid)),
-            ("Projected Tetrahedra (split)", Method::ProjectedTetrahedra(PtSettings::default())),
-            ("Tet ray casting (split)", Method::TetRaycast(SegmentRule::Psi)),
+            (
+                "Projected Tetrahedra (split)",
+                Method::ProjectedTetrahedra(PtSettings::default()),
+            ),
+            (
+                "Tet ray casting (split)",
+                Method::TetRaycast(SegmentRule::Psi),
+            ),
         ],
         _ => vec![
-            ("Projected Tetrahedra", Method::ProjectedTetrahedra(PtSettings::default())),
+            (
+                "Projected Tetrahedra",
+                Method::ProjectedTetrahedra(PtSettings::default()),
+            ),
             ("Tet ray casting", Method::TetRaycast(SegmentRule::Psi)),
-            ("Resample + ray casting", Method::Resample { samples: 256, raycast: grid }),
+            (
+                "Resample + ray casting",
+                Method::Resample {
+                    samples: 256,
+                    raycast: grid,
+                },
+            ),
         ],
     }
 }
 
 fn method_settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
-    let Some(volume) = app.volume().cloned() else { return };
+    let Some(volume) = app.volume().cloned() else {
+        return;
+    };
     let current = app.scene.method.name();
     let mut picked = None;
     egui::ComboBox::from_label("method")
         .selected_text(current)
         .show_ui(ui, |ui| {
             for (label, m) in method_choices(&volume) {
-                if ui.selectable_label(m.name() == current, label).clicked() && m.name() != current {
+                if ui.selectable_label(m.name() == current, label).clicked() && m.name() != current
+                {
                     picked = Some(m);
                 }
             }
@@ -129,7 +158,10 @@ fn method_settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
 fn pick_method(app: &mut ViewerApp, method: Method) {
     let Some(data) = &app.data else { return };
     let needs_split = matches!(data.volume.volume, Volume::Grid(_))
-        && matches!(method, Method::ProjectedTetrahedra(_) | Method::TetRaycast(_));
+        && matches!(
+            method,
+            Method::ProjectedTetrahedra(_) | Method::TetRaycast(_)
+        );
     if needs_split && data.tets.is_none() {
         let mut copy = data.clone();
         let job = Job::spawn("splitting into tetrahedra", move || {
@@ -142,7 +174,14 @@ fn pick_method(app: &mut ViewerApp, method: Method) {
 }
 
 fn grid_settings(ui: &mut egui::Ui, g: &mut GridRaycast) {
-    let names = ["riemann", "trapezoid", "simpson", "preintegrated", "adaptive", "reference"];
+    let names = [
+        "riemann",
+        "trapezoid",
+        "simpson",
+        "preintegrated",
+        "adaptive",
+        "reference",
+    ];
     let step = match g.integrator {
         Integrator::Riemann { step }
         | Integrator::Trapezoid { step }
@@ -165,10 +204,18 @@ fn grid_settings(ui: &mut egui::Ui, g: &mut GridRaycast) {
         | Integrator::Trapezoid { step }
         | Integrator::Simpson { step }
         | Integrator::Preintegrated { step } => {
-            ui.add(egui::Slider::new(step, 0.05..=4.0).logarithmic(true).text("step (voxels)"));
+            ui.add(
+                egui::Slider::new(step, 0.05..=4.0)
+                    .logarithmic(true)
+                    .text("step (voxels)"),
+            );
         }
         Integrator::AdaptiveSimpson(p) => {
-            ui.add(egui::Slider::new(&mut p.tol, 1e-5..=0.1).logarithmic(true).text("tolerance"));
+            ui.add(
+                egui::Slider::new(&mut p.tol, 1e-5..=0.1)
+                    .logarithmic(true)
+                    .text("tolerance"),
+            );
         }
         _ => {}
     }
@@ -202,10 +249,12 @@ fn integrator_named(name: &str, step: f64) -> Integrator {
         "trapezoid" => Integrator::Trapezoid { step },
         "simpson" => Integrator::Simpson { step },
         "preintegrated" => Integrator::Preintegrated { step },
-        "adaptive" => Integrator::AdaptiveSimpson(volux_render::integrate::adaptive::AdaptiveParams {
-            tol: 1e-3,
-            ..Integrator::REFERENCE
-        }),
+        "adaptive" => {
+            Integrator::AdaptiveSimpson(volux_render::integrate::adaptive::AdaptiveParams {
+                tol: 1e-3,
+                ..Integrator::REFERENCE
+            })
+        }
         "reference" => Integrator::Reference,
         _ => Integrator::Riemann { step },
     }
@@ -226,29 +275,44 @@ fn rule_settings(ui: &mut egui::Ui, rule: &mut SegmentRule, adaptive: bool) {
         ui.radio_value(rule, SegmentRule::Average, "average");
         ui.radio_value(rule, SegmentRule::Psi, "ψ");
         ui.radio_value(rule, SegmentRule::Exact, "exact");
-        if adaptive && ui.radio(matches!(rule, SegmentRule::AdaptiveSimpson(_)), "adaptive").clicked() {
-            *rule = SegmentRule::AdaptiveSimpson(volux_render::integrate::adaptive::AdaptiveParams {
-                tol: 1e-3,
-                ..Integrator::REFERENCE
-            });
+        if adaptive
+            && ui
+                .radio(matches!(rule, SegmentRule::AdaptiveSimpson(_)), "adaptive")
+                .clicked()
+        {
+            *rule =
+                SegmentRule::AdaptiveSimpson(volux_render::integrate::adaptive::AdaptiveParams {
+                    tol: 1e-3,
+                    ..Integrator::REFERENCE
+                });
         }
     });
 }
 
 fn appearance_settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
     let a = &mut app.scene.appearance;
-    let grid_like = matches!(app.scene.method, Method::GridRaycast(_) | Method::Resample { .. });
+    let grid_like = matches!(
+        app.scene.method,
+        Method::GridRaycast(_) | Method::Resample { .. }
+    );
     ui.horizontal(|ui| {
         ui.add_enabled(grid_like, egui::Checkbox::new(&mut a.shade_volume, "shade"));
         let pt = matches!(app.scene.method, Method::ProjectedTetrahedra(_));
         ui.add_enabled(!pt, egui::Checkbox::new(&mut a.mip, "MIP"));
         ui.checkbox(&mut app.show_planes, "slice planes");
     });
-    ui.add(egui::Slider::new(&mut a.opacity_scale, 0.01..=20.0).logarithmic(true).text("opacity scale"));
+    ui.add(
+        egui::Slider::new(&mut a.opacity_scale, 0.01..=20.0)
+            .logarithmic(true)
+            .text("opacity scale"),
+    );
     ui.horizontal(|ui| {
         ui.label("background");
         ui.color_edit_button_rgb(&mut app.background);
-        let mut perspective = matches!(app.scene.view.camera.projection, volux_core::Projection::Perspective { .. });
+        let mut perspective = matches!(
+            app.scene.view.camera.projection,
+            volux_core::Projection::Perspective { .. }
+        );
         if ui.checkbox(&mut perspective, "perspective").changed() {
             app.scene.view.camera = crate::navigation::toggle_projection(&app.scene.view.camera);
         }
@@ -265,9 +329,15 @@ fn isosurface_list(app: &mut ViewerApp, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             let speed = (range[1] - range[0]) / 500.0;
             changed |= ui
-                .add(egui::DragValue::new(&mut iso.value).speed(speed).range(range[0]..=range[1]))
+                .add(
+                    egui::DragValue::new(&mut iso.value)
+                        .speed(speed)
+                        .range(range[0]..=range[1]),
+                )
                 .changed();
-            changed |= ui.color_edit_button_rgba_unmultiplied(&mut iso.rgba).changed();
+            changed |= ui
+                .color_edit_button_rgba_unmultiplied(&mut iso.rgba)
+                .changed();
             if ui.small_button("remove").clicked() {
                 remove = Some(i);
             }
@@ -322,7 +392,9 @@ fn tf_section(app: &mut ViewerApp, ui: &mut egui::Ui) {
 
 /// Replaces the TF with a preset fitted to the data.
 pub fn apply_preset(app: &mut ViewerApp, name: &str) {
-    let Some(volume) = app.volume().cloned() else { return };
+    let Some(volume) = app.volume().cloned() else {
+        return;
+    };
     match volume.preset_tf(name) {
         Ok(tf) => {
             app.scene.appearance.tf = in_value_space(&tf, volume.range());

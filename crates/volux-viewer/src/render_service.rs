@@ -259,8 +259,7 @@ impl Worker {
         let resolved = scene.method.resolve(&request.volume.volume)?;
         let key = (request.volume.id, resolved.name());
         if !self.renderers.contains_key(&key) {
-            self.renderers
-                .retain(|(id, _), _| *id == request.volume.id);
+            self.renderers.retain(|(id, _), _| *id == request.volume.id);
             let r = create_renderer(&request.volume.volume, &resolved)?;
             self.renderers.insert(key, r);
         }

@@ -34,7 +34,11 @@ pub fn show(app: &mut ViewerApp, ctx: &egui::Context) {
 /// Re-cuts the slices when the crosshair's sample or the window changed.
 fn refresh_textures(app: &mut ViewerApp, ctx: &egui::Context) {
     let Some(data) = &app.data else { return };
-    let key = (data.volume.id, app.window, data.slices.index_of(app.crosshair));
+    let key = (
+        data.volume.id,
+        app.window,
+        data.slices.index_of(app.crosshair),
+    );
     if app.slices_key == Some(key) {
         return;
     }
@@ -97,13 +101,31 @@ fn slice_view(
     };
     let font = FontId::proportional(13.0);
     let colour = Color32::from_rgb(240, 200, 90);
-    painter.text(Pos2::new(rect.right() - 4.0, rect.center().y), Align2::RIGHT_CENTER, letters.0, font.clone(), colour);
-    painter.text(Pos2::new(rect.center().x, rect.top() + 2.0), Align2::CENTER_TOP, letters.1, font.clone(), colour);
+    painter.text(
+        Pos2::new(rect.right() - 4.0, rect.center().y),
+        Align2::RIGHT_CENTER,
+        letters.0,
+        font.clone(),
+        colour,
+    );
+    painter.text(
+        Pos2::new(rect.center().x, rect.top() + 2.0),
+        Align2::CENTER_TOP,
+        letters.1,
+        font.clone(),
+        colour,
+    );
     let idx = data.slices.index_of(app.crosshair);
     painter.text(
         rect.left_bottom() + egui::vec2(4.0, -4.0),
         Align2::LEFT_BOTTOM,
-        format!("{} · {:?} · window [{:.4}, {:.4}]", plane.name(), idx, app.window[0], app.window[1]),
+        format!(
+            "{} · {:?} · window [{:.4}, {:.4}]",
+            plane.name(),
+            idx,
+            app.window[0],
+            app.window[1]
+        ),
         FontId::monospace(10.0),
         Color32::LIGHT_GRAY,
     );
@@ -139,6 +161,12 @@ fn crosshair_lines(app: &ViewerApp, painter: &egui::Painter, plane: Plane, area:
     let x = area.left() + u * area.width();
     let y = area.top() + v * area.height();
     let stroke = Stroke::new(1.0, Color32::from_rgba_unmultiplied(80, 220, 255, 160));
-    painter.line_segment([Pos2::new(x, area.top()), Pos2::new(x, area.bottom())], stroke);
-    painter.line_segment([Pos2::new(area.left(), y), Pos2::new(area.right(), y)], stroke);
+    painter.line_segment(
+        [Pos2::new(x, area.top()), Pos2::new(x, area.bottom())],
+        stroke,
+    );
+    painter.line_segment(
+        [Pos2::new(area.left(), y), Pos2::new(area.right(), y)],
+        stroke,
+    );
 }

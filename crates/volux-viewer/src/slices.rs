@@ -74,7 +74,11 @@ pub fn patient_letter(d: DVec3) -> char {
 /// The axis name of a world direction (`+X` ... `-Z`) for data without patient axes.
 pub fn axis_label(d: DVec3) -> &'static str {
     let a = d.abs();
-    match (a.x >= a.y && a.x >= a.z, a.y >= a.z, d.max_element() >= -d.min_element()) {
+    match (
+        a.x >= a.y && a.x >= a.z,
+        a.y >= a.z,
+        d.max_element() >= -d.min_element(),
+    ) {
         (true, _, true) => "+X",
         (true, _, false) => "-X",
         (false, true, true) => "+Y",
@@ -240,7 +244,13 @@ mod tests {
         let v: Vec<f32> = (0..24)
             .map(|n| (n % 4 + 10 * ((n / 4) % 3) + 100 * (n / 12)) as f32)
             .collect();
-        let g = Grid::new([4, 3, 2], [1.0; 3], [0.0; 3], Samples::F32(volux_core::grid::Buffer::owned(v))).unwrap();
+        let g = Grid::new(
+            [4, 3, 2],
+            [1.0; 3],
+            [0.0; 3],
+            Samples::F32(volux_core::grid::Buffer::owned(v)),
+        )
+        .unwrap();
         SliceVolume::of_grid(Arc::new(g))
     }
 

@@ -73,7 +73,12 @@ pub fn delete_point<T>(points: &mut Vec<T>, i: usize) -> bool {
 
 /// Window/level of the whole TF (colour and curve): positions shifted by `shift` and
 /// scaled by `scale` about `centre`.
-pub fn window_level(tf: &TransferFunction, centre: f64, shift: f64, scale: f64) -> TransferFunction {
+pub fn window_level(
+    tf: &TransferFunction,
+    centre: f64,
+    shift: f64,
+    scale: f64,
+) -> TransferFunction {
     let map = |s: f64| centre + (s - centre) * scale + shift;
     let mut out = tf.clone();
     out.color.iter_mut().for_each(|p| p[0] = map(p[0]));
@@ -102,10 +107,7 @@ pub struct TfEditor {
 enum Drag {
     Point(usize),
     Color(usize),
-    Window {
-        start: Pos2,
-        tf: TransferFunction,
-    },
+    Window { start: Pos2, tf: TransferFunction },
 }
 
 impl TfEditor {
@@ -217,7 +219,10 @@ impl TfEditor {
                     move_point(curve_mut(tf), i, x, y);
                     return true;
                 }
-                Some(Drag::Window { start, tf: original }) => {
+                Some(Drag::Window {
+                    start,
+                    tf: original,
+                }) => {
                     *tf = self.window_drag(rect, start, pos, &original);
                     return true;
                 }
@@ -286,7 +291,9 @@ impl TfEditor {
             return true;
         }
         if response.double_clicked() {
-            let c = tf.resolved([self.histogram.min, self.histogram.max]).color_at(x);
+            let c = tf
+                .resolved([self.histogram.min, self.histogram.max])
+                .color_at(x);
             let i = tf.color.partition_point(|p| p[0] <= x);
             tf.color.insert(i, [x, c[0], c[1], c[2]]);
             self.selected_color = Some(i);
@@ -336,7 +343,9 @@ impl TfEditor {
         let columns = strip.width().max(1.0) as usize;
         for c in 0..columns {
             let s = range[0] + (c as f64 + 0.5) / columns as f64 * (range[1] - range[0]);
-            let rgb = resolved.color_at(s).map(|v| (linear_to_srgb(v) * 255.0) as u8);
+            let rgb = resolved
+                .color_at(s)
+                .map(|v| (linear_to_srgb(v) * 255.0) as u8);
             let x = strip.left() + c as f32;
             painter.line_segment(
                 [Pos2::new(x, strip.top()), Pos2::new(x, strip.bottom())],
@@ -362,7 +371,12 @@ impl TfEditor {
             Stroke::new(1.5, Color32::from_rgb(255, 210, 80)),
         ));
         for p in points {
-            painter.circle(p, 4.0, Color32::from_rgb(255, 210, 80), Stroke::new(1.0, Color32::BLACK));
+            painter.circle(
+                p,
+                4.0,
+                Color32::from_rgb(255, 210, 80),
+                Stroke::new(1.0, Color32::BLACK),
+            );
         }
     }
 
@@ -381,7 +395,10 @@ impl TfEditor {
             let h = (f(*c) / top) as f32 * rect.height();
             let x = rect.left() + i as f32 * w;
             painter.rect_filled(
-                Rect::from_min_max(Pos2::new(x, rect.bottom() - h), Pos2::new(x + w, rect.bottom())),
+                Rect::from_min_max(
+                    Pos2::new(x, rect.bottom() - h),
+                    Pos2::new(x + w, rect.bottom()),
+                ),
                 0.0,
                 Color32::from_gray(70),
             );

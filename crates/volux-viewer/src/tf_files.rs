@@ -14,10 +14,15 @@ pub fn read(path: &Path) -> Result<TransferFunction, String> {
         .map_err(|e| format!("{shown}: {e}"))?
         .len();
     if len > MAX_TF_BYTES {
-        return Err(format!("{shown}: {len} bytes, more than a transfer function holds"));
+        return Err(format!(
+            "{shown}: {len} bytes, more than a transfer function holds"
+        ));
     }
     let text = std::fs::read_to_string(path).map_err(|e| format!("{shown}: {e}"))?;
-    let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy())
+        .unwrap_or_default();
     volux_core::transfer_import::import(&name, &text)
         .map(|imported| imported.tf)
         .map_err(|e| format!("{shown}: {e}"))

@@ -37,10 +37,15 @@ fn toolbar(app: &mut ViewerApp, ui: &mut egui::Ui) {
             reset_camera(app);
         }
         for v in StandardView::ALL {
-            if ui.button(v.label(medical)).on_hover_text("look from this side").clicked() {
+            if ui
+                .button(v.label(medical))
+                .on_hover_text("look from this side")
+                .clicked()
+            {
                 if let Some(b) = app.volume().map(|v| v.bounds()) {
                     let aspect = app.view_size.0 as f64 / app.view_size.1.max(1) as f64;
-                    app.scene.view.camera = navigation::standard_view(&app.scene.view.camera, v, &b, aspect);
+                    app.scene.view.camera =
+                        navigation::standard_view(&app.scene.view.camera, v, &b, aspect);
                 }
             }
         }
@@ -83,7 +88,9 @@ fn gestures(app: &mut ViewerApp, ui: &egui::Ui, response: &egui::Response) {
         reset_camera(app);
     }
     let pointer_down = ui.input(|i| i.pointer.any_down());
-    app.interacting = response.dragged() || (scroll != 0.0) || (pointer_down && response.is_pointer_button_down_on());
+    app.interacting = response.dragged()
+        || (scroll != 0.0)
+        || (pointer_down && response.is_pointer_button_down_on());
 }
 
 fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
@@ -91,9 +98,22 @@ fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
     if let Some(shown) = &app.shown {
         let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
         painter.image(shown.texture.id(), rect, uv, Color32::WHITE);
-        overlay(app, &painter, rect, &shown.frame.stats, shown.frame.full, shown.frame.divisor);
+        overlay(
+            app,
+            &painter,
+            rect,
+            &shown.frame.stats,
+            shown.frame.full,
+            shown.frame.divisor,
+        );
     } else if app.data.is_some() {
-        painter.text(rect.center(), Align2::CENTER_CENTER, "rendering…", FontId::proportional(16.0), Color32::GRAY);
+        painter.text(
+            rect.center(),
+            Align2::CENTER_CENTER,
+            "rendering…",
+            FontId::proportional(16.0),
+            Color32::GRAY,
+        );
     } else {
         painter.text(
             rect.center(),
@@ -111,8 +131,19 @@ fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
     }
 }
 
-fn overlay(app: &ViewerApp, painter: &egui::Painter, rect: Rect, stats: &FrameStats, full: bool, divisor: usize) {
-    let kind = if full { "full".to_string() } else { format!("preview 1/{divisor}") };
+fn overlay(
+    app: &ViewerApp,
+    painter: &egui::Painter,
+    rect: Rect,
+    stats: &FrameStats,
+    full: bool,
+    divisor: usize,
+) {
+    let kind = if full {
+        "full".to_string()
+    } else {
+        format!("preview 1/{divisor}")
+    };
     let text = format!(
         "{:.1} ms/frame · {:.1} fps · {kind}\n{}",
         stats.ms,
@@ -174,10 +205,18 @@ fn orientation_letters(app: &ViewerApp, painter: &egui::Painter, rect: Rect) {
     let m = 14.0;
     let c = rect.center();
     for (d, pos, align) in [
-        (right, Pos2::new(rect.right() - m, c.y), Align2::RIGHT_CENTER),
+        (
+            right,
+            Pos2::new(rect.right() - m, c.y),
+            Align2::RIGHT_CENTER,
+        ),
         (-right, Pos2::new(rect.left() + m, c.y), Align2::LEFT_CENTER),
         (up, Pos2::new(c.x, rect.top() + m), Align2::CENTER_TOP),
-        (-up, Pos2::new(c.x, rect.bottom() - m), Align2::CENTER_BOTTOM),
+        (
+            -up,
+            Pos2::new(c.x, rect.bottom() - m),
+            Align2::CENTER_BOTTOM,
+        ),
     ] {
         painter.text(pos, align, name(d), font.clone(), colour);
     }

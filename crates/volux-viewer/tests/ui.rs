@@ -20,15 +20,17 @@ fn harness(open: Option<PathBuf>) -> Harness<'static, App> {
         .with_max_steps(8)
         .build_state(
             move |ctx, app: &mut App| {
-                app.get_or_insert_with(|| ViewerApp::new(ctx, options.clone()))
-                    .frame(ctx)
+                app.get_or_insert_with(|| ViewerApp::new(ctx, options.clone()));
+                volux_viewer::window::frame(app.as_mut().unwrap(), ctx)
             },
             None,
         )
 }
 
 fn app<'a>(h: &'a Harness<'static, App>) -> &'a ViewerApp {
-    h.state().as_ref().expect("the app starts on the first step")
+    h.state()
+        .as_ref()
+        .expect("the app starts on the first step")
 }
 
 /// Steps the window until `done` holds (the render thread and loaders run meanwhile).
@@ -39,7 +41,10 @@ fn step_until(h: &mut Harness<'static, App>, what: &str, done: impl Fn(&ViewerAp
         if h.state().as_ref().is_some_and(&done) {
             return;
         }
-        assert!(start.elapsed() < Duration::from_secs(60), "timed out waiting for {what}");
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "timed out waiting for {what}"
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
 }
@@ -65,16 +70,35 @@ fn dragging_a_tf_control_point_changes_the_tf() {
     loaded_with_frame(&mut h);
     let tf = app(&h).scene.appearance.tf.clone();
     let curve = |tf: &volux_core::TransferFunction| {
-        if tf.extinction.is_empty() { tf.opacity.clone() } else { tf.extinction.clone() }
+        if tf.extinction.is_empty() {
+            tf.opacity.clone()
+        } else {
+            tf.extinction.clone()
+        }
     };
     let i = curve(&tf).len() / 2;
     let editor = app(&h).editor.as_ref().unwrap();
     let from = editor.point_position(&tf, i).unwrap();
     let to = Pos2::new(from.x + 12.0, from.y - 40.0);
-    drag(&mut h, from, to, egui::PointerButton::Primary, egui::Modifiers::NONE);
+    drag(
+        &mut h,
+        from,
+        to,
+        egui::PointerButton::Primary,
+        egui::Modifiers::NONE,
+    );
     let after = curve(&app(&h).scene.appearance.tf);
-    assert_eq!(after.len(), curve(&tf).len(), "a drag moves, it does not add");
-    assert!(after[i][1] > curve(&tf)[i][1], "{:?} -> {:?}", curve(&tf)[i], after[i]);
+    assert_eq!(
+        after.len(),
+        curve(&tf).len(),
+        "a drag moves, it does not add"
+    );
+    assert!(
+        after[i][1] > curve(&tf)[i][1],
+        "{:?} -> {:?}",
+        curve(&tf)[i],
+        after[i]
+    );
     assert!(after[i][0] > curve(&tf)[i][0] || i + 1 == after.len());
 }
 
@@ -88,13 +112,23 @@ fn drag(
 ) {
     h.hover_at(from);
     h.step();
-    h.event(egui::Event::PointerButton { pos: from, button, pressed: true, modifiers });
+    h.event(egui::Event::PointerButton {
+        pos: from,
+        button,
+        pressed: true,
+        modifiers,
+    });
     h.step();
     for k in 1..=6 {
         h.hover_at(from + (to - from) * (k as f32 / 6.0));
         h.step();
     }
-    h.event(egui::Event::PointerButton { pos: to, button, pressed: false, modifiers });
+    h.event(egui::Event::PointerButton {
+        pos: to,
+        button,
+        pressed: false,
+        modifiers,
+    });
     h.step();
     h.step();
 }
@@ -125,11 +159,20 @@ fn a_drag_in_the_3d_view_turns_the_camera() {
     loaded_with_frame(&mut h);
     let before = app(&h).scene.view.camera;
     let c = app(&h).view_rect.center();
-    drag(&mut h, c, c + egui::vec2(80.0, 0.0), egui::PointerButton::Primary, egui::Modifiers::NONE);
+    drag(
+        &mut h,
+        c,
+        c + egui::vec2(80.0, 0.0),
+        egui::PointerButton::Primary,
+        egui::Modifiers::NONE,
+    );
     let after = app(&h).scene.view.camera;
     assert_eq!(after.target, before.target, "an orbit keeps the target");
     let d0 = (before.eye - before.target).length();
-    assert!((after.eye - before.eye).length() > 0.1 * d0, "{before:?} -> {after:?}");
+    assert!(
+        (after.eye - before.eye).length() > 0.1 * d0,
+        "{before:?} -> {after:?}"
+    );
     assert!(((after.eye - after.target).length() - d0).abs() < 1e-9 * d0);
     // and the full frame of the new view follows
     loaded_with_frame(&mut h);
@@ -174,5 +217,8 @@ fn a_session_with_a_missing_dataset_says_so() {
     let mut h2 = harness(Some(session));
     step_until(&mut h2, "the error", |a| a.error.is_some());
     let message = app(&h2).error.clone().unwrap();
-    assert!(message.contains("ml.raw") && message.contains("no such file"), "{message}");
+    assert!(
+        message.contains("ml.raw") && message.contains("no such file"),
+        "{message}"
+    );
 }

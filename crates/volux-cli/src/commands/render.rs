@@ -23,7 +23,10 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
         return super::session::run(args, session, show);
     }
     let plan = RenderPlan::new(args)?;
-    let file = args.file.as_deref().ok_or("give the file to render, or --session S.json")?;
+    let file = args
+        .file
+        .as_deref()
+        .ok_or("give the file to render, or --session S.json")?;
     let (data, format) = super::common::load(file, &args.load, show)?;
     let loaded_grid = matches!(data, Dataset::Grid(_));
     let volume = crate::settings::volume(data, args)?;

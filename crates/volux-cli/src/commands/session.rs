@@ -15,7 +15,11 @@ const WITH_SESSION: [&str; 2] = ["session", "output"];
 
 /// Renders the session at `path` to `args.output()`.
 pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
-    if let Some(o) = args.given.iter().find(|g| !WITH_SESSION.contains(&g.as_str())) {
+    if let Some(o) = args
+        .given
+        .iter()
+        .find(|g| !WITH_SESSION.contains(&g.as_str()))
+    {
         return Err(format!(
             "--{o} does not go with --session: the session holds the whole scene \
              (open it in volux-view to change it)"
@@ -32,9 +36,8 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
         series: d.series_uid.clone(),
         array: d.array.clone(),
     };
-    let (data, _) = super::common::load(&d.path, &load, show).map_err(|e| {
-        format!("session {}: its dataset: {e}", path.display())
-    })?;
+    let (data, _) = super::common::load(&d.path, &load, show)
+        .map_err(|e| format!("session {}: its dataset: {e}", path.display()))?;
     let mut volume = crate::settings::plain_volume(data)?;
     let mesh_method = matches!(
         session.method,
@@ -44,7 +47,10 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
         volume = volume.to_tets()?;
     }
     let scene = session.scene();
-    scene.method.resolve(&volume)?.check_appearance(&scene.appearance)?;
+    scene
+        .method
+        .resolve(&volume)?
+        .check_appearance(&scene.appearance)?;
     let frame = super::render::render(&volume, &scene, show)?;
     frame
         .image
