@@ -152,7 +152,10 @@ impl Session {
             None => return Err(fail("no \"volux_session\" version: not a session".into())),
         }
         let session: Session = serde_json::from_value(value).map_err(|e| fail(e.to_string()))?;
-        session.scene().validate().map_err(|e| fail(e.to_string()))?;
+        session
+            .scene()
+            .validate()
+            .map_err(|e| fail(e.to_string()))?;
         session
             .method
             .check_appearance(&session.appearance)
@@ -265,10 +268,16 @@ mod tests {
     fn refuses_what_it_cannot_reproduce() {
         let good = Session::new(DatasetRef::default(), &scene(), None).to_json();
         let cases = [
-            (good.replace("\"volux_session\": 1", "\"volux_session\": 2"), "version 2"),
+            (
+                good.replace("\"volux_session\": 1", "\"volux_session\": 2"),
+                "version 2",
+            ),
             ("{\"color\": []}".to_string(), "not a session"),
             (good.replace("\"width\": 40", "\"width\": 0"), "image size"),
-            (good.replace("\"mip\": false", "\"mip\": false, \"x\": 1"), "unknown field"),
+            (
+                good.replace("\"mip\": false", "\"mip\": false, \"x\": 1"),
+                "unknown field",
+            ),
             ("{".to_string(), "not JSON"),
         ];
         for (text, expected) in cases {

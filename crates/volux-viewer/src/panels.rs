@@ -38,6 +38,9 @@ fn menu(app: &mut ViewerApp, ui: &mut egui::Ui) {
             ui.add(egui::DragValue::new(&mut app.export_size.0).range(16..=16384));
             ui.label("x");
             ui.add(egui::DragValue::new(&mut app.export_size.1).range(16..=16384));
+            if ui.small_button("window size").clicked() {
+                app.export_size = app.view_size;
+            }
             if ui.button("Save session…").clicked() {
                 app.open_dialog(Purpose::SaveSession);
             }

@@ -1,8 +1,10 @@
 //! The render thread: progressive refinement off the UI thread.
 //!
 //! The window hands each new scene to [`RenderService::submit`] and never waits. The thread
-//! keeps only the newest request (a mailbox, not a queue), cancels the frame in flight when a
-//! newer one arrives (the engine's [`Control::cancel`]), and answers each request with a
+//! keeps only the newest request (a mailbox, not a queue). A newer request cancels a full
+//! frame in flight (the engine's [`Control::cancel`]) but lets a preview finish: inputs come
+//! faster than previews render, and cancelling them would show nothing while the user drags.
+//! Each request is answered with a
 //! reduced-resolution **preview** first (sized so that it takes about
 //! [`PREVIEW_BUDGET_MS`]), then, once the user stops interacting, the **full** frame with the
 //! scene's own integrator (for adaptive integration, the error-controlled one). Renderers are
@@ -87,6 +89,8 @@ struct Mailbox {
     slot: Mutex<Option<Request>>,
     ready: Condvar,
     closed: AtomicBool,
+    /// The thread is rendering a full frame (which a newer request cancels).
+    full_in_flight: AtomicBool,
 }
 
 /// The render thread, its mailbox and the frames it sends back.
@@ -131,7 +135,9 @@ impl RenderService {
         self.generation += 1;
         let cancel = Arc::new(AtomicBool::new(false));
         let previous = std::mem::replace(&mut *lock(&self.in_flight), cancel.clone());
-        previous.store(true, Ordering::Relaxed);
+        if self.mailbox.full_in_flight.load(Ordering::SeqCst) {
+            previous.store(true, Ordering::SeqCst);
+        }
         let request = Request {
             volume: volume.clone(),
             scene: scene.clone(),
@@ -231,10 +237,16 @@ impl Worker {
             }
             self.previewed = Some((request.volume.id, request.scene.clone()));
         }
+        // Flag the full frame before looking for newer requests, so that a request arriving
+        // in between either is seen here or cancels the frame.
+        self.mailbox.full_in_flight.store(true, Ordering::SeqCst);
         if request.interacting || divisor == 1 || self.newer_waiting() {
+            self.mailbox.full_in_flight.store(false, Ordering::SeqCst);
             return;
         }
-        match self.render(&request, 1) {
+        let result = self.render(&request, 1);
+        self.mailbox.full_in_flight.store(false, Ordering::SeqCst);
+        match result {
             Ok(()) | Err(RenderError::Cancelled) => {}
             Err(e) => self.fail(&request, e),
         }
