@@ -194,12 +194,31 @@ impl Session {
         Ok(session)
     }
 
-    /// Writes the session (to a temporary name, then renamed).
+    /// Writes the session (to a temporary name, then renamed). The dataset path, relative
+    /// to the working folder in memory, is written relative to the session's folder when
+    /// the dataset lies inside it (the two move together), absolute otherwise.
     pub fn save(&self, path: &Path) -> Result<(), RenderError> {
-        write_atomically(path, self.to_json().as_bytes()).map_err(|e| RenderError::Session {
+        let mut saved = self.clone();
+        saved.dataset.path = path_for_session(&self.dataset.path, path);
+        write_atomically(path, saved.to_json().as_bytes()).map_err(|e| RenderError::Session {
             path: path.display().to_string(),
             reason: e.to_string(),
         })
+    }
+}
+
+/// `dataset` (relative to the working folder) as a session file at `session` names it.
+fn path_for_session(dataset: &Path, session: &Path) -> PathBuf {
+    let cwd = std::env::current_dir().unwrap_or_default();
+    let absolute = |p: &Path| {
+        let p = if p.is_relative() { cwd.join(p) } else { p.to_path_buf() };
+        p.canonicalize().unwrap_or(p)
+    };
+    let data = absolute(dataset);
+    let folder = absolute(session.parent().unwrap_or(Path::new("")));
+    match data.strip_prefix(&folder) {
+        Ok(inside) => inside.to_path_buf(),
+        Err(_) => data,
     }
 }
 
@@ -249,18 +268,28 @@ mod tests {
         assert_eq!(back.scene(), scene());
     }
 
-    /// A relative dataset path is taken from the session file's folder.
+    /// A dataset beside the session is saved relative to it (they move together), one
+    /// elsewhere absolute; loading resolves both.
     #[test]
     fn relative_paths_follow_the_session_file() {
         let dir = tempfile::tempdir().unwrap();
-        let dataset = DatasetRef {
-            path: "head.nrrd".into(),
-            ..Default::default()
-        };
-        let file = dir.path().join("view.json");
-        Session::new(dataset, &scene(), None).save(&file).unwrap();
-        let back = Session::load(&file).unwrap();
-        assert_eq!(back.dataset.path, dir.path().join("head.nrrd"));
+        let root = dir.path().canonicalize().unwrap();
+        std::fs::create_dir(root.join("s")).unwrap();
+        for (data, written) in [
+            (root.join("s/data/head.nrrd"), "data/head.nrrd".into()),
+            (root.join("head.nrrd"), root.join("head.nrrd")),
+        ] {
+            let dataset = DatasetRef {
+                path: data.clone(),
+                ..Default::default()
+            };
+            let file = root.join("s/view.json");
+            Session::new(dataset, &scene(), None).save(&file).unwrap();
+            let text = std::fs::read_to_string(&file).unwrap();
+            let raw: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert_eq!(raw["dataset"]["path"], written.display().to_string());
+            assert_eq!(Session::load(&file).unwrap().dataset.path, data);
+        }
     }
 
     /// Other versions, unknown fields, invalid scenes and non-sessions are named errors.

@@ -268,7 +268,9 @@ impl ViewerApp {
         self.scene = s.scene();
         self.scene.appearance.tf = in_value_space(&s.appearance.tf, self.range());
         self.background = s.background.unwrap_or(BACKGROUND);
-        if self.options.size.is_none() {
+        // A screenshot of a session is taken at its size (the batch render's); on screen the
+        // view follows the window.
+        if self.options.screenshot.is_some() && self.options.size.is_none() {
             self.options.size = Some((s.width, s.height));
         }
         if let Some(sl) = s.slices {
