@@ -211,7 +211,11 @@ impl Session {
 fn path_for_session(dataset: &Path, session: &Path) -> PathBuf {
     let cwd = std::env::current_dir().unwrap_or_default();
     let absolute = |p: &Path| {
-        let p = if p.is_relative() { cwd.join(p) } else { p.to_path_buf() };
+        let p = if p.is_relative() {
+            cwd.join(p)
+        } else {
+            p.to_path_buf()
+        };
         p.canonicalize().unwrap_or(p)
     };
     let data = absolute(dataset);

@@ -522,6 +522,7 @@ impl ViewerApp {
             return;
         }
         if self.load_job.is_none() && self.data.is_none() && self.error.is_some() {
+            eprintln!("volux-view: {}", self.error.as_deref().unwrap_or_default());
             self.finished = true;
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
             return;
