@@ -162,7 +162,12 @@ impl ViewerApp {
             self.pending_session = None;
             return;
         }
-        let label = format!("loading {}", dataset::title_name(&source.path));
+        let size = std::fs::metadata(&source.path)
+            .ok()
+            .filter(|m| m.is_file())
+            .map(|m| format!(", {}", volux_core::units::format_bytes(m.len())))
+            .unwrap_or_default();
+        let label = format!("loading {}{size}", dataset::title_name(&source.path));
         self.load_job = Some(Job::spawn(label, move || dataset::load(&source)));
     }
 
@@ -521,7 +526,8 @@ impl ViewerApp {
         if self.finished {
             return;
         }
-        if self.load_job.is_none() && self.data.is_none() && self.error.is_some() {
+        // A file that cannot be read, or a scene that cannot be rendered: say so and stop.
+        if !self.busy() && self.error.is_some() {
             eprintln!("volux-view: {}", self.error.as_deref().unwrap_or_default());
             self.finished = true;
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
