@@ -240,8 +240,9 @@ pub struct RenderArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub elevation: Option<f64>,
     /// A named view: front, back, left, right (the camera on -y, +y, -x, +x, z up), top,
-    /// bottom (on +z, -z, y up); --azimuth and --elevation turn from it. Axis directions:
-    /// Volux does not yet apply a scan's patient orientation.
+    /// bottom (on +z, -z, y up); --azimuth and --elevation turn from it. The world is LPS
+    /// (+x left, +y posterior, +z superior), scans placed by their orientation: front faces
+    /// the patient's face.
     #[arg(long, value_enum)]
     pub view: Option<ViewArg>,
     /// Up direction X,Y,Z of the orbit camera (default 0,0,1; e.g. 0,0,-1 for scans stored

@@ -44,6 +44,15 @@ pub struct Shown {
     pub frame: Rendered,
 }
 
+/// What was last handed to the render thread.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Submitted {
+    volume: u64,
+    pub(crate) scene: Scene,
+    interacting: bool,
+    background: [f32; 3],
+}
+
 /// The viewer.
 pub struct ViewerApp {
     pub(crate) ctx: egui::Context,
@@ -72,7 +81,7 @@ pub struct ViewerApp {
     pub(crate) shown: Option<Shown>,
     pub(crate) slice_textures: Vec<Option<egui::TextureHandle>>,
     pub(crate) slices_key: Option<(u64, [f64; 2], [usize; 3])>,
-    pub(crate) submitted: Option<(u64, Scene, bool)>,
+    pub(crate) submitted: Option<Submitted>,
     pub(crate) interacting: bool,
     pub(crate) frame_times: VecDeque<Instant>,
     /// Size of the 3D view in pixels.
@@ -332,12 +341,15 @@ impl ViewerApp {
         let Some(volume) = data.volume_for(mesh_method).cloned() else {
             return;
         };
-        let same = self.submitted.as_ref().is_some_and(|(id, s, interacting)| {
-            *id == volume.id && *s == scene && *interacting == self.interacting
-        });
+        let now = Submitted {
+            volume: volume.id,
+            scene: scene.clone(),
+            interacting: self.interacting,
+            background: self.background,
+        };
         // Once the drag ends, the same scene is asked for again without `interacting`, and
         // the full frame follows the preview.
-        if same {
+        if self.submitted.as_ref() == Some(&now) {
             return;
         }
         if let Err(e) = scene
@@ -346,11 +358,12 @@ impl ViewerApp {
             .and_then(|m| m.check_appearance(&scene.appearance))
         {
             self.error = Some(e.to_string());
-            self.submitted = Some((volume.id, scene, self.interacting));
+            self.submitted = Some(now);
             return;
         }
+        self.service.set_background(self.background);
         self.service.submit(&volume, &scene, self.interacting);
-        self.submitted = Some((volume.id, scene, self.interacting));
+        self.submitted = Some(now);
     }
 
     /// Shows the frames the render thread finished.
@@ -361,12 +374,8 @@ impl ViewerApp {
                     if f.generation != self.service.generation() && self.shown.is_some() {
                         continue;
                     }
-                    let image = &f.image;
-                    let rgba = image.to_srgba8(self.background);
-                    let color = egui::ColorImage::from_rgba_unmultiplied(
-                        [image.width(), image.height()],
-                        &rgba,
-                    );
+                    let size = [f.image.width(), f.image.height()];
+                    let color = egui::ColorImage::from_rgba_unmultiplied(size, &f.display);
                     let texture = ctx.load_texture("volux-3d", color, egui::TextureOptions::LINEAR);
                     self.frame_times.push_back(Instant::now());
                     while self.frame_times.len() > 30 {
@@ -534,7 +543,7 @@ impl ViewerApp {
             return;
         }
         let Some(shown) = &self.shown else { return };
-        let current = self.submitted.as_ref().map(|s| &s.1);
+        let current = self.submitted.as_ref().map(|s| &s.scene);
         if !shown.frame.full
             || shown.frame.generation != self.service.generation()
             || current != Some(&shown.frame.scene)
@@ -543,7 +552,7 @@ impl ViewerApp {
             return;
         }
         let png = PngOptions {
-            background: Some(self.background),
+            background: Some(shown.frame.background),
             sixteen_bit: false,
         };
         let result = shown

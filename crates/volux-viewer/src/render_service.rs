@@ -55,6 +55,11 @@ struct Request {
 pub struct Rendered {
     /// The picture.
     pub image: Image,
+    /// The picture over [`Rendered::background`] as 8-bit sRGB RGBA, ready for the screen
+    /// (converted on the render thread: the window only uploads it).
+    pub display: Vec<u8>,
+    /// The background it was composited over.
+    pub background: [f32; 3],
     /// The engine's figures of the frame.
     pub stats: FrameStats,
     /// The request it answers ([`RenderService::submit`]'s number).
@@ -87,6 +92,7 @@ pub enum Event {
 #[derive(Default)]
 struct Mailbox {
     slot: Mutex<Option<Request>>,
+    background: Mutex<[f32; 3]>,
     ready: Condvar,
     closed: AtomicBool,
     /// The thread is rendering a full frame (which a newer request cancels).
@@ -149,6 +155,11 @@ impl RenderService {
         *lock(&self.mailbox.slot) = Some(request);
         self.mailbox.ready.notify_one();
         self.generation
+    }
+
+    /// The colour frames are composited over for the screen (from the next frame on).
+    pub fn set_background(&self, background: [f32; 3]) {
+        *lock(&self.mailbox.background) = background;
     }
 
     /// The number of the newest request.
@@ -289,7 +300,10 @@ impl Worker {
             let px = (frame.stats.pixels.max(1)) as f64;
             self.ns_per_pixel = Some(frame.stats.ms * 1e6 / px);
         }
+        let background = *lock(&self.mailbox.background);
         let rendered = Rendered {
+            display: frame.image.to_srgba8(background),
+            background,
             image: frame.image,
             stats: frame.stats,
             generation: request.generation,

@@ -89,7 +89,10 @@ const CAMERA_HELP: &str = r#"Cameras (--camera FILE.json, or the orbit options o
 
 Orbit form: angles around the centre of what is framed.
   {"projection": "perspective", "fov_y_deg": 30, "azimuth": 30, "elevation": 15, "zoom": 1.2}
-Look-at form: positions in world units (the data's coordinates, e.g. mm).
+Look-at form: positions in world units (the data's coordinates, e.g. mm). The world is
+LPS, as DICOM and ITK (+x the patient's left, +y posterior, +z superior); scans that carry
+an orientation (NIfTI, DICOM, NRRD, MetaImage, VTI) are placed in it by their direction
+matrix, so a camera means the same view whichever way the slices were stored.
   {"projection": "orthographic", "eye": [0, -500, 0], "target": [0, 0, 0], "up": [0, 0, 1]}
 
 Fields (all optional):
@@ -106,7 +109,7 @@ Fields (all optional):
 A file with only a few slices in z (a thin slab) and no angles is seen along z.
 
 Without --camera, `volux render` builds the orbit camera from --view front|back|left|right|
-top|bottom (axis directions: front puts the camera on -y, top on +z with y up), --azimuth,
+top|bottom (front puts the camera on -y, facing the patient's face; top on +z with y up), --azimuth,
 --elevation (degrees, turning from the view), --up X,Y,Z, --zoom and --orthographic, and
 fits the framed box to the image. --frame visible (default) frames what the transfer
 function and isosurfaces show; --frame all the whole bounding box. A camera file is used as
