@@ -37,6 +37,7 @@ pub mod nifti;
 pub mod nrrd;
 pub mod off;
 pub mod plot3d;
+pub mod progress;
 pub mod raw;
 pub mod slc;
 pub mod util;

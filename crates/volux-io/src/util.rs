@@ -119,7 +119,7 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>> {
     }
     volux_core::limits::check_alloc("file", len, 1).map_err(|e| ReadError::new(path, e))?;
     let mut out = Vec::with_capacity(len as usize);
-    let got = file
+    let got = crate::progress::counted(file, len)
         .take(limit.saturating_add(1))
         .read_to_end(&mut out)
         .map_err(|e| io_error(path, e))? as u64;
@@ -206,7 +206,7 @@ pub fn read_to_limit(
     why: impl FnOnce() -> String,
 ) -> Result<Vec<u8>> {
     let mut out = Vec::with_capacity(limit.min(FIRST_CHUNK) as usize);
-    let got = reader
+    let got = crate::progress::counted(reader, 0)
         .take(limit.saturating_add(1))
         .read_to_end(&mut out)
         .map_err(|e| io_error(path, e))? as u64;
@@ -224,10 +224,10 @@ pub fn read_to_limit(
 /// allocated; a short stream is [`ErrorKind::Truncated`]. Memory grows with what is actually
 /// read (from a first chunk of a few MiB), so a lying header cannot make us allocate more than
 /// the data holds plus one chunk.
-pub fn read_exact_checked(path: &Path, mut reader: impl Read, expected: u64) -> Result<Vec<u8>> {
+pub fn read_exact_checked(path: &Path, reader: impl Read, expected: u64) -> Result<Vec<u8>> {
     volux_core::limits::check_alloc("data", expected, 1).map_err(|e| ReadError::new(path, e))?;
     let mut out = Vec::with_capacity(expected.min(FIRST_CHUNK) as usize);
-    let got = (&mut reader)
+    let got = crate::progress::counted(reader, expected)
         .take(expected)
         .read_to_end(&mut out)
         .map_err(|e| io_error(path, e))? as u64;

@@ -4,12 +4,14 @@
 //! waits for a render or a file.
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use eframe::egui;
 use glam::DVec3;
 use volux_core::image::PngOptions;
 use volux_core::{Camera, TransferFunction};
+use volux_io::progress::{with_progress, LoadProgress};
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::session::{DatasetRef, Session, SliceState};
 
@@ -60,6 +62,8 @@ pub struct ViewerApp {
     /// The dataset on screen.
     pub data: Option<Loaded>,
     pub(crate) load_job: Option<Job<Loaded>>,
+    /// Bytes read by the running load, and its cancel flag.
+    pub(crate) load_progress: Option<Arc<LoadProgress>>,
     pub(crate) split_job: Option<(Job<Loaded>, Method)>,
     pub(crate) export_job: Option<Job<String>>,
     /// The error shown in the window (the viewer stays usable).
@@ -114,6 +118,7 @@ impl ViewerApp {
             service,
             data: None,
             load_job: None,
+            load_progress: None,
             split_job: None,
             export_job: None,
             error: None,
@@ -177,11 +182,18 @@ impl ViewerApp {
             .map(|m| format!(", {}", volux_core::units::format_bytes(m.len())))
             .unwrap_or_default();
         let label = format!("loading {}{size}", dataset::title_name(&source.path));
-        self.load_job = Some(Job::spawn(label, move || dataset::load(&source)));
+        let progress = LoadProgress::new();
+        self.load_progress = Some(progress.clone());
+        self.load_job = Some(Job::spawn(label, move || {
+            with_progress(progress, || dataset::load(&source))
+        }));
     }
 
     /// Drops the running load: the window is free at once.
     pub fn cancel_load(&mut self) {
+        if let Some(p) = self.load_progress.take() {
+            p.cancel();
+        }
         self.load_job = None;
         self.pending_session = None;
         self.status = Some("loading cancelled".into());
@@ -205,6 +217,7 @@ impl ViewerApp {
         if let Some(job) = &mut self.load_job {
             if let Poll::Done(r) = job.poll() {
                 self.load_job = None;
+                self.load_progress = None;
                 match r {
                     Ok(loaded) => self.set_data(loaded),
                     Err(e) => {

@@ -46,7 +46,15 @@ fn menu(app: &mut ViewerApp, ui: &mut egui::Ui) {
             }
         });
         if let Some(job) = &app.load_job {
-            ui.spinner();
+            match app.load_progress.as_ref().and_then(|p| p.fraction()) {
+                Some(f) => {
+                    let bar = egui::ProgressBar::new(f as f32).desired_width(160.0);
+                    ui.add(bar.show_percentage());
+                }
+                None => {
+                    ui.spinner();
+                }
+            }
             ui.label(format!(
                 "{} ({:.1} s)",
                 job.label,

@@ -222,3 +222,19 @@ fn a_session_with_a_missing_dataset_says_so() {
         "{message}"
     );
 }
+
+/// Cancelling a load frees the window at once; the next file opens.
+#[test]
+fn a_load_can_be_cancelled() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = small_grid(dir.path());
+    let mut h = harness(Some(path.clone()));
+    h.step();
+    let a = h.state_mut().as_mut().unwrap();
+    assert!(a.busy(), "loading runs in the background");
+    a.cancel_load();
+    assert!(!a.busy() && a.data.is_none());
+    assert_eq!(a.status.as_deref(), Some("loading cancelled"));
+    a.open(&path);
+    loaded_with_frame(&mut h);
+}
