@@ -59,7 +59,10 @@ use serde_json::{Map, Value};
 use crate::error::{Error, Result};
 use crate::transfer::{Space, TransferFunction};
 
+mod blend;
 mod color_space;
+
+use blend::Blend;
 pub use color_space::{vtk_color_value, ColorSpace, VtkColorNode};
 
 /// The most control points one imported function may hold.
@@ -162,30 +165,12 @@ pub fn vtk_piecewise_value(nodes: &[VtkNode], x: f64) -> f64 {
 
 /// The VTK curve between nodes `a` and `b` at `x` (see [`vtk_piecewise_value`]).
 fn segment_value(a: &VtkNode, b: &VtkNode, x: f64) -> f64 {
-    let s = midpoint_position(a, b, x);
-    let (y1, y2, sharp) = (a.y, b.y, a.sharpness);
-    if sharp > 0.99 {
-        return if s < 0.5 { y1 } else { y2 };
+    let blend = Blend::new(midpoint_position(a, b, x), a.sharpness);
+    let v = blend.mix(a.y, b.y);
+    match blend {
+        Blend::Hermite { .. } => v.clamp(a.y.min(b.y), a.y.max(b.y)),
+        _ => v,
     }
-    if sharp < 0.01 {
-        return (1.0 - s) * y1 + s * y2;
-    }
-    let p = 1.0 + 10.0 * sharp;
-    let s = if s < 0.5 {
-        0.5 * (s * 2.0).powf(p)
-    } else if s > 0.5 {
-        1.0 - 0.5 * ((1.0 - s) * 2.0).powf(p)
-    } else {
-        s
-    };
-    let (ss, sss) = (s * s, s * s * s);
-    let h1 = 2.0 * sss - 3.0 * ss + 1.0;
-    let h2 = -2.0 * sss + 3.0 * ss;
-    let h3 = sss - 2.0 * ss + s;
-    let h4 = sss - ss;
-    let t = (1.0 - sharp) * (y2 - y1);
-    let v = h1 * y1 + h2 * y2 + h3 * t + h4 * t;
-    v.clamp(y1.min(y2), y1.max(y2))
 }
 
 /// The position in segment `a`-`b`, moved so that the midpoint (kept in [1e-5, 1 - 1e-5]

@@ -78,6 +78,13 @@ fn dataset(dir: &Path) -> PathBuf {
     path
 }
 
+/// Runs `cmd`, which must succeed (its stderr shown otherwise).
+fn succeed(cmd: &mut Command) {
+    let out = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{cmd:?}: {err}");
+}
+
 /// `--screenshot` writes the fully refined frame, and the session it saves renders in
 /// batch (`volux render --session`) to the same picture within 1/255.
 #[test]
@@ -90,38 +97,20 @@ fn screenshot_equals_the_batch_render_of_its_session() {
         dir.path().join("s.json"),
         dir.path().join("batch.png"),
     );
-    let out = Command::new(VIEWER)
-        .arg(&data)
-        .args(["--screenshot", shot.to_str().unwrap(), "--size", "200x150"])
-        .args(["--save-session", session.to_str().unwrap()])
-        .env("DISPLAY", &d.name)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        Command::new(VIEWER)
+            .arg(&data)
+            .args(["--screenshot", shot.to_str().unwrap(), "--size", "200x150"])
+            .args(["--save-session", session.to_str().unwrap()])
+            .env("DISPLAY", &d.name),
     );
     let volux = Path::new(VIEWER).with_file_name("volux");
     if !volux.is_file() {
         eprintln!("skipped the batch half: {} is not built", volux.display());
         return;
     }
-    let out = Command::new(&volux)
-        .args([
-            "render",
-            "--session",
-            session.to_str().unwrap(),
-            "-o",
-            batch.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (session, batch_name) = (session.to_str().unwrap(), batch.to_str().unwrap());
+    succeed(Command::new(&volux).args(["render", "--session", session, "-o", batch_name]));
     let (a, b) = (png_rgb(&shot), png_rgb(&batch));
     assert_eq!((a.0, a.1), (200, 150));
     assert_eq!((a.0, a.1), (b.0, b.1));
@@ -193,8 +182,12 @@ fn drag_check(display: &str, dir: &Path) {
     let before = settled(display, dir, region, "first");
     assert!(spread(&before) > 20, "the render region is blank");
     let (cx, cy) = ((region.0 + region.2) / 2, (region.1 + region.3) / 2);
+    // The pointer enters first, in a frame of its own, so that the press lands on a
+    // hovered view (as a hand would), then the press in another frame.
     xdotool(&["mousemove", &cx.to_string(), &cy.to_string()]);
+    std::thread::sleep(Duration::from_millis(300));
     xdotool(&["mousedown", "1"]);
+    std::thread::sleep(Duration::from_millis(100));
     for k in 1..=10 {
         xdotool(&[
             "mousemove",
@@ -204,20 +197,25 @@ fn drag_check(display: &str, dir: &Path) {
         std::thread::sleep(Duration::from_millis(30));
     }
     xdotool(&["mouseup", "1"]);
-    let after = settled(display, dir, region, "after the drag");
-    let changed = before
-        .iter()
-        .zip(&after)
-        .filter(|(a, b)| a.abs_diff(**b) > 8)
-        .count();
-    eprintln!(
-        "{changed} of {} channel values changed by the drag",
-        before.len()
-    );
-    assert!(
-        changed > before.len() / 50,
-        "the drag did not change the render"
-    );
+    let changed = |a: &[u8]| {
+        before
+            .iter()
+            .zip(a)
+            .filter(|(x, y)| x.abs_diff(**y) > 8)
+            .count()
+    };
+    // The full frame of the new view comes after the previews: wait for a settled picture
+    // that differs (or time out and fail).
+    let start = Instant::now();
+    let after = loop {
+        let after = settled(display, dir, region, "after the drag");
+        if changed(&after) > before.len() / 50 || start.elapsed() > Duration::from_secs(30) {
+            break after;
+        }
+    };
+    let n = changed(&after);
+    eprintln!("{n} of {} channel values changed by the drag", before.len());
+    assert!(n > before.len() / 50, "the drag did not change the render");
 }
 
 /// Screenshots the region until two in a row agree (the full frame is on screen).

@@ -2,6 +2,7 @@
 //! `Rendering/Core/vtkColorTransferFunction.cxx`) in its colour spaces, with the conversions
 //! of `vtkMath` (`Common/Core/vtkMath.cxx`). All colours are VTK display values (sRGB-encoded
 //! RGB in 0..1).
+use super::blend::Blend;
 use std::f64::consts::PI;
 
 /// A `vtkColorTransferFunction` colour space, as ParaView names it in presets.
@@ -83,32 +84,22 @@ pub(super) fn segment_color(
     } else {
         0.5 + 0.5 * (s - m) / (1.0 - m)
     };
-    let sharp = a.sharpness;
-    if sharp > 0.99 {
-        return if s < 0.5 { a.rgb } else { b.rgb };
-    }
-    if sharp < 0.01 {
+    let blend = Blend::new(s, a.sharpness);
+    let mixed = |p: f64, q: f64| blend.mix(p, q);
+    match blend {
+        Blend::Step { right } => {
+            if right {
+                b.rgb
+            } else {
+                a.rgb
+            }
+        }
         // VTK does not clamp this branch; every conversion back to RGB stays in 0..1.
-        return interpolate(space, s, &a.rgb, &b.rgb, |p, q| (1.0 - s) * p + s * q);
+        Blend::Linear { .. } => interpolate(space, blend.position(), &a.rgb, &b.rgb, mixed),
+        Blend::Hermite { .. } => {
+            interpolate(space, blend.position(), &a.rgb, &b.rgb, mixed).map(|c| c.clamp(0.0, 1.0))
+        }
     }
-    let p = 1.0 + 10.0 * sharp;
-    let s = if s < 0.5 {
-        0.5 * (s * 2.0).powf(p)
-    } else if s > 0.5 {
-        1.0 - 0.5 * ((1.0 - s) * 2.0).powf(p)
-    } else {
-        s
-    };
-    let (ss, sss) = (s * s, s * s * s);
-    let h1 = 2.0 * sss - 3.0 * ss + 1.0;
-    let h2 = -2.0 * sss + 3.0 * ss;
-    let h3 = sss - 2.0 * ss + s;
-    let h4 = sss - ss;
-    let hermite = |p: f64, q: f64| {
-        let t = (1.0 - sharp) * (q - p);
-        h1 * p + h2 * q + h3 * t + h4 * t
-    };
-    interpolate(space, s, &a.rgb, &b.rgb, hermite).map(|c| c.clamp(0.0, 1.0))
 }
 
 /// Colour between `rgb1` and `rgb2` in `space`, `mix` blending one coordinate (linear or
