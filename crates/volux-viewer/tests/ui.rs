@@ -228,11 +228,14 @@ fn a_session_with_a_missing_dataset_says_so() {
 fn a_load_can_be_cancelled() {
     let dir = tempfile::tempdir().unwrap();
     let path = small_grid(dir.path());
-    let mut h = harness(Some(path.clone()));
+    let mut h = harness(None);
     h.step();
     let a = h.state_mut().as_mut().unwrap();
+    a.open(&path);
     assert!(a.busy(), "loading runs in the background");
     a.cancel_load();
+    h.step();
+    let a = h.state_mut().as_mut().unwrap();
     assert!(!a.busy() && a.data.is_none());
     assert_eq!(a.status.as_deref(), Some("loading cancelled"));
     a.open(&path);
