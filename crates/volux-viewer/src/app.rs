@@ -12,6 +12,7 @@ use glam::DVec3;
 use volux_core::image::PngOptions;
 use volux_core::{Camera, TransferFunction};
 use volux_io::progress::{with_progress, LoadProgress};
+use volux_render::framing::visible_bounds;
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::session::{DatasetRef, Session, SliceState};
 
@@ -236,7 +237,13 @@ impl ViewerApp {
                         self.data = Some(loaded);
                         self.scene.method = method;
                     }
-                    Err(e) => self.error = Some(e),
+                    Err(e) => {
+                        // Back to the volume's own method, or the next frame would split again.
+                        if let Some(v) = self.volume().cloned() {
+                            self.scene.method = Method::Auto.resolve(&v).unwrap_or(Method::Auto);
+                        }
+                        self.error = Some(format!("cannot split into tetrahedra: {e}"));
+                    }
                 }
             }
         }
@@ -260,13 +267,13 @@ impl ViewerApp {
             .preset_tf("auto")
             .map(|tf| in_value_space(&tf, range))
             .unwrap_or_else(|_| self.scene.appearance.tf.clone());
-        let aspect = self.view_size.0 as f64 / self.view_size.1.max(1) as f64;
         self.scene = Scene::new(
-            navigation::home(&volume.bounds(), aspect),
+            self.scene.view.camera,
             self.view_size.0,
             self.view_size.1,
             tf,
         );
+        self.scene.view.camera = self.home_camera(&volume);
         self.scene.method = Method::Auto.resolve(&volume).unwrap_or(Method::Auto);
         self.window = [
             loaded.histogram.quantile(0.01),
@@ -307,6 +314,36 @@ impl ViewerApp {
         if let Some(e) = &mut self.editor {
             e.fit_height(&self.scene.appearance.tf);
         }
+    }
+
+    /// Switches the method; a grid is split into tetrahedra first, on a job thread, for the
+    /// mesh methods (the method applies once the split is done).
+    pub fn set_method(&mut self, method: Method) {
+        let Some(data) = &self.data else { return };
+        let mesh_method = matches!(
+            method,
+            Method::ProjectedTetrahedra(_) | Method::TetRaycast(_) | Method::MeshReference
+        );
+        if data.volume_for(mesh_method).is_none() {
+            if self.split_job.is_none() {
+                let mut copy = data.clone();
+                let job = Job::spawn("splitting into tetrahedra", move || {
+                    copy.split_into_tets().map(|_| copy)
+                });
+                self.split_job = Some((job, method));
+            }
+            return;
+        }
+        self.scene.method = method;
+    }
+
+    /// The home view of `volume`: a three-quarter view fitted to what the transfer
+    /// function and isosurfaces show (the whole box when they show nothing), as `volux
+    /// render --frame visible` frames it.
+    pub fn home_camera(&self, volume: &Volume) -> Camera {
+        let bounds = visible_bounds(volume, &self.scene.appearance).unwrap_or(volume.bounds());
+        let aspect = self.view_size.0 as f64 / self.view_size.1.max(1) as f64;
+        navigation::home(&bounds, aspect)
     }
 
     /// The data's value range.
@@ -352,6 +389,8 @@ impl ViewerApp {
             Method::ProjectedTetrahedra(_) | Method::TetRaycast(_) | Method::MeshReference
         );
         let Some(volume) = data.volume_for(mesh_method).cloned() else {
+            // A mesh method on a grid not yet split (a session written by hand).
+            self.set_method(scene.method);
             return;
         };
         let now = Submitted {

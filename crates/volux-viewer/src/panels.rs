@@ -9,7 +9,6 @@ use volux_render::scene::{GridRaycast, Method, PtSettings, SortMode, Volume};
 
 use crate::app::ViewerApp;
 use crate::file_dialog::Purpose;
-use crate::jobs::Job;
 use crate::tf_editor::in_value_space;
 
 use volux_core::transfer::PRESETS;
@@ -167,21 +166,7 @@ fn method_settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
 /// Switches method; a grid is split into tetrahedra first (in the background) for the mesh
 /// methods.
 fn pick_method(app: &mut ViewerApp, method: Method) {
-    let Some(data) = &app.data else { return };
-    let needs_split = matches!(data.volume.volume, Volume::Grid(_))
-        && matches!(
-            method,
-            Method::ProjectedTetrahedra(_) | Method::TetRaycast(_)
-        );
-    if needs_split && data.tets.is_none() {
-        let mut copy = data.clone();
-        let job = Job::spawn("splitting into tetrahedra", move || {
-            copy.split_into_tets().map(|_| copy)
-        });
-        app.split_job = Some((job, method));
-        return;
-    }
-    app.scene.method = method;
+    app.set_method(method);
 }
 
 fn grid_settings(ui: &mut egui::Ui, g: &mut GridRaycast) {

@@ -54,9 +54,8 @@ fn toolbar(app: &mut ViewerApp, ui: &mut egui::Ui) {
 
 /// The home camera on the dataset.
 pub fn reset_camera(app: &mut ViewerApp) {
-    if let Some(b) = app.volume().map(|v| v.bounds()) {
-        let aspect = app.view_size.0 as f64 / app.view_size.1.max(1) as f64;
-        app.scene.view.camera = navigation::home(&b, aspect);
+    if let Some(volume) = app.volume().cloned() {
+        app.scene.view.camera = app.home_camera(&volume);
     }
 }
 

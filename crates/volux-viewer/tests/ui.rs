@@ -241,3 +241,23 @@ fn a_load_can_be_cancelled() {
     a.open(&path);
     loaded_with_frame(&mut h);
 }
+
+/// A session asking for Projected Tetrahedra of a grid that was not split (written by hand)
+/// splits it and renders.
+#[test]
+fn a_session_with_a_mesh_method_on_a_grid_splits_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let session = dir.path().join("pt.json");
+    app(&h).save_session(&session).unwrap();
+    let text = std::fs::read_to_string(&session).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["method"] = serde_json::json!({"name": "projected-tetrahedra",
+        "settings": {"sort": "centroid", "color": {"kind": "psi"}, "count_violations": false}});
+    std::fs::write(&session, json.to_string()).unwrap();
+    let mut h2 = harness(Some(session));
+    loaded_with_frame(&mut h2);
+    assert_eq!(app(&h2).shown_scene().unwrap().method.name(), "pt");
+    assert!(app(&h2).data.as_ref().unwrap().tets.is_some());
+}
