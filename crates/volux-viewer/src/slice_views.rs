@@ -146,18 +146,8 @@ fn axis_of(letter: char) -> String {
 
 fn crosshair_lines(app: &ViewerApp, painter: &egui::Painter, plane: Plane, area: Rect) {
     let Some(data) = &app.data else { return };
-    let dims = data.slices.dims();
-    let idx = data.slices.index_of(app.crosshair);
-    let (across, down, upward) = match plane {
-        Plane::Axial => (0, 1, false),
-        Plane::Coronal => (0, 2, true),
-        Plane::Sagittal => (1, 2, true),
-    };
-    let u = (idx[across] as f32 + 0.5) / dims[across] as f32;
-    let mut v = (idx[down] as f32 + 0.5) / dims[down] as f32;
-    if upward {
-        v = 1.0 - v;
-    }
+    let (u, v) = data.slices.crosshair_fraction(plane, app.crosshair);
+    let (u, v) = (u as f32, v as f32);
     let x = area.left() + u * area.width();
     let y = area.top() + v * area.height();
     let stroke = Stroke::new(1.0, Color32::from_rgba_unmultiplied(80, 220, 255, 160));

@@ -1,6 +1,11 @@
-//! The slice views: three orthogonal planes of the data through the crosshair point
-//! (axial, coronal, sagittal in the grid's index planes), grey-scale through a window, with
-//! the patient or axis letters on their edges. Meshes are resampled onto a grid once
+//! The slice views: three orthogonal planes of the data through the crosshair point, grey
+//! through a window, with the patient or axis letters on their edges. Axial, coronal and
+//! sagittal are the world's (LPS) planes: each is cut along the grid's index plane nearest to
+//! it, whatever the acquisition (a sagittally acquired scan shows its slices in the sagittal
+//! view), laid out as radiologists read them (axial: patient left on the right, anterior at
+//! the top; coronal: left on the right, superior at the top; sagittal: posterior on the
+//! right, superior at the top). For an oblique acquisition the planes are the nearest index
+//! planes, and the letters say where they point. Meshes are resampled onto a grid once
 //! ([`volux_render::resample::resample_mesh`]); outside the mesh a slice is dark blue.
 use std::sync::Arc;
 
@@ -32,26 +37,56 @@ pub struct SliceVolume {
 /// The three planes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Plane {
-    /// k fixed: i across, j down (LPS data: patient left on the right, anterior at the top,
-    /// the radiological convention).
+    /// Across the feet-head axis (world z).
     Axial,
-    /// j fixed: i across, k up.
+    /// Across the front-back axis (world y).
     Coronal,
-    /// i fixed: j across, k up.
+    /// Across the left-right axis (world x).
     Sagittal,
+}
+
+/// How a plane is cut from the grid: the index axis held fixed, the one across the image
+/// (reversed: column 0 is its last index) and the one down it (upward: row 0 is its last
+/// index).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Layout {
+    fixed: usize,
+    across: usize,
+    across_reversed: bool,
+    down: usize,
+    upward: bool,
+}
+
+impl Layout {
+    /// The index along `across` of column `c` (of `n`).
+    fn column(&self, c: usize, n: usize) -> usize {
+        if self.across_reversed {
+            n - 1 - c
+        } else {
+            c
+        }
+    }
+
+    /// The index along `down` of row `r` (of `n`).
+    fn row(&self, r: usize, n: usize) -> usize {
+        if self.upward {
+            n - 1 - r
+        } else {
+            r
+        }
+    }
 }
 
 impl Plane {
     /// The three, in display order.
     pub const ALL: [Plane; 3] = [Plane::Axial, Plane::Coronal, Plane::Sagittal];
 
-    /// The index axis held fixed, the one across and the one down the image, and whether
-    /// the down axis runs upwards (row 0 = its last index).
-    fn axes(self) -> (usize, usize, usize, bool) {
+    /// The world directions of the image's right and top.
+    fn screen(self) -> (DVec3, DVec3) {
         match self {
-            Plane::Axial => (2, 0, 1, false),
-            Plane::Coronal => (1, 0, 2, true),
-            Plane::Sagittal => (0, 1, 2, true),
+            Plane::Axial => (DVec3::X, -DVec3::Y),
+            Plane::Coronal => (DVec3::X, DVec3::Z),
+            Plane::Sagittal => (DVec3::Y, DVec3::Z),
         }
     }
 
@@ -139,6 +174,27 @@ impl SliceVolume {
         }
     }
 
+    /// How `plane` is cut: the index axes nearest to its right and top directions.
+    fn layout(&self, plane: Plane) -> Layout {
+        let (right, top) = plane.screen();
+        let col = |a: usize| self.direction.col(a);
+        let nearest = |d: DVec3, skip: Option<usize>| {
+            (0..3)
+                .filter(|a| Some(*a) != skip)
+                .max_by(|a, b| col(*a).dot(d).abs().total_cmp(&col(*b).dot(d).abs()))
+                .expect("three axes")
+        };
+        let across = nearest(right, None);
+        let down = nearest(top, Some(across));
+        Layout {
+            fixed: 3 - across - down,
+            across,
+            across_reversed: col(across).dot(right) < 0.0,
+            down,
+            upward: col(down).dot(top) > 0.0,
+        }
+    }
+
     /// The sample nearest to a world point, clamped into the grid.
     pub fn index_of(&self, p: DVec3) -> [usize; 3] {
         let t = self.direction.transpose() * (p - self.origin) / self.spacing;
@@ -158,7 +214,7 @@ impl SliceVolume {
 
     /// The world width and height of a slice of `plane`.
     pub fn world_size(&self, plane: Plane) -> [f64; 2] {
-        let (_, across, down, _) = plane.axes();
+        let Layout { across, down, .. } = self.layout(plane);
         [
             self.spacing[across] * self.dims[across] as f64,
             self.spacing[down] * self.dims[down] as f64,
@@ -167,18 +223,16 @@ impl SliceVolume {
 
     /// The plane through `crosshair`, grey from `window[0]` (black) to `window[1]` (white).
     pub fn slice(&self, plane: Plane, crosshair: DVec3, window: [f64; 2]) -> SliceImage {
-        let (fixed, across, down, upward) = plane.axes();
+        let l = self.layout(plane);
         let at = self.index_of(crosshair);
-        let (w, h) = (self.dims[across], self.dims[down]);
+        let (w, h) = (self.dims[l.across], self.dims[l.down]);
         let mut rgba = Vec::with_capacity(w * h * 4);
         let width = (window[1] - window[0]).max(1e-300);
         for row in 0..h {
-            let d = if upward { h - 1 - row } else { row };
             for col in 0..w {
-                let mut idx = [0; 3];
-                idx[fixed] = at[fixed];
-                idx[across] = col;
-                idx[down] = d;
+                let mut idx = at;
+                idx[l.across] = l.column(col, w);
+                idx[l.down] = l.row(row, h);
                 let v = self.value(idx);
                 if v.is_nan() {
                     rgba.extend([10, 14, 40, 255]);
@@ -199,37 +253,55 @@ impl SliceVolume {
     /// The crosshair moved to the point at fraction (`u`, `v`) across and down a slice of
     /// `plane` (the fixed coordinate stays).
     pub fn pick(&self, plane: Plane, crosshair: DVec3, u: f64, v: f64) -> DVec3 {
-        let (_, across, down, upward) = plane.axes();
+        let l = self.layout(plane);
         let mut idx = self.index_of(crosshair);
         let cell = |f: f64, n: usize| ((f.clamp(0.0, 1.0) * n as f64) as usize).min(n - 1);
-        idx[across] = cell(u, self.dims[across]);
-        let d = cell(v, self.dims[down]);
-        idx[down] = if upward { self.dims[down] - 1 - d } else { d };
+        let (w, h) = (self.dims[l.across], self.dims[l.down]);
+        idx[l.across] = l.column(cell(u, w), w);
+        idx[l.down] = l.row(cell(v, h), h);
         self.world_of(idx)
     }
 
+    /// Where the crosshair sits in a slice of `plane`, as fractions across and down (the
+    /// centre of its sample).
+    pub fn crosshair_fraction(&self, plane: Plane, crosshair: DVec3) -> (f64, f64) {
+        let l = self.layout(plane);
+        let idx = self.index_of(crosshair);
+        let (w, h) = (self.dims[l.across], self.dims[l.down]);
+        let (c, r) = (l.column(idx[l.across], w), l.row(idx[l.down], h));
+        ((c as f64 + 0.5) / w as f64, (r as f64 + 0.5) / h as f64)
+    }
+
     /// The letters at the right and top edges of a slice of `plane`: the patient sides
-    /// (LPS) the index axes point to through the direction cosines.
+    /// (LPS) its index axes point to through the direction cosines.
     pub fn edge_letters(&self, plane: Plane) -> (char, char) {
-        let (_, across, down, upward) = plane.axes();
-        let axis = |a: usize| self.direction.col(a);
-        let top = if upward { axis(down) } else { -axis(down) };
-        (patient_letter(axis(across)), patient_letter(top))
+        let l = self.layout(plane);
+        let axis = |a: usize, towards: bool| {
+            let d = self.direction.col(a);
+            if towards {
+                d
+            } else {
+                -d
+            }
+        };
+        (
+            patient_letter(axis(l.across, !l.across_reversed)),
+            patient_letter(axis(l.down, l.upward)),
+        )
     }
 
     /// The four world corners of a slice of `plane` through `crosshair` (for outlines in
     /// the 3D view).
     pub fn plane_corners(&self, plane: Plane, crosshair: DVec3) -> [DVec3; 4] {
-        let (fixed, across, down, _) = plane.axes();
+        let l = self.layout(plane);
         let at = self.index_of(crosshair);
         let corner = |a: usize, d: usize| {
-            let mut idx = [0; 3];
-            idx[fixed] = at[fixed];
-            idx[across] = a;
-            idx[down] = d;
+            let mut idx = at;
+            idx[l.across] = a;
+            idx[l.down] = d;
             self.world_of(idx)
         };
-        let (na, nd) = (self.dims[across] - 1, self.dims[down] - 1);
+        let (na, nd) = (self.dims[l.across] - 1, self.dims[l.down] - 1);
         [corner(0, 0), corner(na, 0), corner(na, nd), corner(0, nd)]
     }
 }
@@ -280,5 +352,60 @@ mod tests {
         assert_eq!(ramp().edge_letters(Plane::Axial), ('L', 'A'));
         assert_eq!(ramp().edge_letters(Plane::Coronal), ('L', 'S'));
         assert_eq!(axis_label(-DVec3::Z), "-Z");
+    }
+
+    /// A scan stored sagittally (index axes P, I, R: the direction matrix "PIR") shows the
+    /// same slices, letters and crosshair as the axial storage of the same object.
+    #[test]
+    fn world_planes_whatever_the_storage() {
+        let (n, axial) = (
+            [4usize, 3, 2],
+            (0..24).map(|v| v as f32).collect::<Vec<f32>>(),
+        );
+        // Axial storage: index (i, j, k) at world (i, j, k), value axial[i + 4 j + 12 k].
+        // Sagittal storage: index (a, b, c) with a along +y, b along -z, c along -x.
+        let dims_s = [n[1], n[2], n[0]];
+        let mut sag = vec![0f32; 24];
+        for (c, i) in (0..n[0]).rev().enumerate() {
+            for (b, k) in (0..n[2]).rev().enumerate() {
+                for j in 0..n[1] {
+                    sag[j + dims_s[0] * (b + dims_s[1] * c)] = axial[i + 4 * j + 12 * k];
+                }
+            }
+        }
+        let grid = |dims: [usize; 3], v: Vec<f32>, origin: [f64; 3]| {
+            Grid::new(
+                dims,
+                [1.0; 3],
+                origin,
+                Samples::F32(volux_core::grid::Buffer::owned(v)),
+            )
+            .unwrap()
+        };
+        let a = SliceVolume::of_grid(Arc::new(grid(n, axial, [0.0; 3])));
+        let pir = DMat3::from_cols(DVec3::Y, -DVec3::Z, -DVec3::X);
+        let s = grid(dims_s, sag, [3.0, 0.0, 1.0])
+            .with_direction(pir)
+            .unwrap();
+        let s = SliceVolume::of_grid(Arc::new(s));
+        let c = DVec3::new(1.0, 2.0, 1.0);
+        for plane in Plane::ALL {
+            assert_eq!(
+                a.slice(plane, c, [0.0, 255.0]),
+                s.slice(plane, c, [0.0, 255.0]),
+                "{plane:?}"
+            );
+            assert_eq!(a.edge_letters(plane), s.edge_letters(plane), "{plane:?}");
+            assert_eq!(
+                a.crosshair_fraction(plane, c),
+                s.crosshair_fraction(plane, c)
+            );
+            let p = s.pick(plane, c, 0.9, 0.1);
+            assert!(
+                (p - a.pick(plane, c, 0.9, 0.1)).length() < 1e-9,
+                "{plane:?}"
+            );
+        }
+        assert_eq!(s.edge_letters(Plane::Sagittal), ('P', 'S'));
     }
 }
