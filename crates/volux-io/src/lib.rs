@@ -22,7 +22,7 @@
 //! The other modules: [`load`](mod@load) (the entry point), [`detect`](mod@detect) (format
 //! detection), [`dataset`] (what readers return), [`error`] (typed errors), [`cells`] (the VTK
 //! cell types shared by the legacy and XML readers), [`util`] (bounded reads and header
-//! errors).
+//! errors), [`progress`] (a load's progress and cancellation, for front ends with a bar).
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 

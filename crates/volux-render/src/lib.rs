@@ -31,6 +31,8 @@
 //!   runs on, and [`Control`](tiles::Control).
 //! - [`framing`]: what a scene makes visible (the box a camera frames, or why nothing
 //!   shows), and a camera fitted to a box.
+//! - [`session`]: a scene and its dataset saved as versioned JSON (the viewer's sessions,
+//!   rendered in batch by `volux render --session`).
 //!
 //! ## Shared stages
 //!

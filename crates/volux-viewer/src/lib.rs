@@ -7,6 +7,21 @@
 //! other front end: reduced-resolution previews while the user drags, the full frame when
 //! input stops. Sessions ([`volux_render::session`]) are shared with `volux render
 //! --session`, so a view found by hand renders in batch to the same pixels.
+//!
+//! Where each part lives:
+//!
+//! - [`app`]: the state (dataset, scene, slices, jobs) and what acts on it; [`window`]: one
+//!   frame of the window (poll, draw the panels, submit);
+//! - [`render_service`]: the render thread (mailbox, previews, full frames, cancellation);
+//!   [`jobs`]: loading and other background work;
+//! - [`view3d`]: the 3D view, its gestures and overlay; [`navigation`]: the camera gestures
+//!   as pure functions (orbit, pan, zoom, standard views);
+//! - [`slices`]: the axial, coronal and sagittal planes cut from the data;
+//!   [`slice_views`]: their views, crosshair and window/level;
+//! - [`tf_editor`]: the transfer-function editor over the histogram; [`tf_files`]: TF files
+//!   (Volux, ParaView, Slicer);
+//! - [`panels`]: the menu and the settings panel; [`file_dialog`]: the file dialog;
+//!   [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
 pub mod app;
 pub mod bench;
 pub mod dataset;
