@@ -18,6 +18,14 @@ const ORBIT: [&str; 6] = ["azimuth", "elevation", "zoom", "orthographic", "view"
 /// Checks the options that do not depend on the data: pairs that contradict or need each
 /// other.
 pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
+    if args.no_write && args.orbit.is_none() {
+        return Err("--no-write goes with --orbit (a single render always writes its PNG)".into());
+    }
+    if let (Some(_), Some(_)) = (&args.orbit, &args.error_map) {
+        return Err(
+            "--error-map writes one map; render the frame of interest without --orbit".into(),
+        );
+    }
     if args.given("json") && !args.stats {
         return Err("--json prints the --stats figures as JSON; add --stats".into());
     }

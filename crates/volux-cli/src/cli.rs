@@ -351,9 +351,21 @@ pub struct RenderArgs {
     /// Print render statistics.
     #[arg(long)]
     pub stats: bool,
-    /// With --stats: print them as one JSON object.
+    /// With --stats: print them as one JSON object (per frame with --orbit).
     #[arg(long)]
     pub json: bool,
+    /// Render a turntable of N frames in one process (warm frames: the caches are built
+    /// once): the camera turns about its up vector through its target by DEG degrees per
+    /// frame (default 360/N); frames go to OUT_0000.png, OUT_0001.png, ... (OUT: -o without
+    /// .png).
+    #[arg(long, value_name = "N[:DEG]")]
+    pub orbit: Option<String>,
+    /// With --orbit: write no images (figures only, with --stats).
+    #[arg(long)]
+    pub no_write: bool,
+    /// The frame of an --orbit being reported (set by the command, not typed).
+    #[arg(skip)]
+    pub frame_index: Option<usize>,
     #[command(flatten)]
     pub load: LoadArgs,
     /// The long names of the options given on the command line (filled after parsing), so

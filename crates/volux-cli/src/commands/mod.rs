@@ -8,6 +8,7 @@ mod compare;
 mod convert;
 mod help;
 mod info;
+mod orbit;
 mod render;
 mod report;
 mod session;

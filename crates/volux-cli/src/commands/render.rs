@@ -32,6 +32,9 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let volume = crate::settings::volume(data, args)?;
     let scene = plan.scene(args, &volume, loaded_grid)?;
     let invisible = warn_invisible(&volume, &scene, format);
+    if let Some(spec) = &args.orbit {
+        return super::orbit::run(args, spec, &volume, &scene, &plan.png);
+    }
     let frame = render(&volume, &scene, show)?;
     if !invisible && frame.image.coverage(0.0) == 0.0 {
         warn("the image is empty: no ray met a visible sample (check the camera)");

@@ -44,7 +44,8 @@ fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize)) {
     }
     if args.stats {
         eprintln!(
-            "{w}x{h}: {:.1} ms, {} rays, {} samples, {:.1} M samples/s",
+            "{}{w}x{h}: {:.1} ms, {} rays, {} samples, {:.1} M samples/s",
+            frame_prefix(args),
             s.seconds * 1e3,
             s.rays,
             s.samples,
@@ -98,8 +99,9 @@ fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)
         return;
     }
     eprintln!(
-        "{w}x{h} PT: {:.1} ms ({:.2} M tets/s), {} tets, {} kept, {} drawn, {} zero-volume, \
+        "{}{w}x{h} PT: {:.1} ms ({:.2} M tets/s), {} tets, {} kept, {} drawn, {} zero-volume, \
          {} degenerate projections, {} fragments, {:.1} bytes/tet per frame",
+        frame_prefix(args),
         s.seconds * 1e3,
         tets_per_s / 1e6,
         s.tets,
@@ -180,9 +182,10 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
     }
     if args.stats {
         eprintln!(
-            "{w}x{h} tet ray casting ({mode}): {:.1} ms, {} rays, {} segments, {} samples, \
+            "{}{w}x{h} tet ray casting ({mode}): {:.1} ms, {} rays, {} segments, {} samples, \
              {reentries_per_ray:.3} re-entries per ray, {} abandoned, {} rays over tolerance \
              (max estimated error {max_error:.2e}), {:.0} bytes/tet of acceleration structures",
+            frame_prefix(args),
             s.seconds * 1e3,
             s.rays,
             s.segments,
@@ -198,6 +201,24 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
 /// file written.
 fn print_json(args: &RenderArgs, mut v: serde_json::Value) {
     v["threads"] = json!(rayon::current_num_threads());
-    v["output"] = json!(args.output().display().to_string());
+    v["output"] = if args.no_write {
+        serde_json::Value::Null
+    } else {
+        json!(args.output().display().to_string())
+    };
+    if let Some(k) = args.frame_index {
+        v["frame"] = json!(k);
+        v["first"] = json!(k == 0);
+    }
     println!("{v}");
+}
+
+/// The line prefix of a frame of an --orbit (`frame 3: `; the first says it builds the
+/// caches).
+fn frame_prefix(args: &RenderArgs) -> String {
+    match args.frame_index {
+        Some(0) => "frame 0 (first: builds the caches): ".into(),
+        Some(k) => format!("frame {k}: "),
+        None => String::new(),
+    }
 }
