@@ -21,11 +21,12 @@
 //! - [`tf_editor`]: the transfer-function editor over the histogram; [`tf_files`]: TF files
 //!   (Volux, ParaView, Slicer);
 //! - [`panels`]: the menu and the settings panel; [`file_dialog`]: the file dialog;
-//!   [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
+//!   [`files`]: TF files, sessions and screenshots read and written; [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
 pub mod app;
 pub mod bench;
 pub mod dataset;
 pub mod file_dialog;
+pub mod files;
 pub mod jobs;
 pub mod navigation;
 pub mod panels;
