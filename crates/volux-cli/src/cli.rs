@@ -169,6 +169,13 @@ pub enum Command {
         /// text (e.g. `marschner riemann h=0.5`, matched word by word).
         #[arg(long)]
         only: Option<String>,
+        /// Time warm frames of this file (any format) instead of a suite: a turntable of
+        /// --frames frames after a first one, with the `volux render` options given after
+        /// `--` (e.g. `volux bench head.nrrd -- --tf ct-bone --size 800x600`).
+        file: Option<PathBuf>,
+        /// With FILE: `volux render` options (after `--`).
+        #[arg(last = true)]
+        render: Vec<String>,
     },
 }
 

@@ -43,7 +43,16 @@ fn main() -> ExitCode {
 
 /// Parses the command line, noting which `render` options were given (not defaulted).
 fn parse() -> Result<cli::Cli, clap::Error> {
-    let matches = cli::Cli::command().try_get_matches()?;
+    parse_from(std::env::args_os())
+}
+
+/// Parses `argv` (the program name first) as [`parse`] does the command line.
+fn parse_from<I, T>(argv: I) -> Result<cli::Cli, clap::Error>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    let matches = cli::Cli::command().try_get_matches_from(argv)?;
     let mut args = cli::Cli::from_arg_matches(&matches)?;
     if let Some((name, sub)) = matches.subcommand() {
         args.given = given_options(name, sub);

@@ -107,3 +107,62 @@ fn no_write_and_mistakes() {
         assert_eq!(err.lines().count(), 1, "{err}");
     }
 }
+
+/// `volux bench FILE -- [render options]` times a first frame and warm frames of any file.
+#[test]
+fn bench_of_a_file_times_warm_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    grid(d);
+    let args = [
+        "bench",
+        "ml.raw",
+        "--frames",
+        "3",
+        "--json",
+        "--",
+        "--size",
+        "32x24",
+        "--tf",
+        "grayscale",
+    ];
+    let out = volux(&args, d);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (v["method"].as_str(), v["warm_frames"].as_u64()),
+        (Some("raycast"), Some(3))
+    );
+    assert_eq!(
+        (v["width"].as_u64(), v["rate_unit"].as_str()),
+        (Some(32), Some("samples"))
+    );
+    assert!(v["warm_min_ms"].as_f64() <= v["warm_median_ms"].as_f64());
+    assert!(!d.join("out.png").exists() && !d.join("out_0000.png").exists());
+    for (args, expected) in [
+        (
+            &["bench", "ml.raw", "--suite", "pt"][..],
+            "--suite selects suite cases",
+        ),
+        (
+            &["bench", "ml.raw", "--", "--orbit", "3"][..],
+            "--orbit is set by the bench",
+        ),
+        (
+            &["bench", "ml.raw", "--", "--nonsense"][..],
+            "the render options after --",
+        ),
+    ] {
+        let out = volux(args, d);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(expected),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+}

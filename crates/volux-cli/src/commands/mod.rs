@@ -81,9 +81,14 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             json,
             suite,
             only,
-        } => {
-            bench::check_options(quick, frames, suite, &cli.given)?;
-            bench::run(quick, frames, grid_size, json, suite, only.as_deref())
-        }
+            file,
+            render,
+        } => match file {
+            Some(file) => bench::file::run(&file, &render, frames, json, &cli.given),
+            None => {
+                bench::check_options(quick, frames, suite, &cli.given)?;
+                bench::run(quick, frames, grid_size, json, suite, only.as_deref())
+            }
+        },
     }
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use volux_core::image::PngOptions;
 use volux_core::Camera;
-use volux_render::engine::create_renderer;
+use volux_render::engine::{create_renderer, Frame};
 use volux_render::scene::{Scene, Volume};
 use volux_render::tiles::Control;
 
@@ -71,12 +71,8 @@ pub fn run(
     png: &PngOptions,
 ) -> Result<(), CmdError> {
     let (n, deg) = parse(spec)?;
-    let mut renderer = create_renderer(volume, &scene.method)?;
     let output = args.output();
-    for k in 0..n {
-        let mut frame_scene = scene.clone();
-        frame_scene.view.camera = turned(&scene.view.camera, deg * k as f64);
-        let frame = renderer.render(&frame_scene, &Control::default())?;
+    frames(n, deg, volume, scene, |k, frame_scene, frame| {
         let path = frame_path(&output, k);
         if !args.no_write {
             frame
@@ -87,8 +83,9 @@ pub fn run(
         let mut frame_args = args.clone();
         frame_args.output = Some(path);
         frame_args.frame_index = Some(k);
-        report::frame(&frame_args, &frame, &frame_scene, volume);
-    }
+        report::frame(&frame_args, frame, frame_scene, volume);
+        Ok(())
+    })?;
     if args.no_write {
         eprintln!("rendered {n} frames, {deg} degrees apart (no files: --no-write)");
     } else {
@@ -97,6 +94,25 @@ pub fn run(
             frame_path(&output, 0).display(),
             frame_path(&output, n - 1).display()
         );
+    }
+    Ok(())
+}
+
+/// Renders `n` frames of `scene` with one renderer, the camera turned by `deg` more each
+/// time, handing each to `each` (frame number, its scene, the frame).
+pub fn frames(
+    n: usize,
+    deg: f64,
+    volume: &Volume,
+    scene: &Scene,
+    mut each: impl FnMut(usize, &Scene, &Frame) -> Result<(), CmdError>,
+) -> Result<(), CmdError> {
+    let mut renderer = create_renderer(volume, &scene.method)?;
+    for k in 0..n {
+        let mut frame_scene = scene.clone();
+        frame_scene.view.camera = turned(&scene.view.camera, deg * k as f64);
+        let frame = renderer.render(&frame_scene, &Control::default())?;
+        each(k, &frame_scene, &frame)?;
     }
     Ok(())
 }

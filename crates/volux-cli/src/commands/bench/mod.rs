@@ -4,7 +4,8 @@
 //! - [`pt`]: tets/s of Projected Tetrahedra per colour mode, and its accuracy against the
 //!   brute-force reference;
 //! - [`tetray`]: ms/frame of tetrahedral ray casting;
-//! - [`targets`]: the grid speed targets, cases in turn, fastest frame per case.
+//! - [`targets`]: the grid speed targets, cases in turn, fastest frame per case;
+//! - [`file`]: warm frames of any file with any render options.
 //!
 //! Each case renders through a [`Renderer`](volux_render::engine::Renderer) kept for its volume, as a viewer would, and times
 //! [`FrameStats::ms`](volux_render::engine::FrameStats::ms), the wall time of the render call.
@@ -12,6 +13,7 @@ use super::common::CmdError;
 use crate::cli::Suite;
 
 mod common;
+pub mod file;
 mod grid;
 mod pt;
 mod targets;
