@@ -5,7 +5,7 @@
 //!   brute-force reference;
 //! - [`tetray`]: ms/frame of tetrahedral ray casting;
 //! - [`targets`]: the grid speed targets, cases in turn, fastest frame per case;
-//! - [`file`]: warm frames of any file with any render options.
+//! - [`file`](mod@file): warm frames of any file with any render options.
 //!
 //! Each case renders through a [`Renderer`](volux_render::engine::Renderer) kept for its volume, as a viewer would, and times
 //! [`FrameStats::ms`](volux_render::engine::FrameStats::ms), the wall time of the render call.
