@@ -15,6 +15,19 @@ fn grid(dir: &std::path::Path) {
     );
 }
 
+/// Each command fails with one line holding its expected text.
+fn one_line_errors(cases: &[(&[&str], &str)], dir: &std::path::Path) {
+    for (args, expected) in cases {
+        let out = volux(args, dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(expected),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+}
+
 /// Frame 0 is the plain render; the others turn; each frame's figures are one JSON object
 /// that says which frame it is.
 #[test]
@@ -84,7 +97,7 @@ fn no_write_and_mistakes() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no files"));
     assert!(!d.join("out_0000.png").exists());
-    for (args, expected) in [
+    let cases = [
         (
             &["render", "ml.raw", "--no-write"][..],
             "--no-write goes with --orbit",
@@ -97,15 +110,8 @@ fn no_write_and_mistakes() {
             &["render", "ml.raw", "--orbit", "5:x"][..],
             "DEG is a number",
         ),
-    ] {
-        let out = volux(args, d);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            !out.status.success() && err.contains(expected),
-            "{args:?}: {err}"
-        );
-        assert_eq!(err.lines().count(), 1, "{err}");
-    }
+    ];
+    one_line_errors(&cases, d);
 }
 
 /// `volux bench FILE -- [render options]` times a first frame and warm frames of any file.
@@ -143,7 +149,7 @@ fn bench_of_a_file_times_warm_frames() {
     );
     assert!(v["warm_min_ms"].as_f64() <= v["warm_median_ms"].as_f64());
     assert!(!d.join("out.png").exists() && !d.join("out_0000.png").exists());
-    for (args, expected) in [
+    let cases = [
         (
             &["bench", "ml.raw", "--suite", "pt"][..],
             "--suite selects suite cases",
@@ -156,13 +162,6 @@ fn bench_of_a_file_times_warm_frames() {
             &["bench", "ml.raw", "--", "--nonsense"][..],
             "the render options after --",
         ),
-    ] {
-        let out = volux(args, d);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            !out.status.success() && err.contains(expected),
-            "{args:?}: {err}"
-        );
-        assert_eq!(err.lines().count(), 1, "{err}");
-    }
+    ];
+    one_line_errors(&cases, d);
 }
