@@ -68,8 +68,8 @@ pub fn is_tf_file(spec: &str) -> bool {
 /// ([`transfer_import::import`] tells them apart); what an imported file sets that Volux
 /// does not apply is printed as warnings.
 pub fn tf_file(spec: &str) -> Result<TransferFunction, CmdError> {
-    let text = std::fs::read_to_string(spec).map_err(|e| format!("{spec}: {e}"))?;
-    let imported = transfer_import::import(spec, &text).map_err(|e| format!("{spec}: {e}"))?;
+    let imported =
+        transfer_import::import_file(Path::new(spec)).map_err(|e| format!("{spec}: {e}"))?;
     for note in &imported.notes {
         eprintln!(
             "volux: warning: {}",

@@ -132,6 +132,43 @@ pub fn detect_format(file_name: &str, text: &str) -> TfFormat {
     }
 }
 
+/// Largest transfer-function file read ([`import_file`]): far more than any real TF, and
+/// a bound on what a wrong path (a disk image, `/dev/zero`) can make us read.
+pub const MAX_FILE_BYTES: u64 = 16 << 20;
+
+/// Reads the transfer-function file at `path`, of any format ([`import`]): a regular file
+/// of at most [`MAX_FILE_BYTES`], read no further than that.
+pub fn import_file(path: &std::path::Path) -> Result<Imported> {
+    use std::io::Read;
+    let too_large = |bytes: u64| Error::TfImport {
+        format: "file",
+        field: path.display().to_string(),
+        reason: format!("{bytes} bytes or more; a transfer function is at most {MAX_FILE_BYTES}"),
+    };
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        return Err(Error::TfImport {
+            format: "file",
+            field: path.display().to_string(),
+            reason: "not a regular file".into(),
+        });
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(too_large(meta.len()));
+    }
+    let mut text = String::new();
+    let read = file.take(MAX_FILE_BYTES + 1).read_to_string(&mut text)? as u64;
+    if read > MAX_FILE_BYTES {
+        return Err(too_large(read));
+    }
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy())
+        .unwrap_or_default();
+    import(&name, &text)
+}
+
 /// Reads a transfer-function file of any format ([`detect_format`]).
 pub fn import(file_name: &str, text: &str) -> Result<Imported> {
     match detect_format(file_name, text) {

@@ -326,6 +326,15 @@ impl Method {
 }
 
 impl Method {
+    /// Whether the method draws tetrahedra (Projected Tetrahedra, tet ray casting, the mesh
+    /// reference): a grid must be split first ([`Volume::to_tets`]).
+    pub fn draws_tets(&self) -> bool {
+        matches!(
+            self,
+            Self::ProjectedTetrahedra(_) | Self::TetRaycast(_) | Self::MeshReference
+        )
+    }
+
     /// Whether this (resolved) method draws everything `appearance` asks for: Projected
     /// Tetrahedra composites cells and has no maximum intensity projection, and the mesh
     /// renderers light their isosurfaces but not the volume. A front end calls this so that
@@ -342,10 +351,7 @@ impl Method {
                 "{who} {what}; {instead}"
             )))
         };
-        let mesh = matches!(
-            self,
-            Self::ProjectedTetrahedra(_) | Self::TetRaycast(_) | Self::MeshReference
-        );
+        let mesh = self.draws_tets();
         if appearance.mip && matches!(self, Self::ProjectedTetrahedra(_) | Self::MeshReference) {
             return refuse(
                 "composites cells and has no maximum intensity projection",

@@ -319,10 +319,7 @@ impl ViewerApp {
     /// mesh methods (the method applies once the split is done).
     pub fn set_method(&mut self, method: Method) {
         let Some(data) = &self.data else { return };
-        let mesh_method = matches!(
-            method,
-            Method::ProjectedTetrahedra(_) | Method::TetRaycast(_) | Method::MeshReference
-        );
+        let mesh_method = method.draws_tets();
         if data.volume_for(mesh_method).is_none() {
             if self.split_job.is_none() {
                 let mut copy = data.clone();
@@ -383,10 +380,7 @@ impl ViewerApp {
             return;
         }
         let scene = self.render_scene();
-        let mesh_method = matches!(
-            scene.method,
-            Method::ProjectedTetrahedra(_) | Method::TetRaycast(_) | Method::MeshReference
-        );
+        let mesh_method = scene.method.draws_tets();
         let Some(volume) = data.volume_for(mesh_method).cloned() else {
             // A mesh method on a grid not yet split (a session written by hand).
             self.set_method(scene.method);

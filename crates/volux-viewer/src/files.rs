@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 
 use eframe::egui;
 use volux_core::image::PngOptions;
-use volux_render::scene::Method;
 
 use crate::app::ViewerApp;
 use crate::file_dialog::Purpose;
@@ -38,7 +37,7 @@ impl ViewerApp {
                 self.open(path);
                 Ok(None)
             }
-            Purpose::LoadTf => self.load_tf(path).map(|_| None),
+            Purpose::LoadTf => self.load_tf(path),
             Purpose::SaveTf => {
                 let text = self.scene.appearance.tf.to_json();
                 volux_core::image::write_atomically(path, text.as_bytes())
@@ -57,14 +56,17 @@ impl ViewerApp {
         }
     }
 
-    /// Replaces the TF with one read from `path` (any format `volux render --tf` reads).
-    pub fn load_tf(&mut self, path: &Path) -> Result<(), String> {
-        let tf = crate::tf_files::read(path)?;
-        self.scene.appearance.tf = in_value_space(&tf, self.range());
+    /// Replaces the TF with one read from `path` (any format `volux render --tf` reads);
+    /// returns what the file sets that Volux does not apply (to show), if anything.
+    pub fn load_tf(&mut self, path: &Path) -> Result<Option<String>, String> {
+        let imported = volux_core::transfer_import::import_file(path)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        self.scene.appearance.tf = in_value_space(&imported.tf, self.range());
         if let Some(e) = &mut self.editor {
             e.fit_height(&self.scene.appearance.tf);
         }
-        Ok(())
+        let notes = imported.notes.join("; ");
+        Ok((!notes.is_empty()).then(|| format!("{}: {notes}", path.display())))
     }
 
     /// Saves the session to `path`.
@@ -87,10 +89,7 @@ impl ViewerApp {
         let mut scene = self.scene.clone();
         scene.view.width = size.0.max(1);
         scene.view.height = size.1.max(1);
-        let mesh_method = !matches!(
-            scene.method,
-            Method::GridRaycast(_) | Method::Resample { .. }
-        );
+        let mesh_method = scene.method.draws_tets();
         let Some(volume) = data.volume_for(mesh_method).cloned() else {
             return;
         };

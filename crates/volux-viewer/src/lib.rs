@@ -18,8 +18,7 @@
 //!   as pure functions (orbit, pan, zoom, standard views);
 //! - [`slices`]: the axial, coronal and sagittal planes cut from the data;
 //!   [`slice_views`]: their views, crosshair and window/level;
-//! - [`tf_editor`]: the transfer-function editor over the histogram; [`tf_files`]: TF files
-//!   (Volux, ParaView, Slicer);
+//! - [`tf_editor`]: the transfer-function editor over the histogram;
 //! - [`panels`]: the menu and the settings panel; [`file_dialog`]: the file dialog;
 //!   [`files`]: TF files, sessions and screenshots read and written; [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
 pub mod app;
@@ -34,7 +33,6 @@ pub mod render_service;
 pub mod slice_views;
 pub mod slices;
 pub mod tf_editor;
-pub mod tf_files;
 pub mod view3d;
 pub mod window;
 

@@ -4,7 +4,7 @@
 use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect, Sense, Stroke};
 
 use crate::app::ViewerApp;
-use crate::slices::Plane;
+use crate::slices::{direction_name, Plane};
 
 /// Height of the slice strip (points).
 pub const STRIP_HEIGHT: f32 = 220.0;
@@ -93,12 +93,9 @@ fn slice_view(
         painter.image(t.id(), area, uv, Color32::WHITE);
     }
     crosshair_lines(app, &painter, plane, area);
-    let (right, top) = data.slices.edge_letters(plane);
-    let letters = if data.is_medical() {
-        (right.to_string(), top.to_string())
-    } else {
-        (axis_of(right), axis_of(top))
-    };
+    let (right, top) = data.slices.edge_directions(plane);
+    let medical = data.is_medical();
+    let letters = (direction_name(right, medical), direction_name(top, medical));
     let font = FontId::proportional(13.0);
     let colour = Color32::from_rgb(240, 200, 90);
     painter.text(
@@ -129,19 +126,6 @@ fn slice_view(
         FontId::monospace(10.0),
         Color32::LIGHT_GRAY,
     );
-}
-
-/// LPS letters as axis names for data without patient axes.
-fn axis_of(letter: char) -> String {
-    match letter {
-        'L' => "+X",
-        'R' => "-X",
-        'P' => "+Y",
-        'A' => "-Y",
-        'S' => "+Z",
-        _ => "-Z",
-    }
-    .into()
 }
 
 fn crosshair_lines(app: &ViewerApp, painter: &egui::Painter, plane: Plane, area: Rect) {

@@ -106,6 +106,16 @@ pub fn patient_letter(d: DVec3) -> char {
     orientation::patient_letter(d).unwrap_or('?')
 }
 
+/// How the views name a world direction: its patient letter for medical data, its axis
+/// (`+X` ... `-Z`) otherwise.
+pub fn direction_name(d: DVec3, medical: bool) -> String {
+    if medical {
+        patient_letter(d).to_string()
+    } else {
+        axis_label(d).to_string()
+    }
+}
+
 /// The axis name of a world direction (`+X` ... `-Z`) for data without patient axes.
 pub fn axis_label(d: DVec3) -> &'static str {
     let a = d.abs();
@@ -272,9 +282,9 @@ impl SliceVolume {
         ((c as f64 + 0.5) / w as f64, (r as f64 + 0.5) / h as f64)
     }
 
-    /// The letters at the right and top edges of a slice of `plane`: the patient sides
-    /// (LPS) its index axes point to through the direction cosines.
-    pub fn edge_letters(&self, plane: Plane) -> (char, char) {
+    /// The world directions the right and top edges of a slice of `plane` face (through
+    /// the direction cosines).
+    pub fn edge_directions(&self, plane: Plane) -> (DVec3, DVec3) {
         let l = self.layout(plane);
         let axis = |a: usize, towards: bool| {
             let d = self.direction.col(a);
@@ -284,10 +294,13 @@ impl SliceVolume {
                 -d
             }
         };
-        (
-            patient_letter(axis(l.across, !l.across_reversed)),
-            patient_letter(axis(l.down, l.upward)),
-        )
+        (axis(l.across, !l.across_reversed), axis(l.down, l.upward))
+    }
+
+    /// The patient sides (LPS letters) the right and top edges of a slice of `plane` face.
+    pub fn edge_letters(&self, plane: Plane) -> (char, char) {
+        let (right, top) = self.edge_directions(plane);
+        (patient_letter(right), patient_letter(top))
     }
 
     /// The four world corners of a slice of `plane` through `crosshair` (for outlines in

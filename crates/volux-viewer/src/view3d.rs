@@ -7,7 +7,7 @@ use volux_render::engine::{FrameStats, MethodStats};
 
 use crate::app::ViewerApp;
 use crate::navigation::{self, StandardView};
-use crate::slices::{axis_label, patient_letter, Plane};
+use crate::slices::{direction_name, Plane};
 
 /// Draws the 3D view in the central panel and applies the gestures to the camera.
 pub fn show(app: &mut ViewerApp, ctx: &egui::Context) {
@@ -192,13 +192,7 @@ pub fn method_figure(stats: &FrameStats) -> String {
 fn orientation_letters(app: &ViewerApp, painter: &egui::Painter, rect: Rect) {
     let medical = app.data.as_ref().is_some_and(|d| d.is_medical());
     let (right, up, _) = app.scene.view.camera.basis();
-    let name = |d: DVec3| {
-        if medical {
-            patient_letter(d).to_string()
-        } else {
-            axis_label(d).to_string()
-        }
-    };
+    let name = |d: DVec3| direction_name(d, medical);
     let font = FontId::proportional(15.0);
     let colour = Color32::from_rgb(240, 200, 90);
     let m = 14.0;

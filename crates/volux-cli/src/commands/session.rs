@@ -4,7 +4,7 @@
 //! differ, and the PNG equals the viewer's screenshot of the same session.
 use std::path::Path;
 
-use volux_render::scene::{Method, Volume};
+use volux_render::scene::Volume;
 use volux_render::session::Session;
 
 use super::common::CmdError;
@@ -39,10 +39,7 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
     let (data, _) = super::common::load(&d.path, &load, show)
         .map_err(|e| format!("session {}: its dataset: {e}", path.display()))?;
     let mut volume = crate::settings::plain_volume(data)?;
-    let mesh_method = matches!(
-        session.method,
-        Method::ProjectedTetrahedra(_) | Method::TetRaycast(_) | Method::MeshReference
-    );
+    let mesh_method = session.method.draws_tets();
     if mesh_method && matches!(volume, Volume::Grid(_)) {
         volume = volume.to_tets()?;
     }

@@ -945,3 +945,29 @@ fn module_colour_evaluation_agrees_with_the_reference() {
         }
     }
 }
+
+/// Files are read within bounds: a device or a huge file is refused before it is read, and
+/// a real file imports as its text does.
+#[test]
+fn files_are_read_within_bounds() {
+    let e = import_file(std::path::Path::new("/dev/zero"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a regular file"), "{e}");
+    let dir = tempfile::tempdir().unwrap();
+    let huge = dir.path().join("huge.json");
+    std::fs::File::create(&huge)
+        .unwrap()
+        .set_len(MAX_FILE_BYTES + 1)
+        .unwrap();
+    let e = import_file(&huge).unwrap_err().to_string();
+    assert!(e.contains("a transfer function is at most"), "{e}");
+    let good = dir.path().join("tf.json");
+    let text = r#"{"color": [[0, 0, 0, 0], [1, 1, 1, 1]], "opacity": [[0, 0], [1, 1]]}"#;
+    std::fs::write(&good, text).unwrap();
+    assert_eq!(
+        import_file(&good).unwrap().tf,
+        import("tf.json", text).unwrap().tf
+    );
+    assert!(import_file(&dir.path().join("missing.json")).is_err());
+}
