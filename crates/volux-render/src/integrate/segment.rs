@@ -247,6 +247,22 @@ impl SegmentIntegrator {
         Self { knots, lines }
     }
 
+    /// Whether the extinction is zero for every value in `[lo, hi]`: every linear piece of the
+    /// TF meeting that range (a piece ending at `lo` or starting at `hi` included) has zero
+    /// extinction, so [`SegmentIntegrator::integrate`] returns exactly transparent black for
+    /// any segment whose scalars stay in the range. `false` for NaN bounds.
+    pub fn is_transparent(&self, lo: f64, hi: f64) -> bool {
+        if lo.is_nan() || hi.is_nan() {
+            return false;
+        }
+        let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
+        let first = self.knots.partition_point(|&x| x < lo);
+        let last = self.knots.partition_point(|&x| x <= hi);
+        self.lines[first..=last.min(self.lines.len() - 1)]
+            .iter()
+            .all(|l| l.tau0 == 0.0 && l.dtau == 0.0)
+    }
+
     /// The exact premultiplied RGBA of a segment of length `len` (world units) along which the
     /// scalar goes linearly from `s_f` (front) to `s_b` (back); see the module documentation.
     /// Returns transparent black when any argument is not finite or `len <= 0`.

@@ -62,6 +62,7 @@ mod geom;
 mod options;
 mod pixel;
 pub mod render;
+mod skip;
 pub mod walk;
 
 pub use crate::frame::TetRayStats;

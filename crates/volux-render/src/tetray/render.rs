@@ -14,6 +14,7 @@ use super::bvh::Bvh;
 use super::geom::Geometry;
 use super::options::TetRayOptions;
 use super::pixel::{PixelContext, PixelOut, Tables};
+use super::skip::Visibility;
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::error::RenderError;
 use crate::frame::{Frame, MethodStats, Rebuilt, TetRayStats};
@@ -32,6 +33,7 @@ impl TetRayStats {
         self.recovered += walk.recovered;
         self.local_searches += walk.local_searches;
         self.abandoned += u64::from(walk.abandoned);
+        self.skips += walk.skips;
         self.samples += px.samples;
         self.rays_over_tolerance += u64::from(px.missed);
     }
@@ -44,6 +46,7 @@ impl TetRayStats {
         self.recovered += s.recovered;
         self.local_searches += s.local_searches;
         self.abandoned += s.abandoned;
+        self.skips += s.skips;
         self.samples += s.samples;
         self.rays_over_tolerance += s.rays_over_tolerance;
     }
@@ -83,6 +86,8 @@ pub struct TetRayCaster<M: Deref<Target = TetMesh> = Arc<TetMesh>> {
     psi: OnceLock<PsiTable>,
     /// The classification of the last frame's TF.
     tables: Mutex<Option<Arc<Tables>>>,
+    /// The visible cells of the last skipping frame's TF and isovalues.
+    visible: Mutex<Option<Arc<Visibility>>>,
     /// The start cells of the last frame's camera.
     start: Mutex<Option<(Camera, Arc<Bvh>)>>,
     /// Whether the first frame is still to come (it reports the structures as built).
@@ -149,6 +154,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             gradients: OnceLock::new(),
             psi: OnceLock::new(),
             tables: Mutex::new(None),
+            visible: Mutex::new(None),
             start: Mutex::new(None),
             first: AtomicBool::new(true),
         })
@@ -231,6 +237,44 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
         t
     }
 
+    /// The visible cells of the frame ([`super::skip`]), kept while the TF and the isovalues
+    /// do not change; `None` when the frame does not skip (MIP, the adaptive rule,
+    /// [`TetRayOptions::skip_empty`] off) or skipping does not pay.
+    fn visibility(
+        &self,
+        opts: &TetRayOptions,
+        tables: &Tables,
+        rebuilt: &mut Rebuilt,
+    ) -> Option<Arc<Visibility>> {
+        let per_segment = !opts.mip && !matches!(opts.color, SegmentRule::AdaptiveSimpson(_));
+        if !(opts.skip_empty && per_segment) {
+            return None;
+        }
+        let isos = opts.isosurfaces.as_slice();
+        let mut cache = self.visible.lock().unwrap_or_else(|e| e.into_inner());
+        let same = |v: &&Arc<Visibility>| {
+            v.source == opts.tf && v.isovalues.iter().copied().eq(isos.iter().map(|i| i.value))
+        };
+        let vis = match cache.as_ref().filter(same) {
+            Some(v) => v.clone(),
+            None => {
+                rebuilt.classification = true;
+                let mesh = self.mesh();
+                let v = Arc::new(Visibility::new(
+                    mesh,
+                    &self.geo,
+                    tables,
+                    isos,
+                    |t| tet_box(mesh, t),
+                    self.pad,
+                ));
+                *cache = Some(v.clone());
+                v
+            }
+        };
+        vis.worthwhile().then_some(vis)
+    }
+
     /// The start cells of `camera`'s rays, kept while the camera does not move.
     fn start_set_for(&self, camera: &Camera, rebuilt: &mut Rebuilt) -> Arc<Bvh> {
         let mut cache = self.start.lock().unwrap_or_else(|e| e.into_inner());
@@ -287,7 +331,13 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             ..Rebuilt::default()
         };
         let tables = self.tables(&opts.tf, &mut rebuilt);
-        let start = self.start_set_for(&opts.camera, &mut rebuilt);
+        let visible = self.visibility(opts, &tables, &mut rebuilt);
+        let visible = visible.as_deref();
+        let start = match visible {
+            // The hierarchy of visible cells also finds those around the eye.
+            Some(_) => Arc::new(Bvh::default()),
+            None => self.start_set_for(&opts.camera, &mut rebuilt),
+        };
         let walker = Walker {
             geo: &self.geo,
             boundary: &self.boundary,
@@ -319,8 +369,14 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             for y in r.y0..r.y1 {
                 for x in r.x0..r.x1 {
                     let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                    let (px, outcome) =
-                        ctx.pixel(&walker, ray.origin, ray.dir, &mut scratch, &mut segments);
+                    let (px, outcome) = ctx.pixel(
+                        &walker,
+                        visible,
+                        ray.origin,
+                        ray.dir,
+                        &mut scratch,
+                        &mut segments,
+                    );
                     stats.add_ray(&px, &outcome);
                     out.push(px);
                 }
@@ -334,6 +390,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
         let pixels = tiled.pixels.iter().map(|p| p.rgba).collect();
         let error_map = tiled.pixels.iter().map(|p| p.error).collect();
         stats.start_cells = start.len();
+        stats.visible_cells = visible.map_or(0, Visibility::len);
         stats.rebuilt = rebuilt;
         stats.tets = self.mesh.tets().len();
         stats.bytes_per_tet = self.bytes_per_tet();
