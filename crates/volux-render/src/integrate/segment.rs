@@ -127,6 +127,10 @@ impl SegmentRule {
 /// Largest optical-depth increase per quadrature sub-interval.
 const DEPTH_STEP: f64 = 0.5;
 
+/// Pieces with less optical depth are a single sub-interval (the step solved for would be
+/// longer than the piece; the margin covers its rounding).
+const SINGLE_STEP_DEPTH: f64 = DEPTH_STEP * (1.0 - 1e-9);
+
 /// Colour stops accumulating below this transparency (`exp(-46)`).
 const MAX_COLOUR_DEPTH: f64 = 46.0;
 
@@ -195,6 +199,57 @@ pub struct SegmentIntegrator {
     knots: Vec<f64>,
     /// `K + 1` pieces: piece `k` spans `[x_{k-1}, x_k]` (unbounded at both ends).
     lines: Vec<Line>,
+    /// Where the search for a value's piece starts ([`SegmentIntegrator::count_at_most`]).
+    buckets: KnotBuckets,
+}
+
+/// Buckets of equal width over the knots, each with the number of knots at or below the
+/// start of the bucket before it: a value's piece is found from its bucket by a short
+/// forward scan instead of a binary search (whose dependent loads dominated short
+/// segments).
+#[derive(Clone, Debug, Default, PartialEq)]
+struct KnotBuckets {
+    lo: f64,
+    scale: f64,
+    first: Vec<u32>,
+}
+
+/// Buckets over the knots (a few per knot of a dense TF).
+const KNOT_BUCKETS: usize = 256;
+
+impl KnotBuckets {
+    fn new(knots: &[f64]) -> Self {
+        let (Some(&lo), Some(&hi)) = (knots.first(), knots.last()) else {
+            return Self::default();
+        };
+        let scale = KNOT_BUCKETS as f64 / (hi - lo);
+        if !(scale.is_finite() && scale > 0.0) {
+            return Self::default();
+        }
+        // One bucket of slack: every value mapped to bucket `i` is above the start of
+        // bucket `i - 1` whatever the rounding of the mapping.
+        let first = (0..KNOT_BUCKETS)
+            .map(|i| {
+                let below = lo + (i as f64 - 1.0) / scale;
+                if i == 0 {
+                    0
+                } else {
+                    knots.partition_point(|&x| x <= below) as u32
+                }
+            })
+            .collect();
+        Self { lo, scale, first }
+    }
+
+    /// A number of knots, all at or below `s` (finite): where a forward scan may start.
+    #[inline]
+    fn start(&self, s: f64) -> usize {
+        let x = (s - self.lo) * self.scale;
+        if self.first.is_empty() || !(x >= 1.0) {
+            return 0;
+        }
+        self.first[(x as usize).min(KNOT_BUCKETS - 1)] as usize
+    }
 }
 
 impl SegmentIntegrator {
@@ -248,7 +303,32 @@ impl SegmentIntegrator {
         if !knots.is_empty() {
             lines.push(constant(f64::INFINITY));
         }
-        Self { knots, lines }
+        let buckets = KnotBuckets::new(&knots);
+        Self {
+            knots,
+            lines,
+            buckets,
+        }
+    }
+
+    /// The number of knots `<= s` (`s` finite): `knots.partition_point(|&x| x <= s)`.
+    #[inline]
+    fn count_at_most(&self, s: f64) -> usize {
+        let mut k = self.buckets.start(s);
+        while k < self.knots.len() && self.knots[k] <= s {
+            k += 1;
+        }
+        k
+    }
+
+    /// The number of knots `< s` (`s` finite): `knots.partition_point(|&x| x < s)`.
+    #[inline]
+    fn count_below(&self, s: f64) -> usize {
+        let mut k = self.buckets.start(s);
+        while k < self.knots.len() && self.knots[k] < s {
+            k += 1;
+        }
+        k
     }
 
     /// Whether the extinction is zero for every value in `[lo, hi]`: every linear piece of the
@@ -277,7 +357,7 @@ impl SegmentIntegrator {
         let mut acc = Accumulator::default();
         let ds = s_b - s_f;
         if ds == 0.0 || !ds.is_finite() {
-            let line = &self.lines[self.knots.partition_point(|&x| x <= s_f)];
+            let line = &self.lines[self.count_at_most(s_f)];
             let (tau, c) = (line.tau(s_f), line.color(s_f));
             acc.piece(len, [tau, tau], c, c);
             return acc.rgba();
@@ -294,7 +374,7 @@ impl SegmentIntegrator {
         };
         let (mut sa, mut ta) = (s_f, 0.0);
         if ds > 0.0 {
-            let mut k = self.knots.partition_point(|&x| x <= s_f);
+            let mut k = self.count_at_most(s_f);
             while k < self.knots.len() && self.knots[k] < s_b {
                 let (sb, tb) = (self.knots[k], to_t(self.knots[k]));
                 emit(k, sa, sb, ta, tb);
@@ -302,7 +382,7 @@ impl SegmentIntegrator {
             }
             emit(k, sa, s_b, ta, len);
         } else {
-            let mut k = self.knots.partition_point(|&x| x < s_f);
+            let mut k = self.count_below(s_f);
             while k > 0 && self.knots[k - 1] > s_b {
                 let (sb, tb) = (self.knots[k - 1], to_t(self.knots[k - 1]));
                 emit(k, sa, sb, ta, tb);
@@ -359,6 +439,8 @@ impl Accumulator {
         }
         let beta = finite_or_zero((tau[1] - tau[0]) / len);
         let dc = [0, 1, 2].map(|k| finite_or_zero((c_b[k] - c_a[k]) / len));
+        // A piece thinner than a depth step is one sub-interval: no step to solve for.
+        let single = self.depth - depth0 < SINGLE_STEP_DEPTH;
         let (mut u0, mut q0) = (0.0, depth0);
         let mut e0 = self.transmittance;
         loop {
@@ -368,7 +450,11 @@ impl Accumulator {
                 (tau[0] + beta * u0).max(0.0)
             };
             let rest = len - u0;
-            let h = step_for_depth(alpha, beta, DEPTH_STEP);
+            let h = if single {
+                f64::INFINITY
+            } else {
+                step_for_depth(alpha, beta, DEPTH_STEP)
+            };
             self.subintervals += 1;
             let last =
                 h.is_nan() || h >= rest || u0 + h <= u0 || self.subintervals >= MAX_SUBINTERVALS;
@@ -590,6 +676,23 @@ mod tests {
         }
         eprintln!("split + composite vs whole: max |error| {worst:.2e}");
         assert!(worst < 1e-12, "{worst}");
+    }
+
+    #[test]
+    fn knot_buckets_find_the_binary_search_counts() {
+        let mut rng = TestRng::new(5);
+        for _ in 0..20 {
+            let seg = SegmentIntegrator::new(&random_tf(&mut rng, 2));
+            let knots = &seg.knots;
+            let probes = knots
+                .iter()
+                .flat_map(|&k| [k, k.next_up(), k.next_down()])
+                .chain((0..200).map(|_| rng.unit() * 200.0 - 50.0));
+            for s in probes {
+                assert_eq!(seg.count_at_most(s), knots.partition_point(|&x| x <= s));
+                assert_eq!(seg.count_below(s), knots.partition_point(|&x| x < s));
+            }
+        }
     }
 
     #[test]

@@ -224,7 +224,7 @@ impl<'a> PixelContext<'a> {
                     self.early.is_none_or(|e| acc[3] < e)
                 };
                 let outcome = match visible {
-                    Some(vis) => walker.trace_visible(vis, o, d, sink),
+                    Some(vis) => walker.trace_visible(vis, o, d, scratch, sink),
                     None => walker.trace(o, d, scratch, sink),
                 };
                 let out = PixelOut {

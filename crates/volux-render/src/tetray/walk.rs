@@ -69,6 +69,9 @@ pub struct WalkOutcome {
 pub(crate) struct Scratch {
     visited: Vec<u32>,
     queue: Vec<u32>,
+    /// The first visible cell of the previous ray ([`Walker::trace_visible`]): neighbouring
+    /// rays mostly start in the same cell, and the hierarchy prunes against it.
+    first: Option<u32>,
 }
 
 /// A ray tracer over one mesh's geometry.
@@ -171,6 +174,7 @@ impl Walker<'_> {
         vis: &Visibility,
         o: DVec3,
         d: DVec3,
+        scratch: &mut Scratch,
         mut sink: impl FnMut(&WalkSegment) -> bool,
     ) -> WalkOutcome {
         let mut out = WalkOutcome::default();
@@ -179,7 +183,13 @@ impl Walker<'_> {
         }
         let geo = self.geo;
         let mut t = 0.0f64;
-        let mut next = vis.bvh.nearest(geo, o, d, 0.0);
+        let candidate = scratch
+            .first
+            .and_then(|c| geo.clip(c as usize, o, d).map(|clip| Hit { tet: c, clip }));
+        let mut next = vis.bvh.nearest_from(geo, o, d, 0.0, candidate);
+        if let Some(h) = next {
+            scratch.first = Some(h.tet);
+        }
         let mut steps = 0usize;
         while let Some(hit) = next {
             steps += 1;
