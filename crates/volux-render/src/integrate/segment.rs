@@ -245,7 +245,7 @@ impl KnotBuckets {
     #[inline]
     fn start(&self, s: f64) -> usize {
         let x = (s - self.lo) * self.scale;
-        if self.first.is_empty() || !(x >= 1.0) {
+        if self.first.is_empty() || x.is_nan() || x < 1.0 {
             return 0;
         }
         self.first[(x as usize).min(KNOT_BUCKETS - 1)] as usize
