@@ -437,8 +437,9 @@ impl Accumulator {
         if (tau[0] == 0.0 && tau[1] == 0.0) || depth0 > MAX_COLOUR_DEPTH {
             return;
         }
-        let beta = finite_or_zero((tau[1] - tau[0]) / len);
-        let dc = [0, 1, 2].map(|k| finite_or_zero((c_b[k] - c_a[k]) / len));
+        let inv_len = 1.0 / len;
+        let beta = finite_or_zero((tau[1] - tau[0]) * inv_len);
+        let dc = [0, 1, 2].map(|k| finite_or_zero((c_b[k] - c_a[k]) * inv_len));
         // A piece thinner than a depth step is one sub-interval: no step to solve for.
         let single = self.depth - depth0 < SINGLE_STEP_DEPTH;
         let (mut u0, mut q0) = (0.0, depth0);
@@ -538,17 +539,38 @@ const INV_K: [f64; 24] = {
     a
 };
 
+/// `SERIES_LIMIT[n - 1]`: the largest `y_max` for which the Taylor series of `expm1(y)`,
+/// `0 <= y <= y_max`, may be truncated at degree `n` ([`series_degree`]), a little below
+/// `(3.7e-18 (n + 1)!)^(1/n)`.
+const SERIES_LIMIT: [f64; 19] = [
+    7.392600e-18,
+    4.706976e-09,
+    4.456937e-06,
+    1.450144e-04,
+    1.215269e-03,
+    5.144433e-03,
+    1.469739e-02,
+    3.277639e-02,
+    6.188161e-02,
+    1.038727e-01,
+    1.599477e-01,
+    2.307308e-01,
+    3.163937e-01,
+    4.167747e-01,
+    5.314800e-01,
+    6.599634e-01,
+    8.015864e-01,
+    9.556617e-01,
+    1.121484e+00,
+];
+
 /// The degree `n` at which the Taylor series of `expm1(y)`, `0 <= y <= y_max <= 1`, is
 /// truncated: the remainder relative to `expm1(y)` is at most `y_max^n e / (n + 1)!`, kept
-/// below `1e-17` (under a tenth of an ulp). 19 terms at `y_max = 1`, 10 at `0.1`.
+/// below `1e-17` (under a tenth of an ulp). 19 terms at `y_max = 1`, 10 at `0.1`. (The
+/// limits are compared independently, without a chain of multiplications.)
 #[inline]
 fn series_degree(y_max: f64) -> usize {
-    let (mut n, mut term) = (1, 0.5 * y_max);
-    while term > 3.7e-18 && n < INV_K.len() - 2 {
-        n += 1;
-        term *= y_max * INV_K[n + 1];
-    }
-    n
+    1 + SERIES_LIMIT.iter().filter(|&&l| y_max > l).count()
 }
 
 /// `expm1(y)` of each `y` in `[0, 1]` by its Taylor series to degree `n` ([`series_degree`]),
@@ -676,6 +698,18 @@ mod tests {
         }
         eprintln!("split + composite vs whole: max |error| {worst:.2e}");
         assert!(worst < 1e-12, "{worst}");
+    }
+
+    #[test]
+    fn series_degree_bounds_the_remainder() {
+        for i in 0..=2000 {
+            let y = f64::from(i) / 2000.0;
+            let n = series_degree(y);
+            // y^n / (n + 1)!, the remainder bound without the factor e^y.
+            let term = (1..=n).fold(1.0, |t, k| t * y / (k + 1) as f64);
+            assert!(term <= 3.7e-18, "{y}: degree {n}, {term:e}");
+            assert!(n <= 20);
+        }
     }
 
     #[test]

@@ -164,6 +164,23 @@ impl Geometry {
     /// misses the cell, touches it in a point or the cell is skipped.
     #[inline]
     pub fn clip(&self, t: usize, o: DVec3, d: DVec3) -> Option<Clip> {
+        self.clip_entered(t, o, d, u32::MAX, 0.0)
+    }
+
+    /// [`Geometry::clip`] of tet `t` entered through face `face` (an index into `faces`, or
+    /// `u32::MAX` for none) at `t_entry`, where the ray left the neighbour across it: the
+    /// neighbour's exit parameter is bit-identical to the one this clip would compute for
+    /// the face (the same plane read with the opposite sign, see the module documentation),
+    /// so it is taken instead of computed.
+    #[inline]
+    pub fn clip_entered(
+        &self,
+        t: usize,
+        o: DVec3,
+        d: DVec3,
+        face: u32,
+        t_entry: f64,
+    ) -> Option<Clip> {
         if !self.usable(t) {
             return None;
         }
@@ -172,6 +189,10 @@ impl Geometry {
         let mut t_out = f64::INFINITY;
         let mut exit = 0u8;
         for (f, &code) in codes.iter().enumerate() {
+            if code & !FLIP == face {
+                t_in = t_in.max(t_entry);
+                continue;
+            }
             let pl = &self.faces[(code & !FLIP) as usize];
             let mut num = pl.n.dot(o - pl.a.as_dvec3());
             let mut den = pl.n.dot(d);

@@ -24,7 +24,7 @@ use glam::DVec3;
 use volux_core::mesh::NO_NEIGHBOR;
 
 use super::bvh::{Bvh, Hit};
-use super::geom::Geometry;
+use super::geom::{Geometry, FLIP};
 use super::skip::Visibility;
 
 /// Most cells the local search around an edge or vertex visits.
@@ -206,7 +206,8 @@ impl Walker<'_> {
             let nb = geo.adj[hit.tet as usize][hit.clip.exit as usize];
             let shown = nb != NO_NEIGHBOR && vis.is_visible(nb);
             if shown {
-                if let Some(clip) = geo.clip(nb as usize, o, d) {
+                let face = geo.tet_faces[hit.tet as usize][hit.clip.exit as usize] & !FLIP;
+                if let Some(clip) = geo.clip_entered(nb as usize, o, d, face, t) {
                     if clip.t_out > t {
                         next = Some(Hit { tet: nb, clip });
                         continue;
@@ -258,7 +259,8 @@ impl Walker<'_> {
             t = seg.t_out;
             let nb = geo.adj[tet][hit.clip.exit as usize];
             if nb != NO_NEIGHBOR {
-                if let Some(clip) = geo.clip(nb as usize, o, d) {
+                let face = geo.tet_faces[tet][hit.clip.exit as usize] & !FLIP;
+                if let Some(clip) = geo.clip_entered(nb as usize, o, d, face, t) {
                     if clip.t_out > t {
                         next = Some(Hit { tet: nb, clip });
                         continue;
