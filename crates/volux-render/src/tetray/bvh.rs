@@ -14,8 +14,11 @@
 //!
 //! Nodes are a flat array (children of an inner node are adjacent), built by median split of
 //! the primitives' centroids on the widest axis, at most [`LEAF`] primitives per leaf; boxes
-//! are `f64`, padded by a small multiple of the mesh size so that rays lying in a box face are
-//! never rejected. Traversal is nearest child first with pruning against the best hit.
+//! are padded by a small multiple of the mesh size so that rays lying in a box face are
+//! never rejected, and stored as `f32` rounded outward (the slab test is in `f64`). Each
+//! primitive's own box is kept too and tested before its clip. Traversal is nearest child
+//! first, children culled before they are pushed, with pruning against the best hit (which
+//! a caller may seed with a candidate, e.g. the neighbouring ray's answer).
 use glam::DVec3;
 
 use super::geom::{Clip, Geometry};
