@@ -128,7 +128,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
         // entering the mesh exactly through a boundary edge or vertex may continue in a cell
         // that only touches the boundary there.
         let mut on_boundary = vec![false; m.positions().len()];
-        for (t, adj) in geo.adj.iter().enumerate() {
+        for (t, adj) in geo.cells.iter().map(|c| c.adj).enumerate() {
             for (f, &nb) in adj.iter().enumerate() {
                 if nb == NO_NEIGHBOR {
                     for s in FACES[f] {

@@ -24,7 +24,7 @@ use glam::DVec3;
 use volux_core::mesh::NO_NEIGHBOR;
 
 use super::bvh::{Bvh, Hit};
-use super::geom::{Geometry, FLIP};
+use super::geom::Geometry;
 use super::skip::Visibility;
 
 /// Most cells the local search around an edge or vertex visits.
@@ -120,7 +120,7 @@ impl Walker<'_> {
         while head < scratch.queue.len() {
             let x = scratch.queue[head] as usize;
             head += 1;
-            for &y in &geo.adj[x] {
+            for y in geo.adj(x) {
                 if y == NO_NEIGHBOR || scratch.visited.contains(&y) {
                     continue;
                 }
@@ -203,10 +203,10 @@ impl Walker<'_> {
                 break;
             }
             t = seg.t_out;
-            let nb = geo.adj[hit.tet as usize][hit.clip.exit as usize];
+            let nb = geo.adj(hit.tet as usize)[hit.clip.exit as usize];
             let shown = nb != NO_NEIGHBOR && vis.is_visible(nb);
             if shown {
-                let face = geo.tet_faces[hit.tet as usize][hit.clip.exit as usize] & !FLIP;
+                let face = geo.face_id(hit.tet as usize, hit.clip.exit as usize);
                 if let Some(clip) = geo.clip_entered(nb as usize, o, d, face, t) {
                     if clip.t_out > t {
                         next = Some(Hit { tet: nb, clip });
@@ -257,9 +257,9 @@ impl Walker<'_> {
                 break;
             }
             t = seg.t_out;
-            let nb = geo.adj[tet][hit.clip.exit as usize];
+            let nb = geo.adj(tet)[hit.clip.exit as usize];
             if nb != NO_NEIGHBOR {
-                let face = geo.tet_faces[tet][hit.clip.exit as usize] & !FLIP;
+                let face = geo.face_id(tet, hit.clip.exit as usize);
                 if let Some(clip) = geo.clip_entered(nb as usize, o, d, face, t) {
                     if clip.t_out > t {
                         next = Some(Hit { tet: nb, clip });
