@@ -20,6 +20,7 @@
 //! first, children culled before they are pushed, with pruning against the best hit (which
 //! a caller may seed with a candidate, e.g. the neighbouring ray's answer).
 use glam::DVec3;
+use volux_core::RayGenerator;
 
 use super::geom::{Clip, Geometry};
 
@@ -95,6 +96,51 @@ pub(crate) struct Bvh {
     /// The padded box of each primitive (as a node without children), tested before its
     /// clip.
     prim_boxes: Vec<Node>,
+}
+
+/// The region swept by the rays of a block of pixels: four planes `n . (p - a) >= 0` through
+/// the block's corner rays (a pyramid from a perspective eye, a prism for an orthographic
+/// camera), built by [`Frustum::of_block`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Frustum {
+    planes: [(DVec3, DVec3); 4],
+}
+
+impl Frustum {
+    /// The frustum of the pixel centres in `[x0, x1] x [y0, y1]` (pixel coordinates) of the
+    /// rays of `rays`: the corner rays span the others (directions and origins are affine in
+    /// the pixel coordinates before normalization). `None` when a plane is degenerate.
+    pub fn of_block(rays: &RayGenerator, [x0, y0, x1, y1]: [f64; 4]) -> Option<Self> {
+        let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| rays.ray(x, y));
+        let centre = rays.ray(0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        let inside = centre.origin + centre.dir;
+        let mut planes = [(DVec3::ZERO, DVec3::ZERO); 4];
+        for (i, plane) in planes.iter_mut().enumerate() {
+            let (a, b) = (corners[i], corners[(i + 1) % 4]);
+            let n = a.dir.cross(b.origin + b.dir - a.origin);
+            let side = n.dot(inside - a.origin);
+            if !(n.is_finite() && side.is_finite() && side != 0.0) {
+                return None;
+            }
+            *plane = (if side > 0.0 { n } else { -n }, a.origin);
+        }
+        Some(Self { planes })
+    }
+
+    /// Whether the box may meet the frustum: not entirely outside one of its planes (with a
+    /// relative margin far above the rounding of the test).
+    #[inline]
+    fn may_meet(&self, node: &Node) -> bool {
+        let lo = DVec3::from_array(node.lo.map(f64::from));
+        let hi = DVec3::from_array(node.hi.map(f64::from));
+        let (c, e) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+        self.planes.iter().all(|&(n, a)| {
+            let reach = n.abs().dot(e);
+            let s = n.dot(c - a) + reach;
+            let tol = 1e-9 * (n.length() * (c - a).length() + reach);
+            s >= -tol || s.is_nan()
+        })
+    }
 }
 
 /// A hit of [`Bvh::nearest`]: the tet and its clip.
@@ -300,6 +346,37 @@ impl Bvh {
             }
         }
         best
+    }
+
+    /// Whether some primitive's box may meet `frustum`: `false` proves that no ray of the
+    /// frustum hits a primitive ([`Bvh::nearest`] gives `None` for each of them).
+    pub fn may_meet(&self, frustum: &Frustum) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if !frustum.may_meet(node) {
+                continue;
+            }
+            if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                if self.prim_boxes[range].iter().any(|b| frustum.may_meet(b)) {
+                    return true;
+                }
+                continue;
+            }
+            if sp + 2 > stack.len() {
+                return true;
+            }
+            stack[sp] = node.first;
+            stack[sp + 1] = node.first + 1;
+            sp += 2;
+        }
+        false
     }
 
     fn nearest_linear(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {

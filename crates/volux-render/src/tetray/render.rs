@@ -8,9 +8,9 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::mesh::{FACES, NO_NEIGHBOR};
-use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
+use volux_core::{Camera, Image, Projection, RayGenerator, TetMesh, TransferFunction};
 
-use super::bvh::Bvh;
+use super::bvh::{Bvh, Frustum};
 use super::geom::Geometry;
 use super::options::TetRayOptions;
 use super::pixel::{PixelContext, PixelOut, Tables};
@@ -22,7 +22,7 @@ use crate::integrate::psi::PsiTable;
 use crate::integrate::SegmentRule;
 use crate::renderer::{frame, wrong_method, Renderer};
 use crate::scene::{Method, Scene, MESH_UNITS_PER_DIAGONAL};
-use crate::tiles::{render_tiles, Control, TileGrid, TILE};
+use crate::tiles::{render_tiles, Control, Rect, TileGrid, TILE};
 
 impl TetRayStats {
     /// Counts one ray's pixel and walk.
@@ -359,16 +359,23 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             &tiny
         };
         let ctx = PixelContext::new(&self.mesh, opts, &tables, gradients, psi);
-        let camera = opts.camera;
+        let rays = opts.camera.rays(w, h);
         let grid = TileGrid::new(w, h, TILE);
         let tiled = render_tiles(&grid, &opts.control, |_, r| {
             let mut out = Vec::with_capacity(r.area());
             let mut stats = TetRayStats::default();
             let mut scratch = Scratch::default();
             let mut segments = Vec::new();
+            let empty = visible.map(|v| empty_blocks(&v.bvh, &rays, r));
             for y in r.y0..r.y1 {
                 for x in r.x0..r.x1 {
-                    let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                    if empty.as_ref().is_some_and(|e| e.contains(x, y)) {
+                        // No visible cell meets this block's rays: nothing to walk.
+                        stats.add_ray(&PixelOut::default(), &WalkOutcome::default());
+                        out.push(PixelOut::default());
+                        continue;
+                    }
+                    let ray = rays.ray(x as f64 + 0.5, y as f64 + 0.5);
                     let (px, outcome) = ctx.pixel(
                         &walker,
                         visible,
@@ -400,6 +407,50 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             error_map,
             stats,
         })
+    }
+}
+
+/// Side in pixels of the blocks whose rays are culled together against the hierarchy of
+/// visible cells.
+const BLOCK: usize = 4;
+
+/// The blocks of a tile whose rays meet no visible cell ([`Bvh::may_meet`] of the block's
+/// frustum), as a bit per block.
+struct EmptyBlocks {
+    rect: Rect,
+    /// Blocks per row.
+    across: usize,
+    empty: Vec<bool>,
+}
+
+impl EmptyBlocks {
+    /// Whether pixel `(x, y)` of the tile lies in an empty block.
+    #[inline]
+    fn contains(&self, x: usize, y: usize) -> bool {
+        let (bx, by) = ((x - self.rect.x0) / BLOCK, (y - self.rect.y0) / BLOCK);
+        self.empty[by * self.across + bx]
+    }
+}
+
+/// The empty blocks of tile `rect` for the hierarchy `bvh` of visible cells and the rays
+/// `rays` (a block whose frustum cannot be built is not empty).
+fn empty_blocks(bvh: &Bvh, rays: &RayGenerator, rect: Rect) -> EmptyBlocks {
+    let (across, down) = (rect.width().div_ceil(BLOCK), rect.height().div_ceil(BLOCK));
+    let mut empty = Vec::with_capacity(across * down);
+    for by in 0..down {
+        for bx in 0..across {
+            let x0 = rect.x0 + bx * BLOCK;
+            let y0 = rect.y0 + by * BLOCK;
+            let (x1, y1) = ((x0 + BLOCK).min(rect.x1), (y0 + BLOCK).min(rect.y1));
+            // The pixel centres' extent, widened to the pixels' edges.
+            let block = [x0 as f64, y0 as f64, x1 as f64, y1 as f64];
+            empty.push(Frustum::of_block(rays, block).is_some_and(|f| !bvh.may_meet(&f)));
+        }
+    }
+    EmptyBlocks {
+        rect,
+        across,
+        empty,
     }
 }
 
