@@ -51,6 +51,9 @@
 //! so the image is the one of the full walk (equal in the tests, bit for bit on the bench
 //! meshes); the statistics then count the visible cells' segments only, with the jumps over
 //! invisible runs as `skips`. With more than 90 % of the cells visible the full walk is used.
+//! Before walking, each tile's 4 x 4 pixel blocks whose frustum (the planes through the
+//! block's corner rays) meets no visible cell's box are left empty without a query: no ray of
+//! such a block can find a visible cell, so this changes nothing either.
 //! On the issue-17 workload (`tets_200k`, the 37-knot TF, 512 x 512) 28 % of the segments
 //! are visible; the walk makes about 1.3 hierarchy queries per ray (the entry, a few jumps,
 //! the last exit).
