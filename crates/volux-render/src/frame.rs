@@ -135,7 +135,9 @@ pub struct PtStats {
 pub struct TetRayStats {
     /// Rays cast (one per pixel).
     pub rays: u64,
-    /// Segments integrated (cells crossed, summed over rays).
+    /// Segments integrated (cells crossed, summed over rays). With empty-space skipping
+    /// ([`TetRayOptions::skip_empty`](crate::tetray::TetRayOptions::skip_empty)) only the
+    /// visible cells' segments are walked and counted.
     pub segments: u64,
     /// Scalar values evaluated: the medium samples of the adaptive rule, two per segment
     /// otherwise.
@@ -152,6 +154,11 @@ pub struct TetRayStats {
     pub local_searches: u64,
     /// Rays stopped by the step bound.
     pub abandoned: u64,
+    /// Jumps over runs of invisible cells through the hierarchy of visible cells (empty-space
+    /// skipping), summed over rays.
+    pub skips: u64,
+    /// Visible cells of the frame's TF and isovalues when it skips empty space, 0 otherwise.
+    pub visible_cells: usize,
     /// Cells in the per-frame start set (camera inside the mesh), 0 otherwise.
     pub start_cells: usize,
     /// Tetrahedra in the mesh.

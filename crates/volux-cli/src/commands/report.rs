@@ -171,6 +171,8 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
             "reentries_per_ray": reentries_per_ray,
             "recovered": s.recovered,
             "abandoned": s.abandoned,
+            "skips": s.skips,
+            "visible_cells": s.visible_cells,
             "bytes_per_tet": s.bytes_per_tet,
             "color": colour,
             "integrator": mode,
@@ -183,13 +185,16 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
     if args.stats {
         eprintln!(
             "{}{w}x{h} tet ray casting ({mode}): {:.1} ms, {} rays, {} segments, {} samples, \
-             {reentries_per_ray:.3} re-entries per ray, {} abandoned, {} rays over tolerance \
+             {reentries_per_ray:.3} re-entries per ray, {} skips over invisible cells ({} \
+             visible cells), {} abandoned, {} rays over tolerance \
              (max estimated error {max_error:.2e}), {:.0} bytes/tet of acceleration structures",
             frame_prefix(args),
             s.seconds * 1e3,
             s.rays,
             s.segments,
             s.samples,
+            s.skips,
+            s.visible_cells,
             s.abandoned,
             s.rays_over_tolerance,
             s.bytes_per_tet

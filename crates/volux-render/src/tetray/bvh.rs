@@ -14,23 +14,78 @@
 //!
 //! Nodes are a flat array (children of an inner node are adjacent), built by median split of
 //! the primitives' centroids on the widest axis, at most [`LEAF`] primitives per leaf; boxes
-//! are `f64`, padded by a small multiple of the mesh size so that rays lying in a box face are
-//! never rejected. Traversal is nearest child first with pruning against the best hit.
+//! are padded by a small multiple of the mesh size so that rays lying in a box face are
+//! never rejected, and stored as `f32` rounded outward (the slab test is in `f64`). Each
+//! primitive's own box is kept too and tested before its clip. Traversal is nearest child
+//! first, children culled before they are pushed, with pruning against the best hit (which
+//! a caller may seed with a candidate, e.g. the neighbouring ray's answer).
 use glam::DVec3;
+use volux_core::RayGenerator;
 
 use super::geom::{Clip, Geometry};
 
 /// Most primitives in a leaf.
 pub(crate) const LEAF: usize = 4;
 
-/// A node: its box, then either two children at `first`, `first + 1` (`count == 0`) or
-/// `count` primitives from `first` in the primitive array.
+/// A node: its box (`f32`, rounded outward from the `f64` box), then either two children at
+/// `first`, `first + 1` (`count == 0`) or `count` primitives from `first` in the primitive
+/// array.
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    lo: DVec3,
-    hi: DVec3,
+    lo: [f32; 3],
+    hi: [f32; 3],
     first: u32,
     count: u32,
+}
+
+/// `v` rounded to an `f32` no larger than it.
+fn f32_down(v: f64) -> f32 {
+    let f = v as f32;
+    if f64::from(f) > v {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// `v` rounded to an `f32` no smaller than it.
+fn f32_up(v: f64) -> f32 {
+    let f = v as f32;
+    if f64::from(f) < v {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+impl Node {
+    const EMPTY: Node = Node {
+        lo: [0.0; 3],
+        hi: [0.0; 3],
+        first: 0,
+        count: 0,
+    };
+
+    /// The parameters `(near, far)` where the ray `o + t d` (`inv = 1 / d`) enters and leaves
+    /// the box, in `f64`.
+    #[inline(always)]
+    fn slab(&self, o: DVec3, inv: DVec3) -> (f64, f64) {
+        let lo = DVec3::new(self.lo[0].into(), self.lo[1].into(), self.lo[2].into());
+        let hi = DVec3::new(self.hi[0].into(), self.hi[1].into(), self.hi[2].into());
+        let a = (lo - o) * inv;
+        let b = (hi - o) * inv;
+        // f64::min/max ignore a NaN (0 * inf: the origin on a padded face, parallel).
+        let near = a.x.min(b.x).max(a.y.min(b.y)).max(a.z.min(b.z));
+        let far = a.x.max(b.x).min(a.y.max(b.y)).min(a.z.max(b.z));
+        (near, far)
+    }
+}
+
+/// Whether a box the ray crosses over `(near, far)` may hold a hit past `t_lo` starting no
+/// later than `best_key` (kept when a comparison is NaN).
+#[inline(always)]
+fn may_hold((near, far): (f64, f64), t_lo: f64, best_key: f64) -> bool {
+    !(far < t_lo || near > far || near > best_key)
 }
 
 /// The hierarchy.
@@ -38,6 +93,54 @@ struct Node {
 pub(crate) struct Bvh {
     nodes: Vec<Node>,
     prims: Vec<u32>,
+    /// The padded box of each primitive (as a node without children), tested before its
+    /// clip.
+    prim_boxes: Vec<Node>,
+}
+
+/// The region swept by the rays of a block of pixels: four planes `n . (p - a) >= 0` through
+/// the block's corner rays (a pyramid from a perspective eye, a prism for an orthographic
+/// camera), built by [`Frustum::of_block`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Frustum {
+    planes: [(DVec3, DVec3); 4],
+}
+
+impl Frustum {
+    /// The frustum of the pixel centres in `[x0, x1] x [y0, y1]` (pixel coordinates) of the
+    /// rays of `rays`: the corner rays span the others (directions and origins are affine in
+    /// the pixel coordinates before normalization). `None` when a plane is degenerate.
+    pub fn of_block(rays: &RayGenerator, [x0, y0, x1, y1]: [f64; 4]) -> Option<Self> {
+        let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| rays.ray(x, y));
+        let centre = rays.ray(0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        let inside = centre.origin + centre.dir;
+        let mut planes = [(DVec3::ZERO, DVec3::ZERO); 4];
+        for (i, plane) in planes.iter_mut().enumerate() {
+            let (a, b) = (corners[i], corners[(i + 1) % 4]);
+            let n = a.dir.cross(b.origin + b.dir - a.origin);
+            let side = n.dot(inside - a.origin);
+            if !(n.is_finite() && side.is_finite() && side != 0.0) {
+                return None;
+            }
+            *plane = (if side > 0.0 { n } else { -n }, a.origin);
+        }
+        Some(Self { planes })
+    }
+
+    /// Whether the box may meet the frustum: not entirely outside one of its planes (with a
+    /// relative margin far above the rounding of the test).
+    #[inline]
+    fn may_meet(&self, node: &Node) -> bool {
+        let lo = DVec3::from_array(node.lo.map(f64::from));
+        let hi = DVec3::from_array(node.hi.map(f64::from));
+        let (c, e) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+        self.planes.iter().all(|&(n, a)| {
+            let reach = n.abs().dot(e);
+            let s = n.dot(c - a) + reach;
+            let tol = 1e-9 * (n.length() * (c - a).length() + reach);
+            s >= -tol || s.is_nan()
+        })
+    }
 }
 
 /// A hit of [`Bvh::nearest`]: the tet and its clip.
@@ -82,12 +185,7 @@ impl Bvh {
             .map(|(i, &t)| (t, i as u32))
             .collect();
         let mut nodes = Vec::with_capacity(2 * items.len() / LEAF + 2);
-        nodes.push(Node {
-            lo: DVec3::ZERO,
-            hi: DVec3::ZERO,
-            first: 0,
-            count: 0,
-        });
+        nodes.push(Node::EMPTY);
         let mut stack = vec![(0usize, 0usize, items.len())];
         while let Some((node, begin, end)) = stack.pop() {
             let slice = &mut items[begin..end];
@@ -101,8 +199,8 @@ impl Bvh {
                 clo = clo.min(c);
                 chi = chi.max(c);
             }
-            nodes[node].lo = lo;
-            nodes[node].hi = hi;
+            nodes[node].lo = lo.to_array().map(f32_down);
+            nodes[node].hi = hi.to_array().map(f32_up);
             let ext = chi - clo;
             if slice.len() <= LEAF || ext.max_element() <= 0.0 {
                 nodes[node].first = begin as u32;
@@ -125,27 +223,35 @@ impl Bvh {
                 centre(x.1).total_cmp(&centre(y.1)).then(x.0.cmp(&y.0))
             });
             let left = nodes.len();
-            for _ in 0..2 {
-                nodes.push(Node {
-                    lo: DVec3::ZERO,
-                    hi: DVec3::ZERO,
-                    first: 0,
-                    count: 0,
-                });
-            }
+            nodes.extend([Node::EMPTY; 2]);
             nodes[node].first = left as u32;
             stack.push((left + 1, begin + mid, end));
             stack.push((left, begin, begin + mid));
         }
+        let prim_boxes = items
+            .iter()
+            .map(|&(_, b)| {
+                let (lo, hi) = bounds[b as usize];
+                Node {
+                    lo: lo.to_array().map(f32_down),
+                    hi: hi.to_array().map(f32_up),
+                    ..Node::EMPTY
+                }
+            })
+            .collect();
         prims = items.into_iter().map(|(t, _)| t).collect();
-        Self { nodes, prims }
+        Self {
+            nodes,
+            prims,
+            prim_boxes,
+        }
     }
 
     /// Peak bytes per cell while [`Bvh::build`] builds: the cell list, its padded box, the
-    /// (cell, box) pairs and the nodes (at most two per leaf).
+    /// (cell, box) pairs, its box in the hierarchy and the nodes (at most two per leaf).
     pub fn build_bytes_per_cell() -> u64 {
         let node = std::mem::size_of::<Node>();
-        (4 + std::mem::size_of::<(DVec3, DVec3)>() + 8 + (2 * node).div_ceil(LEAF)) as u64
+        (4 + std::mem::size_of::<(DVec3, DVec3)>() + 8 + node + (2 * node).div_ceil(LEAF)) as u64
     }
 
     /// Number of primitives.
@@ -155,44 +261,57 @@ impl Bvh {
 
     /// Bytes of the nodes and primitive list.
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node>() + self.prims.len() * 4
+        (self.nodes.len() + self.prim_boxes.len()) * std::mem::size_of::<Node>()
+            + self.prims.len() * 4
     }
 
     /// The cell whose clip reaches past `t_lo` and starts first (`max(t_in, t_lo)`, ties by
     /// index), or `None`.
     pub fn nearest(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {
+        self.nearest_from(geo, o, d, t_lo, None)
+    }
+
+    /// [`Bvh::nearest`] given a `candidate`, a hit of one of the primitives (e.g. the answer
+    /// for a neighbouring ray, clipped with this one): the answer is the same, but the
+    /// traversal prunes against the candidate from the start.
+    pub fn nearest_from(
+        &self,
+        geo: &Geometry,
+        o: DVec3,
+        d: DVec3,
+        t_lo: f64,
+        candidate: Option<Hit>,
+    ) -> Option<Hit> {
         if self.nodes.is_empty() {
             return None;
         }
         let inv = DVec3::ONE / d;
-        let slab = |n: &Node| -> (f64, f64) {
-            let a = (n.lo - o) * inv;
-            let b = (n.hi - o) * inv;
-            // f64::min/max ignore a NaN (0 * inf: the origin on a padded face, parallel).
-            let near = a.x.min(b.x).max(a.y.min(b.y)).max(a.z.min(b.z));
-            let far = a.x.max(b.x).min(a.y.max(b.y)).min(a.z.max(b.z));
-            (near, far)
-        };
-        let mut best: Option<Hit> = None;
-        let mut best_key = f64::INFINITY;
-        let mut stack: [u32; 64] = [0; 64];
-        let mut sp = 0usize;
-        let (near, far) = slab(&self.nodes[0]);
-        if !(far >= t_lo && near <= far) {
-            return None;
+        let mut best = candidate.filter(|h| h.clip.t_out > t_lo);
+        let mut best_key = best.map_or(f64::INFINITY, |h| h.key(t_lo));
+        // Nodes to visit, with the parameter where the ray enters their box.
+        let mut stack: [(u32, f64); 64] = [(0, 0.0); 64];
+        let root = self.nodes[0].slab(o, inv);
+        if !may_hold(root, t_lo, best_key) {
+            return best;
         }
-        stack[0] = 0;
-        sp += 1;
+        stack[0] = (0, root.0);
+        let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;
-            let node = &self.nodes[stack[sp] as usize];
-            let (near, far) = slab(node);
-            if far < t_lo || near > far || near > best_key {
+            let (index, near) = stack[sp];
+            if near > best_key {
                 continue;
             }
+            let node = &self.nodes[index as usize];
             if node.count > 0 {
-                let first = node.first as usize;
-                for &t in &self.prims[first..first + node.count as usize] {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                for (&t, b) in self.prims[range.clone()]
+                    .iter()
+                    .zip(&self.prim_boxes[range])
+                {
+                    if !may_hold(b.slab(o, inv), t_lo, best_key) {
+                        continue;
+                    }
                     if let Some(clip) = geo.clip(t as usize, o, d) {
                         if clip.t_out > t_lo {
                             let hit = Hit { tet: t, clip };
@@ -206,19 +325,58 @@ impl Bvh {
                 continue;
             }
             let (l, r) = (node.first, node.first + 1);
-            let (nl, _) = slab(&self.nodes[l as usize]);
-            let (nr, _) = slab(&self.nodes[r as usize]);
-            // Push the farther child first so the nearer one is visited first.
-            let (first, second) = if nl <= nr { (r, l) } else { (l, r) };
+            let sl = self.nodes[l as usize].slab(o, inv);
+            let sr = self.nodes[r as usize].slab(o, inv);
+            let (hl, hr) = (may_hold(sl, t_lo, best_key), may_hold(sr, t_lo, best_key));
             if sp + 2 > stack.len() {
                 // Unreachable for median splits (depth <= log2(n) + 1); stay correct anyway.
                 return self.nearest_linear(geo, o, d, t_lo);
             }
-            stack[sp] = first;
-            stack[sp + 1] = second;
-            sp += 2;
+            // Push the farther child first so the nearer one is visited first.
+            let (first, second) = if sl.0 <= sr.0 {
+                ((r, sr.0, hr), (l, sl.0, hl))
+            } else {
+                ((l, sl.0, hl), (r, sr.0, hr))
+            };
+            for (child, near, hit) in [first, second] {
+                if hit {
+                    stack[sp] = (child, near);
+                    sp += 1;
+                }
+            }
         }
         best
+    }
+
+    /// Whether some primitive's box may meet `frustum`: `false` proves that no ray of the
+    /// frustum hits a primitive ([`Bvh::nearest`] gives `None` for each of them).
+    pub fn may_meet(&self, frustum: &Frustum) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if !frustum.may_meet(node) {
+                continue;
+            }
+            if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                if self.prim_boxes[range].iter().any(|b| frustum.may_meet(b)) {
+                    return true;
+                }
+                continue;
+            }
+            if sp + 2 > stack.len() {
+                return true;
+            }
+            stack[sp] = node.first;
+            stack[sp + 1] = node.first + 1;
+            sp += 2;
+        }
+        false
     }
 
     fn nearest_linear(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {

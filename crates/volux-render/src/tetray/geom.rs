@@ -34,18 +34,26 @@ pub(crate) struct Clip {
     pub exit: u8,
 }
 
+/// What the walk reads of one cell, in one 64-byte cache line (one memory access per cell
+/// stepped into, besides its face planes).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct Cell {
+    /// Scalar field, `s(p) = g . p + c` as `[g.x, g.y, g.z, c]`; `g.x` is NaN for a skipped
+    /// (degenerate or non-finite) cell.
+    pub field: [f64; 4],
+    /// Per face slot: index into `faces`, with [`FLIP`] set when the outward normal is `-n`.
+    pub faces: [u32; 4],
+    /// Neighbour across each face slot, or [`NO_NEIGHBOR`].
+    pub adj: [u32; 4],
+}
+
 /// The per-mesh structures of the walk.
 #[derive(Clone, Debug)]
 pub(crate) struct Geometry {
     pub faces: Vec<FacePlane>,
-    /// Per tet and face slot: index into `faces`, with [`FLIP`] set when the outward normal
-    /// is `-n`.
-    pub tet_faces: Vec<[u32; 4]>,
-    /// Neighbour across each face slot, or [`NO_NEIGHBOR`].
-    pub adj: Vec<[u32; 4]>,
-    /// Scalar field of each cell, `s(p) = g . p + c` as `[g.x, g.y, g.z, c]`; `g.x` is NaN
-    /// for a skipped (degenerate or non-finite) cell.
-    pub field: Vec<[f64; 4]>,
+    /// Per tet: its field, face planes and neighbours.
+    pub cells: Vec<Cell>,
     /// Diagonal of the mesh's bounding box (tolerances are relative to it).
     pub scale: f64,
 }
@@ -84,8 +92,14 @@ impl Geometry {
             })
             .collect();
         keys.par_sort_unstable();
-        let mut adj = vec![[NO_NEIGHBOR; 4]; tets.len()];
-        let mut tet_faces = vec![[0u32; 4]; tets.len()];
+        let mut cells = vec![
+            Cell {
+                field: [0.0; 4],
+                faces: [0; 4],
+                adj: [NO_NEIGHBOR; 4],
+            };
+            tets.len()
+        ];
         let mut faces = Vec::with_capacity(tets.len() * 2 + 16);
         let mut i = 0;
         while i < keys.len() {
@@ -105,30 +119,25 @@ impl Geometry {
                 let (t, f) = ((code >> 2) as usize, (code & 3) as usize);
                 let opp = pos[tets[t][f] as usize].as_dvec3();
                 let h = n.dot(opp - v[0]);
-                tet_faces[t][f] = id | if h > 0.0 { FLIP } else { 0 };
+                cells[t].faces[f] = id | if h > 0.0 { FLIP } else { 0 };
             }
             if j - i >= 2 {
                 let (a, b) = (keys[i].1, keys[i + 1].1);
-                adj[(a >> 2) as usize][(a & 3) as usize] = b >> 2;
-                adj[(b >> 2) as usize][(b & 3) as usize] = a >> 2;
+                cells[(a >> 2) as usize].adj[(a & 3) as usize] = b >> 2;
+                cells[(b >> 2) as usize].adj[(b & 3) as usize] = a >> 2;
             }
             i = j;
         }
         let scalars = mesh.scalars();
-        let field = tets
-            .par_iter()
-            .map(|tet| {
-                let p = tet.map(|v| pos[v as usize].as_dvec3());
-                let s = tet.map(|v| scalars[v as usize] as f64);
-                // A face plane through the opposite vertex makes the cell unusable too.
-                cell_field(p, s).unwrap_or([f64::NAN, 0.0, 0.0, 0.0])
-            })
-            .collect::<Vec<_>>();
+        cells.par_iter_mut().zip(tets).for_each(|(cell, tet)| {
+            let p = tet.map(|v| pos[v as usize].as_dvec3());
+            let s = tet.map(|v| scalars[v as usize] as f64);
+            // A face plane through the opposite vertex makes the cell unusable too.
+            cell.field = cell_field(p, s).unwrap_or([f64::NAN, 0.0, 0.0, 0.0]);
+        });
         let mut geo = Self {
             faces,
-            tet_faces,
-            adj,
-            field,
+            cells,
             scale: mesh.bounds().diagonal().max(f64::MIN_POSITIVE),
         };
         // The reference also rejects a cell when a face's height `h` is zero.
@@ -137,7 +146,7 @@ impl Geometry {
                 let (n, a) = geo.plane(t, f);
                 let h = n.dot(pos[tets[t][f] as usize].as_dvec3() - a);
                 if !(h < 0.0 && h.is_finite()) {
-                    geo.field[t][0] = f64::NAN;
+                    geo.cells[t].field[0] = f64::NAN;
                 }
             }
         }
@@ -147,16 +156,28 @@ impl Geometry {
     /// Outward normal and base point of face `f` of tet `t`.
     #[inline]
     pub fn plane(&self, t: usize, f: usize) -> (DVec3, DVec3) {
-        let code = self.tet_faces[t][f];
+        let code = self.cells[t].faces[f];
         let pl = &self.faces[(code & !FLIP) as usize];
         let n = if code & FLIP != 0 { -pl.n } else { pl.n };
         (n, pl.a.as_dvec3())
     }
 
+    /// The neighbours of tet `t` across its face slots ([`NO_NEIGHBOR`] for none).
+    #[inline]
+    pub fn adj(&self, t: usize) -> [u32; 4] {
+        self.cells[t].adj
+    }
+
+    /// The face of slot `f` of tet `t`: its index into `faces` (without [`FLIP`]).
+    #[inline]
+    pub fn face_id(&self, t: usize, f: usize) -> u32 {
+        self.cells[t].faces[f] & !FLIP
+    }
+
     /// Whether tet `t` is rendered (not degenerate, finite scalars).
     #[inline]
     pub fn usable(&self, t: usize) -> bool {
-        !self.field[t][0].is_nan()
+        !self.cells[t].field[0].is_nan()
     }
 
     /// The reference's clip of the ray `o + t d`, `t >= 0`, against tet `t`, with the exit
@@ -164,14 +185,36 @@ impl Geometry {
     /// misses the cell, touches it in a point or the cell is skipped.
     #[inline]
     pub fn clip(&self, t: usize, o: DVec3, d: DVec3) -> Option<Clip> {
-        if !self.usable(t) {
+        self.clip_entered(t, o, d, u32::MAX, 0.0)
+    }
+
+    /// [`Geometry::clip`] of tet `t` entered through face `face` (an index into `faces`, or
+    /// `u32::MAX` for none) at `t_entry`, where the ray left the neighbour across it: the
+    /// neighbour's exit parameter is bit-identical to the one this clip would compute for
+    /// the face (the same plane read with the opposite sign, see the module documentation),
+    /// so it is taken instead of computed.
+    #[inline]
+    pub fn clip_entered(
+        &self,
+        t: usize,
+        o: DVec3,
+        d: DVec3,
+        face: u32,
+        t_entry: f64,
+    ) -> Option<Clip> {
+        let cell = &self.cells[t];
+        if cell.field[0].is_nan() {
             return None;
         }
-        let codes = self.tet_faces[t];
+        let codes = cell.faces;
         let mut t_in = 0.0f64;
         let mut t_out = f64::INFINITY;
         let mut exit = 0u8;
         for (f, &code) in codes.iter().enumerate() {
+            if code & !FLIP == face {
+                t_in = t_in.max(t_entry);
+                continue;
+            }
             let pl = &self.faces[(code & !FLIP) as usize];
             let mut num = pl.n.dot(o - pl.a.as_dvec3());
             let mut den = pl.n.dot(d);
@@ -211,7 +254,7 @@ impl Geometry {
     /// The scalar of tet `t` at point `p`.
     #[inline]
     pub fn scalar(&self, t: usize, p: DVec3) -> f64 {
-        let g = self.field[t];
+        let g = self.cells[t].field;
         g[0] * p.x + g[1] * p.y + g[2] * p.z + g[3]
     }
 
@@ -220,14 +263,12 @@ impl Geometry {
     pub fn build_bytes_per_tet() -> u64 {
         let keys = 4 * std::mem::size_of::<([u32; 3], u32)>();
         let planes = 2 * std::mem::size_of::<FacePlane>();
-        (keys + 16 + 16 + 32 + planes) as u64
+        (keys + std::mem::size_of::<Cell>() + planes) as u64
     }
 
     /// Bytes of these structures.
     pub fn bytes(&self) -> usize {
         self.faces.len() * std::mem::size_of::<FacePlane>()
-            + self.tet_faces.len() * 16
-            + self.adj.len() * 16
-            + self.field.len() * 32
+            + self.cells.len() * std::mem::size_of::<Cell>()
     }
 }

@@ -40,6 +40,24 @@
 //! tet (face planes 40 bytes per face, cell-to-face table, adjacency, cell fields, boundary
 //! hierarchy).
 //!
+//! **Empty-space skipping** (`skip.rs`, per-segment colours only,
+//! [`TetRayOptions::skip_empty`], on by default): per TF and set of isovalues, the cells whose
+//! vertex value range has zero extinction (exactly, for the exact integrator's linear pieces
+//! and the ψ/average lookup table) and holds no isovalue colour as transparent black, so
+//! they are left out: the walk ([`Walker::trace_visible`](walk::Walker::trace_visible))
+//! steps across faces while the neighbour is visible and otherwise asks a hierarchy over the
+//! visible cells for the first one past the exit (which also covers entries, boundary exits,
+//! re-entries and edge or vertex exits). Compositing a transparent segment changes nothing,
+//! so the image is the one of the full walk (equal in the tests, bit for bit on the bench
+//! meshes); the statistics then count the visible cells' segments only, with the jumps over
+//! invisible runs as `skips`. With more than 90 % of the cells visible the full walk is used.
+//! Before walking, each tile's 4 x 4 pixel blocks whose frustum (the planes through the
+//! block's corner rays) meets no visible cell's box are left empty without a query: no ray of
+//! such a block can find a visible cell, so this changes nothing either.
+//! On the issue-17 workload (`tets_200k`, the 37-knot TF, 512 x 512) 28 % of the segments
+//! are visible; the walk makes about 1.3 hierarchy queries per ray (the entry, a few jumps,
+//! the last exit).
+//!
 //! **Adaptive Simpson** ([`SegmentRule::AdaptiveSimpson`](crate::integrate::SegmentRule::AdaptiveSimpson), seed `001` ch. 4): the walked
 //! segments of a ray form the medium (scalar linear per segment, exact TF classification,
 //! TF breakpoints inside a step reported as hidden features, gaps empty) and the whole ray
@@ -62,6 +80,7 @@ mod geom;
 mod options;
 mod pixel;
 pub mod render;
+mod skip;
 pub mod walk;
 
 pub use crate::frame::TetRayStats;

@@ -34,6 +34,11 @@ pub struct TetRayOptions {
     pub mip: bool,
     /// Stop a ray once its opacity reaches this (`None`: never).
     pub early_termination: Option<f32>,
+    /// Empty-space skipping (per-segment colours only; default on): the walk leaves out the
+    /// cells whose value range has zero extinction and no isovalue, jumping over runs of
+    /// them through a hierarchy of the other cells ([`super::skip`]). The image is the same
+    /// up to the choice among cells tied at an edge or vertex; `false` walks every cell.
+    pub skip_empty: bool,
     /// Cancellation and progress.
     pub control: Control,
 }
@@ -52,6 +57,7 @@ impl TetRayOptions {
             shading: BlinnPhong::default(),
             mip: false,
             early_termination: Some(DEFAULT_EARLY_TERMINATION),
+            skip_empty: true,
             control: Control::default(),
         }
     }
@@ -104,6 +110,7 @@ impl TetRayOptions {
             shading: a.lighting,
             mip: a.mip,
             early_termination: scene.early_termination,
+            skip_empty: true,
             control: control.clone(),
         }
     }

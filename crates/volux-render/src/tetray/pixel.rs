@@ -20,6 +20,7 @@ use glam::{DVec3, Vec3};
 use volux_core::{TetMesh, TransferFunction};
 
 use super::options::TetRayOptions;
+use super::skip::Visibility;
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::composite::under64;
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
@@ -187,10 +188,13 @@ impl<'a> PixelContext<'a> {
         )
     }
 
-    /// Walks the ray `o + t d` and colours it; `segments` is scratch space.
+    /// Walks the ray `o + t d` and colours it; `segments` is scratch space. With `visible`
+    /// (per-segment colours only) the walk leaves out the cells that colour as transparent
+    /// black ([`super::skip`]), which does not change the pixel.
     pub fn pixel(
         &self,
         walker: &Walker<'_>,
+        visible: Option<&Visibility>,
         o: DVec3,
         d: DVec3,
         scratch: &mut Scratch,
@@ -202,7 +206,7 @@ impl<'a> PixelContext<'a> {
                 let shader = self.shader();
                 let view = d.as_vec3();
                 let iso = !self.isosurfaces.is_empty();
-                let outcome = walker.trace(o, d, scratch, |s| {
+                let sink = |s: &WalkSegment| {
                     let c = if iso {
                         shader
                             .fragment(
@@ -218,7 +222,11 @@ impl<'a> PixelContext<'a> {
                     };
                     under64(&mut acc, c);
                     self.early.is_none_or(|e| acc[3] < e)
-                });
+                };
+                let outcome = match visible {
+                    Some(vis) => walker.trace_visible(vis, o, d, scratch, sink),
+                    None => walker.trace(o, d, scratch, sink),
+                };
                 let out = PixelOut {
                     rgba: acc.map(|v| v as f32),
                     samples: 2 * outcome.segments,

@@ -8,12 +8,13 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::mesh::{FACES, NO_NEIGHBOR};
-use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
+use volux_core::{Camera, Image, Projection, RayGenerator, TetMesh, TransferFunction};
 
-use super::bvh::Bvh;
+use super::bvh::{Bvh, Frustum};
 use super::geom::Geometry;
 use super::options::TetRayOptions;
 use super::pixel::{PixelContext, PixelOut, Tables};
+use super::skip::Visibility;
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::error::RenderError;
 use crate::frame::{Frame, MethodStats, Rebuilt, TetRayStats};
@@ -21,7 +22,7 @@ use crate::integrate::psi::PsiTable;
 use crate::integrate::SegmentRule;
 use crate::renderer::{frame, wrong_method, Renderer};
 use crate::scene::{Method, Scene, MESH_UNITS_PER_DIAGONAL};
-use crate::tiles::{render_tiles, Control, TileGrid, TILE};
+use crate::tiles::{render_tiles, Control, Rect, TileGrid, TILE};
 
 impl TetRayStats {
     /// Counts one ray's pixel and walk.
@@ -32,6 +33,7 @@ impl TetRayStats {
         self.recovered += walk.recovered;
         self.local_searches += walk.local_searches;
         self.abandoned += u64::from(walk.abandoned);
+        self.skips += walk.skips;
         self.samples += px.samples;
         self.rays_over_tolerance += u64::from(px.missed);
     }
@@ -44,6 +46,7 @@ impl TetRayStats {
         self.recovered += s.recovered;
         self.local_searches += s.local_searches;
         self.abandoned += s.abandoned;
+        self.skips += s.skips;
         self.samples += s.samples;
         self.rays_over_tolerance += s.rays_over_tolerance;
     }
@@ -83,6 +86,8 @@ pub struct TetRayCaster<M: Deref<Target = TetMesh> = Arc<TetMesh>> {
     psi: OnceLock<PsiTable>,
     /// The classification of the last frame's TF.
     tables: Mutex<Option<Arc<Tables>>>,
+    /// The visible cells of the last skipping frame's TF and isovalues.
+    visible: Mutex<Option<Arc<Visibility>>>,
     /// The start cells of the last frame's camera.
     start: Mutex<Option<(Camera, Arc<Bvh>)>>,
     /// Whether the first frame is still to come (it reports the structures as built).
@@ -123,7 +128,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
         // entering the mesh exactly through a boundary edge or vertex may continue in a cell
         // that only touches the boundary there.
         let mut on_boundary = vec![false; m.positions().len()];
-        for (t, adj) in geo.adj.iter().enumerate() {
+        for (t, adj) in geo.cells.iter().map(|c| c.adj).enumerate() {
             for (f, &nb) in adj.iter().enumerate() {
                 if nb == NO_NEIGHBOR {
                     for s in FACES[f] {
@@ -149,6 +154,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             gradients: OnceLock::new(),
             psi: OnceLock::new(),
             tables: Mutex::new(None),
+            visible: Mutex::new(None),
             start: Mutex::new(None),
             first: AtomicBool::new(true),
         })
@@ -231,6 +237,44 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
         t
     }
 
+    /// The visible cells of the frame ([`super::skip`]), kept while the TF and the isovalues
+    /// do not change; `None` when the frame does not skip (MIP, the adaptive rule,
+    /// [`TetRayOptions::skip_empty`] off) or skipping does not pay.
+    fn visibility(
+        &self,
+        opts: &TetRayOptions,
+        tables: &Tables,
+        rebuilt: &mut Rebuilt,
+    ) -> Option<Arc<Visibility>> {
+        let per_segment = !opts.mip && !matches!(opts.color, SegmentRule::AdaptiveSimpson(_));
+        if !(opts.skip_empty && per_segment) {
+            return None;
+        }
+        let isos = opts.isosurfaces.as_slice();
+        let mut cache = self.visible.lock().unwrap_or_else(|e| e.into_inner());
+        let same = |v: &&Arc<Visibility>| {
+            v.source == opts.tf && v.isovalues.iter().copied().eq(isos.iter().map(|i| i.value))
+        };
+        let vis = match cache.as_ref().filter(same) {
+            Some(v) => v.clone(),
+            None => {
+                rebuilt.classification = true;
+                let mesh = self.mesh();
+                let v = Arc::new(Visibility::new(
+                    mesh,
+                    &self.geo,
+                    tables,
+                    isos,
+                    |t| tet_box(mesh, t),
+                    self.pad,
+                ));
+                *cache = Some(v.clone());
+                v
+            }
+        };
+        vis.worthwhile().then_some(vis)
+    }
+
     /// The start cells of `camera`'s rays, kept while the camera does not move.
     fn start_set_for(&self, camera: &Camera, rebuilt: &mut Rebuilt) -> Arc<Bvh> {
         let mut cache = self.start.lock().unwrap_or_else(|e| e.into_inner());
@@ -287,7 +331,13 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             ..Rebuilt::default()
         };
         let tables = self.tables(&opts.tf, &mut rebuilt);
-        let start = self.start_set_for(&opts.camera, &mut rebuilt);
+        let visible = self.visibility(opts, &tables, &mut rebuilt);
+        let visible = visible.as_deref();
+        let start = match visible {
+            // The hierarchy of visible cells also finds those around the eye.
+            Some(_) => Arc::new(Bvh::default()),
+            None => self.start_set_for(&opts.camera, &mut rebuilt),
+        };
         let walker = Walker {
             geo: &self.geo,
             boundary: &self.boundary,
@@ -309,18 +359,31 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             &tiny
         };
         let ctx = PixelContext::new(&self.mesh, opts, &tables, gradients, psi);
-        let camera = opts.camera;
+        let rays = opts.camera.rays(w, h);
         let grid = TileGrid::new(w, h, TILE);
         let tiled = render_tiles(&grid, &opts.control, |_, r| {
             let mut out = Vec::with_capacity(r.area());
             let mut stats = TetRayStats::default();
             let mut scratch = Scratch::default();
             let mut segments = Vec::new();
+            let empty = visible.map(|v| empty_blocks(&v.bvh, &rays, r));
             for y in r.y0..r.y1 {
                 for x in r.x0..r.x1 {
-                    let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                    let (px, outcome) =
-                        ctx.pixel(&walker, ray.origin, ray.dir, &mut scratch, &mut segments);
+                    if empty.as_ref().is_some_and(|e| e.contains(x, y)) {
+                        // No visible cell meets this block's rays: nothing to walk.
+                        stats.add_ray(&PixelOut::default(), &WalkOutcome::default());
+                        out.push(PixelOut::default());
+                        continue;
+                    }
+                    let ray = rays.ray(x as f64 + 0.5, y as f64 + 0.5);
+                    let (px, outcome) = ctx.pixel(
+                        &walker,
+                        visible,
+                        ray.origin,
+                        ray.dir,
+                        &mut scratch,
+                        &mut segments,
+                    );
                     stats.add_ray(&px, &outcome);
                     out.push(px);
                 }
@@ -334,6 +397,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
         let pixels = tiled.pixels.iter().map(|p| p.rgba).collect();
         let error_map = tiled.pixels.iter().map(|p| p.error).collect();
         stats.start_cells = start.len();
+        stats.visible_cells = visible.map_or(0, Visibility::len);
         stats.rebuilt = rebuilt;
         stats.tets = self.mesh.tets().len();
         stats.bytes_per_tet = self.bytes_per_tet();
@@ -343,6 +407,50 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             error_map,
             stats,
         })
+    }
+}
+
+/// Side in pixels of the blocks whose rays are culled together against the hierarchy of
+/// visible cells.
+const BLOCK: usize = 4;
+
+/// The blocks of a tile whose rays meet no visible cell ([`Bvh::may_meet`] of the block's
+/// frustum), as a bit per block.
+struct EmptyBlocks {
+    rect: Rect,
+    /// Blocks per row.
+    across: usize,
+    empty: Vec<bool>,
+}
+
+impl EmptyBlocks {
+    /// Whether pixel `(x, y)` of the tile lies in an empty block.
+    #[inline]
+    fn contains(&self, x: usize, y: usize) -> bool {
+        let (bx, by) = ((x - self.rect.x0) / BLOCK, (y - self.rect.y0) / BLOCK);
+        self.empty[by * self.across + bx]
+    }
+}
+
+/// The empty blocks of tile `rect` for the hierarchy `bvh` of visible cells and the rays
+/// `rays` (a block whose frustum cannot be built is not empty).
+fn empty_blocks(bvh: &Bvh, rays: &RayGenerator, rect: Rect) -> EmptyBlocks {
+    let (across, down) = (rect.width().div_ceil(BLOCK), rect.height().div_ceil(BLOCK));
+    let mut empty = Vec::with_capacity(across * down);
+    for by in 0..down {
+        for bx in 0..across {
+            let x0 = rect.x0 + bx * BLOCK;
+            let y0 = rect.y0 + by * BLOCK;
+            let (x1, y1) = ((x0 + BLOCK).min(rect.x1), (y0 + BLOCK).min(rect.y1));
+            // The pixel centres' extent, widened to the pixels' edges.
+            let block = [x0 as f64, y0 as f64, x1 as f64, y1 as f64];
+            empty.push(Frustum::of_block(rays, block).is_some_and(|f| !bvh.may_meet(&f)));
+        }
+    }
+    EmptyBlocks {
+        rect,
+        across,
+        empty,
     }
 }
 

@@ -843,3 +843,179 @@ fn timing_512_smooth_200k() {
         rayon::current_num_threads()
     );
 }
+
+/// A TF with zero extinction over `[0, 0.25]` and `[0.62, 0.72]` of the range: runs of
+/// invisible cells for empty-space skipping.
+fn gappy_tf() -> TransferFunction {
+    TransferFunction::from_json(
+        r#"{"space": "normalized", "color": [[0, 0.1, 0.2, 0.9], [0.5, 1, 0.6, 0.1], [1, 0.3, 1, 0.5]],
+            "extinction": [[0, 0], [0.25, 0], [0.4, 3], [0.55, 3], [0.62, 0], [0.72, 0], [0.85, 5], [1, 2]]}"#,
+    )
+    .unwrap()
+}
+
+/// A TF visible only over `[0.3, 0.45]` of the range (the torus's field is mostly visible
+/// under [`gappy_tf`]).
+fn band_tf() -> TransferFunction {
+    TransferFunction::from_json(
+        r#"{"space": "normalized", "color": [[0, 0.1, 0.2, 0.9], [0.5, 1, 0.6, 0.1], [1, 0.3, 1, 0.5]],
+            "extinction": [[0, 0], [0.3, 0], [0.35, 4], [0.4, 4], [0.45, 0], [1, 0]]}"#,
+    )
+    .unwrap()
+}
+
+/// The TF with runs of invisible cells for each test mesh.
+fn skip_tf(name: &str) -> TransferFunction {
+    if name == "torus" {
+        band_tf()
+    } else {
+        gappy_tf()
+    }
+}
+
+/// Renders `opts` with and without empty-space skipping and checks that the images agree
+/// and that cells were skipped; returns the skipping frame's statistics.
+fn check_skipping(
+    caster: &TetRayCaster<&TetMesh>,
+    opts: &TetRayOptions,
+    label: &str,
+) -> TetRayStats {
+    let skip = caster.render(opts).unwrap();
+    let full = caster
+        .render(&TetRayOptions {
+            skip_empty: false,
+            ..opts.clone()
+        })
+        .unwrap();
+    let d = skip.image.compare(&full.image, 0.0).unwrap();
+    let s = &skip.stats;
+    eprintln!(
+        "{label}: max {:.2e}, mean {:.2e}; segments {} of {}, {} visible cells of {}, {} skips",
+        d.max_error,
+        d.mean_error,
+        s.segments,
+        full.stats.segments,
+        s.visible_cells,
+        s.tets,
+        s.skips
+    );
+    assert!(d.max_error < 1e-6, "{label}: {d:?}");
+    assert!(
+        full.image.coverage(1e-3) > 0.1,
+        "{label}: the view must show the mesh"
+    );
+    assert!(
+        s.visible_cells > 0 && s.visible_cells < s.tets,
+        "{label}: {s:?}"
+    );
+    assert!(s.segments < full.stats.segments, "{label}: {s:?}");
+    assert_eq!(full.stats.visible_cells, 0, "{label}");
+    assert_eq!(s.abandoned + full.stats.abandoned, 0, "{label}");
+    skip.stats
+}
+
+#[test]
+fn empty_space_skipping_leaves_the_image_unchanged() {
+    let iso = |mesh: &TetMesh, f: f64| {
+        let r = mesh.range();
+        Isosurfaces::new(vec![Isovalue {
+            value: (r[0] + f * (r[1] - r[0])) as f32,
+            rgba: [0.9, 0.8, 0.2, 0.6],
+        }])
+        .unwrap()
+    };
+    let smooth = synth::smooth_tets(3000).unwrap();
+    let torus = synth::torus_tets(24).unwrap();
+    for (name, mesh) in [("smooth", &smooth), ("torus", &torus)] {
+        let caster = TetRayCaster::new(mesh).unwrap();
+        let b = mesh.bounds();
+        let mut cams = vec![
+            orbit("perspective", 10.0, 25.0, 1.0).resolve(&b).unwrap(),
+            orbit("orthographic", 30.0, -20.0, 1.0).resolve(&b).unwrap(),
+        ];
+        if name == "torus" {
+            // From inside the tube.
+            cams.push(Camera {
+                eye: DVec3::new(1.3, 0.0, 0.05),
+                target: DVec3::new(0.0, 1.2, 0.0),
+                up: DVec3::Z,
+                projection: Projection::Perspective { fov_y_deg: 80.0 },
+            });
+        }
+        let mut passes = 0;
+        for (c, &cam) in cams.iter().enumerate() {
+            for color in [SegmentRule::Exact, SegmentRule::Psi] {
+                for isos in [Isosurfaces::default(), iso(mesh, 0.2), iso(mesh, 0.67)] {
+                    let label = format!("{name} camera {c} {} {} iso", color.name(), isos.len());
+                    let opts = TetRayOptions {
+                        tf: skip_tf(name),
+                        color,
+                        isosurfaces: isos,
+                        ..options(cam, 40, 40)
+                    };
+                    let s = check_skipping(&caster, &opts, &label);
+                    passes += s.skips + s.reentries;
+                }
+            }
+        }
+        assert!(passes > 0, "{name}: some rays jump or re-enter");
+    }
+}
+
+#[test]
+fn empty_space_skipping_matches_the_reference() {
+    for (name, mesh) in [
+        ("smooth", synth::smooth_tets(3000).unwrap()),
+        ("torus", synth::torus_tets(24).unwrap()),
+    ] {
+        let caster = TetRayCaster::new(&mesh).unwrap();
+        let camera = orbit("perspective", 10.0, 25.0, 1.0)
+            .resolve(&mesh.bounds())
+            .unwrap();
+        let opts = TetRayOptions {
+            tf: skip_tf(name),
+            ..options(camera, 48, 48)
+        };
+        let got = caster.render(&opts).unwrap();
+        assert!(got.stats.visible_cells > 0, "{name}: skipping is on");
+        let want = render_mesh_reference(
+            &mesh,
+            &ReferenceOptions {
+                width: 48,
+                height: 48,
+                camera,
+                tf: skip_tf(name),
+            },
+        )
+        .unwrap();
+        let d = got.image.compare(&want, 0.0).unwrap();
+        eprintln!("{name}: max {:.2e}, mean {:.2e}", d.max_error, d.mean_error);
+        assert!(d.mean_error < 1e-4 && d.max_error < 1e-2, "{name}: {d:?}");
+    }
+}
+
+#[test]
+fn empty_space_skipping_does_not_depend_on_the_thread_count() {
+    let mesh = synth::torus_tets(24).unwrap();
+    let caster = TetRayCaster::new(&mesh).unwrap();
+    let camera = orbit("perspective", 10.0, 25.0, 1.0)
+        .resolve(&mesh.bounds())
+        .unwrap();
+    let opts = TetRayOptions {
+        tf: band_tf(),
+        ..options(camera, 64, 64)
+    };
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| caster.render(&opts).unwrap());
+    let many = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap()
+        .install(|| caster.render(&opts).unwrap());
+    assert!(one.stats.visible_cells > 0);
+    assert_eq!(one.image, many.image);
+    assert_eq!(one.stats.segments, many.stats.segments);
+}

@@ -25,6 +25,7 @@ use volux_core::mesh::NO_NEIGHBOR;
 
 use super::bvh::{Bvh, Hit};
 use super::geom::Geometry;
+use super::skip::Visibility;
 
 /// Most cells the local search around an edge or vertex visits.
 pub(crate) const LOCAL_SEARCH: usize = 512;
@@ -58,6 +59,9 @@ pub struct WalkOutcome {
     pub local_searches: u64,
     /// Whether the step bound stopped the ray.
     pub abandoned: bool,
+    /// Jumps over runs of invisible cells through the hierarchy of visible cells
+    /// ([`Walker::trace_visible`] only).
+    pub skips: u64,
 }
 
 /// Reusable buffers of the local search.
@@ -65,6 +69,9 @@ pub struct WalkOutcome {
 pub(crate) struct Scratch {
     visited: Vec<u32>,
     queue: Vec<u32>,
+    /// The first visible cell of the previous ray ([`Walker::trace_visible`]): neighbouring
+    /// rays mostly start in the same cell, and the hierarchy prunes against it.
+    first: Option<u32>,
 }
 
 /// A ray tracer over one mesh's geometry.
@@ -113,7 +120,7 @@ impl Walker<'_> {
         while head < scratch.queue.len() {
             let x = scratch.queue[head] as usize;
             head += 1;
-            for &y in &geo.adj[x] {
+            for y in geo.adj(x) {
                 if y == NO_NEIGHBOR || scratch.visited.contains(&y) {
                     continue;
                 }
@@ -135,6 +142,89 @@ impl Walker<'_> {
         }
         // A cell starting well past `t` is not a continuation; let the hierarchy decide.
         best.filter(|b| b.key(t) <= t + tol * (1.0 + d.length().recip()))
+    }
+
+    /// The segment of `hit` past `t` (the previous exit) on the ray `o + t d`.
+    #[inline]
+    fn segment(&self, hit: &Hit, o: DVec3, d: DVec3, t: f64) -> WalkSegment {
+        let tet = hit.tet as usize;
+        let (t0, t1) = (hit.clip.t_in.max(t), hit.clip.t_out);
+        WalkSegment {
+            t_in: t0,
+            t_out: t1,
+            s_in: self.geo.scalar(tet, o + d * t0),
+            s_out: self.geo.scalar(tet, o + d * t1),
+            tet: hit.tet,
+        }
+    }
+
+    /// Walks the ray `o + t d`, `t >= 0`, through the visible cells of `vis` only
+    /// ([`super::skip`]), calling `sink` with each of their segments in front-to-back order
+    /// until it returns `false` or no visible cell is left. The walk steps across the exit
+    /// face while the neighbour is visible and continues the ray; otherwise (an invisible
+    /// neighbour, a boundary exit, an exit through an edge or a vertex) the hierarchy of
+    /// visible cells gives the first one past the exit. The segments are those of
+    /// [`Walker::trace`] less the invisible cells' (up to the choice among cells tied at an
+    /// edge or vertex, and the rounding of a segment's start there). Counted: hierarchy
+    /// queries past an invisible neighbour that found a cell as `skips`, past a boundary face
+    /// as `reentries`, and visible neighbours that did not continue the ray as
+    /// `local_searches` (resolved by the hierarchy here).
+    pub fn trace_visible(
+        &self,
+        vis: &Visibility,
+        o: DVec3,
+        d: DVec3,
+        scratch: &mut Scratch,
+        mut sink: impl FnMut(&WalkSegment) -> bool,
+    ) -> WalkOutcome {
+        let mut out = WalkOutcome::default();
+        if !(o.is_finite() && d.is_finite()) || d == DVec3::ZERO {
+            return out;
+        }
+        let geo = self.geo;
+        let mut t = 0.0f64;
+        let candidate = scratch
+            .first
+            .and_then(|c| geo.clip(c as usize, o, d).map(|clip| Hit { tet: c, clip }));
+        let mut next = vis.bvh.nearest_from(geo, o, d, 0.0, candidate);
+        if let Some(h) = next {
+            scratch.first = Some(h.tet);
+        }
+        let mut steps = 0usize;
+        while let Some(hit) = next {
+            steps += 1;
+            if steps > self.max_steps {
+                out.abandoned = true;
+                break;
+            }
+            let seg = self.segment(&hit, o, d, t);
+            out.segments += 1;
+            if !sink(&seg) {
+                break;
+            }
+            t = seg.t_out;
+            let nb = geo.adj(hit.tet as usize)[hit.clip.exit as usize];
+            let shown = nb != NO_NEIGHBOR && vis.is_visible(nb);
+            if shown {
+                let face = geo.face_id(hit.tet as usize, hit.clip.exit as usize);
+                if let Some(clip) = geo.clip_entered(nb as usize, o, d, face, t) {
+                    if clip.t_out > t {
+                        next = Some(Hit { tet: nb, clip });
+                        continue;
+                    }
+                }
+                out.local_searches += 1;
+            }
+            next = vis.bvh.nearest(geo, o, d, t);
+            if next.is_some() {
+                if nb == NO_NEIGHBOR {
+                    out.reentries += 1;
+                } else if !shown {
+                    out.skips += 1;
+                }
+            }
+        }
+        out
     }
 
     /// Walks the ray `o + t d`, `t >= 0`, calling `sink` with each segment in front-to-back
@@ -161,22 +251,16 @@ impl Walker<'_> {
                 break;
             }
             let tet = hit.tet as usize;
-            let (t0, t1) = (hit.clip.t_in.max(t), hit.clip.t_out);
-            let seg = WalkSegment {
-                t_in: t0,
-                t_out: t1,
-                s_in: geo.scalar(tet, o + d * t0),
-                s_out: geo.scalar(tet, o + d * t1),
-                tet: hit.tet,
-            };
+            let seg = self.segment(&hit, o, d, t);
             out.segments += 1;
             if !sink(&seg) {
                 break;
             }
-            t = t1;
-            let nb = geo.adj[tet][hit.clip.exit as usize];
+            t = seg.t_out;
+            let nb = geo.adj(tet)[hit.clip.exit as usize];
             if nb != NO_NEIGHBOR {
-                if let Some(clip) = geo.clip(nb as usize, o, d) {
+                let face = geo.face_id(tet, hit.clip.exit as usize);
+                if let Some(clip) = geo.clip_entered(nb as usize, o, d, face, t) {
                     if clip.t_out > t {
                         next = Some(Hit { tet: nb, clip });
                         continue;
