@@ -307,6 +307,42 @@ impl Triangle {
     #[inline(always)]
     fn scan(&self, walk: bool, mut frag: impl FnMut(usize, usize, [f32; 3])) {
         let inv = self.inv_area;
+        self.rows_with(walk, |row| {
+            let mut cur = row.e;
+            for x in row.lo..row.hi + 1 {
+                if row.inside(cur) {
+                    let l = [
+                        cur[0] as f32 * inv,
+                        cur[1] as f32 * inv,
+                        cur[2] as f32 * inv,
+                    ];
+                    frag(x as usize, row.y as usize, l);
+                }
+                cur = [cur[0] + row.d[0], cur[1] + row.d[1], cur[2] + row.d[2]];
+            }
+        });
+    }
+
+    /// `1 / (twice the area)` in fixed point: the barycentric coordinate of vertex `j` is
+    /// `E_j` times this.
+    #[inline(always)]
+    pub fn inv_area(&self) -> f32 {
+        self.inv_area
+    }
+
+    /// Calls `row` for every pixel row of the triangle's box that may hold covered pixels,
+    /// with the columns to visit and the edge functions at the first of them. Narrow boxes
+    /// give every column of the box and [`Row::inside`] tells the covered ones; wide ones
+    /// give each row's exact span (every pixel inside). Together the rows cover exactly the
+    /// pixels of [`Triangle::for_each`].
+    #[inline(always)]
+    pub fn rows(&self, row: impl FnMut(Row)) {
+        self.rows_with(self.x1 - self.x0 < WALK_MAX, row);
+    }
+
+    /// [`Triangle::rows`] with the choice between walking and clipping made by the caller.
+    #[inline(always)]
+    fn rows_with(&self, walk: bool, mut row: impl FnMut(Row)) {
         let [e0, e1, e2] = self.edges;
         let bias = [e0.bias, e1.bias, e2.bias];
         for y in self.y0..self.y1 + 1 {
@@ -329,22 +365,41 @@ impl Triangle {
                     continue;
                 }
             }
-            let mut cur = [c0 + d0 * lo, c1 + d1 * lo, c2 + d2 * lo];
-            for x in lo..hi + 1 {
-                // Inside when every E >= its bias (exact integers).
-                if !walk || ((cur[0] - bias[0]) | (cur[1] - bias[1]) | (cur[2] - bias[2])) >= 0 {
-                    let l = [
-                        cur[0] as f32 * inv,
-                        cur[1] as f32 * inv,
-                        cur[2] as f32 * inv,
-                    ];
-                    frag(x as usize, y as usize, l);
-                }
-                cur[0] += d0;
-                cur[1] += d1;
-                cur[2] += d2;
-            }
+            row(Row {
+                y,
+                lo,
+                hi,
+                e: [c0 + d0 * lo, c1 + d1 * lo, c2 + d2 * lo],
+                d: [d0, d1, d2],
+                // A span needs no test: a bias of i64::MIN makes every `E - bias` >= 0.
+                bias: if walk { bias } else { [i64::MIN / 2; 3] },
+            });
         }
+    }
+}
+
+/// One pixel row of a [`Triangle`]: columns `lo..=hi` of row `y`, with the three edge
+/// functions `e` at column `lo` and their increments `d` per column.
+#[derive(Clone, Copy, Debug)]
+pub struct Row {
+    /// The pixel row.
+    pub y: i64,
+    /// First column.
+    pub lo: i64,
+    /// Last column.
+    pub hi: i64,
+    /// Edge functions at `(lo, y)`; barycentric `j` is `e[j] * inv_area`.
+    pub e: [i64; 3],
+    /// Their increments per column.
+    pub d: [i64; 3],
+    bias: [i64; 3],
+}
+
+impl Row {
+    /// Whether the pixel whose edge functions are `e` is covered (top-left rule).
+    #[inline(always)]
+    pub fn inside(&self, e: [i64; 3]) -> bool {
+        ((e[0] - self.bias[0]) | (e[1] - self.bias[1]) | (e[2] - self.bias[2])) >= 0
     }
 }
 
