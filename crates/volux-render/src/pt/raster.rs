@@ -340,6 +340,40 @@ impl Triangle {
         self.rows_with(self.x1 - self.x0 < WALK_MAX, row);
     }
 
+    /// Calls `span` for every pixel row of the triangle that holds covered pixels, with its
+    /// exact span of covered columns (every pixel of the [`Row`] is inside): rows of narrow
+    /// boxes are walked to find their span (a triangle meets a row in one interval), wide ones
+    /// clipped with exact divisions. The same pixels as [`Triangle::for_each`].
+    #[inline(always)]
+    pub fn spans(&self, mut span: impl FnMut(Row)) {
+        let walk = self.x1 - self.x0 < WALK_MAX;
+        self.rows_with(walk, |row| {
+            if !walk {
+                span(row);
+                return;
+            }
+            let (mut lo, mut hi) = (i64::MAX, i64::MIN);
+            let mut e = row.e;
+            for x in row.lo..row.hi + 1 {
+                let inside = row.inside(e);
+                lo = if inside { lo.min(x) } else { lo };
+                hi = if inside { hi.max(x) } else { hi };
+                e = [e[0] + row.d[0], e[1] + row.d[1], e[2] + row.d[2]];
+            }
+            if lo <= hi {
+                let k = lo - row.lo;
+                let e = [0, 1, 2].map(|j| row.e[j] + row.d[j] * k);
+                span(Row {
+                    lo,
+                    hi,
+                    e,
+                    bias: SPAN_BIAS,
+                    ..row
+                });
+            }
+        });
+    }
+
     /// [`Triangle::rows`] with the choice between walking and clipping made by the caller.
     #[inline(always)]
     fn rows_with(&self, walk: bool, mut row: impl FnMut(Row)) {
@@ -371,12 +405,15 @@ impl Triangle {
                 hi,
                 e: [c0 + d0 * lo, c1 + d1 * lo, c2 + d2 * lo],
                 d: [d0, d1, d2],
-                // A span needs no test: a bias of i64::MIN makes every `E - bias` >= 0.
-                bias: if walk { bias } else { [i64::MIN / 2; 3] },
+                bias: if walk { bias } else { SPAN_BIAS },
             });
         }
     }
 }
+
+/// The biases of a [`Row`] that is an exact span: every `E - bias` is then `>= 0` (the `E`s of
+/// covered pixels are at least 0 and below `2^62`).
+const SPAN_BIAS: [i64; 3] = [i64::MIN / 2; 3];
 
 /// One pixel row of a [`Triangle`]: columns `lo..=hi` of row `y`, with the three edge
 /// functions `e` at column `lo` and their increments `d` per column.
@@ -500,6 +537,47 @@ mod tests {
                 .collect();
             let count = coverage(&tris, 24, 24);
             assert!(count.iter().all(|&n| n == 1), "a pixel missed or doubled");
+        }
+    }
+
+    #[test]
+    fn spans_cover_the_pixels_of_for_each() {
+        let mut seed = 0x1234_5678_9abc_def1u64;
+        let mut rnd = |n: i64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as i64 % n
+        };
+        let clip = Rect {
+            x0: 3,
+            y0: 2,
+            x1: 35,
+            y1: 27,
+        };
+        for i in 0..20_000 {
+            let span = [4 * ONE, 12 * ONE, 40 * ONE][i % 3];
+            let step = if i % 4 == 0 { HALF } else { 1 };
+            let mut p = || [rnd(span / step) * step, rnd(span / step) * step];
+            let v = [p(), p(), p()];
+            let Some(t) = Triangle::new(v, clip) else {
+                continue;
+            };
+            let mut a = Vec::new();
+            t.for_each(|x, y, _| a.push((x as i64, y as i64)));
+            let mut b = Vec::new();
+            t.spans(|row| {
+                let mut e = row.e;
+                for x in row.lo..=row.hi {
+                    assert!(row.inside(e));
+                    // The edge functions the span gives are those of its pixels.
+                    let l = e.map(|e| e as f32 * t.inv_area());
+                    assert!(l.iter().all(|&v| v >= -1e-6), "{v:?}");
+                    b.push((x, row.y));
+                    e = [0, 1, 2].map(|j| e[j] + row.d[j]);
+                }
+            });
+            assert_eq!(a, b, "{v:?}");
         }
     }
 

@@ -191,7 +191,7 @@ impl Gather<'_> {
     ) {
         let inv = tri.inv_area();
         let mut step = None;
-        tri.rows(|row| {
+        tri.spans(|row| {
             let width = (row.hi - row.lo + 1) as usize;
             if !batch.fits(width) {
                 flush(batch, acc);
@@ -201,26 +201,49 @@ impl Gather<'_> {
         });
     }
 
-    /// One row of [`Gather::triangle`]: every column is written at the batch's end, and
-    /// kept (the length advanced) when covered and not opaque (no branch per pixel).
+    /// One span of [`Gather::triangle`]: its pixels are appended, then the opaque ones (if
+    /// any) removed.
     #[inline(always)]
     fn row(&self, batch: &mut Batch, acc: &[[f32; 4]], row: &Row, q0: [f32; 4], dq: [f32; 4]) {
-        let base = (row.y - self.y0) * self.width - self.x0;
-        let mut e = row.e;
-        let mut n = batch.len;
-        for x in row.lo..row.hi + 1 {
-            let p = (base + x) as usize;
-            let live = row.inside(e) & (acc[p][3] < self.early);
-            let i = (x - row.lo) as f32;
-            batch.pixel[n] = p as u32;
-            for (c, a) in batch.attr.iter_mut().enumerate() {
-                a[n] = q0[c] + i * dq[c];
-            }
-            batch.secant[n] = self.secant[p];
-            n += usize::from(live);
-            e = [e[0] + row.d[0], e[1] + row.d[1], e[2] + row.d[2]];
+        let start = ((row.y - self.y0) * self.width + row.lo - self.x0) as usize;
+        let width = (row.hi - row.lo + 1) as usize;
+        let (n, end) = (batch.len, batch.len + width);
+        for (i, p) in batch.pixel[n..end].iter_mut().enumerate() {
+            *p = (start + i) as u32;
         }
-        batch.len = n;
+        for (a, (q0, dq)) in batch.attr.iter_mut().zip(q0.iter().zip(&dq)) {
+            let mut i = 0.0f32;
+            for v in &mut a[n..end] {
+                *v = q0 + i * dq;
+                i += 1.0;
+            }
+        }
+        batch.secant[n..end].copy_from_slice(&self.secant[start..start + width]);
+        let pixels = &acc[start..start + width];
+        batch.len = if pixels.iter().any(|a| a[3] >= self.early) {
+            batch.keep_live(n, end, |p| acc[p as usize][3] < self.early)
+        } else {
+            end
+        };
+    }
+}
+
+impl Batch {
+    /// Keeps, of the fragments `from..to` (the last ones), those whose pixel passes `live`;
+    /// returns the new length.
+    fn keep_live(&mut self, from: usize, to: usize, live: impl Fn(u32) -> bool) -> usize {
+        let mut m = from;
+        for i in from..to {
+            if live(self.pixel[i]) {
+                self.pixel[m] = self.pixel[i];
+                for a in &mut self.attr {
+                    a[m] = a[i];
+                }
+                self.secant[m] = self.secant[i];
+                m += 1;
+            }
+        }
+        m
     }
 }
 
@@ -251,7 +274,8 @@ fn load(v: &[f32], i: usize) -> Lanes {
 fn piece_at(piece: &LinearPiece, s: &Lanes) -> [Lanes; 4] {
     let (origin, at, slope) = piece.coefficients();
     let d = lanes(|k| s[k] - origin);
-    std::array::from_fn(|c| lanes(|k| at[c] + slope[c] * d[k]))
+    let c = |c: usize| lanes(|k| at[c] + slope[c] * d[k]);
+    [c(0), c(1), c(2), c(3)]
 }
 
 impl Batch {
@@ -270,7 +294,12 @@ impl Batch {
             self.secant[i] = self.secant[self.len - 1];
         }
         for i in (0..end).step_by(LANES) {
-            let [wf, nf, wb, nb] = [0, 1, 2, 3].map(|c| load(&self.attr[c], i));
+            let [wf, nf, wb, nb] = [
+                load(&self.attr[0], i),
+                load(&self.attr[1], i),
+                load(&self.attr[2], i),
+                load(&self.attr[3], i),
+            ];
             let sec = load(&self.secant, i);
             let z_f = lanes(|k| if PERSP { 1.0 / wf[k] } else { wf[k] });
             let z_b = lanes(|k| if PERSP { 1.0 / wb[k] } else { wb[k] });
@@ -294,9 +323,11 @@ impl Batch {
 
     /// Composites the shaded fragments under the tile's pixels `acc`, in batch order.
     pub fn composite(&self, acc: &mut [[f32; 4]]) {
-        for i in 0..self.len {
-            let rgba = [0, 1, 2, 3].map(|c| self.rgba[c][i]);
-            under(&mut acc[self.pixel[i] as usize], rgba);
+        let n = self.len;
+        let [r, g, b, a] = &self.rgba;
+        let rgba = r[..n].iter().zip(&g[..n]).zip(b[..n].iter().zip(&a[..n]));
+        for (&p, ((&r, &g), (&b, &a))) in self.pixel[..n].iter().zip(rgba) {
+            under(&mut acc[p as usize], [r, g, b, a]);
         }
     }
 
@@ -325,32 +356,77 @@ impl CellColour {
     }
 
     /// The ψ colour of segments cut at the breakpoints: each span's share, composited in ray
-    /// order (see the module documentation).
+    /// order (see the module documentation). The values of a cell's neighbouring fragments
+    /// nearly always change in the same direction along their rays; lane groups that agree
+    /// take the spans in ray order with no per-lane choice.
     #[inline(always)]
     fn pieces(&self, table: &PsiTable, s_f: &Lanes, s_b: &Lanes, l: &Lanes) -> [Lanes; 4] {
+        let rising = (0..LANES).filter(|&k| s_f[k] <= s_b[k]).count();
+        if rising == LANES {
+            self.pieces_along::<true>(table, s_f, s_b, l)
+        } else if rising == 0 {
+            self.pieces_along::<false>(table, s_f, s_b, l)
+        } else {
+            self.pieces_mixed(table, s_f, s_b, l)
+        }
+    }
+
+    /// [`CellColour::pieces`] for lanes whose values all rise (`RISING`) or all fall along
+    /// their rays: the spans in ray order, each composited under the previous ones.
+    #[inline(always)]
+    fn pieces_along<const RISING: bool>(
+        &self,
+        table: &PsiTable,
+        s_f: &Lanes,
+        s_b: &Lanes,
+        l: &Lanes,
+    ) -> [Lanes; 4] {
+        let (lo, hi) = if RISING { (s_f, s_b) } else { (s_b, s_f) };
+        let inv_width = lanes(|k| 1.0 / (hi[k] - lo[k]));
+        let mut acc = [[0.0f32; LANES]; 4];
+        let mut visit = |span: &Span| {
+            let a = lanes(|k| lo[k].max(span.lo));
+            let b = lanes(|k| hi[k].min(span.hi));
+            let share = span_share(span, lo, hi, &a, &b, &inv_width);
+            if share.iter().all(|&f| f <= 0.0) {
+                return;
+            }
+            let (front, back) = if RISING { (&a, &b) } else { (&b, &a) };
+            let len = lanes(|k| share[k] * l[k]);
+            let c = psi_rgba_lanes(
+                table,
+                &piece_at(&span.piece, front),
+                &piece_at(&span.piece, back),
+                &len,
+            );
+            let w = lanes(|k| 1.0 - acc[3][k]);
+            for (a, c) in acc.iter_mut().zip(&c) {
+                *a = lanes(|k| a[k] + w[k] * c[k]);
+            }
+        };
+        if RISING {
+            self.spans.iter().for_each(&mut visit);
+        } else {
+            self.spans.iter().rev().for_each(&mut visit);
+        }
+        acc
+    }
+
+    /// [`CellColour::pieces`] for lane groups of both directions: the spans in increasing
+    /// value order, composited behind (rising lanes) or in front of (falling lanes) what is
+    /// accumulated.
+    #[inline(always)]
+    fn pieces_mixed(&self, table: &PsiTable, s_f: &Lanes, s_b: &Lanes, l: &Lanes) -> [Lanes; 4] {
         let lo = lanes(|k| s_f[k].min(s_b[k]));
         let hi = lanes(|k| s_f[k].max(s_b[k]));
         // 1 where the values rise along the ray, 0 where they fall.
         let rising = lanes(|k| f32::from(u8::from(s_f[k] <= s_b[k])));
+        let inv_width = lanes(|k| 1.0 / (hi[k] - lo[k]));
         let mut acc = [[0.0f32; LANES]; 4];
         for span in &self.spans {
             let a = lanes(|k| lo[k].max(span.lo));
             let b = lanes(|k| hi[k].min(span.hi));
-            // The share of the segment in the span; a constant segment lies in the one span
-            // holding its value.
-            let share = lanes(|k| {
-                let width = hi[k] - lo[k];
-                if width > 0.0 {
-                    let f = (b[k] - a[k]) / width;
-                    if f > 0.0 {
-                        f.min(1.0)
-                    } else {
-                        0.0
-                    }
-                } else {
-                    f32::from(u8::from(span.lo <= lo[k] && lo[k] < span.hi))
-                }
-            });
+            let share = span_share(span, &lo, &hi, &a, &b, &inv_width);
             if share.iter().all(|&f| f <= 0.0) {
                 continue;
             }
@@ -378,4 +454,30 @@ impl CellColour {
         }
         acc
     }
+}
+
+/// Each lane's share of its segment `[lo, hi]` (values) that lies in `span`, given the
+/// overlap `[a, b]` and `1 / (hi - lo)`; a constant segment lies in the one span holding its
+/// value.
+#[inline(always)]
+fn span_share(
+    span: &Span,
+    lo: &Lanes,
+    hi: &Lanes,
+    a: &Lanes,
+    b: &Lanes,
+    inv_width: &Lanes,
+) -> Lanes {
+    lanes(|k| {
+        if hi[k] > lo[k] {
+            let f = (b[k] - a[k]) * inv_width[k];
+            if f > 0.0 {
+                f.min(1.0)
+            } else {
+                0.0
+            }
+        } else {
+            f32::from(u8::from(span.lo <= lo[k] && lo[k] < span.hi))
+        }
+    })
 }
