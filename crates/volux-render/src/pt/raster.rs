@@ -207,6 +207,74 @@ impl Edge {
     }
 }
 
+/// One edge's bound on the covered columns of successive rows: a pixel `x` is on the inner
+/// side when `C + D x >= bias`, i.e. `x >= -floor(M / D)` for `D > 0` and
+/// `x <= floor(M / -D)` for `D < 0`, with `M = C - bias`; `M` grows by the edge's `dx ONE` per
+/// row, so `floor(M / |D|)` is stepped as a quotient and a remainder.
+#[derive(Clone, Copy, Debug)]
+struct EdgeBound {
+    /// `E`'s increment per column.
+    d: i64,
+    /// `floor(M / |D|)` and `M mod |D|` on the current row (`M` itself when `D = 0`).
+    q: i64,
+    r: i64,
+    /// The same for `M`'s increment per row.
+    tq: i64,
+    tr: i64,
+}
+
+impl EdgeBound {
+    #[inline(always)]
+    fn new(e: &Edge, y: i64) -> Self {
+        let (c, d) = e.row(y);
+        let (m, t) = (c - e.bias, e.d[0] * ONE);
+        if d == 0 {
+            return Self {
+                d,
+                q: m,
+                r: 0,
+                tq: t,
+                tr: 0,
+            };
+        }
+        let k = d.abs();
+        Self {
+            d,
+            q: m.div_euclid(k),
+            r: m.rem_euclid(k),
+            tq: t.div_euclid(k),
+            tr: t.rem_euclid(k),
+        }
+    }
+
+    /// `[lo, hi]` narrowed to this edge's inner side on the current row (empty when the row
+    /// is outside a horizontal edge).
+    #[inline(always)]
+    fn clip(&self, lo: i64, hi: i64) -> (i64, i64) {
+        if self.d > 0 {
+            (lo.max(-self.q), hi)
+        } else if self.d < 0 {
+            (lo, hi.min(self.q))
+        } else if self.q < 0 {
+            (lo, lo - 1)
+        } else {
+            (lo, hi)
+        }
+    }
+
+    /// Moves to the next row.
+    #[inline(always)]
+    fn step(&mut self) {
+        let k = self.d.abs();
+        self.q += self.tq;
+        self.r += self.tr;
+        if self.r >= k && self.d != 0 {
+            self.r -= k;
+            self.q += 1;
+        }
+    }
+}
+
 /// `floor(a / b)` for `b > 0`.
 #[inline]
 fn floor_div(a: i64, b: i64) -> i64 {
@@ -341,37 +409,36 @@ impl Triangle {
     }
 
     /// Calls `span` for every pixel row of the triangle that holds covered pixels, with its
-    /// exact span of covered columns (every pixel of the [`Row`] is inside): rows of narrow
-    /// boxes are walked to find their span (a triangle meets a row in one interval), wide ones
-    /// clipped with exact divisions. The same pixels as [`Triangle::for_each`].
+    /// exact span of covered columns (every pixel of the [`Row`] is inside). Each edge's
+    /// bound on the columns, `ceil` or `floor` of `(bias - C) / D` as in the clipped scan, is
+    /// stepped from row to row with an exact quotient and remainder (a DDA), so there is
+    /// one division per edge and triangle instead of one per edge and row, and no pixel is
+    /// visited outside the triangle. The same pixels as [`Triangle::for_each`].
     #[inline(always)]
     pub fn spans(&self, mut span: impl FnMut(Row)) {
-        let walk = self.x1 - self.x0 < WALK_MAX;
-        self.rows_with(walk, |row| {
-            if !walk {
-                span(row);
-                return;
-            }
-            let (mut lo, mut hi) = (i64::MAX, i64::MIN);
-            let mut e = row.e;
-            for x in row.lo..row.hi + 1 {
-                let inside = row.inside(e);
-                lo = if inside { lo.min(x) } else { lo };
-                hi = if inside { hi.max(x) } else { hi };
-                e = [e[0] + row.d[0], e[1] + row.d[1], e[2] + row.d[2]];
+        let rows = self.y0..self.y1 + 1;
+        let mut bounds = self.edges.map(|e| EdgeBound::new(&e, self.y0));
+        let d = bounds.map(|b| b.d);
+        for y in rows {
+            let (mut lo, mut hi) = (self.x0, self.x1);
+            for b in &bounds {
+                (lo, hi) = b.clip(lo, hi);
             }
             if lo <= hi {
-                let k = lo - row.lo;
-                let e = [0, 1, 2].map(|j| row.e[j] + row.d[j] * k);
+                let e = [0, 1, 2].map(|j| self.edges[j].row(y).0 + d[j] * lo);
                 span(Row {
+                    y,
                     lo,
                     hi,
                     e,
+                    d,
                     bias: SPAN_BIAS,
-                    ..row
                 });
             }
-        });
+            for b in &mut bounds {
+                b.step();
+            }
+        }
     }
 
     /// [`Triangle::rows`] with the choice between walking and clipping made by the caller.

@@ -458,7 +458,7 @@ impl CellColour {
 
 /// Each lane's share of its segment `[lo, hi]` (values) that lies in `span`, given the
 /// overlap `[a, b]` and `1 / (hi - lo)`; a constant segment lies in the one span holding its
-/// value.
+/// value. Written as selects (no branch per lane).
 #[inline(always)]
 fn span_share(
     span: &Span,
@@ -469,15 +469,19 @@ fn span_share(
     inv_width: &Lanes,
 ) -> Lanes {
     lanes(|k| {
-        if hi[k] > lo[k] {
-            let f = (b[k] - a[k]) * inv_width[k];
-            if f > 0.0 {
-                f.min(1.0)
-            } else {
-                0.0
-            }
+        let f = (b[k] - a[k]) * inv_width[k];
+        // NaN (a constant segment) and negative shares give 0.
+        let f = if f > 0.0 { f } else { 0.0 };
+        let f = if f < 1.0 { f } else { 1.0 };
+        let holds = if span.lo <= lo[k] && lo[k] < span.hi {
+            1.0
         } else {
-            f32::from(u8::from(span.lo <= lo[k] && lo[k] < span.hi))
+            0.0
+        };
+        if hi[k] > lo[k] {
+            f
+        } else {
+            holds
         }
     })
 }
