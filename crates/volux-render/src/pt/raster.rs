@@ -213,8 +213,13 @@ impl Edge {
 /// row, so `floor(M / |D|)` is stepped as a quotient and a remainder.
 #[derive(Clone, Copy, Debug)]
 struct EdgeBound {
+    /// `E` at the centre of column 0 of the current row, and its increment per row.
+    c: i64,
+    t: i64,
     /// `E`'s increment per column.
     d: i64,
+    /// `|D|`, or `i64::MAX` for a horizontal edge (whose remainder never carries).
+    k: i64,
     /// `floor(M / |D|)` and `M mod |D|` on the current row (`M` itself when `D = 0`).
     q: i64,
     r: i64,
@@ -228,22 +233,26 @@ impl EdgeBound {
     fn new(e: &Edge, y: i64) -> Self {
         let (c, d) = e.row(y);
         let (m, t) = (c - e.bias, e.d[0] * ONE);
-        if d == 0 {
-            return Self {
-                d,
-                q: m,
-                r: 0,
-                tq: t,
-                tr: 0,
-            };
-        }
-        let k = d.abs();
+        let k = if d == 0 { i64::MAX } else { d.abs() };
+        let (q, r, tq, tr) = if d == 0 {
+            (m, 0, t, 0)
+        } else {
+            (
+                m.div_euclid(k),
+                m.rem_euclid(k),
+                t.div_euclid(k),
+                t.rem_euclid(k),
+            )
+        };
         Self {
+            c,
+            t,
             d,
-            q: m.div_euclid(k),
-            r: m.rem_euclid(k),
-            tq: t.div_euclid(k),
-            tr: t.rem_euclid(k),
+            k,
+            q,
+            r,
+            tq,
+            tr,
         }
     }
 
@@ -251,27 +260,25 @@ impl EdgeBound {
     /// is outside a horizontal edge).
     #[inline(always)]
     fn clip(&self, lo: i64, hi: i64) -> (i64, i64) {
-        if self.d > 0 {
-            (lo.max(-self.q), hi)
-        } else if self.d < 0 {
-            (lo, hi.min(self.q))
-        } else if self.q < 0 {
-            (lo, lo - 1)
+        let low = if self.d > 0 { -self.q } else { i64::MIN };
+        let high = if self.d < 0 {
+            self.q
+        } else if self.d == 0 && self.q < 0 {
+            i64::MIN
         } else {
-            (lo, hi)
-        }
+            i64::MAX
+        };
+        (lo.max(low), hi.min(high))
     }
 
     /// Moves to the next row.
     #[inline(always)]
     fn step(&mut self) {
-        let k = self.d.abs();
-        self.q += self.tq;
-        self.r += self.tr;
-        if self.r >= k && self.d != 0 {
-            self.r -= k;
-            self.q += 1;
-        }
+        self.c += self.t;
+        let r = self.r + self.tr;
+        let carry = r >= self.k;
+        self.r = if carry { r - self.k } else { r };
+        self.q += self.tq + i64::from(carry);
     }
 }
 
@@ -425,7 +432,7 @@ impl Triangle {
                 (lo, hi) = b.clip(lo, hi);
             }
             if lo <= hi {
-                let e = [0, 1, 2].map(|j| self.edges[j].row(y).0 + d[j] * lo);
+                let e = [0, 1, 2].map(|j| bounds[j].c + d[j] * lo);
                 span(Row {
                     y,
                     lo,

@@ -655,7 +655,7 @@ impl TileContext<'_> {
         let shader = self.shader;
         let per_pixel = self.per_pixel;
         let mut gathered: Vec<Gathered> = Vec::with_capacity(GATHER);
-        let mut batch = Batch::new(tw * th);
+        let mut batch = Batch::new();
         let mut colour = CellColour::default();
         let gather = Gather {
             secant: &secant,

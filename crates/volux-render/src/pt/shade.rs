@@ -25,7 +25,7 @@
 //! the extinction vanishes are dropped for the whole cell (their fragments are transparent
 //! black, which composites as nothing), and the rest are composited in ray order (front to
 //! back when the values increase along the ray, back to front otherwise).
-use super::raster::{Row, Triangle};
+use super::raster::{Row, Triangle, TILE};
 use crate::composite::under;
 use crate::integrate::fragment::FragmentShader;
 use crate::integrate::psi::lanes::{average_rgba_lanes, lanes, psi_rgba_lanes, Lanes, LANES};
@@ -107,36 +107,40 @@ impl CellColour {
     }
 }
 
-/// Capacity of a [`Batch`]: a tile's pixels (a cell covers each at most once) and a lane
-/// group of padding.
-fn capacity(tile_pixels: usize) -> usize {
-    tile_pixels + LANES
-}
+/// Capacity of a [`Batch`]: a power of two above a tile's pixels (a cell covers each at most
+/// once), a row and a lane group of padding, so that masked indices need no bounds check.
+const CAPACITY: usize = 2048;
+const _: () = assert!(TILE * TILE + TILE + LANES <= CAPACITY && CAPACITY.is_power_of_two());
 
 /// One cell's fragments in one tile, as structure of arrays (see the module documentation).
 #[derive(Debug)]
 pub struct Batch {
     len: usize,
-    pixel: Vec<u32>,
+    pixel: Box<[u32; CAPACITY]>,
     /// The four attribute planes at each fragment.
-    attr: [Vec<f32>; 4],
-    secant: Vec<f32>,
+    attr: Box<[[f32; CAPACITY]; 4]>,
+    secant: Box<[f32; CAPACITY]>,
     /// Outputs of [`Batch::shade`]: front depth and premultiplied RGBA.
-    z_f: Vec<f32>,
-    rgba: [Vec<f32>; 4],
+    z_f: Box<[f32; CAPACITY]>,
+    rgba: Box<[[f32; CAPACITY]; 4]>,
+}
+
+impl Default for Batch {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Batch {
-    /// An empty batch for tiles of up to `tile_pixels` pixels.
-    pub fn new(tile_pixels: usize) -> Self {
-        let n = capacity(tile_pixels);
+    /// An empty batch (for tiles of up to [`TILE`] x [`TILE`] pixels).
+    pub fn new() -> Self {
         Self {
             len: 0,
-            pixel: vec![0; n],
-            attr: std::array::from_fn(|_| vec![0.0; n]),
-            secant: vec![0.0; n],
-            z_f: vec![0.0; n],
-            rgba: std::array::from_fn(|_| vec![0.0; n]),
+            pixel: Box::new([0; CAPACITY]),
+            attr: Box::new([[0.0; CAPACITY]; 4]),
+            secant: Box::new([0.0; CAPACITY]),
+            z_f: Box::new([0.0; CAPACITY]),
+            rgba: Box::new([[0.0; CAPACITY]; 4]),
         }
     }
 
@@ -157,7 +161,7 @@ impl Batch {
 
     /// Whether `n` more fragments fit.
     fn fits(&self, n: usize) -> bool {
-        self.len + n + LANES <= self.pixel.len()
+        self.len + n + LANES <= CAPACITY
     }
 }
 
@@ -201,29 +205,33 @@ impl Gather<'_> {
         });
     }
 
-    /// One span of [`Gather::triangle`]: its pixels are appended, then the opaque ones (if
-    /// any) removed.
+    /// One span of [`Gather::triangle`]: its pixels are appended (one pass, no bounds check
+    /// per pixel), then the opaque ones (if any) removed.
     #[inline(always)]
     fn row(&self, batch: &mut Batch, acc: &[[f32; 4]], row: &Row, q0: [f32; 4], dq: [f32; 4]) {
+        const MASK: usize = CAPACITY - 1;
         let start = ((row.y - self.y0) * self.width + row.lo - self.x0) as usize;
         let width = (row.hi - row.lo + 1) as usize;
-        let (n, end) = (batch.len, batch.len + width);
-        for (i, p) in batch.pixel[n..end].iter_mut().enumerate() {
-            *p = (start + i) as u32;
-        }
-        for (a, (q0, dq)) in batch.attr.iter_mut().zip(q0.iter().zip(&dq)) {
-            let mut i = 0.0f32;
-            for v in &mut a[n..end] {
-                *v = q0 + i * dq;
-                i += 1.0;
-            }
-        }
-        batch.secant[n..end].copy_from_slice(&self.secant[start..start + width]);
+        let n = batch.len;
         let pixels = &acc[start..start + width];
-        batch.len = if pixels.iter().any(|a| a[3] >= self.early) {
-            batch.keep_live(n, end, |p| acc[p as usize][3] < self.early)
+        let secant = &self.secant[start..start + width];
+        let (pixel, out, attr) = (&mut *batch.pixel, &mut *batch.secant, &mut *batch.attr);
+        let mut opaque = false;
+        let mut i = 0.0f32;
+        for (x, (&s, a)) in secant.iter().zip(pixels).enumerate() {
+            let j = (n + x) & MASK;
+            pixel[j] = (start + x) as u32;
+            out[j] = s;
+            for c in 0..4 {
+                attr[c][j] = q0[c] + i * dq[c];
+            }
+            opaque |= a[3] >= self.early;
+            i += 1.0;
+        }
+        batch.len = if opaque {
+            batch.keep_live(n, n + width, |p| acc[p as usize][3] < self.early)
         } else {
-            end
+            n + width
         };
     }
 }
@@ -236,7 +244,7 @@ impl Batch {
         for i in from..to {
             if live(self.pixel[i]) {
                 self.pixel[m] = self.pixel[i];
-                for a in &mut self.attr {
+                for a in self.attr.iter_mut() {
                     a[m] = a[i];
                 }
                 self.secant[m] = self.secant[i];
@@ -288,7 +296,7 @@ impl Batch {
         // Pad the last lane group with copies of the last fragment.
         let end = self.len.div_ceil(LANES) * LANES;
         for i in self.len..end {
-            for a in &mut self.attr {
+            for a in self.attr.iter_mut() {
                 a[i] = a[self.len - 1];
             }
             self.secant[i] = self.secant[self.len - 1];
@@ -300,7 +308,7 @@ impl Batch {
                 load(&self.attr[2], i),
                 load(&self.attr[3], i),
             ];
-            let sec = load(&self.secant, i);
+            let sec = load(&self.secant[..], i);
             let z_f = lanes(|k| if PERSP { 1.0 / wf[k] } else { wf[k] });
             let z_b = lanes(|k| if PERSP { 1.0 / wb[k] } else { wb[k] });
             let s_f = lanes(|k| if PERSP { nf[k] * z_f[k] } else { nf[k] });
@@ -324,7 +332,7 @@ impl Batch {
     /// Composites the shaded fragments under the tile's pixels `acc`, in batch order.
     pub fn composite(&self, acc: &mut [[f32; 4]]) {
         let n = self.len;
-        let [r, g, b, a] = &self.rgba;
+        let [r, g, b, a] = &*self.rgba;
         let rgba = r[..n].iter().zip(&g[..n]).zip(b[..n].iter().zip(&a[..n]));
         for (&p, ((&r, &g), (&b, &a))) in self.pixel[..n].iter().zip(rgba) {
             under(&mut acc[p as usize], [r, g, b, a]);
