@@ -669,6 +669,19 @@ impl CellClassifier {
         self.pieces.get(k)
     }
 
+    /// The breakpoints around the piece that [`CellClassifier::pieces_on`] gives first for
+    /// ranges starting at `lo`: the last one `<= lo` and the first one `> lo` (infinite where
+    /// there is none). Every range `[lo', hi']` with `below <= lo' <= hi' <= above` and
+    /// `lo' < above` lies in that one piece.
+    pub fn piece_bounds(&self, lo: f32) -> (f32, f32) {
+        let first = self.knots.partition_point(|&x| x <= lo);
+        let below = first
+            .checked_sub(1)
+            .map_or(f32::NEG_INFINITY, |i| self.knots[i]);
+        let above = self.knots.get(first).copied().unwrap_or(f32::INFINITY);
+        (below, above)
+    }
+
     /// The TF on `[lo, hi]` piece by piece: the breakpoints strictly inside (sorted) and the
     /// linear pieces around and between them (one more than the breakpoints; the first
     /// holds `lo`, the last `hi`). `None` for NaN bounds or `lo > hi`. With no breakpoint

@@ -207,6 +207,10 @@ impl Edge {
     }
 }
 
+/// Boxes narrower than this many columns have their spans found by walking
+/// ([`Triangle::spans`]).
+const SPAN_WALK_MAX: i64 = 4;
+
 /// One edge's bound on the covered columns of successive rows: a pixel `x` is on the inner
 /// side when `C + D x >= bias`, i.e. `x >= -floor(M / D)` for `D > 0` and
 /// `x <= floor(M / -D)` for `D < 0`, with `M = C - bias`; `M` grows by the edge's `dx ONE` per
@@ -423,6 +427,10 @@ impl Triangle {
     /// visited outside the triangle. The same pixels as [`Triangle::for_each`].
     #[inline(always)]
     pub fn spans(&self, mut span: impl FnMut(Row)) {
+        if self.x1 - self.x0 < SPAN_WALK_MAX {
+            self.walked_spans(span);
+            return;
+        }
         let rows = self.y0..self.y1 + 1;
         let mut bounds = self.edges.map(|e| EdgeBound::new(&e, self.y0));
         let d = bounds.map(|b| b.d);
@@ -446,6 +454,34 @@ impl Triangle {
                 b.step();
             }
         }
+    }
+
+    /// [`Triangle::spans`] for narrow boxes: each row of the box is walked to find its span
+    /// (a triangle meets a row in one interval), which for a few columns costs less than
+    /// setting up the edge steppers.
+    #[inline(always)]
+    fn walked_spans(&self, mut span: impl FnMut(Row)) {
+        self.rows_with(true, |row| {
+            let (mut lo, mut hi) = (i64::MAX, i64::MIN);
+            let mut e = row.e;
+            for x in row.lo..row.hi + 1 {
+                let inside = row.inside(e);
+                lo = if inside { lo.min(x) } else { lo };
+                hi = if inside { hi.max(x) } else { hi };
+                e = [e[0] + row.d[0], e[1] + row.d[1], e[2] + row.d[2]];
+            }
+            if lo <= hi {
+                let k = lo - row.lo;
+                let e = [0, 1, 2].map(|j| row.e[j] + row.d[j] * k);
+                span(Row {
+                    lo,
+                    hi,
+                    e,
+                    bias: SPAN_BIAS,
+                    ..row
+                });
+            }
+        });
     }
 
     /// [`Triangle::rows`] with the choice between walking and clipping made by the caller.

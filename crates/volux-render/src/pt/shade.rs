@@ -49,6 +49,10 @@ pub struct CellColour {
     psi: bool,
     /// The pieces with non-zero extinction, in increasing value order.
     spans: Vec<Span>,
+    /// For a linear plan of the ψ or average model without isosurfaces: the value range
+    /// `[below, above)` (the breakpoints around its piece) within which another cell's range
+    /// gets the same plan (neighbouring cells often do).
+    reuse: Option<(SegmentRule, f32, f32)>,
 }
 
 impl CellColour {
@@ -57,6 +61,15 @@ impl CellColour {
     /// the exact model, an isosurface value in the range, non-finite values, or the average
     /// model across breakpoints (which it does not cut at).
     pub fn plan(&mut self, shader: &FragmentShader<'_>, lo: f32, hi: f32) -> bool {
+        if let Some((mode, below, above)) = self.reuse {
+            // No breakpoint in `(lo, hi)` and `lo` below the next: the same piece.
+            let finite = lo.is_finite() && hi.is_finite();
+            if finite && mode == shader.mode && below <= lo && lo <= hi && hi <= above && lo < above
+            {
+                return true;
+            }
+        }
+        self.reuse = None;
         self.psi = match shader.mode {
             SegmentRule::Psi => true,
             SegmentRule::Average => false,
@@ -80,6 +93,10 @@ impl CellColour {
                 hi: f32::INFINITY,
                 piece: pieces[0],
             });
+            if shader.isosurfaces.is_empty() {
+                let (below, above) = shader.classifier.piece_bounds(lo);
+                self.reuse = Some((shader.mode, below, above));
+            }
             return true;
         }
         if !self.psi {
