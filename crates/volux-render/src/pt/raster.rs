@@ -25,7 +25,7 @@ use crate::tiles::{Rect, TileGrid};
 
 /// Tile edge in pixels of the projection renderer: a tile's bin of tetrahedra is read once
 /// per tile, so PT's tiles are larger than the ray casters' ([`crate::tiles::TILE`]).
-pub const TILE: usize = 32;
+pub const TILE: usize = 64;
 
 /// The PT screen tiles of a `width x height` image.
 pub fn tiles(width: usize, height: usize) -> TileGrid {

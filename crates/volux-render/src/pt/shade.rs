@@ -126,7 +126,7 @@ impl CellColour {
 
 /// Capacity of a [`Batch`]: a power of two above a tile's pixels (a cell covers each at most
 /// once), a row and a lane group of padding, so that masked indices need no bounds check.
-const CAPACITY: usize = 2048;
+const CAPACITY: usize = 8192;
 const _: () = assert!(TILE * TILE + TILE + LANES <= CAPACITY && CAPACITY.is_power_of_two());
 
 /// One cell's fragments in one tile, as structure of arrays (see the module documentation).
@@ -232,16 +232,18 @@ impl Gather<'_> {
         let n = batch.len;
         let pixels = &acc[start..start + width];
         let secant = &self.secant[start..start + width];
-        let (pixel, out, attr) = (&mut *batch.pixel, &mut *batch.secant, &mut *batch.attr);
+        let (pixel, out) = (&mut *batch.pixel, &mut *batch.secant);
+        let [a0, a1, a2, a3] = &mut *batch.attr;
         let mut opaque = false;
         let mut i = 0.0f32;
         for (x, (&s, a)) in secant.iter().zip(pixels).enumerate() {
             let j = (n + x) & MASK;
             pixel[j] = (start + x) as u32;
             out[j] = s;
-            for c in 0..4 {
-                attr[c][j] = q0[c] + i * dq[c];
-            }
+            a0[j] = q0[0] + i * dq[0];
+            a1[j] = q0[1] + i * dq[1];
+            a2[j] = q0[2] + i * dq[2];
+            a3[j] = q0[3] + i * dq[3];
             opaque |= a[3] >= self.early;
             i += 1.0;
         }
