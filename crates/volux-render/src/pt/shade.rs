@@ -337,7 +337,8 @@ impl Batch {
             // Transparent black for unusable inputs, as the scalar models give (a finite
             // `len` implies finite depths).
             let ok = lanes(|k| {
-                let finite = (s_f[k] - s_f[k]) + (s_b[k] - s_b[k]) + (len[k] - len[k]) == 0.0;
+                let inf = f32::INFINITY;
+                let finite = (s_f[k].abs() < inf) & (s_b[k].abs() < inf) & (len[k].abs() < inf);
                 f32::from(u8::from(finite & (len[k] > 0.0)))
             });
             self.z_f[i..i + LANES].copy_from_slice(&z_f);
