@@ -122,6 +122,8 @@ use volux_core::TransferFunction;
 
 use super::segment::{GL_W, GL_X};
 
+pub mod lanes;
+
 /// Default [`PsiTable`] resolution (nodes per axis).
 pub const PSI_TABLE_SIZE: usize = 512;
 
@@ -459,6 +461,13 @@ pub struct LinearPiece {
 }
 
 impl LinearPiece {
+    /// `(origin, value at origin, slope)`: the piece is `at_origin + slope (s - origin)`,
+    /// for code that evaluates it a channel at a time.
+    #[inline(always)]
+    pub fn coefficients(&self) -> (f32, [f32; 4], [f32; 4]) {
+        (self.origin, self.at_origin, self.slope)
+    }
+
     /// `[r, g, b, tau]` at value `s` (extrapolated linearly outside the piece).
     #[inline(always)]
     pub fn at(&self, s: f32) -> [f32; 4] {
@@ -658,6 +667,36 @@ impl CellClassifier {
             return None;
         }
         self.pieces.get(k)
+    }
+
+    /// The breakpoints around the piece that [`CellClassifier::pieces_on`] gives first for
+    /// ranges starting at `lo`: the last one `<= lo` and the first one `> lo` (infinite where
+    /// there is none). Every range `[lo', hi']` with `below <= lo' <= hi' <= above` and
+    /// `lo' < above` lies in that one piece.
+    pub fn piece_bounds(&self, lo: f32) -> (f32, f32) {
+        let first = self.knots.partition_point(|&x| x <= lo);
+        let below = first
+            .checked_sub(1)
+            .map_or(f32::NEG_INFINITY, |i| self.knots[i]);
+        let above = self.knots.get(first).copied().unwrap_or(f32::INFINITY);
+        (below, above)
+    }
+
+    /// The TF on `[lo, hi]` piece by piece: the breakpoints strictly inside (sorted) and the
+    /// linear pieces around and between them (one more than the breakpoints; the first
+    /// holds `lo`, the last `hi`). `None` for NaN bounds or `lo > hi`. With no breakpoint
+    /// inside, the one piece is [`CellClassifier::linear_on`]'s.
+    #[inline]
+    pub fn pieces_on(&self, lo: f32, hi: f32) -> Option<(&[f32], &[LinearPiece])> {
+        if lo.is_nan() || hi.is_nan() || lo > hi {
+            return None;
+        }
+        let first = self.knots.partition_point(|&x| x <= lo);
+        let last = self.knots.partition_point(|&x| x < hi).max(first);
+        Some((
+            self.knots.get(first..last)?,
+            self.pieces.get(first..last + 1)?,
+        ))
     }
 
     /// Whether the extinction is zero for every value in `[lo, hi]` (including the entries

@@ -43,6 +43,8 @@
 //!   fixed-point edge functions and the top-left rule;
 //! - the colour of a fragment (average, ψ, exact) with isosurfaces is
 //!   [`crate::integrate::fragment`], shared with the tet ray caster;
+//! - [`shade`]: the second pass on lanes: a cell's fragments in a tile gathered, then
+//!   interpolated and coloured several at a time;
 //! - [`render`]: [`PtRenderer`], the stages wired together with the caches of the update step
 //!   (discard, per-tetrahedron pass, order, bins), parallel over tiles and deterministic;
 //! - [`reference`](mod@reference): a brute-force per-pixel ray/tetrahedron integrator, the independent
@@ -54,6 +56,7 @@ pub mod raster;
 pub mod reference;
 pub mod render;
 pub mod setup;
+pub mod shade;
 pub mod sort;
 
 pub use crate::frame::PtStats;

@@ -25,7 +25,7 @@ use crate::tiles::{Rect, TileGrid};
 
 /// Tile edge in pixels of the projection renderer: a tile's bin of tetrahedra is read once
 /// per tile, so PT's tiles are larger than the ray casters' ([`crate::tiles::TILE`]).
-pub const TILE: usize = 32;
+pub const TILE: usize = 64;
 
 /// The PT screen tiles of a `width x height` image.
 pub fn tiles(width: usize, height: usize) -> TileGrid {
@@ -207,6 +207,85 @@ impl Edge {
     }
 }
 
+/// Boxes narrower than this many columns have their spans found by walking
+/// ([`Triangle::spans`]).
+const SPAN_WALK_MAX: i64 = 4;
+
+/// One edge's bound on the covered columns of successive rows: a pixel `x` is on the inner
+/// side when `C + D x >= bias`, i.e. `x >= -floor(M / D)` for `D > 0` and
+/// `x <= floor(M / -D)` for `D < 0`, with `M = C - bias`; `M` grows by the edge's `dx ONE` per
+/// row, so `floor(M / |D|)` is stepped as a quotient and a remainder.
+#[derive(Clone, Copy, Debug)]
+struct EdgeBound {
+    /// `E` at the centre of column 0 of the current row, and its increment per row.
+    c: i64,
+    t: i64,
+    /// `E`'s increment per column.
+    d: i64,
+    /// `|D|`, or `i64::MAX` for a horizontal edge (whose remainder never carries).
+    k: i64,
+    /// `floor(M / |D|)` and `M mod |D|` on the current row (`M` itself when `D = 0`).
+    q: i64,
+    r: i64,
+    /// The same for `M`'s increment per row.
+    tq: i64,
+    tr: i64,
+}
+
+impl EdgeBound {
+    #[inline(always)]
+    fn new(e: &Edge, y: i64) -> Self {
+        let (c, d) = e.row(y);
+        let (m, t) = (c - e.bias, e.d[0] * ONE);
+        let k = if d == 0 { i64::MAX } else { d.abs() };
+        let (q, r, tq, tr) = if d == 0 {
+            (m, 0, t, 0)
+        } else {
+            (
+                m.div_euclid(k),
+                m.rem_euclid(k),
+                t.div_euclid(k),
+                t.rem_euclid(k),
+            )
+        };
+        Self {
+            c,
+            t,
+            d,
+            k,
+            q,
+            r,
+            tq,
+            tr,
+        }
+    }
+
+    /// `[lo, hi]` narrowed to this edge's inner side on the current row (empty when the row
+    /// is outside a horizontal edge).
+    #[inline(always)]
+    fn clip(&self, lo: i64, hi: i64) -> (i64, i64) {
+        let low = if self.d > 0 { -self.q } else { i64::MIN };
+        let high = if self.d < 0 {
+            self.q
+        } else if self.d == 0 && self.q < 0 {
+            i64::MIN
+        } else {
+            i64::MAX
+        };
+        (lo.max(low), hi.min(high))
+    }
+
+    /// Moves to the next row.
+    #[inline(always)]
+    fn step(&mut self) {
+        self.c += self.t;
+        let r = self.r + self.tr;
+        let carry = r >= self.k;
+        self.r = if carry { r - self.k } else { r };
+        self.q += self.tq + i64::from(carry);
+    }
+}
+
 /// `floor(a / b)` for `b > 0`.
 #[inline]
 fn floor_div(a: i64, b: i64) -> i64 {
@@ -307,6 +386,107 @@ impl Triangle {
     #[inline(always)]
     fn scan(&self, walk: bool, mut frag: impl FnMut(usize, usize, [f32; 3])) {
         let inv = self.inv_area;
+        self.rows_with(walk, |row| {
+            let mut cur = row.e;
+            for x in row.lo..row.hi + 1 {
+                if row.inside(cur) {
+                    let l = [
+                        cur[0] as f32 * inv,
+                        cur[1] as f32 * inv,
+                        cur[2] as f32 * inv,
+                    ];
+                    frag(x as usize, row.y as usize, l);
+                }
+                cur = [cur[0] + row.d[0], cur[1] + row.d[1], cur[2] + row.d[2]];
+            }
+        });
+    }
+
+    /// `1 / (twice the area)` in fixed point: the barycentric coordinate of vertex `j` is
+    /// `E_j` times this.
+    #[inline(always)]
+    pub fn inv_area(&self) -> f32 {
+        self.inv_area
+    }
+
+    /// Calls `row` for every pixel row of the triangle's box that may hold covered pixels,
+    /// with the columns to visit and the edge functions at the first of them. Narrow boxes
+    /// give every column of the box and [`Row::inside`] tells the covered ones; wide ones
+    /// give each row's exact span (every pixel inside). Together the rows cover exactly the
+    /// pixels of [`Triangle::for_each`].
+    #[inline(always)]
+    pub fn rows(&self, row: impl FnMut(Row)) {
+        self.rows_with(self.x1 - self.x0 < WALK_MAX, row);
+    }
+
+    /// Calls `span` for every pixel row of the triangle that holds covered pixels, with its
+    /// exact span of covered columns (every pixel of the [`Row`] is inside). Each edge's
+    /// bound on the columns, `ceil` or `floor` of `(bias - C) / D` as in the clipped scan, is
+    /// stepped from row to row with an exact quotient and remainder (a DDA), so there is
+    /// one division per edge and triangle instead of one per edge and row, and no pixel is
+    /// visited outside the triangle. The same pixels as [`Triangle::for_each`].
+    #[inline(always)]
+    pub fn spans(&self, mut span: impl FnMut(Row)) {
+        if self.x1 - self.x0 < SPAN_WALK_MAX {
+            self.walked_spans(span);
+            return;
+        }
+        let rows = self.y0..self.y1 + 1;
+        let mut bounds = self.edges.map(|e| EdgeBound::new(&e, self.y0));
+        let d = bounds.map(|b| b.d);
+        for y in rows {
+            let (mut lo, mut hi) = (self.x0, self.x1);
+            for b in &bounds {
+                (lo, hi) = b.clip(lo, hi);
+            }
+            if lo <= hi {
+                let e = [0, 1, 2].map(|j| bounds[j].c + d[j] * lo);
+                span(Row {
+                    y,
+                    lo,
+                    hi,
+                    e,
+                    d,
+                    bias: SPAN_BIAS,
+                });
+            }
+            for b in &mut bounds {
+                b.step();
+            }
+        }
+    }
+
+    /// [`Triangle::spans`] for narrow boxes: each row of the box is walked to find its span
+    /// (a triangle meets a row in one interval), which for a few columns costs less than
+    /// setting up the edge steppers.
+    #[inline(always)]
+    fn walked_spans(&self, mut span: impl FnMut(Row)) {
+        self.rows_with(true, |row| {
+            let (mut lo, mut hi) = (i64::MAX, i64::MIN);
+            let mut e = row.e;
+            for x in row.lo..row.hi + 1 {
+                let inside = row.inside(e);
+                lo = if inside { lo.min(x) } else { lo };
+                hi = if inside { hi.max(x) } else { hi };
+                e = [e[0] + row.d[0], e[1] + row.d[1], e[2] + row.d[2]];
+            }
+            if lo <= hi {
+                let k = lo - row.lo;
+                let e = [0, 1, 2].map(|j| row.e[j] + row.d[j] * k);
+                span(Row {
+                    lo,
+                    hi,
+                    e,
+                    bias: SPAN_BIAS,
+                    ..row
+                });
+            }
+        });
+    }
+
+    /// [`Triangle::rows`] with the choice between walking and clipping made by the caller.
+    #[inline(always)]
+    fn rows_with(&self, walk: bool, mut row: impl FnMut(Row)) {
         let [e0, e1, e2] = self.edges;
         let bias = [e0.bias, e1.bias, e2.bias];
         for y in self.y0..self.y1 + 1 {
@@ -329,22 +509,44 @@ impl Triangle {
                     continue;
                 }
             }
-            let mut cur = [c0 + d0 * lo, c1 + d1 * lo, c2 + d2 * lo];
-            for x in lo..hi + 1 {
-                // Inside when every E >= its bias (exact integers).
-                if !walk || ((cur[0] - bias[0]) | (cur[1] - bias[1]) | (cur[2] - bias[2])) >= 0 {
-                    let l = [
-                        cur[0] as f32 * inv,
-                        cur[1] as f32 * inv,
-                        cur[2] as f32 * inv,
-                    ];
-                    frag(x as usize, y as usize, l);
-                }
-                cur[0] += d0;
-                cur[1] += d1;
-                cur[2] += d2;
-            }
+            row(Row {
+                y,
+                lo,
+                hi,
+                e: [c0 + d0 * lo, c1 + d1 * lo, c2 + d2 * lo],
+                d: [d0, d1, d2],
+                bias: if walk { bias } else { SPAN_BIAS },
+            });
         }
+    }
+}
+
+/// The biases of a [`Row`] that is an exact span: every `E - bias` is then `>= 0` (the `E`s of
+/// covered pixels are at least 0 and below `2^62`).
+const SPAN_BIAS: [i64; 3] = [i64::MIN / 2; 3];
+
+/// One pixel row of a [`Triangle`]: columns `lo..=hi` of row `y`, with the three edge
+/// functions `e` at column `lo` and their increments `d` per column.
+#[derive(Clone, Copy, Debug)]
+pub struct Row {
+    /// The pixel row.
+    pub y: i64,
+    /// First column.
+    pub lo: i64,
+    /// Last column.
+    pub hi: i64,
+    /// Edge functions at `(lo, y)`; barycentric `j` is `e[j] * inv_area`.
+    pub e: [i64; 3],
+    /// Their increments per column.
+    pub d: [i64; 3],
+    bias: [i64; 3],
+}
+
+impl Row {
+    /// Whether the pixel whose edge functions are `e` is covered (top-left rule).
+    #[inline(always)]
+    pub fn inside(&self, e: [i64; 3]) -> bool {
+        ((e[0] - self.bias[0]) | (e[1] - self.bias[1]) | (e[2] - self.bias[2])) >= 0
     }
 }
 
@@ -445,6 +647,47 @@ mod tests {
                 .collect();
             let count = coverage(&tris, 24, 24);
             assert!(count.iter().all(|&n| n == 1), "a pixel missed or doubled");
+        }
+    }
+
+    #[test]
+    fn spans_cover_the_pixels_of_for_each() {
+        let mut seed = 0x1234_5678_9abc_def1u64;
+        let mut rnd = |n: i64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as i64 % n
+        };
+        let clip = Rect {
+            x0: 3,
+            y0: 2,
+            x1: 35,
+            y1: 27,
+        };
+        for i in 0..20_000 {
+            let span = [4 * ONE, 12 * ONE, 40 * ONE][i % 3];
+            let step = if i % 4 == 0 { HALF } else { 1 };
+            let mut p = || [rnd(span / step) * step, rnd(span / step) * step];
+            let v = [p(), p(), p()];
+            let Some(t) = Triangle::new(v, clip) else {
+                continue;
+            };
+            let mut a = Vec::new();
+            t.for_each(|x, y, _| a.push((x as i64, y as i64)));
+            let mut b = Vec::new();
+            t.spans(|row| {
+                let mut e = row.e;
+                for x in row.lo..=row.hi {
+                    assert!(row.inside(e));
+                    // The edge functions the span gives are those of its pixels.
+                    let l = e.map(|e| e as f32 * t.inv_area());
+                    assert!(l.iter().all(|&v| v >= -1e-6), "{v:?}");
+                    b.push((x, row.y));
+                    e = [0, 1, 2].map(|j| e[j] + row.d[j]);
+                }
+            });
+            assert_eq!(a, b, "{v:?}");
         }
     }
 

@@ -32,11 +32,13 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
+use super::classify::Classification;
 use super::classify::{ternary_code, TERNARY_TABLE};
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
 use super::raster::{bin, fixed, tiles, Bins, Triangle};
 use super::setup::{classify_fixed, projection_tests_screen};
+use super::shade::{Batch, CellColour, Gather};
 use super::sort;
 use crate::composite::under;
 use crate::error::RenderError;
@@ -653,6 +655,15 @@ impl TileContext<'_> {
         let shader = self.shader;
         let per_pixel = self.per_pixel;
         let mut gathered: Vec<Gathered> = Vec::with_capacity(GATHER);
+        let mut batch = Batch::new();
+        let mut colour = CellColour::default();
+        let gather = Gather {
+            secant: &secant,
+            x0: rect.x0 as i64,
+            y0: rect.y0 as i64,
+            width: tw as i64,
+            early,
+        };
         for chunk in list.chunks(GATHER) {
             gathered.clear();
             for &t in chunk {
@@ -693,15 +704,31 @@ impl TileContext<'_> {
                 // linear over it, the colour needs no table lookup or breakpoint search.
                 let [v0, v1, v2, v3] = g.scalars;
                 let (lo, hi) = (v0.min(v1).min(v2.min(v3)), v0.max(v1).max(v2.max(v3)));
+                // Per fan point `1 / z_f` and `1 / z_b` (perspective) or 1, computed once.
+                let kf = fan.map(|v| if PERSP { 1.0 / v.z_f } else { 1.0 });
+                let kb = fan.map(|v| if PERSP { 1.0 / v.z_b } else { 1.0 });
+                if colour.plan(shader, lo, hi) {
+                    // The attribute planes of every fan point (see `shade`).
+                    let planes = std::array::from_fn(|k| {
+                        let v = &fan[k];
+                        if PERSP {
+                            [kf[k], kf[k] * v.s_f, kb[k], kb[k] * v.s_b]
+                        } else {
+                            [v.z_f, v.s_f, v.z_b, v.s_b]
+                        }
+                    });
+                    self.draw_batch::<PERSP>(
+                        &mut batch, &gather, &colour, &c, &pos, &planes, rect, &mut acc,
+                        &mut frags, &mut count,
+                    );
+                    continue;
+                }
                 let finite = g.scalars.iter().all(|v| v.is_finite());
                 let piece = if finite {
                     shader.linear_on(lo, hi)
                 } else {
                     None
                 };
-                // Per fan point `1 / z_f` and `1 / z_b` (perspective) or 1, computed once.
-                let kf = fan.map(|v| if PERSP { 1.0 / v.z_f } else { 1.0 });
-                let kb = fan.map(|v| if PERSP { 1.0 / v.z_b } else { 1.0 });
                 for tri in c.fan.triangles() {
                     let idx = tri.map(|k| usize::from(k) % 5);
                     let Some(raster) = Triangle::new(idx.map(|k| pos[k]), rect) else {
@@ -756,6 +783,53 @@ impl TileContext<'_> {
             }
         }
         (acc, count)
+    }
+}
+
+impl TileContext<'_> {
+    /// Draws one cell through the lanes of [`shade`](super::shade): gathers the fragments of
+    /// its fan triangles (`pos`: the fixed-point fan points, `planes`: their attribute
+    /// planes), colours them with `colour` and composites them (or keeps them for the
+    /// per-pixel sort).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn draw_batch<const PERSP: bool>(
+        &self,
+        batch: &mut Batch,
+        gather: &Gather<'_>,
+        colour: &CellColour,
+        c: &Classification,
+        pos: &[[i64; 2]; 5],
+        planes: &[[f32; 4]; 5],
+        rect: Rect,
+        acc: &mut [[f32; 4]],
+        frags: &mut Vec<Fragment>,
+        count: &mut u64,
+    ) {
+        let table = self.shader.psi;
+        let per_pixel = self.per_pixel;
+        let mut flush = |batch: &mut Batch, acc: &mut [[f32; 4]]| {
+            batch.shade::<PERSP>(colour, table);
+            *count += batch.len() as u64;
+            if per_pixel {
+                frags.extend(batch.fragments().map(|(pixel, depth, rgba)| Fragment {
+                    pixel,
+                    depth,
+                    rgba,
+                }));
+            } else {
+                batch.composite(acc);
+            }
+            batch.clear();
+        };
+        for tri in c.fan.triangles() {
+            let idx = tri.map(|k| usize::from(k) % 5);
+            let Some(raster) = Triangle::new(idx.map(|k| pos[k]), rect) else {
+                continue;
+            };
+            gather.triangle(batch, acc, &raster, idx.map(|k| planes[k]), &mut flush);
+        }
+        flush(batch, acc);
     }
 }
 

@@ -1,0 +1,515 @@
+//! The second pass of PT on lanes: one tetrahedron's fragments in one tile are gathered
+//! by the rasterizer into a [`Batch`], then interpolated and coloured [`LANES`] at a time
+//! and composited (seed `000` §4.3, seed `002` §4.3 and §4.4: per fragment, `s_f`, `s_b` and
+//! `l` from the fan's interpolated attributes, the TF at both ends and the ψ colour).
+//!
+//! The fragments of one cell in one tile cover distinct pixels (the fan's triangles are
+//! interior-disjoint and the fill rule draws a shared edge once), so gathering them before
+//! compositing any of them changes nothing: the early-termination test of each fragment
+//! sees the pixel as it was before the cell, as it would drawing them one by one.
+//!
+//! # Attributes
+//!
+//! Under a perspective projection `1/z` and `s/z` are affine in screen space, so the
+//! rasterizer steps the four planes `1/z_f`, `s_f/z_f`, `1/z_b`, `s_b/z_b` along each row
+//! (one multiply-add each per pixel) and the lanes divide; orthographic views step
+//! `z_f`, `s_f`, `z_b`, `s_b` themselves.
+//!
+//! # Colour ([`CellColour`])
+//!
+//! The cell's vertex range `[lo, hi]` bounds every fragment's values. Where no TF breakpoint
+//! lies inside it the TF is one linear piece there and the ψ (or average) colour needs no
+//! lookup. Otherwise (ψ only) the range is cut at the breakpoints inside it, as
+//! [`crate::integrate::fragment`] cuts each segment: every lane takes its segment's share of
+//! each piece (`002` §4.4's partial pre-integration is exact on each), the pieces on which
+//! the extinction vanishes are dropped for the whole cell (their fragments are transparent
+//! black, which composites as nothing), and the rest are composited in ray order (front to
+//! back when the values increase along the ray, back to front otherwise).
+use super::raster::{Row, Triangle, TILE};
+use crate::composite::under;
+use crate::integrate::fragment::FragmentShader;
+use crate::integrate::psi::lanes::{average_rgba_lanes, lanes, psi_rgba_lanes, Lanes, LANES};
+use crate::integrate::psi::{LinearPiece, PsiTable};
+use crate::integrate::SegmentRule;
+
+/// One piece of a cell's colour: the TF is `piece` for values in `[lo, hi]`.
+#[derive(Clone, Copy, Debug)]
+struct Span {
+    lo: f32,
+    hi: f32,
+    piece: LinearPiece,
+}
+
+/// How the lanes colour one cell's fragments.
+#[derive(Debug, Default)]
+pub struct CellColour {
+    /// The cell's values lie in one linear piece of the TF (`spans[0]`).
+    linear: bool,
+    /// The ψ model (else the average model).
+    psi: bool,
+    /// The pieces with non-zero extinction, in increasing value order.
+    spans: Vec<Span>,
+    /// For a linear plan of the ψ or average model without isosurfaces: the value range
+    /// `[below, above)` (the breakpoints around its piece) within which another cell's range
+    /// gets the same plan (neighbouring cells often do).
+    reuse: Option<(SegmentRule, f32, f32)>,
+}
+
+impl CellColour {
+    /// Plans the colour of a cell whose vertex values span `[lo, hi]`; `false` when the lanes
+    /// cannot colour it and the per-fragment path must ([`FragmentShader::fragment_with`]):
+    /// the exact model, an isosurface value in the range, non-finite values, or the average
+    /// model across breakpoints (which it does not cut at).
+    pub fn plan(&mut self, shader: &FragmentShader<'_>, lo: f32, hi: f32) -> bool {
+        if let Some((mode, below, above)) = self.reuse {
+            // No breakpoint in `(lo, hi)` and `lo` below the next: the same piece.
+            let finite = lo.is_finite() && hi.is_finite();
+            if finite && mode == shader.mode && below <= lo && lo <= hi && hi <= above && lo < above
+            {
+                return true;
+            }
+        }
+        self.reuse = None;
+        self.psi = match shader.mode {
+            SegmentRule::Psi => true,
+            SegmentRule::Average => false,
+            _ => return false,
+        };
+        if !(lo.is_finite() && hi.is_finite()) {
+            return false;
+        }
+        let i = shader.isosurfaces.partition_point(|i| i.value < lo);
+        if shader.isosurfaces.get(i).is_some_and(|i| i.value <= hi) {
+            return false;
+        }
+        let Some((knots, pieces)) = shader.classifier.pieces_on(lo, hi) else {
+            return false;
+        };
+        self.spans.clear();
+        self.linear = knots.is_empty();
+        if self.linear {
+            self.spans.push(Span {
+                lo: f32::NEG_INFINITY,
+                hi: f32::INFINITY,
+                piece: pieces[0],
+            });
+            if shader.isosurfaces.is_empty() {
+                let (below, above) = shader.classifier.piece_bounds(lo);
+                self.reuse = Some((shader.mode, below, above));
+            }
+            return true;
+        }
+        if !self.psi {
+            return false;
+        }
+        for (j, piece) in pieces.iter().enumerate() {
+            let below = if j == 0 { None } else { knots.get(j - 1) };
+            let above = knots.get(j);
+            // The extinction is linear on the piece: zero at both ends of the cell's part of
+            // it means zero throughout.
+            let (a, b) = (
+                below.map_or(lo, |&k| k.max(lo)),
+                above.map_or(hi, |&k| k.min(hi)),
+            );
+            if piece.at(a)[3] <= 0.0 && piece.at(b)[3] <= 0.0 {
+                continue;
+            }
+            self.spans.push(Span {
+                lo: below.copied().unwrap_or(f32::NEG_INFINITY),
+                hi: above.copied().unwrap_or(f32::INFINITY),
+                piece: *piece,
+            });
+        }
+        true
+    }
+}
+
+/// Capacity of a [`Batch`]: a power of two above a tile's pixels (a cell covers each at most
+/// once), a row and a lane group of padding, so that masked indices need no bounds check.
+const CAPACITY: usize = 8192;
+const _: () = assert!(TILE * TILE + TILE + LANES <= CAPACITY && CAPACITY.is_power_of_two());
+
+/// One cell's fragments in one tile, as structure of arrays (see the module documentation).
+#[derive(Debug)]
+pub struct Batch {
+    len: usize,
+    pixel: Box<[u32; CAPACITY]>,
+    /// The four attribute planes at each fragment.
+    attr: Box<[[f32; CAPACITY]; 4]>,
+    secant: Box<[f32; CAPACITY]>,
+    /// Outputs of [`Batch::shade`]: front depth and premultiplied RGBA.
+    z_f: Box<[f32; CAPACITY]>,
+    rgba: Box<[[f32; CAPACITY]; 4]>,
+}
+
+impl Default for Batch {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Batch {
+    /// An empty batch (for tiles of up to [`TILE`] x [`TILE`] pixels).
+    pub fn new() -> Self {
+        Self {
+            len: 0,
+            pixel: Box::new([0; CAPACITY]),
+            attr: Box::new([[0.0; CAPACITY]; 4]),
+            secant: Box::new([0.0; CAPACITY]),
+            z_f: Box::new([0.0; CAPACITY]),
+            rgba: Box::new([[0.0; CAPACITY]; 4]),
+        }
+    }
+
+    /// Number of fragments held.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether no fragment is held.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Empties the batch.
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// Whether `n` more fragments fit.
+    fn fits(&self, n: usize) -> bool {
+        self.len + n + LANES <= CAPACITY
+    }
+}
+
+/// What the rasterizer needs to gather one triangle's fragments into a [`Batch`].
+pub struct Gather<'a> {
+    /// Per tile pixel, the secant of its ray to the view direction.
+    pub secant: &'a [f32],
+    /// The tile's first column.
+    pub x0: i64,
+    /// The tile's first row.
+    pub y0: i64,
+    /// The tile's width.
+    pub width: i64,
+    /// Pixels at or above this opacity take no more fragments.
+    pub early: f32,
+}
+
+impl Gather<'_> {
+    /// Appends the covered, not yet opaque pixels of `tri` to `batch` with the attribute
+    /// planes `q[j]` of its vertex `j` (in the order given to [`Triangle::new`]); calls
+    /// `flush` first whenever a row might not fit (never for a single cell in a tile).
+    /// `acc` holds the tile's accumulated pixels, read for early termination.
+    #[inline(always)]
+    pub fn triangle(
+        &self,
+        batch: &mut Batch,
+        acc: &mut [[f32; 4]],
+        tri: &Triangle,
+        q: [[f32; 4]; 3],
+        mut flush: impl FnMut(&mut Batch, &mut [[f32; 4]]),
+    ) {
+        let inv = tri.inv_area();
+        let mut step = None;
+        tri.spans(|row| {
+            let width = (row.hi - row.lo + 1) as usize;
+            if !batch.fits(width) {
+                flush(batch, acc);
+            }
+            let dq = *step.get_or_insert_with(|| plane_step(&row, inv, &q));
+            self.row(batch, acc, &row, plane_at(&row, inv, &q), dq);
+        });
+    }
+
+    /// One span of [`Gather::triangle`]: its pixels are appended (one pass, no bounds check
+    /// per pixel), then the opaque ones (if any) removed.
+    #[inline(always)]
+    fn row(&self, batch: &mut Batch, acc: &[[f32; 4]], row: &Row, q0: [f32; 4], dq: [f32; 4]) {
+        const MASK: usize = CAPACITY - 1;
+        let start = ((row.y - self.y0) * self.width + row.lo - self.x0) as usize;
+        let width = (row.hi - row.lo + 1) as usize;
+        let n = batch.len;
+        let pixels = &acc[start..start + width];
+        let secant = &self.secant[start..start + width];
+        let (pixel, out) = (&mut *batch.pixel, &mut *batch.secant);
+        let [a0, a1, a2, a3] = &mut *batch.attr;
+        let mut opaque = false;
+        let mut i = 0.0f32;
+        for (x, (&s, a)) in secant.iter().zip(pixels).enumerate() {
+            let j = (n + x) & MASK;
+            pixel[j] = (start + x) as u32;
+            out[j] = s;
+            a0[j] = q0[0] + i * dq[0];
+            a1[j] = q0[1] + i * dq[1];
+            a2[j] = q0[2] + i * dq[2];
+            a3[j] = q0[3] + i * dq[3];
+            opaque |= a[3] >= self.early;
+            i += 1.0;
+        }
+        batch.len = if opaque {
+            batch.keep_live(n, n + width, |p| acc[p as usize][3] < self.early)
+        } else {
+            n + width
+        };
+    }
+}
+
+impl Batch {
+    /// Keeps, of the fragments `from..to` (the last ones), those whose pixel passes `live`;
+    /// returns the new length.
+    fn keep_live(&mut self, from: usize, to: usize, live: impl Fn(u32) -> bool) -> usize {
+        let mut m = from;
+        for i in from..to {
+            if live(self.pixel[i]) {
+                self.pixel[m] = self.pixel[i];
+                for a in self.attr.iter_mut() {
+                    a[m] = a[i];
+                }
+                self.secant[m] = self.secant[i];
+                m += 1;
+            }
+        }
+        m
+    }
+}
+
+/// The attribute planes at the first column of `row`.
+#[inline(always)]
+fn plane_at(row: &Row, inv: f32, q: &[[f32; 4]; 3]) -> [f32; 4] {
+    let l = row.e.map(|e| e as f32 * inv);
+    std::array::from_fn(|c| l[0] * q[0][c] + l[1] * q[1][c] + l[2] * q[2][c])
+}
+
+/// The attribute planes' increments per column (the same on every row).
+#[inline(always)]
+fn plane_step(row: &Row, inv: f32, q: &[[f32; 4]; 3]) -> [f32; 4] {
+    let l = row.d.map(|d| d as f32 * inv);
+    std::array::from_fn(|c| l[0] * q[0][c] + l[1] * q[1][c] + l[2] * q[2][c])
+}
+
+/// A lane group of the batch's array `v` from `i`.
+#[inline(always)]
+fn load(v: &[f32], i: usize) -> Lanes {
+    let mut out = [0.0; LANES];
+    out.copy_from_slice(&v[i..i + LANES]);
+    out
+}
+
+/// `piece` at every lane's value, channel-major (the arithmetic of [`LinearPiece::at`]).
+#[inline(always)]
+fn piece_at(piece: &LinearPiece, s: &Lanes) -> [Lanes; 4] {
+    let (origin, at, slope) = piece.coefficients();
+    let d = lanes(|k| s[k] - origin);
+    let c = |c: usize| lanes(|k| at[c] + slope[c] * d[k]);
+    [c(0), c(1), c(2), c(3)]
+}
+
+impl Batch {
+    /// Interpolates and colours every fragment (`PERSP`: the attributes are the perspective
+    /// planes): fills the front depths and the premultiplied RGBA.
+    pub fn shade<const PERSP: bool>(&mut self, colour: &CellColour, table: &PsiTable) {
+        if self.len == 0 {
+            return;
+        }
+        // Pad the last lane group with copies of the last fragment.
+        let end = self.len.div_ceil(LANES) * LANES;
+        for i in self.len..end {
+            for a in self.attr.iter_mut() {
+                a[i] = a[self.len - 1];
+            }
+            self.secant[i] = self.secant[self.len - 1];
+        }
+        for i in (0..end).step_by(LANES) {
+            let [wf, nf, wb, nb] = [
+                load(&self.attr[0], i),
+                load(&self.attr[1], i),
+                load(&self.attr[2], i),
+                load(&self.attr[3], i),
+            ];
+            let sec = load(&self.secant[..], i);
+            let z_f = lanes(|k| if PERSP { 1.0 / wf[k] } else { wf[k] });
+            let z_b = lanes(|k| if PERSP { 1.0 / wb[k] } else { wb[k] });
+            let s_f = lanes(|k| if PERSP { nf[k] * z_f[k] } else { nf[k] });
+            let s_b = lanes(|k| if PERSP { nb[k] * z_b[k] } else { nb[k] });
+            let len = lanes(|k| ((z_b[k] - z_f[k]) * sec[k]).max(0.0));
+            let rgba = colour.lanes(table, &s_f, &s_b, &len);
+            // Transparent black for unusable inputs, as the scalar models give (a finite
+            // `len` implies finite depths).
+            let ok = lanes(|k| {
+                let inf = f32::INFINITY;
+                let finite = (s_f[k].abs() < inf) & (s_b[k].abs() < inf) & (len[k].abs() < inf);
+                f32::from(u8::from(finite & (len[k] > 0.0)))
+            });
+            self.z_f[i..i + LANES].copy_from_slice(&z_f);
+            for (out, v) in self.rgba.iter_mut().zip(&rgba) {
+                let v = lanes(|k| if ok[k] > 0.0 { v[k] } else { 0.0 });
+                out[i..i + LANES].copy_from_slice(&v);
+            }
+        }
+    }
+
+    /// Composites the shaded fragments under the tile's pixels `acc`, in batch order.
+    pub fn composite(&self, acc: &mut [[f32; 4]]) {
+        let n = self.len;
+        let [r, g, b, a] = &*self.rgba;
+        let rgba = r[..n].iter().zip(&g[..n]).zip(b[..n].iter().zip(&a[..n]));
+        for (&p, ((&r, &g), (&b, &a))) in self.pixel[..n].iter().zip(rgba) {
+            under(&mut acc[p as usize], [r, g, b, a]);
+        }
+    }
+
+    /// The shaded fragments as `(pixel, front depth, RGBA)`, in batch order.
+    pub fn fragments(&self) -> impl Iterator<Item = (u32, f32, [f32; 4])> + '_ {
+        (0..self.len).map(|i| {
+            let rgba = [0, 1, 2, 3].map(|c| self.rgba[c][i]);
+            (self.pixel[i], self.z_f[i], rgba)
+        })
+    }
+}
+
+impl CellColour {
+    /// The colour of one lane group of segments `s_f -> s_b` of lengths `l`.
+    #[inline(always)]
+    fn lanes(&self, table: &PsiTable, s_f: &Lanes, s_b: &Lanes, l: &Lanes) -> [Lanes; 4] {
+        if self.linear {
+            let piece = &self.spans[0].piece;
+            if self.psi {
+                return psi_rgba_lanes(table, &piece_at(piece, s_f), &piece_at(piece, s_b), l);
+            }
+            let mid = piece_at(piece, &lanes(|k| 0.5 * (s_f[k] + s_b[k])));
+            return average_rgba_lanes(&mid, &mid, l);
+        }
+        self.pieces(table, s_f, s_b, l)
+    }
+
+    /// The ψ colour of segments cut at the breakpoints: each span's share, composited in ray
+    /// order (see the module documentation). The values of a cell's neighbouring fragments
+    /// nearly always change in the same direction along their rays; lane groups that agree
+    /// take the spans in ray order with no per-lane choice.
+    #[inline(always)]
+    fn pieces(&self, table: &PsiTable, s_f: &Lanes, s_b: &Lanes, l: &Lanes) -> [Lanes; 4] {
+        let rising = (0..LANES).filter(|&k| s_f[k] <= s_b[k]).count();
+        if rising == LANES {
+            self.pieces_along::<true>(table, s_f, s_b, l)
+        } else if rising == 0 {
+            self.pieces_along::<false>(table, s_f, s_b, l)
+        } else {
+            self.pieces_mixed(table, s_f, s_b, l)
+        }
+    }
+
+    /// [`CellColour::pieces`] for lanes whose values all rise (`RISING`) or all fall along
+    /// their rays: the spans in ray order, each composited under the previous ones.
+    #[inline(always)]
+    fn pieces_along<const RISING: bool>(
+        &self,
+        table: &PsiTable,
+        s_f: &Lanes,
+        s_b: &Lanes,
+        l: &Lanes,
+    ) -> [Lanes; 4] {
+        let (lo, hi) = if RISING { (s_f, s_b) } else { (s_b, s_f) };
+        let inv_width = lanes(|k| 1.0 / (hi[k] - lo[k]));
+        let mut acc = [[0.0f32; LANES]; 4];
+        let mut visit = |span: &Span| {
+            let a = lanes(|k| lo[k].max(span.lo));
+            let b = lanes(|k| hi[k].min(span.hi));
+            let share = span_share(span, lo, hi, &a, &b, &inv_width);
+            if share.iter().all(|&f| f <= 0.0) {
+                return;
+            }
+            let (front, back) = if RISING { (&a, &b) } else { (&b, &a) };
+            let len = lanes(|k| share[k] * l[k]);
+            let c = psi_rgba_lanes(
+                table,
+                &piece_at(&span.piece, front),
+                &piece_at(&span.piece, back),
+                &len,
+            );
+            let w = lanes(|k| 1.0 - acc[3][k]);
+            for (a, c) in acc.iter_mut().zip(&c) {
+                *a = lanes(|k| a[k] + w[k] * c[k]);
+            }
+        };
+        if RISING {
+            self.spans.iter().for_each(&mut visit);
+        } else {
+            self.spans.iter().rev().for_each(&mut visit);
+        }
+        acc
+    }
+
+    /// [`CellColour::pieces`] for lane groups of both directions: the spans in increasing
+    /// value order, composited behind (rising lanes) or in front of (falling lanes) what is
+    /// accumulated.
+    #[inline(always)]
+    fn pieces_mixed(&self, table: &PsiTable, s_f: &Lanes, s_b: &Lanes, l: &Lanes) -> [Lanes; 4] {
+        let lo = lanes(|k| s_f[k].min(s_b[k]));
+        let hi = lanes(|k| s_f[k].max(s_b[k]));
+        // 1 where the values rise along the ray, 0 where they fall.
+        let rising = lanes(|k| f32::from(u8::from(s_f[k] <= s_b[k])));
+        let inv_width = lanes(|k| 1.0 / (hi[k] - lo[k]));
+        let mut acc = [[0.0f32; LANES]; 4];
+        for span in &self.spans {
+            let a = lanes(|k| lo[k].max(span.lo));
+            let b = lanes(|k| hi[k].min(span.hi));
+            let share = span_share(span, &lo, &hi, &a, &b, &inv_width);
+            if share.iter().all(|&f| f <= 0.0) {
+                continue;
+            }
+            let front = lanes(|k| if rising[k] > 0.0 { a[k] } else { b[k] });
+            let back = lanes(|k| if rising[k] > 0.0 { b[k] } else { a[k] });
+            let len = lanes(|k| share[k] * l[k]);
+            let c = psi_rgba_lanes(
+                table,
+                &piece_at(&span.piece, &front),
+                &piece_at(&span.piece, &back),
+                &len,
+            );
+            // Rising: this span is behind what is accumulated (under); falling: in front.
+            let keep = lanes(|k| if rising[k] > 0.0 { 1.0 } else { 1.0 - c[3][k] });
+            let add = lanes(|k| {
+                if rising[k] > 0.0 {
+                    1.0 - acc[3][k]
+                } else {
+                    1.0
+                }
+            });
+            for (a, c) in acc.iter_mut().zip(&c) {
+                *a = lanes(|k| a[k] * keep[k] + add[k] * c[k]);
+            }
+        }
+        acc
+    }
+}
+
+/// Each lane's share of its segment `[lo, hi]` (values) that lies in `span`, given the
+/// overlap `[a, b]` and `1 / (hi - lo)`; a constant segment lies in the one span holding its
+/// value. Written as selects (no branch per lane).
+#[inline(always)]
+fn span_share(
+    span: &Span,
+    lo: &Lanes,
+    hi: &Lanes,
+    a: &Lanes,
+    b: &Lanes,
+    inv_width: &Lanes,
+) -> Lanes {
+    lanes(|k| {
+        let f = (b[k] - a[k]) * inv_width[k];
+        // NaN (a constant segment) and negative shares give 0.
+        let f = if f > 0.0 { f } else { 0.0 };
+        let f = if f < 1.0 { f } else { 1.0 };
+        let holds = if span.lo <= lo[k] && lo[k] < span.hi {
+            1.0
+        } else {
+            0.0
+        };
+        if hi[k] > lo[k] {
+            f
+        } else {
+            holds
+        }
+    })
+}
