@@ -137,17 +137,34 @@ impl<F: Field> RayContext<'_, F> {
         dir: DVec3,
         spans: &mut Vec<(f64, f64)>,
     ) -> Option<(DVec3, DVec3, f64, f64, f64)> {
+        self.setup_until(origin, dir, spans, f64::INFINITY)
+            .map(|(ray, _)| ray)
+    }
+
+    /// [`RayContext::setup`] with the spans walked only until about `reach` voxels past the
+    /// entry ([`IntervalSource::occupied_until`](crate::intervals::IntervalSource)), and where
+    /// they stop (the exit distance when the whole ray was walked).
+    pub(super) fn setup_until(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        spans: &mut Vec<(f64, f64)>,
+        reach: f64,
+    ) -> Option<((DVec3, DVec3, f64, f64, f64), f64)> {
         let place = &self.place;
         let (t0, t1) = ray_box(origin, dir, place.origin, place.origin + place.extent())?;
         let unit = place.spacing.min_element();
         let o_v = (origin - place.origin) / place.spacing;
         let d_v = dir / place.spacing;
         spans.clear();
-        match self.intervals {
-            Some(occ) => occ.occupied(o_v, d_v, t0, t1, spans),
-            None => spans.push((t0, t1)),
-        }
-        Some((o_v, d_v, t0, t1, unit))
+        let walked = match self.intervals {
+            Some(occ) => occ.occupied_until(o_v, d_v, (t0, t1), t0 + reach * unit, spans),
+            None => {
+                spans.push((t0, t1));
+                t1
+            }
+        };
+        Some(((o_v, d_v, t0, t1, unit), walked))
     }
 
     /// The table-classified medium along a ray (voxel-space origin and direction).
