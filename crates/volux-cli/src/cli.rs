@@ -292,6 +292,10 @@ pub struct RenderArgs {
     /// adaptive-simpson: control the colour integral's step apart from the opacity's.
     #[arg(long)]
     pub decoupled: bool,
+    /// adaptive-simpson (coupled): the step-size controller: the error-per-step controller
+    /// (standard) or the seed's halving and doubling (seed, Algorithm 3).
+    #[arg(long, value_enum, default_value_t = ControllerArg::Seed)]
+    pub controller: ControllerArg,
     /// Reconstruction filter: trilinear, catmull-rom or b-spline (tricubic).
     #[arg(long, value_enum, default_value_t = ReconstructionArg::Trilinear)]
     pub reconstruction: ReconstructionArg,
@@ -493,6 +497,15 @@ impl IntegratorArg {
             .map(|v| v.get_name().to_string())
             .unwrap_or_default()
     }
+}
+
+/// `volux render --controller`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ControllerArg {
+    /// The error-per-step controller: `h 0.9 (tol / err)^(1/4)`, within `[0.2 h, 5 h]`.
+    Standard,
+    /// The seed's Algorithm 3: halve on failure, double after two successes.
+    Seed,
 }
 
 /// `volux render --reconstruction`.

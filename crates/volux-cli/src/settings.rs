@@ -16,7 +16,8 @@ use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, Volume};
 use volux_render::shading::{BlinnPhong, Light};
 
 use crate::cli::{
-    ColorArg, FrameArg, IntegratorArg, MethodArg, ReconstructionArg, RenderArgs, SortArg, ViewArg,
+    ColorArg, ControllerArg, FrameArg, IntegratorArg, MethodArg, ReconstructionArg, RenderArgs,
+    SortArg, ViewArg,
 };
 use crate::commands::common::CmdError;
 
@@ -158,10 +159,10 @@ fn adaptive(args: &RenderArgs) -> AdaptiveParams {
         h0: args.h0,
         hmin: args.hmin,
         hmax: args.hmax,
-        control: if args.decoupled {
-            StepControl::Decoupled
-        } else {
-            StepControl::Coupled
+        control: match (args.decoupled, args.controller) {
+            (true, _) => StepControl::Decoupled,
+            (false, ControllerArg::Standard) => StepControl::CoupledStandard,
+            (false, ControllerArg::Seed) => StepControl::Coupled,
         },
         early_termination: None,
     }

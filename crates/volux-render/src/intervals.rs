@@ -20,6 +20,23 @@ pub trait IntervalSource: Sync {
     /// `[t0, t1]`, front to back, into `out` (cleared first).
     fn occupied(&self, o: glam::DVec3, d: glam::DVec3, t0: f64, t1: f64, out: &mut Vec<(f64, f64)>);
 
+    /// The first of [`IntervalSource::occupied`]'s ranges, at least those starting before
+    /// `limit`, into `out` (cleared first); returns where they stop: `t1` when the whole ray
+    /// was walked, else a distance in empty space (no range crosses it) from which a later
+    /// call continues. A ray that stops early (opaque) then never walks the rest. By default
+    /// the whole ray.
+    fn occupied_until(
+        &self,
+        o: glam::DVec3,
+        d: glam::DVec3,
+        (t0, t1): (f64, f64),
+        _limit: f64,
+        out: &mut Vec<(f64, f64)>,
+    ) -> f64 {
+        self.occupied(o, d, t0, t1, out);
+        t1
+    }
+
     /// The fraction of the volume known to be empty (renderers skip empty space only when it
     /// pays: walking the intervals costs time too).
     fn empty_fraction(&self) -> f64;

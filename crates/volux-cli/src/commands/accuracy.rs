@@ -104,6 +104,7 @@ pub fn run(args: &Args, show: bool) -> Result<(), CmdError> {
     }
     for (method, control) in [
         ("adaptive-coupled", StepControl::Coupled),
+        ("adaptive-standard", StepControl::CoupledStandard),
         ("adaptive-decoupled", StepControl::Decoupled),
     ] {
         for tol in [0.01, 0.005, 0.001] {

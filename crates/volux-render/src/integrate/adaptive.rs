@@ -32,6 +32,43 @@ pub enum StepControl {
     Coupled,
     /// The outer step is controlled on its own within each inner step.
     Decoupled,
+    /// One step for both integrals, sized by the error-per-step controller
+    /// ([`standard_factor`]) instead of the seed's halving and doubling (Algorithm 3).
+    #[serde(rename = "coupled-standard")]
+    CoupledStandard,
+}
+
+impl StepControl {
+    /// Whether one step serves both integrals.
+    pub fn is_coupled(self) -> bool {
+        self != StepControl::Decoupled
+    }
+}
+
+/// Safety factor of the error-per-step controller: the next step aims at `0.9^4`, about
+/// two thirds, of the allowed error rather than at the limit, so that few steps fail.
+const CONTROLLER_SAFETY: f64 = 0.9;
+
+/// Bounds on the factor by which the error-per-step controller changes the step.
+const CONTROLLER_FACTOR: [f64; 2] = [0.2, 5.0];
+
+/// The error-per-step controller (Hairer, Norsett and Wanner, *Solving ODEs I*, sec. II.4),
+/// the alternative to the seed's Algorithm 3 (`001_...txt` ch. 4): the next step is the last
+/// one times `0.9 (tol / err)^(1/4)`, clamped to `[0.2, 5]`. Simpson's error estimate over a
+/// step of length `h` is `O(h^5)` and the tolerance allowed is proportional to `h` (`eps h /
+/// L`), so their ratio goes as `h^4`: the fourth root makes the next step meet the tolerance
+/// with the safety margin where the error behaves asymptotically. Two square roots, no `powf`.
+/// A zero error gives the largest growth.
+pub fn standard_factor(err: f64, tol: f64) -> f64 {
+    let [lo, hi] = CONTROLLER_FACTOR;
+    let f = CONTROLLER_SAFETY * (tol / err).sqrt().sqrt();
+    // Selects: NaN (0 / 0) goes to the largest growth.
+    let f = if f > lo { f } else { lo };
+    if f < hi {
+        f
+    } else {
+        hi
+    }
 }
 
 /// Parameters of [`adaptive_simpson`]; lengths in world units.
@@ -190,22 +227,44 @@ fn outer_error(ev: &StepEval, trans0: f64) -> f64 {
     })
 }
 
-/// Step-size bookkeeping shared by both controls: doubling after two consecutive successes.
+/// Step-size bookkeeping shared by both controls: the seed's doubling after two consecutive
+/// successes and halving on failure (Algorithm 3), or the error-per-step controller
+/// ([`standard_factor`]) when `standard`.
 struct StepSize {
     h: f64,
     successes: u32,
+    standard: bool,
 }
 
 impl StepSize {
-    fn success(&mut self, taken: f64, hmax: f64) {
+    /// The step `taken` was accepted with the error `err` where `tol` was allowed.
+    fn success(&mut self, taken: f64, hmax: f64, err: f64, tol: f64) {
         self.successes += 1;
-        if taken >= self.h && self.successes >= 2 {
+        if self.standard {
+            let next = taken * standard_growth(err, tol, self.successes);
+            // A step shortened to end its interval does not shrink the proposal.
+            let next = if taken < self.h {
+                next.max(self.h)
+            } else {
+                next
+            };
+            self.h = next.min(hmax);
+        } else if taken >= self.h && self.successes >= 2 {
             self.h = (2.0 * self.h).min(hmax);
         }
     }
-    fn failure(&mut self, taken: f64) {
-        self.h = taken * 0.5;
+
+    /// The step `taken` failed with the error `err` where `tol` was allowed (or hides a peak,
+    /// `blind`); true when the next try is its first half (whose samples are known).
+    fn failure(&mut self, taken: f64, err: f64, tol: f64, blind: bool) -> bool {
         self.successes = 0;
+        if self.standard && !blind {
+            self.h = taken * standard_factor(err, tol);
+            false
+        } else {
+            self.h = taken * 0.5;
+            true
+        }
     }
 
     /// The control at the start of an interval: `h0` on the ray's first; `hmax` after a gap
@@ -213,17 +272,31 @@ impl StepSize {
     /// grow to `hmax`), so that skipping changes the steps taken in occupied space as little
     /// as possible and does not restart the growth from `h0` at every occupied span.
     fn start(p: &AdaptiveParams, after_gap: bool) -> Self {
+        let standard = p.control == StepControl::CoupledStandard;
         if after_gap {
             Self {
                 h: p.hmax,
                 successes: 2,
+                standard,
             }
         } else {
             Self {
                 h: p.h0,
                 successes: 0,
+                standard,
             }
         }
+    }
+}
+
+/// The growth factor of the error-per-step controller after an accepted step: at most 1 right
+/// after a failure (`successes == 1`), so that a step that just failed is not retried longer.
+pub fn standard_growth(err: f64, tol: f64, successes: u32) -> f64 {
+    let f = standard_factor(err, tol);
+    if successes <= 1 {
+        f.min(1.0)
+    } else {
+        f
     }
 }
 
@@ -300,7 +373,9 @@ pub fn adaptive_simpson_intervals(
         let first = m.at(t0);
         ray.samples += 1;
         match p.control {
-            StepControl::Coupled => coupled_scaled(m, t0, t1, len, first, p, &mut ray),
+            StepControl::Coupled | StepControl::CoupledStandard => {
+                coupled_scaled(m, t0, t1, len, first, p, &mut ray)
+            }
             StepControl::Decoupled => decoupled(m, t0, t1, len, first, p, &mut ray),
         }
         ray.after_gap = true;
@@ -399,11 +474,13 @@ impl CoupledSpan {
         if (err <= tol_h && !blind) || probe.h <= p.hmin * (1.0 + 1e-9) {
             ray.accept(&ev, err, tol_h);
             self.t += probe.h;
-            self.step.success(probe.h, p.hmax);
+            self.step.success(probe.h, p.hmax, err, tol_h);
             probe.restart(self.t, clamp_step(self.step.h, p, self.t1 - self.t), last);
-        } else {
-            self.step.failure(probe.h);
+        } else if self.step.failure(probe.h, err, tol_h, blind) {
             probe.halve();
+        } else {
+            let first = probe.s[0];
+            probe.restart(self.t, clamp_step(self.step.h, p, self.t1 - self.t), first);
         }
     }
 }
@@ -428,8 +505,9 @@ fn decoupled(
         let ev = eval_step(ray.depth, ray.trans, probe.h, &s);
         let err = ray.trans * ev.err_depth.abs();
         let blind = hidden(m, &s);
-        if (err > SAFETY * p.tol * probe.h / len || blind) && probe.h > p.hmin * (1.0 + 1e-9) {
-            inner.failure(probe.h);
+        let tol_h = SAFETY * p.tol * probe.h / len;
+        if (err > tol_h || blind) && probe.h > p.hmin * (1.0 + 1e-9) {
+            inner.failure(probe.h, err, tol_h, blind);
             probe.halve();
             continue;
         }
@@ -438,7 +516,7 @@ fn decoupled(
             outer_interval(m, t, h_int, s, p, len, &mut outer, ray);
         }
         t += h_int;
-        inner.success(h_int, p.hmax);
+        inner.success(h_int, p.hmax, err, tol_h);
         probe.restart(t, clamp_step(inner.h, p, t1 - t), s[4]);
     }
 }
@@ -474,10 +552,10 @@ fn outer_interval(
         if (err <= tol_h && !blind) || probe.h <= p.hmin * (1.0 + 1e-9) {
             ray.accept(&ev, err, tol_h);
             u += probe.h;
-            outer.success(probe.h, p.hmax);
+            outer.success(probe.h, p.hmax, err, tol_h);
             probe.restart(u, outer.h.clamp(p.hmin, p.hmax).min(end - u), last);
         } else {
-            outer.failure(probe.h);
+            outer.failure(probe.h, err, tol_h, blind);
             probe.halve();
         }
     }

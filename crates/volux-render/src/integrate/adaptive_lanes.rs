@@ -20,7 +20,7 @@
 //! f32 rounding of a step's sums is about 1e-7 of the step's integral, far below the error
 //! allowed per step for tolerances of [`AdaptiveLanes::MIN_TOL`] and above; the f64 integrator
 //! serves smaller tolerances and the reference.
-use super::adaptive::{AdaptiveParams, SAFETY};
+use super::adaptive::{standard_factor, standard_growth, AdaptiveParams, StepControl, SAFETY};
 use super::medium::RayIntegral;
 
 /// Rays integrated together.
@@ -82,6 +82,9 @@ pub struct AdaptiveLanes {
     t_end: [f32; RAYS],
     h: [f32; RAYS],
     to_end: [bool; RAYS],
+    /// Whether steps are sized by the error-per-step controller
+    /// ([`standard_factor`](super::adaptive::standard_factor)) rather than Algorithm 3.
+    standard: bool,
     /// The step the control proposes, and its consecutive successes.
     step_h: [f32; RAYS],
     successes: [u32; RAYS],
@@ -138,6 +141,7 @@ impl AdaptiveLanes {
             t_end: [0.0; RAYS],
             h: [0.0; RAYS],
             to_end: [false; RAYS],
+            standard: p.control == StepControl::CoupledStandard,
             step_h: [0.0; RAYS],
             successes: [0; RAYS],
             fresh: [true; RAYS],
@@ -277,9 +281,7 @@ impl AdaptiveLanes {
             self.missed[r] |= err > tol_h;
             self.keep_start(r, m, 3);
             self.successes[r] += 1;
-            if h >= self.step_h[r] && self.successes[r] >= 2 {
-                self.step_h[r] = (2.0 * self.step_h[r]).min(self.hmax);
-            }
+            self.grow(r, h, err, tol_h);
             if self.to_end[r] || self.is_opaque(r) {
                 self.t[r] = self.t_end[r];
                 self.phase[r] = Phase::NeedsSpan;
@@ -287,9 +289,47 @@ impl AdaptiveLanes {
                 self.t[r] += h;
                 self.propose(r);
             }
+        } else if self.standard && !blind && self.shrink(r, h, err, tol_h) {
+            // The error-per-step controller proposed a shorter step from the same start.
         } else {
             (self.step_h[r], self.successes[r]) = (h * 0.5, 0);
             (self.h[r], self.to_end[r], self.fresh[r]) = (h * 0.5, false, false);
+        }
+    }
+
+    /// The error-per-step controller's next try after ray `r`'s step `h` failed with the error
+    /// `err` (`tol` allowed): a new step from the same start, all its points new. False (and
+    /// nothing changed) when the proposal is not shorter than `h`, which happens when the
+    /// rest of the interval is a sliver over `hmin`: the step is then halved, as Algorithm 3.
+    fn shrink(&mut self, r: usize, h: f32, err: f32, tol: f32) -> bool {
+        let f = standard_factor(f64::from(err), f64::from(tol)) as f32;
+        let next = (h * f).clamp(self.hmin, self.hmax);
+        let room = self.t_end[r] - self.t[r];
+        let sliver = 64.0 * f32::EPSILON * self.t_end[r].abs();
+        if next >= h || next + sliver >= room {
+            return false;
+        }
+        (self.step_h[r], self.successes[r]) = (h * f, 0);
+        (self.h[r], self.to_end[r], self.fresh[r]) = (next, false, true);
+        true
+    }
+
+    /// The step proposed after ray `r`'s step `h` was accepted with the error `err` (`tol`
+    /// allowed): doubled after two consecutive successes (Algorithm 3), or scaled by the
+    /// error-per-step controller, as [`StepSize`](super::adaptive) in f64.
+    fn grow(&mut self, r: usize, h: f32, err: f32, tol: f32) {
+        let proposed = self.step_h[r];
+        if self.standard {
+            let f = standard_growth(f64::from(err), f64::from(tol), self.successes[r]) as f32;
+            // A step shortened to end its interval does not shrink the proposal.
+            let next = if h < proposed {
+                (h * f).max(proposed)
+            } else {
+                h * f
+            };
+            self.step_h[r] = next.min(self.hmax);
+        } else if h >= proposed && self.successes[r] >= 2 {
+            self.step_h[r] = (2.0 * proposed).min(self.hmax);
         }
     }
 

@@ -56,6 +56,9 @@ impl Integrator {
             Integrator::AdaptiveSimpson(p) if p.control == StepControl::Coupled => {
                 "adaptive-coupled"
             }
+            Integrator::AdaptiveSimpson(p) if p.control == StepControl::CoupledStandard => {
+                "adaptive-standard"
+            }
             Integrator::AdaptiveSimpson(_) => "adaptive-decoupled",
             Integrator::Preintegrated { .. } => "preintegrated",
             Integrator::Reference => "reference",

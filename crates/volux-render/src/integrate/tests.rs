@@ -77,9 +77,16 @@ fn params(tol: f64, control: StepControl) -> AdaptiveParams {
     }
 }
 
+/// Every step control: the seed's coupled and decoupled, and the error-per-step controller.
+const CONTROLS: [StepControl; 3] = [
+    StepControl::Coupled,
+    StepControl::Decoupled,
+    StepControl::CoupledStandard,
+];
+
 #[test]
 fn adaptive_simpson_meets_its_tolerance() {
-    for control in [StepControl::Coupled, StepControl::Decoupled] {
+    for control in CONTROLS {
         let mut last_samples = u64::MAX;
         for tol in [1e-2, 1e-3, 1e-4, 1e-6] {
             let r = adaptive_simpson(&mut medium, 0.0, L, &params(tol, control));
@@ -105,7 +112,7 @@ fn adaptive_simpson_resolves_a_spike() {
         value: t,
     };
     let reference = simpson(&mut { spike }, 0.0, L, 1e-5);
-    for control in [StepControl::Coupled, StepControl::Decoupled] {
+    for control in CONTROLS {
         let r = adaptive_simpson(&mut { spike }, 0.0, L, &params(1e-3, control));
         let err = (0..4)
             .map(|c| (r.rgba[c] - reference.rgba[c]).abs())
@@ -126,7 +133,7 @@ fn hmin_accepts_and_reports() {
 
 #[test]
 fn empty_ray_is_transparent() {
-    for control in [StepControl::Coupled, StepControl::Decoupled] {
+    for control in CONTROLS {
         let r = adaptive_simpson(
             &mut |_t: f64| Medium::default(),
             0.0,
@@ -221,4 +228,20 @@ fn breakpoints_along_samples_agree_with_each_pair() {
     }
     assert!((100..3900).contains(&hidden), "{hidden}");
     assert!(!hides_breakpoints_along(&[0.5], &[0.0, 1.0, 0.0, 1.0, 0.0]));
+}
+
+/// The error-per-step controller's factor: the safety margin at the tolerance, the fourth
+/// root, the bounds, and the largest growth for a zero error.
+#[test]
+fn standard_factor_follows_the_fourth_root() {
+    use super::adaptive::{standard_factor, standard_growth};
+    assert!((standard_factor(1.0, 1.0) - 0.9).abs() < 1e-12);
+    assert!((standard_factor(1.0, 16.0) - 1.8).abs() < 1e-12);
+    assert_eq!(standard_factor(1.0, 1e9), 5.0);
+    assert_eq!(standard_factor(1e9, 1.0), 0.2);
+    assert_eq!(standard_factor(0.0, 1.0), 5.0);
+    assert_eq!(standard_factor(f64::NAN, 1.0), 0.2);
+    // Right after a failure the step does not grow.
+    assert_eq!(standard_growth(0.0, 1.0, 1), 1.0);
+    assert_eq!(standard_growth(0.0, 1.0, 2), 5.0);
 }

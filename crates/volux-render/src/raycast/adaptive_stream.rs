@@ -14,7 +14,7 @@ use super::context::{pixel, PixelOut, RayContext};
 use super::stream::{block_order, StreamShading};
 use crate::classify::{BreakpointRanks, LaneTable};
 use crate::integrate::adaptive_lanes::{AdaptiveLanes, LaneMedia, RAYS};
-use crate::integrate::{AdaptiveParams, Integrator, StepControl};
+use crate::integrate::{AdaptiveParams, Integrator};
 use crate::sampling::{Field, LANES};
 use crate::shading::Lanes3;
 use crate::tiles::TILE;
@@ -60,7 +60,7 @@ impl<F: Field> RayContext<'_, F> {
         let Integrator::AdaptiveSimpson(p) = self.opts.integrator else {
             return None;
         };
-        let lane_path = p.control == StepControl::Coupled
+        let lane_path = p.control.is_coupled()
             && p.tol >= AdaptiveLanes::MIN_TOL
             && (self.opts.shading.is_none() || self.gradients.is_some())
             && !self.opts.mip;

@@ -21,6 +21,10 @@ use crate::sampling::Field;
 use crate::shading;
 use crate::tiles::TILE;
 
+/// A ray set up for sampling ([`RayContext::setup`]): its voxel-space origin and direction,
+/// entry and exit distances, and the voxel unit of steps.
+pub(super) type RaySetup = (DVec3, DVec3, f64, f64, f64);
+
 impl<F: Field> RayMedium for GridRay<'_, F> {
     fn at(&mut self, t: f64) -> Medium {
         let p = self.o_v + self.d_v * t;
@@ -136,18 +140,35 @@ impl<F: Field> RayContext<'_, F> {
         origin: DVec3,
         dir: DVec3,
         spans: &mut Vec<(f64, f64)>,
-    ) -> Option<(DVec3, DVec3, f64, f64, f64)> {
+    ) -> Option<RaySetup> {
+        self.setup_until(origin, dir, spans, f64::INFINITY)
+            .map(|(ray, _)| ray)
+    }
+
+    /// [`RayContext::setup`] with the spans walked only until about `reach` voxels past the
+    /// entry ([`IntervalSource::occupied_until`](crate::intervals::IntervalSource)), and where
+    /// they stop (the exit distance when the whole ray was walked).
+    pub(super) fn setup_until(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        spans: &mut Vec<(f64, f64)>,
+        reach: f64,
+    ) -> Option<(RaySetup, f64)> {
         let place = &self.place;
         let (t0, t1) = ray_box(origin, dir, place.origin, place.origin + place.extent())?;
         let unit = place.spacing.min_element();
         let o_v = (origin - place.origin) / place.spacing;
         let d_v = dir / place.spacing;
         spans.clear();
-        match self.intervals {
-            Some(occ) => occ.occupied(o_v, d_v, t0, t1, spans),
-            None => spans.push((t0, t1)),
-        }
-        Some((o_v, d_v, t0, t1, unit))
+        let walked = match self.intervals {
+            Some(occ) => occ.occupied_until(o_v, d_v, (t0, t1), t0 + reach * unit, spans),
+            None => {
+                spans.push((t0, t1));
+                t1
+            }
+        };
+        Some(((o_v, d_v, t0, t1, unit), walked))
     }
 
     /// The table-classified medium along a ray (voxel-space origin and direction).

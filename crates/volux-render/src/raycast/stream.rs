@@ -26,6 +26,7 @@ use crate::composite::{under_if, under_partial, RayAccumulator};
 use crate::integrate::adaptive_lanes::exp_lanes;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{riemann_step, Integrator};
+use crate::intervals::IntervalSource;
 use crate::sampling::{Field, LANES};
 use crate::shading::{BlinnPhong, GradientVolume, Lanes3};
 use crate::tiles::TILE;
@@ -237,6 +238,12 @@ fn composite_entries<R: SlabRule>(
 /// Side of the pixel blocks in which a tile's rays enter the lanes.
 const BLOCK: usize = 4;
 
+/// How far (voxels) a ray's first walk of its spans reaches; each later walk reaches twice as
+/// far as the one before. Rays that become opaque early never walk the rest of the macrocells
+/// they cross: the walk was 10 % of a Marschner-Lobb frame and 23 % of an MRI head frame
+/// (Riemann 0.5, perf), most of it past the early-termination point.
+const FIRST_REACH: f64 = 64.0;
+
 /// The lighting of one step's lanes: the lit colour is `rgb k + s`.
 struct LaneLight {
     k: [f32; LANES],
@@ -267,6 +274,12 @@ struct LaneRay {
     t0: f64,
     t1: f64,
     spans: Vec<(f64, f64)>,
+    /// Voxel-space origin and direction of the ray, where the walk of its spans stopped
+    /// (`t1` once walked to the end) and how far (voxels) the next walk reaches.
+    o_v: DVec3,
+    d_v: DVec3,
+    walked: f64,
+    reach: f64,
     /// The ray's world direction, for lighting.
     view: Vec3,
     /// The next span to enter.
@@ -318,6 +331,25 @@ impl LaneRay {
             k += 1;
         }
         k
+    }
+
+    /// Walks the ray's next spans from where the last walk stopped, twice as far as the last
+    /// time (rays that become opaque early never walk the rest); false when none is left.
+    fn walk_on(&mut self, intervals: Option<&dyn IntervalSource>, unit: f64) -> bool {
+        let Some(occ) = intervals else {
+            return false;
+        };
+        while self.walked < self.t1 {
+            self.reach *= 2.0;
+            let limit = self.walked + self.reach * unit;
+            let ends = (self.walked, self.t1);
+            self.walked = occ.occupied_until(self.o_v, self.d_v, ends, limit, &mut self.spans);
+            self.span = 0;
+            if !self.spans.is_empty() {
+                return true;
+            }
+        }
+        false
     }
 
     /// The voxel-space position of sample `i`, clamped to the ray's extent.
@@ -561,9 +593,12 @@ impl<F: Field> RayContext<'_, F> {
                 return false;
             }
             let r = &mut lanes.rays[l];
-            let Some(&(a, b)) = r.spans.get(r.span) else {
+            if r.span == r.spans.len()
+                && !r.walk_on(self.intervals, self.place.spacing.min_element())
+            {
                 return false;
-            };
+            }
+            let (a, b) = r.spans[r.span];
             r.span += 1;
             let (first, after, lane_first) = if R::SEGMENTS {
                 // The segments that overlap `[a, b]` and are not composited yet; segment 0
@@ -668,7 +703,9 @@ impl<F: Field> RayContext<'_, F> {
             let ray = self.rays.ray(gx as f64 + 0.5, gy as f64 + 0.5);
             let jitter = if jittered { pixel_hash(gx, gy) } else { 0.0 };
             let mut spans = std::mem::take(&mut lanes.rays[l].spans);
-            let Some((o_v, d_v, t0, t1, unit)) = self.setup(ray.origin, ray.dir, &mut spans) else {
+            let Some(((o_v, d_v, t0, t1, unit), walked)) =
+                self.setup_until(ray.origin, ray.dir, &mut spans, FIRST_REACH)
+            else {
                 lanes.rays[l].spans = spans;
                 continue;
             };
@@ -685,6 +722,10 @@ impl<F: Field> RayContext<'_, F> {
                 t0,
                 t1,
                 spans,
+                o_v,
+                d_v,
+                walked,
+                reach: FIRST_REACH,
                 view,
                 ..LaneRay::default()
             };

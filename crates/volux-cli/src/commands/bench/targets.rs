@@ -22,25 +22,32 @@ const RIEMANN_TARGET_MS: f64 = 150.0;
 
 /// The cases timed per dataset: Riemann 0.5 and 0.2, and adaptive coupled eps 0.01 with the
 /// seed's two step limits (fig. 5.1 and table 5.5: hmin 0.1, hmax 2; Bonsai tables 5.4 and
-/// 5.6: hmin 0.4, hmax 4).
-fn cases() -> [(&'static str, Integrator); 4] {
-    let adaptive = |hmin, hmax| {
+/// 5.6: hmin 0.4, hmax 4), with the seed's step control (Algorithm 3) and with the
+/// error-per-step controller ([`StepControl::CoupledStandard`]).
+fn cases() -> [(&'static str, Integrator); 6] {
+    let adaptive = |hmin, hmax, control| {
         Integrator::AdaptiveSimpson(AdaptiveParams {
             tol: 0.01,
             h0: 0.5,
             hmin,
             hmax,
-            control: StepControl::Coupled,
+            control,
             early_termination: None,
         })
     };
+    let (seed, standard) = (StepControl::Coupled, StepControl::CoupledStandard);
     [
         ("riemann h=0.5", Integrator::Riemann { step: 0.5 }),
         ("riemann h=0.2", Integrator::Riemann { step: 0.2 }),
-        ("adaptive hmin=0.4 hmax=4", adaptive(0.4, 4.0)),
-        ("adaptive hmin=0.1 hmax=2", adaptive(0.1, 2.0)),
+        ("seed hmin=0.4 hmax=4", adaptive(0.4, 4.0, seed)),
+        ("seed hmin=0.1 hmax=2", adaptive(0.1, 2.0, seed)),
+        ("standard hmin=0.4 hmax=4", adaptive(0.4, 4.0, standard)),
+        ("standard hmin=0.1 hmax=2", adaptive(0.1, 2.0, standard)),
     ]
 }
+
+/// The adaptive cases' indices in [`cases`].
+const ADAPTIVE: [usize; 4] = [2, 3, 4, 5];
 
 /// The frame times of one dataset's cases, `ms[case][round]`.
 struct Timings {
@@ -112,25 +119,26 @@ pub fn run(n: usize, rounds: usize, as_json: bool) -> Result<Vec<serde_json::Val
              (fastest frames; median per round in brackets)",
             rayon::current_num_threads()
         );
-        println!(
-            "{:<22} {:>14} {:>14} {:>26} {:>26}",
-            "dataset", names[0], names[1], names[2], names[3]
-        );
+        print!("{:<22} {:>14} {:>14}", "dataset", names[0], names[1]);
+        for c in ADAPTIVE {
+            print!(" {:>26}", names[c]);
+        }
+        println!();
     }
     let mut rows = Vec::new();
     for (name, volume, tf) in grids(n)? {
         let t = time_cases(&volume, &tf, rounds)?;
-        let adaptive = [2, 3].map(|c| (t.fastest(c), t.ratio(c, 1)));
+        let adaptive = ADAPTIVE.map(|c| (t.fastest(c), t.ratio(c, 1)));
         // The Riemann target is set for 256^3 volumes only.
         let riemann_met = grid_of(&volume)
             .filter(|g| g.dims() == [256; 3])
             .map(|_| t.fastest(0) <= RIEMANN_TARGET_MS);
         let adaptive_met = adaptive.map(|(_, (r, _))| r <= 1.0);
         if as_json {
-            let adaptive_rows = [0, 1].map(|k| {
+            let adaptive_rows = [0, 1, 2, 3].map(|k| {
                 let (ms, (ratio, median)) = adaptive[k];
                 json!({
-                    "case": names[2 + k], "ms": ms,
+                    "case": names[ADAPTIVE[k]], "ms": ms,
                     "ratio_to_riemann_0_2": ratio,
                     "median_round_ratio": median,
                     "target_met": adaptive_met[k],
@@ -147,22 +155,17 @@ pub fn run(n: usize, rounds: usize, as_json: bool) -> Result<Vec<serde_json::Val
                 let mark = if met { "ok" } else { "no" };
                 format!("{ms:.1} ({r:.2}x [{m:.2}]) {mark}")
             };
-            println!(
-                "{:<22} {:>14} {:>14.1} {:>26} {:>26}",
-                name,
-                format!(
-                    "{:.1} {}",
-                    t.fastest(0),
-                    match riemann_met {
-                        Some(true) => "ok",
-                        Some(false) => "no",
-                        None => "  ",
-                    }
-                ),
-                t.fastest(1),
-                cell(adaptive[0], adaptive_met[0]),
-                cell(adaptive[1], adaptive_met[1]),
-            );
+            let mark = match riemann_met {
+                Some(true) => "ok",
+                Some(false) => "no",
+                None => "  ",
+            };
+            let riemann = format!("{:.1} {mark}", t.fastest(0));
+            print!("{name:<22} {riemann:>14} {:>14.1}", t.fastest(1));
+            for (a, met) in adaptive.into_iter().zip(adaptive_met) {
+                print!(" {:>26}", cell(a, met));
+            }
+            println!();
         }
     }
     if !as_json {
