@@ -81,6 +81,7 @@ mod options;
 mod pixel;
 pub mod render;
 mod skip;
+mod tables;
 pub mod walk;
 
 pub use crate::frame::TetRayStats;

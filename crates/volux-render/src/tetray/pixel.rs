@@ -21,12 +21,12 @@ use volux_core::{TetMesh, TransferFunction};
 
 use super::options::TetRayOptions;
 use super::skip::Visibility;
+use super::tables::Tables;
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::composite::under64;
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
 use crate::integrate::fragment::FragmentShader;
-use crate::integrate::psi::{CellClassifier, PsiTable};
-use crate::integrate::segment::SegmentIntegrator;
+use crate::integrate::psi::PsiTable;
 use crate::integrate::SegmentRule;
 use crate::integrate::{hides_breakpoints, hides_breakpoints_along, Medium, RayMedium};
 use crate::isosurface::Isovalue;
@@ -43,36 +43,6 @@ pub(crate) struct PixelOut {
     pub samples: u64,
     /// Whether the adaptive rule accepted a step over its tolerance.
     pub missed: bool,
-}
-
-/// The classification of a frame, what depends on the transfer function only: the caster
-/// keeps it while the TF does not change.
-pub(crate) struct Tables {
-    /// The TF as given (the key).
-    pub source: TransferFunction,
-    /// The TF resolved against the mesh's range.
-    pub tf: TransferFunction,
-    pub exact: SegmentIntegrator,
-    pub classifier: CellClassifier,
-    pub breakpoints: Vec<f64>,
-    /// The breakpoints in `f32`, for the ψ model's cuts.
-    pub knots: Vec<f32>,
-}
-
-impl Tables {
-    /// The tables of `tf` on the data range `range`.
-    pub fn new(tf: &TransferFunction, range: [f64; 2]) -> Self {
-        let resolved = tf.resolved(range);
-        let breakpoints = resolved.breakpoints();
-        Self {
-            source: tf.clone(),
-            exact: SegmentIntegrator::new(&resolved),
-            classifier: CellClassifier::new(&resolved, range),
-            knots: breakpoints.iter().map(|&k| k as f32).collect(),
-            breakpoints,
-            tf: resolved,
-        }
-    }
 }
 
 /// How the pixels of a frame are coloured.

@@ -13,8 +13,9 @@ use volux_core::{Camera, Image, Projection, RayGenerator, TetMesh, TransferFunct
 use super::bvh::{Bvh, Frustum};
 use super::geom::Geometry;
 use super::options::TetRayOptions;
-use super::pixel::{PixelContext, PixelOut, Tables};
+use super::pixel::{PixelContext, PixelOut};
 use super::skip::Visibility;
+use super::tables::Tables;
 use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
 use crate::error::RenderError;
 use crate::frame::{Frame, MethodStats, Rebuilt, TetRayStats};

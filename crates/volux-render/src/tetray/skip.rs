@@ -24,7 +24,7 @@ use volux_core::{TetMesh, TransferFunction};
 
 use super::bvh::Bvh;
 use super::geom::Geometry;
-use super::pixel::Tables;
+use super::tables::Tables;
 use crate::isosurface::Isovalue;
 
 /// Relative widening of a cell's value range before it is classified.
