@@ -565,6 +565,16 @@ pub fn rasterize_triangle(v: [[i64; 2]; 3], clip: Rect, frag: impl FnMut(usize, 
 mod tests {
     use super::*;
 
+    /// A xorshift generator of integers in `[0, n)` (reproducible random triangles).
+    fn xorshift(mut seed: u64) -> impl FnMut(i64) -> i64 {
+        move |n| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as i64 % n
+        }
+    }
+
     fn fx(x: f32, y: f32) -> [i64; 2] {
         fixed([x, y])
     }
@@ -652,13 +662,7 @@ mod tests {
 
     #[test]
     fn spans_cover_the_pixels_of_for_each() {
-        let mut seed = 0x1234_5678_9abc_def1u64;
-        let mut rnd = |n: i64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as i64 % n
-        };
+        let mut rnd = xorshift(0x1234_5678_9abc_def1u64);
         let clip = Rect {
             x0: 3,
             y0: 2,
@@ -693,13 +697,7 @@ mod tests {
 
     #[test]
     fn walking_and_spans_draw_the_same_pixels() {
-        let mut seed = 987654321u64;
-        let mut rnd = |n: i64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as i64 % n
-        };
+        let mut rnd = xorshift(987654321u64);
         let clip = Rect {
             x0: 3,
             y0: 2,

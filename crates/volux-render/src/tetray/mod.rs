@@ -44,7 +44,7 @@
 //! [`TetRayOptions::skip_empty`], on by default): per TF and set of isovalues, the cells whose
 //! vertex value range has zero extinction (exactly, for the exact integrator's linear pieces
 //! and the ψ/average lookup table) and holds no isovalue colour as transparent black, so
-//! they are left out: the walk ([`Walker::trace_visible`](walk::Walker::trace_visible))
+//! they are left out: the walk (`Walker::trace_visible` in `walk`)
 //! steps across faces while the neighbour is visible and otherwise asks a hierarchy over the
 //! visible cells for the first one past the exit (which also covers entries, boundary exits,
 //! re-entries and edge or vertex exits). Compositing a transparent segment changes nothing,

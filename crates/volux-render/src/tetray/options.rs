@@ -36,7 +36,7 @@ pub struct TetRayOptions {
     pub early_termination: Option<f32>,
     /// Empty-space skipping (per-segment colours only; default on): the walk leaves out the
     /// cells whose value range has zero extinction and no isovalue, jumping over runs of
-    /// them through a hierarchy of the other cells ([`super::skip`]). The image is the same
+    /// them through a hierarchy of the other cells (the `skip` module). The image is the same
     /// up to the choice among cells tied at an edge or vertex; `false` walks every cell.
     pub skip_empty: bool,
     /// Cancellation and progress.

@@ -60,7 +60,7 @@ pub struct WalkOutcome {
     /// Whether the step bound stopped the ray.
     pub abandoned: bool,
     /// Jumps over runs of invisible cells through the hierarchy of visible cells
-    /// ([`Walker::trace_visible`] only).
+    /// (`Walker::trace_visible` only).
     pub skips: u64,
 }
 

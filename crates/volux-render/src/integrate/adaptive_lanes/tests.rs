@@ -121,18 +121,24 @@ fn lanes(rays: &[Vec<(f64, f64)>], p: &AdaptiveParams) -> Vec<RayIntegral> {
     out
 }
 
-/// Six rays (so slots are refilled) over gaps, an empty interval and a hidden peak each, with
-/// and without early termination: the same integrals as the f64 integrator to f32 rounding,
-/// the same sample counts (the same step decisions).
-#[test]
-fn lanes_match_the_f64_coupled_integrator() {
-    let rays: Vec<Vec<(f64, f64)>> = (0..6)
+/// Six rays (so slots are refilled): one whole interval, intervals with gaps and an empty
+/// one, and two intervals meeting almost end to end.
+fn gapped_rays() -> Vec<Vec<(f64, f64)>> {
+    (0..6)
         .map(|r| match r % 3 {
             0 => vec![(0.0, 2.0)],
             1 => vec![(0.0, 0.4), (0.4, 0.4), (0.7, 1.6), (1.9, 2.0)],
             _ => vec![(0.3, 1.25), (1.3, 2.0)],
         })
-        .collect();
+        .collect()
+}
+
+/// Six rays (so slots are refilled) over gaps, an empty interval and a hidden peak each, with
+/// and without early termination: the same integrals as the f64 integrator to f32 rounding,
+/// the same sample counts (the same step decisions).
+#[test]
+fn lanes_match_the_f64_coupled_integrator() {
+    let rays = gapped_rays();
     for (tol, stop) in [(1e-3, None), (1e-2, None), (1e-3, Some(0.6))] {
         let p = AdaptiveParams {
             tol,
@@ -167,13 +173,7 @@ fn lanes_match_the_f64_coupled_integrator() {
 /// controller take many more samples than Algorithm 3.
 #[test]
 fn standard_controller_lanes_meet_the_tolerance() {
-    let rays: Vec<Vec<(f64, f64)>> = (0..6)
-        .map(|r| match r % 3 {
-            0 => vec![(0.0, 2.0)],
-            1 => vec![(0.0, 0.4), (0.4, 0.4), (0.7, 1.6), (1.9, 2.0)],
-            _ => vec![(0.3, 1.25), (1.3, 2.0)],
-        })
-        .collect();
+    let rays = gapped_rays();
     for (tol, stop) in [(1e-3, None), (1e-2, None), (1e-3, Some(0.6))] {
         let p = AdaptiveParams {
             tol,
