@@ -133,6 +133,19 @@ fn gapped_rays() -> Vec<Vec<(f64, f64)>> {
         .collect()
 }
 
+/// The step limits of the [`gapped_rays`] tests, with tolerance `tol`, early termination
+/// `stop` and the controller `control`.
+fn gapped_params(tol: f64, stop: Option<f64>, control: StepControl) -> AdaptiveParams {
+    AdaptiveParams {
+        tol,
+        h0: 0.1,
+        hmin: 1e-3,
+        hmax: 0.4,
+        control,
+        early_termination: stop,
+    }
+}
+
 /// Six rays (so slots are refilled) over gaps, an empty interval and a hidden peak each, with
 /// and without early termination: the same integrals as the f64 integrator to f32 rounding,
 /// the same sample counts (the same step decisions).
@@ -140,14 +153,7 @@ fn gapped_rays() -> Vec<Vec<(f64, f64)>> {
 fn lanes_match_the_f64_coupled_integrator() {
     let rays = gapped_rays();
     for (tol, stop) in [(1e-3, None), (1e-2, None), (1e-3, Some(0.6))] {
-        let p = AdaptiveParams {
-            tol,
-            h0: 0.1,
-            hmin: 1e-3,
-            hmax: 0.4,
-            control: StepControl::Coupled,
-            early_termination: stop,
-        };
+        let p = gapped_params(tol, stop, StepControl::Coupled);
         let got = lanes(&rays, &p);
         for (r, spans) in rays.iter().enumerate() {
             let want = adaptive_simpson_intervals(&mut Peaked(r), spans, &p);
@@ -175,14 +181,7 @@ fn lanes_match_the_f64_coupled_integrator() {
 fn standard_controller_lanes_meet_the_tolerance() {
     let rays = gapped_rays();
     for (tol, stop) in [(1e-3, None), (1e-2, None), (1e-3, Some(0.6))] {
-        let p = AdaptiveParams {
-            tol,
-            h0: 0.1,
-            hmin: 1e-3,
-            hmax: 0.4,
-            control: StepControl::CoupledStandard,
-            early_termination: stop,
-        };
+        let p = gapped_params(tol, stop, StepControl::CoupledStandard);
         let seed = AdaptiveParams {
             control: StepControl::Coupled,
             ..p
