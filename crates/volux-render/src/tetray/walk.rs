@@ -206,12 +206,9 @@ impl Walker<'_> {
             let nb = geo.adj(hit.tet as usize)[hit.clip.exit as usize];
             let shown = nb != NO_NEIGHBOR && vis.is_visible(nb);
             if shown {
-                let face = geo.face_id(hit.tet as usize, hit.clip.exit as usize);
-                if let Some(clip) = geo.clip_entered(nb as usize, o, d, face, t) {
-                    if clip.t_out > t {
-                        next = Some(Hit { tet: nb, clip });
-                        continue;
-                    }
+                if let Some(h) = self.enter_neighbour(&hit, nb, o, d, t) {
+                    next = Some(h);
+                    continue;
                 }
                 out.local_searches += 1;
             }
@@ -225,6 +222,15 @@ impl Walker<'_> {
             }
         }
         out
+    }
+
+    /// The neighbour `nb` entered through the exit face of `hit` at `t`, when the ray goes
+    /// on in it (the entry parameter comes from the shared face, bit for bit).
+    #[inline(always)]
+    fn enter_neighbour(&self, hit: &Hit, nb: u32, o: DVec3, d: DVec3, t: f64) -> Option<Hit> {
+        let face = self.geo.face_id(hit.tet as usize, hit.clip.exit as usize);
+        let clip = self.geo.clip_entered(nb as usize, o, d, face, t)?;
+        (clip.t_out > t).then_some(Hit { tet: nb, clip })
     }
 
     /// Walks the ray `o + t d`, `t >= 0`, calling `sink` with each segment in front-to-back
@@ -259,15 +265,10 @@ impl Walker<'_> {
             t = seg.t_out;
             let nb = geo.adj(tet)[hit.clip.exit as usize];
             if nb != NO_NEIGHBOR {
-                let face = geo.face_id(tet, hit.clip.exit as usize);
-                if let Some(clip) = geo.clip_entered(nb as usize, o, d, face, t) {
-                    if clip.t_out > t {
-                        next = Some(Hit { tet: nb, clip });
-                        continue;
-                    }
+                if let Some(h) = self.enter_neighbour(&hit, nb, o, d, t) {
+                    next = Some(h);
+                    continue;
                 }
-            }
-            if nb != NO_NEIGHBOR {
                 out.local_searches += 1;
             }
             next = self.local_search(hit.tet, o, d, t, scratch);
