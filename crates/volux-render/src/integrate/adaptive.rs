@@ -52,6 +52,14 @@ const CONTROLLER_SAFETY: f64 = 0.9;
 /// Bounds on the factor by which the error-per-step controller changes the step.
 const CONTROLLER_FACTOR: [f64; 2] = [0.2, 5.0];
 
+/// `tol / err` at and beyond which the controller's factor is its upper bound:
+/// `(5 / 0.9)^4`.
+const FACTOR_HI_RATIO: f64 = 952.598_689_224_203_4;
+
+/// `tol / err` at and below which the controller's factor is its lower bound:
+/// `(0.2 / 0.9)^4`.
+const FACTOR_LO_RATIO: f64 = 0.002_438_652_644_413_961_8;
+
 /// The error-per-step controller (Hairer, Norsett and Wanner, *Solving ODEs I*, sec. II.4),
 /// the alternative to the seed's Algorithm 3 (`001_...txt` ch. 4): the next step is the last
 /// one times `0.9 (tol / err)^(1/4)`, clamped to `[0.2, 5]`. Simpson's error estimate over a
@@ -61,6 +69,15 @@ const CONTROLLER_FACTOR: [f64; 2] = [0.2, 5.0];
 /// A zero error gives the largest growth.
 pub fn standard_factor(err: f64, tol: f64) -> f64 {
     let [lo, hi] = CONTROLLER_FACTOR;
+    // The clamps without the roots: most steps of smooth or empty stretches have errors far
+    // below the tolerance, and two roots and a division cost more than the rest of a step's
+    // bookkeeping.
+    if err * FACTOR_HI_RATIO < tol {
+        return hi;
+    }
+    if err * FACTOR_LO_RATIO > tol {
+        return lo;
+    }
     let f = CONTROLLER_SAFETY * (tol / err).sqrt().sqrt();
     // Selects: NaN (0 / 0) goes to the largest growth.
     let f = if f > lo { f } else { lo };
@@ -137,6 +154,17 @@ impl Probe {
         (self.t, self.h, self.s[0], self.known) = (t, h, first, 1);
     }
 
+    /// Shortens the step to its first `quarters` quarters (1 to 3), keeping the samples that
+    /// fall on the shorter step's points.
+    fn keep_quarters(&mut self, quarters: usize) {
+        if quarters == 2 {
+            return self.halve();
+        }
+        self.h *= quarters as f64 * 0.25;
+        self.s[4] = self.s[quarters];
+        self.known = 0b10001;
+    }
+
     /// Halves the step, keeping the samples of the first half.
     fn halve(&mut self) {
         self.h *= 0.5;
@@ -210,7 +238,12 @@ fn eval_step(depth0: f64, trans0: f64, h: f64, s: &[Medium; 5]) -> StepEval {
 /// Whether the medium hides features between two adjacent samples (the step is then
 /// refined down to `hmin`, whatever its error estimate says).
 fn hidden(m: &impl RayMedium, s: &[Medium; 5]) -> bool {
-    m.hides_features_along(&[s[0].value, s[1].value, s[2].value, s[3].value, s[4].value])
+    m.hides_features_along(&values(s))
+}
+
+/// The scalar values of a step's five samples.
+fn values(s: &[Medium; 5]) -> [f64; 5] {
+    [s[0].value, s[1].value, s[2].value, s[3].value, s[4].value]
 }
 
 /// Largest estimated error of R, G, B and A over a step starting at transmittance `trans0`.
@@ -234,13 +267,20 @@ struct StepSize {
     h: f64,
     successes: u32,
     standard: bool,
+    hmin: f64,
+    /// Where the step proposed ends at the quarter of a refused step that hid a peak: that
+    /// quarter's length, the step after it (0: none).
+    peak_ahead: f64,
 }
 
 impl StepSize {
     /// The step `taken` was accepted with the error `err` where `tol` was allowed.
     fn success(&mut self, taken: f64, hmax: f64, err: f64, tol: f64) {
         self.successes += 1;
-        if self.standard {
+        if self.peak_ahead > 0.0 {
+            // The step ended where a hidden peak's quarter begins: that quarter next.
+            (self.h, self.peak_ahead) = (self.peak_step(self.peak_ahead), 0.0);
+        } else if self.standard {
             let next = taken * standard_growth(err, tol, self.successes);
             // A step shortened to end its interval does not shrink the proposal.
             let next = if taken < self.h {
@@ -267,6 +307,41 @@ impl StepSize {
         }
     }
 
+    /// The step that searches a quarter of length `quarter` hiding a peak: the quarter, or
+    /// `hmin` once the quarter is within [`PEAK_NEAR_HMIN`] of it.
+    fn peak_step(&self, quarter: f64) -> f64 {
+        if quarter > PEAK_NEAR_HMIN * self.hmin {
+            quarter
+        } else {
+            self.hmin
+        }
+    }
+
+    /// The error-per-step controller's next try after `probe` hid a peak of the transfer
+    /// function in its quarter `quarter` (1 to 4): the quarters before it, whose samples
+    /// showed none, as one step, then the quarter that hid the peak ([`StepSize::peak_step`]);
+    /// a peak in the first quarter gets that step at once. Each refused step narrows where the
+    /// peak lies fourfold, down to `hmin`, where halving (Algorithm 3) narrows it twofold.
+    fn before_peak(&mut self, probe: &mut Probe, quarter: usize) {
+        self.successes = 0;
+        let quarter_len = probe.h * 0.25;
+        let before = quarter_len * (quarter - 1) as f64;
+        if before > self.hmin {
+            (self.h, self.peak_ahead) = (before, quarter_len);
+            probe.keep_quarters(quarter - 1);
+        } else if self.peak_step(quarter_len) > self.hmin {
+            (self.h, self.peak_ahead) = (quarter_len, 0.0);
+            probe.keep_quarters(1);
+        } else if self.hmin < probe.h {
+            (self.h, self.peak_ahead) = (self.hmin, 0.0);
+            let first = probe.s[0];
+            probe.restart(probe.t, self.hmin, first);
+        } else {
+            self.h = probe.h * 0.5;
+            probe.halve();
+        }
+    }
+
     /// The control at the start of an interval: `h0` on the ray's first; `hmax` after a gap
     /// of empty space (skipped), as if the gap's steps had been taken (they all succeed, and
     /// grow to `hmax`), so that skipping changes the steps taken in occupied space as little
@@ -278,12 +353,16 @@ impl StepSize {
                 h: p.hmax,
                 successes: 2,
                 standard,
+                hmin: p.hmin,
+                peak_ahead: 0.0,
             }
         } else {
             Self {
                 h: p.h0,
                 successes: 0,
                 standard,
+                hmin: p.hmin,
+                peak_ahead: 0.0,
             }
         }
     }
@@ -476,6 +555,8 @@ impl CoupledSpan {
             self.t += probe.h;
             self.step.success(probe.h, p.hmax, err, tol_h);
             probe.restart(self.t, clamp_step(self.step.h, p, self.t1 - self.t), last);
+        } else if self.step.standard && blind {
+            self.step.before_peak(probe, m.hidden_quarter(&values(s)));
         } else if self.step.failure(probe.h, err, tol_h, blind) {
             probe.halve();
         } else {
@@ -560,6 +641,13 @@ fn outer_interval(
         }
     }
 }
+
+/// A quarter of a step that hides a peak and is at most this many times `hmin` long is
+/// searched by `hmin` steps at once: at the quarter's own spacing the peak would most likely
+/// stay hidden (TF peaks are narrow), and the refused step costs more than the few `hmin`
+/// steps the quarter holds. Measured on the phantom of `--suite targets` (hmin 0.4, hmax 4):
+/// 3 % fewer steps than searching every quarter.
+pub(crate) const PEAK_NEAR_HMIN: f64 = 4.0;
 
 /// Fraction of the tolerance that the error estimates must meet. Simpson's estimate
 /// `(S2 - S1) / 15` assumes a smooth integrand; trilinear fields have kinks at voxel

@@ -20,7 +20,9 @@
 //! f32 rounding of a step's sums is about 1e-7 of the step's integral, far below the error
 //! allowed per step for tolerances of [`AdaptiveLanes::MIN_TOL`] and above; the f64 integrator
 //! serves smaller tolerances and the reference.
-use super::adaptive::{standard_factor, standard_growth, AdaptiveParams, StepControl, SAFETY};
+use super::adaptive::{
+    standard_factor, standard_growth, AdaptiveParams, StepControl, PEAK_NEAR_HMIN, SAFETY,
+};
 use super::medium::RayIntegral;
 
 /// Rays integrated together.
@@ -70,6 +72,9 @@ pub struct AdaptiveLanes {
     h0: f32,
     hmin: f32,
     hmax: f32,
+    /// Quarters hiding a peak up to this long are searched by `hmin` steps
+    /// ([`PEAK_NEAR_HMIN`] `hmin`).
+    peak_near_hmin: f32,
     /// Steps at or below this are accepted whatever their error.
     hmin_accept: f32,
     /// Optical depth at which the early-termination opacity is reached.
@@ -88,8 +93,11 @@ pub struct AdaptiveLanes {
     /// The step the control proposes, and its consecutive successes.
     step_h: [f32; RAYS],
     successes: [u32; RAYS],
-    /// Whether the current step's four points are all new (else two are known).
-    fresh: [bool; RAYS],
+    /// How many of the current step's four points are new (the others were sampled before).
+    new_points: [u64; RAYS],
+    /// Where the step proposed ends at the quarter of a refused step that hid a peak: that
+    /// quarter's length, the step after it (0: none).
+    peak_ahead: [f32; RAYS],
     /// Whether the ray has integrated an interval (the next one follows a gap).
     after_gap: [bool; RAYS],
     /// Allowed error per unit length.
@@ -129,6 +137,7 @@ impl AdaptiveLanes {
             h0: p.h0 as f32,
             hmin: p.hmin as f32,
             hmax: p.hmax as f32,
+            peak_near_hmin: (PEAK_NEAR_HMIN * p.hmin) as f32,
             hmin_accept: (p.hmin * (1.0 + 1e-6)) as f32,
             depth_stop: if a < 1.0 {
                 -((1.0 - a).ln()) as f32
@@ -144,7 +153,8 @@ impl AdaptiveLanes {
             standard: p.control == StepControl::CoupledStandard,
             step_h: [0.0; RAYS],
             successes: [0; RAYS],
-            fresh: [true; RAYS],
+            new_points: [4; RAYS],
+            peak_ahead: [0.0; RAYS],
             after_gap: [false; RAYS],
             tol_per_length: [0.0; RAYS],
             rgb0: [[0.0; RAYS]; 3],
@@ -242,8 +252,8 @@ impl AdaptiveLanes {
     /// first sample, stepping rays accept their step (and propose the next) or halve it.
     pub fn supply(&mut self, m: &LaneMedia) {
         let rules = self.rules(m);
-        let blind = self.hides_peaks(m);
-        for (r, &blind) in blind.iter().enumerate() {
+        let peaks = self.hides_peaks(m);
+        for (r, &quarter) in peaks.iter().enumerate() {
             match self.phase[r] {
                 Phase::Entering => {
                     self.keep_start(r, m, 0);
@@ -251,7 +261,7 @@ impl AdaptiveLanes {
                     self.phase[r] = Phase::Stepping;
                     self.propose(r);
                 }
-                Phase::Stepping => self.judge(r, m, &rules, blind),
+                Phase::Stepping => self.judge(r, m, &rules, quarter),
                 Phase::Idle | Phase::NeedsSpan => {}
             }
         }
@@ -267,11 +277,12 @@ impl AdaptiveLanes {
     }
 
     /// Accepts or halves ray `r`'s step (Algorithm 3, lines 7-13).
-    fn judge(&mut self, r: usize, m: &LaneMedia, rules: &Rules, blind: bool) {
+    fn judge(&mut self, r: usize, m: &LaneMedia, rules: &Rules, quarter: u8) {
+        let blind = quarter != 0;
         let h = self.h[r];
         let tol_h = self.tol_per_length[r] * h;
         let err = rules.error[r];
-        self.samples[r] += if self.fresh[r] { 4 } else { 2 };
+        self.samples[r] += self.new_points[r];
         if (err <= tol_h && !blind) || h <= self.hmin_accept {
             for c in 0..3 {
                 self.color[c][r] += rules.color[c][r];
@@ -289,11 +300,13 @@ impl AdaptiveLanes {
                 self.t[r] += h;
                 self.propose(r);
             }
-        } else if self.standard && !blind && self.shrink(r, h, err, tol_h) {
+        } else if self.standard && blind {
+            self.before_peak(r, h, quarter);
+        } else if self.standard && self.shrink(r, h, err, tol_h) {
             // The error-per-step controller proposed a shorter step from the same start.
         } else {
             (self.step_h[r], self.successes[r]) = (h * 0.5, 0);
-            (self.h[r], self.to_end[r], self.fresh[r]) = (h * 0.5, false, false);
+            (self.h[r], self.to_end[r], self.new_points[r]) = (h * 0.5, false, 2);
         }
     }
 
@@ -310,8 +323,33 @@ impl AdaptiveLanes {
             return false;
         }
         (self.step_h[r], self.successes[r]) = (h * f, 0);
-        (self.h[r], self.to_end[r], self.fresh[r]) = (next, false, true);
+        (self.h[r], self.to_end[r], self.new_points[r]) = (next, false, 4);
         true
+    }
+
+    /// The error-per-step controller's next try after ray `r`'s step `h` hid a peak of the
+    /// transfer function in its quarter `quarter` (1 to 4): the quarters before it, whose
+    /// samples showed none, as one step, then the quarter that hid the peak (see
+    /// [`AdaptiveLanes::grow`]); a peak in the first quarter gets that quarter at once. Each
+    /// refused step narrows where the peak lies fourfold, down to `hmin`, where halving
+    /// (Algorithm 3) narrows it twofold. As the f64 integrator's `StepSize::before_peak`.
+    fn before_peak(&mut self, r: usize, h: f32, quarter: u8) {
+        let quarter_len = h * 0.25;
+        let before = quarter_len * f32::from(quarter - 1);
+        // The points of the refused step sampled again: the new end, and for half the step
+        // its midpoint too.
+        let (next, known, ahead) = if before > self.hmin {
+            (before, if quarter == 3 { 2 } else { 1 }, quarter_len)
+        } else if quarter_len > self.peak_near_hmin {
+            (quarter_len, 1, 0.0)
+        } else if self.hmin < h {
+            (self.hmin, 0, 0.0)
+        } else {
+            (h * 0.5, 2, 0.0)
+        };
+        self.peak_ahead[r] = ahead;
+        (self.step_h[r], self.successes[r]) = (next, 0);
+        (self.h[r], self.to_end[r], self.new_points[r]) = (next, false, 4 - known);
     }
 
     /// The step proposed after ray `r`'s step `h` was accepted with the error `err` (`tol`
@@ -319,7 +357,16 @@ impl AdaptiveLanes {
     /// error-per-step controller, as [`StepSize`](super::adaptive) in f64.
     fn grow(&mut self, r: usize, h: f32, err: f32, tol: f32) {
         let proposed = self.step_h[r];
-        if self.standard {
+        if self.peak_ahead[r] > 0.0 {
+            // The step ended where a hidden peak's quarter begins: that quarter next.
+            let quarter = self.peak_ahead[r];
+            self.step_h[r] = if quarter > self.peak_near_hmin {
+                quarter
+            } else {
+                self.hmin
+            };
+            self.peak_ahead[r] = 0.0;
+        } else if self.standard {
             let f = standard_growth(f64::from(err), f64::from(tol), self.successes[r]) as f32;
             // A step shortened to end its interval does not shrink the proposal.
             let next = if h < proposed {
@@ -355,7 +402,7 @@ impl AdaptiveLanes {
         } else {
             (h, false)
         };
-        self.fresh[r] = true;
+        self.new_points[r] = 4;
     }
 
     /// Simpson's rule on each step and on its halves for the optical depth (inner integral)
@@ -450,14 +497,14 @@ impl AdaptiveLanes {
         }
     }
 
-    /// Per ray, whether two or more breakpoints lie strictly between the values of two
-    /// neighbouring points of its step: the transfer function then has a peak or valley no
-    /// sample shows, and the step is refined down to `hmin` (as
+    /// Per ray, the first quarter of its step (1 to 4; 0: none) where two or more breakpoints
+    /// lie strictly between the values of its two end points: the transfer function then has
+    /// a peak or valley no sample shows, and the step is refined down to `hmin` (as
     /// [`hides_breakpoints_along`](super::hides_breakpoints_along), from the counts of
     /// [`LaneMedia`]).
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn hides_peaks(&self, m: &LaneMedia) -> [bool; RAYS] {
+    fn hides_peaks(&self, m: &LaneMedia) -> [u8; RAYS] {
         // Point-major over the five points: [k RAYS + r].
         let mut v = [0.0f32; LANES + RAYS];
         let (mut at_or_below, mut below) = ([0.0f32; LANES + RAYS], [0.0f32; LANES + RAYS]);
@@ -467,12 +514,14 @@ impl AdaptiveLanes {
         v[RAYS..].copy_from_slice(&m.value);
         at_or_below[RAYS..].copy_from_slice(&m.breakpoints_at_or_below);
         below[RAYS..].copy_from_slice(&m.breakpoints_below);
-        let mut out = [false; RAYS];
-        for k in 1..5 {
+        let mut out = [0u8; RAYS];
+        for k in (1..5).rev() {
             for r in 0..RAYS {
                 let (a, b) = ((k - 1) * RAYS + r, k * RAYS + r);
                 let (lo, hi) = if v[a] <= v[b] { (a, b) } else { (b, a) };
-                out[r] |= below[hi] >= at_or_below[lo] + 2.0;
+                if below[hi] >= at_or_below[lo] + 2.0 {
+                    out[r] = k as u8;
+                }
             }
         }
         out

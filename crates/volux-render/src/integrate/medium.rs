@@ -23,6 +23,18 @@ pub trait RayMedium {
     fn hides_features_along(&self, values: &[f64; 5]) -> bool {
         values.windows(2).any(|w| self.hides_features(w[0], w[1]))
     }
+
+    /// The first pair of neighbouring samples of `values` between which
+    /// [`RayMedium::hides_features`] holds, as the quarter of a five-point step it spans (1
+    /// to 4), or 0 where none does.
+    fn hidden_quarter(&self, values: &[f64; 5]) -> usize {
+        if !self.hides_features_along(values) {
+            return 0;
+        }
+        (1..5)
+            .find(|&k| self.hides_features(values[k - 1], values[k]))
+            .unwrap_or(4)
+    }
 }
 
 /// Whether two or more of the sorted `breakpoints` lie strictly between `a` and `b`: the

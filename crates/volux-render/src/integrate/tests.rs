@@ -200,13 +200,55 @@ fn adaptive_refines_across_hidden_tf_peaks() {
         }
     }
     let exact = 1.0 - (-0.5f64).exp(); // depth = 50 * 0.01 = 0.5
-    let mut p = params(1e-3, StepControl::Coupled);
-    (p.h0, p.hmax, p.hmin) = (0.25, 0.25, 1e-4);
-    let r = adaptive_simpson(&mut Peak, 0.0, 1.0, &p);
+    for control in [StepControl::Coupled, StepControl::CoupledStandard] {
+        let mut p = params(1e-3, control);
+        (p.h0, p.hmax, p.hmin) = (0.25, 0.25, 1e-4);
+        let r = adaptive_simpson(&mut Peak, 0.0, 1.0, &p);
+        assert!(
+            (r.rgba[3] - exact).abs() < 1e-3,
+            "{control:?}: alpha {} vs {exact}",
+            r.rgba[3]
+        );
+    }
+}
+
+/// A uniform medium whose values cross three breakpoints near `C` (a transfer-function
+/// feature the samples cannot see): no error estimate fails, so the steps refused are those
+/// that hide the feature. Both controllers refine to `hmin` there and integrate exactly; the
+/// error-per-step controller narrows where the feature lies fourfold per refused step (the
+/// quarters before it as one step, then its quarter), Algorithm 3 twofold (halving), so it
+/// takes fewer samples.
+#[test]
+fn the_standard_controller_goes_straight_to_a_hidden_peak() {
+    const C: f64 = 0.613;
+    struct Feature;
+    impl RayMedium for Feature {
+        fn at(&mut self, t: f64) -> Medium {
+            Medium {
+                rgb: [1.0; 3],
+                tau: 0.5,
+                value: t,
+            }
+        }
+        fn hides_features(&self, a: f64, b: f64) -> bool {
+            hides_breakpoints(&[C - 1e-4, C, C + 1e-4], a, b)
+        }
+    }
+    let exact = 1.0 - (-1.0f64).exp();
+    let samples = [StepControl::Coupled, StepControl::CoupledStandard].map(|control| {
+        let mut p = params(1e-3, control);
+        (p.h0, p.hmax, p.hmin) = (0.5, 1.0, 1e-3);
+        let r = adaptive_simpson(&mut Feature, 0.0, 2.0, &p);
+        assert!(
+            (r.rgba[3] - exact).abs() < 1e-9,
+            "{control:?}: {}",
+            r.rgba[3]
+        );
+        r.samples
+    });
     assert!(
-        (r.rgba[3] - exact).abs() < 1e-3,
-        "alpha {} vs {exact}",
-        r.rgba[3]
+        samples[1] * 4 < samples[0] * 3,
+        "samples seed / standard {samples:?}"
     );
 }
 

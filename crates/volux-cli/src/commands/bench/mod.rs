@@ -61,11 +61,13 @@ pub fn run(
     suite: Suite,
     only: Option<&str>,
 ) -> Result<(), CmdError> {
-    if only.is_some() && !matches!(suite, Suite::Grid | Suite::All) {
-        return Err("--only selects cases of the grid suite (--suite grid or all)".into());
+    if only.is_some() && !matches!(suite, Suite::Grid | Suite::All | Suite::Targets) {
+        return Err(
+            "--only selects cases of the grid suite or datasets of the targets suite".into(),
+        );
     }
     let rows = match suite {
-        Suite::Targets => targets::run(n, frames, as_json)?,
+        Suite::Targets => targets::run(n, frames, as_json, only)?,
         Suite::Grid => grid::run(quick, frames, n, as_json, only)?,
         Suite::Pt => pt::run(quick, frames, as_json)?,
         Suite::Tetray => tetray::run(quick, frames, as_json)?,

@@ -109,8 +109,14 @@ fn time_cases(volume: &Volume, tf: &TransferFunction, rounds: usize) -> Result<T
 }
 
 /// Times the targets on the bench datasets (`n`^3 synthetic volumes and the shared heads),
-/// `rounds` frames per case, and prints a table (or returns JSON rows).
-pub fn run(n: usize, rounds: usize, as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
+/// `rounds` frames per case, and prints a table (or returns JSON rows); `only` keeps the
+/// datasets whose name contains each of its words.
+pub fn run(
+    n: usize,
+    rounds: usize,
+    as_json: bool,
+    only: Option<&str>,
+) -> Result<Vec<serde_json::Value>, CmdError> {
     let rounds = rounds.max(1);
     let names = cases().map(|(name, _)| name);
     if !as_json {
@@ -126,7 +132,8 @@ pub fn run(n: usize, rounds: usize, as_json: bool) -> Result<Vec<serde_json::Val
         println!();
     }
     let mut rows = Vec::new();
-    for (name, volume, tf) in grids(n)? {
+    let wanted = |name: &str| only.is_none_or(|o| o.split_whitespace().all(|w| name.contains(w)));
+    for (name, volume, tf) in grids(n)?.into_iter().filter(|(name, ..)| wanted(name)) {
         let t = time_cases(&volume, &tf, rounds)?;
         let adaptive = ADAPTIVE.map(|c| (t.fastest(c), t.ratio(c, 1)));
         // The Riemann target is set for 256^3 volumes only.
