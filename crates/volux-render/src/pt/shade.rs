@@ -25,6 +25,8 @@
 //! the extinction vanishes are dropped for the whole cell (their fragments are transparent
 //! black, which composites as nothing), and the rest are composited in ray order (front to
 //! back when the values increase along the ray, back to front otherwise).
+use std::cmp::Ordering;
+
 use glam::Vec4;
 
 use super::raster::{Row, Triangle, TILE};
@@ -417,7 +419,7 @@ impl CellColour {
         let mut acc = [[0.0f32; LANES]; 4];
         // Without constant segments (`s_f == s_b`, in the span holding their value) only the
         // spans that meet the lane group's range `(min lo, max hi)` can take a share.
-        let constant = (0..LANES).any(|k| !(lo[k] < hi[k]));
+        let constant = (0..LANES).any(|k| lo[k].partial_cmp(&hi[k]) != Some(Ordering::Less));
         let spans = if constant {
             &self.spans[..]
         } else {
