@@ -428,8 +428,12 @@ impl CellColour {
         let mut visit = |span: &Span| {
             let a = lanes(|k| lo[k].max(span.lo));
             let b = lanes(|k| hi[k].min(span.hi));
-            let share = span_share(span, lo, hi, &a, &b, &inv_width);
-            if share.iter().all(|&f| f <= 0.0) {
+            let share = if constant {
+                span_share(span, lo, hi, &a, &b, &inv_width)
+            } else {
+                lanes(|k| clamp_share((b[k] - a[k]) * inv_width[k]))
+            };
+            if !Vec4::from(share).cmpgt(Vec4::ZERO).any() {
                 return;
             }
             let (front, back) = if RISING { (&a, &b) } else { (&b, &a) };
@@ -483,7 +487,7 @@ impl CellColour {
             let a = lanes(|k| lo[k].max(span.lo));
             let b = lanes(|k| hi[k].min(span.hi));
             let share = span_share(span, &lo, &hi, &a, &b, &inv_width);
-            if share.iter().all(|&f| f <= 0.0) {
+            if !Vec4::from(share).cmpgt(Vec4::ZERO).any() {
                 continue;
             }
             let front = lanes(|k| if rising[k] > 0.0 { a[k] } else { b[k] });
@@ -525,10 +529,7 @@ fn span_share(
     inv_width: &Lanes,
 ) -> Lanes {
     lanes(|k| {
-        let f = (b[k] - a[k]) * inv_width[k];
-        // NaN (a constant segment) and negative shares give 0.
-        let f = if f > 0.0 { f } else { 0.0 };
-        let f = if f < 1.0 { f } else { 1.0 };
+        let f = clamp_share((b[k] - a[k]) * inv_width[k]);
         let holds = if span.lo <= lo[k] && lo[k] < span.hi {
             1.0
         } else {
@@ -540,4 +541,15 @@ fn span_share(
             holds
         }
     })
+}
+
+/// A share clamped to `[0, 1]`; NaN (a constant segment) gives 0.
+#[inline(always)]
+fn clamp_share(f: f32) -> f32 {
+    let f = if f > 0.0 { f } else { 0.0 };
+    if f < 1.0 {
+        f
+    } else {
+        1.0
+    }
 }
