@@ -593,6 +593,11 @@ struct Fragment {
     rgba: [f32; 4],
 }
 
+thread_local! {
+    /// A [`Batch`] per thread, reused from tile to tile.
+    static SPARE_BATCH: std::cell::Cell<Option<Batch>> = const { std::cell::Cell::new(None) };
+}
+
 /// Tetrahedra gathered at a time before drawing: the gather loop's loads are independent of
 /// each other, so their cache misses overlap.
 const GATHER: usize = 64;
@@ -655,7 +660,8 @@ impl TileContext<'_> {
         let shader = self.shader;
         let per_pixel = self.per_pixel;
         let mut gathered: Vec<Gathered> = Vec::with_capacity(GATHER);
-        let mut batch = Batch::new();
+        // The batch's buffers (a third of a MiB) are kept per thread, not zeroed per tile.
+        let mut batch = SPARE_BATCH.with(|b| b.take()).unwrap_or_default();
         let mut colour = CellColour::default();
         let gather = Gather {
             secant: &secant,
@@ -776,6 +782,8 @@ impl TileContext<'_> {
                 }
             }
         }
+        batch.clear();
+        SPARE_BATCH.with(|b| b.set(Some(batch)));
         if self.per_pixel {
             frags.sort_unstable_by(|a, b| a.pixel.cmp(&b.pixel).then(a.depth.total_cmp(&b.depth)));
             for f in &frags {

@@ -25,6 +25,10 @@
 //! the extinction vanishes are dropped for the whole cell (their fragments are transparent
 //! black, which composites as nothing), and the rest are composited in ray order (front to
 //! back when the values increase along the ray, back to front otherwise).
+use std::cmp::Ordering;
+
+use glam::Vec4;
+
 use super::raster::{Row, Triangle, TILE};
 use crate::composite::under;
 use crate::integrate::fragment::FragmentShader;
@@ -128,6 +132,8 @@ impl CellColour {
 /// once), a row and a lane group of padding, so that masked indices need no bounds check.
 const CAPACITY: usize = 8192;
 const _: () = assert!(TILE * TILE + TILE + LANES <= CAPACITY && CAPACITY.is_power_of_two());
+// The lane groups are `Vec4`s where a select is needed.
+const _: () = assert!(LANES == 4);
 
 /// One cell's fragments in one tile, as structure of arrays (see the module documentation).
 #[derive(Debug)]
@@ -336,15 +342,14 @@ impl Batch {
             let rgba = colour.lanes(table, &s_f, &s_b, &len);
             // Transparent black for unusable inputs, as the scalar models give (a finite
             // `len` implies finite depths).
-            let ok = lanes(|k| {
-                let inf = f32::INFINITY;
-                let finite = (s_f[k].abs() < inf) & (s_b[k].abs() < inf) & (len[k].abs() < inf);
-                f32::from(u8::from(finite & (len[k] > 0.0)))
-            });
+            let inf = Vec4::splat(f32::INFINITY);
+            let (sf, sb, ln) = (Vec4::from(s_f), Vec4::from(s_b), Vec4::from(len));
+            let ok =
+                sf.abs().cmplt(inf) & sb.abs().cmplt(inf) & ln.cmplt(inf) & ln.cmpgt(Vec4::ZERO);
             self.z_f[i..i + LANES].copy_from_slice(&z_f);
             for (out, v) in self.rgba.iter_mut().zip(&rgba) {
-                let v = lanes(|k| if ok[k] > 0.0 { v[k] } else { 0.0 });
-                out[i..i + LANES].copy_from_slice(&v);
+                let v = Vec4::select(ok, Vec4::from(*v), Vec4::ZERO);
+                out[i..i + LANES].copy_from_slice(&v.to_array());
             }
         }
     }
@@ -412,11 +417,23 @@ impl CellColour {
         let (lo, hi) = if RISING { (s_f, s_b) } else { (s_b, s_f) };
         let inv_width = lanes(|k| 1.0 / (hi[k] - lo[k]));
         let mut acc = [[0.0f32; LANES]; 4];
+        // Without constant segments (`s_f == s_b`, in the span holding their value) only the
+        // spans that meet the lane group's range `(min lo, max hi)` can take a share.
+        let constant = (0..LANES).any(|k| lo[k].partial_cmp(&hi[k]) != Some(Ordering::Less));
+        let spans = if constant {
+            &self.spans[..]
+        } else {
+            self.spans_meeting(lo, hi)
+        };
         let mut visit = |span: &Span| {
             let a = lanes(|k| lo[k].max(span.lo));
             let b = lanes(|k| hi[k].min(span.hi));
-            let share = span_share(span, lo, hi, &a, &b, &inv_width);
-            if share.iter().all(|&f| f <= 0.0) {
+            let share = if constant {
+                span_share(span, lo, hi, &a, &b, &inv_width)
+            } else {
+                lanes(|k| clamp_share((b[k] - a[k]) * inv_width[k]))
+            };
+            if !Vec4::from(share).cmpgt(Vec4::ZERO).any() {
                 return;
             }
             let (front, back) = if RISING { (&a, &b) } else { (&b, &a) };
@@ -433,11 +450,26 @@ impl CellColour {
             }
         };
         if RISING {
-            self.spans.iter().for_each(&mut visit);
+            spans.iter().for_each(&mut visit);
         } else {
-            self.spans.iter().rev().for_each(&mut visit);
+            spans.iter().rev().for_each(&mut visit);
         }
         acc
+    }
+
+    /// The spans that meet `(min lo, max hi)` over the lanes (the spans are sorted and
+    /// disjoint).
+    #[inline(always)]
+    fn spans_meeting(&self, lo: &Lanes, hi: &Lanes) -> &[Span] {
+        let min = lo
+            .iter()
+            .fold(f32::INFINITY, |m, &v| if v < m { v } else { m });
+        let max = hi
+            .iter()
+            .fold(f32::NEG_INFINITY, |m, &v| if v > m { v } else { m });
+        let first = self.spans.partition_point(|s| s.hi <= min);
+        let last = self.spans.partition_point(|s| s.lo < max).max(first);
+        &self.spans[first..last]
     }
 
     /// [`CellColour::pieces`] for lane groups of both directions: the spans in increasing
@@ -455,7 +487,7 @@ impl CellColour {
             let a = lanes(|k| lo[k].max(span.lo));
             let b = lanes(|k| hi[k].min(span.hi));
             let share = span_share(span, &lo, &hi, &a, &b, &inv_width);
-            if share.iter().all(|&f| f <= 0.0) {
+            if !Vec4::from(share).cmpgt(Vec4::ZERO).any() {
                 continue;
             }
             let front = lanes(|k| if rising[k] > 0.0 { a[k] } else { b[k] });
@@ -497,10 +529,7 @@ fn span_share(
     inv_width: &Lanes,
 ) -> Lanes {
     lanes(|k| {
-        let f = (b[k] - a[k]) * inv_width[k];
-        // NaN (a constant segment) and negative shares give 0.
-        let f = if f > 0.0 { f } else { 0.0 };
-        let f = if f < 1.0 { f } else { 1.0 };
+        let f = clamp_share((b[k] - a[k]) * inv_width[k]);
         let holds = if span.lo <= lo[k] && lo[k] < span.hi {
             1.0
         } else {
@@ -512,4 +541,15 @@ fn span_share(
             holds
         }
     })
+}
+
+/// A share clamped to `[0, 1]`; NaN (a constant segment) gives 0.
+#[inline(always)]
+fn clamp_share(f: f32) -> f32 {
+    let f = if f > 0.0 { f } else { 0.0 };
+    if f < 1.0 {
+        f
+    } else {
+        1.0
+    }
 }

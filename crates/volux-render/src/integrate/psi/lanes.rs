@@ -11,6 +11,8 @@ use super::{clamp_or_lo, coords_of_depths, one_minus_psi_series, opacity, PsiTab
 
 /// Fragments per lane group.
 pub const LANES: usize = 4;
+// Lane groups are `glam::Vec4`s where a mask is wanted.
+const _: () = assert!(LANES == 4);
 
 /// One value per lane.
 pub type Lanes = [f32; LANES];
@@ -86,7 +88,9 @@ pub fn psi_rgba_lanes(
     let a = lanes(|k| (front[3][k] * l[k]).max(0.0));
     let b = lanes(|k| (back[3][k] * l[k]).max(0.0));
     let series = lanes(|k| one_minus_psi_series(a[k], b[k]));
-    let thick = (0..LANES).any(|k| a[k] + b[k] >= THIN);
+    let thick = (glam::Vec4::from(a) + glam::Vec4::from(b))
+        .cmpge(glam::Vec4::splat(THIN))
+        .any();
     let (alpha, w) = if thick {
         let tabled = table.one_minus_psi_lanes(&a, &b);
         (
