@@ -9,9 +9,11 @@
 //! cache), perf put about 40 % of the lane stream's samples on the instructions just after
 //! the row-major grid's corner loads; bricked, that frame's CPU time fell 1.2x (Riemann 0.5,
 //! 512x512), while the heads, whose samples fit the cache, stayed within noise. The values and
-//! the arithmetic are those of [`Trilinear`]: every sample is bit-identical to it. The copy
-//! costs `(9/8)³ ≈ 1.42` times the grid's samples (in their native type), more for grids
-//! whose sides are not multiples of 8; it is built when it fits the memory budget.
+//! the arithmetic are those of [`Trilinear`] (the copy holds each sample as f32, which every
+//! scalar type converts to exactly, so the loads need no conversion): every sample is
+//! bit-identical to it. The copy takes `(9/8)³ ≈ 1.42` f32 per grid sample (more for grids
+//! whose sides are not multiples of 8): 1.42x an f32 grid, 2.8x an `i16` one, 5.7x a `u8`
+//! one; it is built when it fits the memory budget.
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::grid::Scalar;
@@ -43,9 +45,9 @@ const CORNERS: [usize; 8] = [
 const REACH: usize = CORNERS[7] + 1;
 
 /// The bricked samples of a grid (see the module docs).
-pub(crate) struct Bricks<T> {
+pub(crate) struct Bricks {
     /// The bricks one after the other, each [`BRICK`] samples `[z][y][x]`.
-    samples: Vec<T>,
+    samples: Vec<f32>,
     dims: [usize; 3],
     /// Per axis, the offset that the cell index adds to its first sample (the sum over the
     /// axes is the offset): `(c / 8) stride + (c % 8) side^a`, where `stride` is the bricks'
@@ -55,14 +57,14 @@ pub(crate) struct Bricks<T> {
     hi: [f32; 3],
     cell_max: [i32; 3],
     /// Read where a cell's samples would not fit (never: every cell's do).
-    spare: [T; REACH],
+    spare: [f32; REACH],
 }
 
-impl<T: Scalar> Bricks<T> {
-    /// Bytes the bricked copy of a grid with `dims` samples of `T` takes.
+impl Bricks {
+    /// Bytes the bricked copy of a grid with `dims` samples takes.
     pub(crate) fn bytes_for(dims: [usize; 3]) -> u64 {
         let n: u64 = Self::counts_for(dims).iter().map(|&c| c as u64).product();
-        n.saturating_mul((BRICK * std::mem::size_of::<T>()) as u64)
+        n.saturating_mul((BRICK * std::mem::size_of::<f32>()) as u64)
     }
 
     fn counts_for(dims: [usize; 3]) -> [usize; 3] {
@@ -72,18 +74,18 @@ impl<T: Scalar> Bricks<T> {
     /// The bricked copy of `values` laid out x fastest with `dims` samples per axis; `None`
     /// unless `values` holds exactly that many samples (at least one), each side has at most
     /// [`AXIS_MAX`], the copy's offsets fit in `i32` and it takes at most `budget` bytes.
-    pub(crate) fn build(values: &[T], dims: [usize; 3], budget: u64) -> Option<Self> {
+    pub(crate) fn build<T: Scalar>(values: &[T], dims: [usize; 3], budget: u64) -> Option<Self> {
         let count = dims[0].checked_mul(dims[1])?.checked_mul(dims[2])?;
         let small = dims.iter().all(|&n| n <= AXIS_MAX);
         let bytes = Self::bytes_for(dims);
-        let len = bytes / std::mem::size_of::<T>() as u64;
+        let len = bytes / std::mem::size_of::<f32>() as u64;
         if count != values.len() || count == 0 || !small || bytes > budget || len > i32::MAX as u64
         {
             return None;
         }
         let counts = Self::counts_for(dims);
         let [nx, ny, nz] = dims;
-        let mut samples = vec![values[0]; len as usize];
+        let mut samples = vec![0.0f32; len as usize];
         samples
             .par_chunks_mut(BRICK)
             .enumerate()
@@ -99,7 +101,7 @@ impl<T: Scalar> Bricks<T> {
                     let y = (CELLS * bj + v).min(ny - 1);
                     for (u, s) in row.iter_mut().enumerate() {
                         let x = (CELLS * bi + u).min(nx - 1);
-                        *s = values[x + nx * (y + ny * z)];
+                        *s = values[x + nx * (y + ny * z)].to_f32();
                     }
                 }
             });
@@ -116,7 +118,7 @@ impl<T: Scalar> Bricks<T> {
             offsets,
             hi: dims.map(|n| n.saturating_sub(1) as f32),
             cell_max: dims.map(|n| n.saturating_sub(2) as i32),
-            spare: [values[0]; REACH],
+            spare: [0.0; REACH],
         })
     }
 
@@ -135,7 +137,7 @@ impl<T: Scalar> Bricks<T> {
             .get(offset as usize..)
             .and_then(|s| s.first_chunk::<REACH>())
             .unwrap_or(&self.spare);
-        CORNERS.map(|o| c[o].to_f32())
+        CORNERS.map(|o| c[o])
     }
 
     /// The trilinear values at `N` points (`N` a multiple of 4), each bit-identical to
@@ -183,7 +185,7 @@ impl<T: Scalar> Bricks<T> {
 /// Trilinear sampling through the bricked copy, with the row-major sampler for the f64
 /// reference path.
 pub(crate) struct BrickedTrilinear<'a, T> {
-    pub(crate) bricks: &'a Bricks<T>,
+    pub(crate) bricks: &'a Bricks,
     pub(crate) linear: Trilinear<'a, T>,
 }
 
@@ -296,11 +298,11 @@ mod tests {
     #[test]
     fn bricks_respect_the_budget_and_the_slice_length() {
         let v = vec![1.0f32; 27];
-        let bytes = Bricks::<f32>::bytes_for([3, 3, 3]);
+        let bytes = Bricks::bytes_for([3, 3, 3]);
         assert_eq!(bytes, 729 * 4);
         assert!(Bricks::build(&v, [3, 3, 3], bytes).is_some());
         assert!(Bricks::build(&v, [3, 3, 3], bytes - 1).is_none());
         assert!(Bricks::build(&v[..26], [3, 3, 3], u64::MAX).is_none());
-        assert!(Bricks::<f32>::build(&[], [0, 0, 0], u64::MAX).is_none());
+        assert!(Bricks::build::<f32>(&[], [0, 0, 0], u64::MAX).is_none());
     }
 }

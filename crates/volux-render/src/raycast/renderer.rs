@@ -1,5 +1,4 @@
 //! The grid ray caster with its per-volume caches.
-use std::any::Any;
 use std::ops::Deref;
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
@@ -44,8 +43,8 @@ pub struct GridRenderer<G: Deref<Target = Grid> = Arc<Grid>> {
     classification: Mutex<Option<Arc<Classification>>>,
     preintegration: Mutex<Option<Arc<PreintegrationTable>>>,
     gradients: OnceLock<Option<GradientVolume>>,
-    /// The bricked samples (a `Bricks<T>` of the grid's scalar type).
-    bricks: OnceLock<Option<Box<dyn Any + Send + Sync>>>,
+    /// The bricked samples.
+    bricks: OnceLock<Option<Bricks>>,
     /// Bytes the derived structures may take each.
     memory_budget: u64,
     /// Whether tiles may take the lane paths; tests turn it off to compare them with the
@@ -137,14 +136,10 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
     /// The bricked copy of the samples `s` (the grid's), built on first use (`None` if it
     /// does not fit in the memory budget: the row-major samples are read, with the same
     /// values).
-    fn bricks<T: Scalar>(&self, s: &[T]) -> Option<&Bricks<T>> {
+    fn bricks<T: Scalar>(&self, s: &[T]) -> Option<&Bricks> {
         self.bricks
-            .get_or_init(|| {
-                let b = Bricks::build(s, self.grid.dims(), self.memory_budget)?;
-                Some(Box::new(b) as Box<dyn Any + Send + Sync>)
-            })
-            .as_ref()?
-            .downcast_ref()
+            .get_or_init(|| Bricks::build(s, self.grid.dims(), self.memory_budget))
+            .as_ref()
     }
 
     /// Renders the samples `s` (the grid's) with trilinear reconstruction, through their
