@@ -3,8 +3,10 @@ use std::ops::Deref;
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
+use volux_core::grid::Scalar;
 use volux_core::Grid;
 
+use super::bricks::{BrickedTrilinear, Bricks};
 use super::context::{Classification, Derived};
 use super::options::{Placement, RenderOptions, Rendered};
 use super::traverse::render_with;
@@ -25,7 +27,8 @@ pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<Rendered, Render
 }
 
 /// A grid ray caster that keeps what it derives between renders, keyed on what it was
-/// derived from: the macrocell min/max grid and the gradient volume (data, built once), the
+/// derived from: the macrocell min/max grid, the gradient volume and the bricked copy of the
+/// samples that the trilinear paths read (data, built once), the
 /// classification table with the macrocells' empty flags and the pre-integration table
 /// (rebuilt when the TF, the isovalues or the step change). An interactive session pays for
 /// each once.
@@ -40,6 +43,8 @@ pub struct GridRenderer<G: Deref<Target = Grid> = Arc<Grid>> {
     classification: Mutex<Option<Arc<Classification>>>,
     preintegration: Mutex<Option<Arc<PreintegrationTable>>>,
     gradients: OnceLock<Option<GradientVolume>>,
+    /// The bricked samples.
+    bricks: OnceLock<Option<Bricks>>,
     /// Bytes the derived structures may take each.
     memory_budget: u64,
     /// Whether tiles may take the lane paths; tests turn it off to compare them with the
@@ -56,6 +61,7 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
             classification: Mutex::new(None),
             preintegration: Mutex::new(None),
             gradients: OnceLock::new(),
+            bricks: OnceLock::new(),
             memory_budget: volux_core::limits::memory_budget(),
             lanes: true,
         }
@@ -127,6 +133,38 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
             .as_ref()
     }
 
+    /// The bricked copy of the samples `s` (the grid's), built on first use (`None` if it
+    /// does not fit in the memory budget: the row-major samples are read, with the same
+    /// values).
+    fn bricks<T: Scalar>(&self, s: &[T]) -> Option<&Bricks> {
+        self.bricks
+            .get_or_init(|| Bricks::build(s, self.grid.dims(), self.memory_budget))
+            .as_ref()
+    }
+
+    /// Renders the samples `s` (the grid's) with trilinear reconstruction, through their
+    /// bricked copy when there is one.
+    fn render_trilinear<T: Scalar>(
+        &self,
+        s: &[T],
+        place: Placement,
+        range: [f64; 2],
+        opts: &RenderOptions,
+        derived: Derived<'_>,
+    ) -> Result<Rendered, RenderError> {
+        let linear = Trilinear::new(s, self.grid.dims());
+        match self.bricks(s) {
+            Some(bricks) => render_with(
+                &BrickedTrilinear { bricks, linear },
+                place,
+                range,
+                opts,
+                derived,
+            ),
+            None => render_with(&linear, place, range, opts, derived),
+        }
+    }
+
     /// The classification for `opts`, rebuilt only when the TF or the isovalues changed
     /// (`cells`: with the empty flags of these macrocells); and whether it was rebuilt.
     fn classification(
@@ -151,7 +189,12 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
     pub fn render(&self, opts: &RenderOptions) -> Result<Rendered, RenderError> {
         opts.validate()?;
         let g = &*self.grid;
-        let built_data = (opts.empty_space_skipping && self.macrocells.get().is_none())
+        let cubic = matches!(
+            opts.reconstruction,
+            Reconstruction::CatmullRom | Reconstruction::BSpline
+        );
+        let built_data = (!cubic && self.bricks.get().is_none())
+            || (opts.empty_space_skipping && self.macrocells.get().is_none())
             || (opts.shading.is_some() && self.gradients.get().is_none());
         let cells = opts
             .empty_space_skipping
@@ -186,13 +229,8 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
                     derived
                 ))
             }
-            _ => volux_core::with_samples!(g.samples(), |s| render_with(
-                &Trilinear::new(s, g.dims()),
-                place,
-                range,
-                opts,
-                derived
-            )),
+            _ => volux_core::with_samples!(g.samples(), |s| self
+                .render_trilinear(s, place, range, opts, derived)),
         }?;
         out.stats.rebuilt = Rebuilt {
             data: built_data,

@@ -418,6 +418,27 @@ impl LaneLattice {
         pos
     }
 
+    /// Advances every lane by one sample; whether some lane reached its end.
+    #[inline(always)]
+    pub(super) fn advance_any(&mut self) -> bool {
+        let mut ended = false;
+        for l in 0..LANES {
+            self.i[l] += 1;
+            ended |= self.i[l] >= self.end[l];
+        }
+        ended
+    }
+
+    /// The bit mask of the lanes that reached their end.
+    #[inline(always)]
+    pub(super) fn ended(&self) -> u32 {
+        let mut ended = 0u32;
+        for l in 0..LANES {
+            ended |= u32::from(self.i[l] >= self.end[l]) << l;
+        }
+        ended
+    }
+
     /// Advances every lane by one sample; the bit mask of the lanes that reached their end.
     #[inline(always)]
     pub(super) fn advance(&mut self) -> u32 {
@@ -530,12 +551,17 @@ impl<F: Field> RayContext<'_, F> {
             if R::SEGMENTS {
                 lanes.front = v;
             }
-            let mut cold = lanes.lattice.advance();
+            // Whether any lane needs attention, as one reduction; which ones only then.
+            let mut cold = lanes.lattice.advance_any();
             for l in 0..LANES {
-                cold |= u32::from(lanes.acc[l][3] >= lanes.stop[l]) << l;
+                cold |= lanes.acc[l][3] >= lanes.stop[l];
             }
-            if cold != 0 {
-                return cold;
+            if cold {
+                let mut mask = lanes.lattice.ended();
+                for l in 0..LANES {
+                    mask |= u32::from(lanes.acc[l][3] >= lanes.stop[l]) << l;
+                }
+                return mask;
             }
         }
     }
