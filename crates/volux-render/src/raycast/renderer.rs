@@ -138,7 +138,7 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
     /// values).
     fn bricks<T: Scalar>(&self, s: &[T]) -> Option<&Bricks> {
         self.bricks
-            .get_or_init(|| Bricks::build(s, self.grid.dims(), self.memory_budget))
+            .get_or_init(|| Bricks::build(s, self.grid.dims(), brick_budget(s, self.memory_budget)))
             .as_ref()
     }
 
@@ -270,4 +270,35 @@ pub(crate) fn grid_frame(r: Rendered, settings: &GridRaycast, started: Instant) 
         rebuilt,
         MethodStats::GridRaycast(r.stats),
     )
+}
+
+/// A bricked copy of any size takes at most this many bytes.
+const BRICKS_ANY_GRID: u64 = 256 << 20;
+
+/// The bytes the bricked copy of the samples `s` may take: within `budget`, and at most twice
+/// the samples' own bytes (an f32 grid's copy takes 1.42x) or [`BRICKS_ANY_GRID`]. The copy
+/// stores f32, 2.8x an `i16` grid and 5.7x a `u8` one, and it measured at most 1.2x faster
+/// on such grids (the heads of `../shared/bench/`), which fit the cache anyway: a large 8- or
+/// 16-bit volume is read row-major rather than taking several times its size again.
+fn brick_budget<T: Scalar>(s: &[T], budget: u64) -> u64 {
+    let own = std::mem::size_of_val(s) as u64;
+    budget.min(own.saturating_mul(2).max(BRICKS_ANY_GRID))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bricks_of_large_narrow_grids_are_not_built() {
+        let gib = 1u64 << 30;
+        // Small grids: up to the fixed allowance, whatever their type.
+        assert_eq!(brick_budget(&[0u8; 1000], 8 * gib), BRICKS_ANY_GRID);
+        // A large u8 grid (its copy would be 5.7x) gets twice its bytes: too little.
+        let big = vec![0u8; 300 << 20];
+        assert_eq!(brick_budget(&big, 8 * gib), 600 << 20);
+        assert!(Bricks::bytes_for([1024, 1024, 300]) > 600 << 20);
+        // The memory budget bounds it in any case.
+        assert_eq!(brick_budget(&big, 100 << 20), 100 << 20);
+    }
 }
