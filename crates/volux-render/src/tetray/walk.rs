@@ -199,17 +199,24 @@ impl Walker<'_> {
             }
             let seg = self.segment(&hit, o, d, t);
             out.segments += 1;
+            t = seg.t_out;
+            // The neighbour is clipped before the segment is coloured: its cell record and
+            // face planes load while the segment's integral is computed.
+            let nb = geo.adj(hit.tet as usize)[hit.clip.exit as usize];
+            let shown = nb != NO_NEIGHBOR && vis.is_visible(nb);
+            let entered = if shown {
+                self.enter_neighbour(&hit, nb, o, d, t)
+            } else {
+                None
+            };
             if !sink(&seg) {
                 break;
             }
-            t = seg.t_out;
-            let nb = geo.adj(hit.tet as usize)[hit.clip.exit as usize];
-            let shown = nb != NO_NEIGHBOR && vis.is_visible(nb);
+            if let Some(h) = entered {
+                next = Some(h);
+                continue;
+            }
             if shown {
-                if let Some(h) = self.enter_neighbour(&hit, nb, o, d, t) {
-                    next = Some(h);
-                    continue;
-                }
                 out.local_searches += 1;
             }
             next = vis.bvh.nearest(geo, o, d, t);
