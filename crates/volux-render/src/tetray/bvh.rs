@@ -268,18 +268,20 @@ impl Bvh {
     /// The cell whose clip reaches past `t_lo` and starts first (`max(t_in, t_lo)`, ties by
     /// index), or `None`.
     pub fn nearest(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {
-        self.nearest_from(geo, o, d, t_lo, None)
+        self.nearest_from(geo, o, d, [t_lo, f64::INFINITY], None)
     }
 
-    /// [`Bvh::nearest`] given a `candidate`, a hit of one of the primitives (e.g. the answer
-    /// for a neighbouring ray, clipped with this one): the answer is the same, but the
-    /// traversal prunes against the candidate from the start.
+    /// [`Bvh::nearest`] past `t_lo` given a `candidate`, a hit of one of the primitives (e.g.
+    /// the answer for a neighbouring ray, clipped with this one), and a bound `t_hi` known to
+    /// be at or past the start of the answer, if there is one (e.g. from [`Bvh::reach`]): the
+    /// answer is the same, but the traversal prunes against the candidate and the bound from
+    /// the start.
     pub fn nearest_from(
         &self,
         geo: &Geometry,
         o: DVec3,
         d: DVec3,
-        t_lo: f64,
+        [t_lo, t_hi]: [f64; 2],
         candidate: Option<Hit>,
     ) -> Option<Hit> {
         if self.nodes.is_empty() {
@@ -287,7 +289,7 @@ impl Bvh {
         }
         let inv = DVec3::ONE / d;
         let mut best = candidate.filter(|h| h.clip.t_out > t_lo);
-        let mut best_key = best.map_or(f64::INFINITY, |h| h.key(t_lo));
+        let mut best_key = best.map_or(t_hi, |h| h.key(t_lo).min(t_hi));
         // Nodes to visit, with the parameter where the ray enters their box.
         let mut stack: [(u32, f64); 64] = [(0, 0.0); 64];
         let root = self.nodes[0].slab(o, inv);
@@ -377,6 +379,50 @@ impl Bvh {
             sp += 2;
         }
         false
+    }
+
+    /// The largest distance from `from` to a corner of a primitive box that may meet
+    /// `frustum`, `None` when none may ([`Bvh::may_meet`] is `false`). A ray of the frustum
+    /// from origin `o` meets the primitives only at distances from `o` up to this plus
+    /// `|o - from|`: past it, no primitive's clip reaches.
+    pub fn reach(&self, frustum: &Frustum, from: DVec3) -> Option<f64> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let far = |n: &Node| {
+            let lo = DVec3::from_array(n.lo.map(f64::from)) - from;
+            let hi = DVec3::from_array(n.hi.map(f64::from)) - from;
+            lo.abs().max(hi.abs()).length()
+        };
+        let mut best: Option<f64> = None;
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if best.is_some_and(|b| far(node) <= b) || !frustum.may_meet(node) {
+                continue;
+            }
+            if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                for b in self.prim_boxes[range]
+                    .iter()
+                    .filter(|b| frustum.may_meet(b))
+                {
+                    best = Some(best.map_or(far(b), |x| x.max(far(b))));
+                }
+                continue;
+            }
+            if sp + 2 > stack.len() {
+                return Some(f64::INFINITY);
+            }
+            // The child reaching farther is visited first: it raises the bound soonest.
+            let (l, r) = (node.first, node.first + 1);
+            let (a, b) = (far(&self.nodes[l as usize]), far(&self.nodes[r as usize]));
+            (stack[sp], stack[sp + 1]) = if a <= b { (l, r) } else { (r, l) };
+            sp += 2;
+        }
+        best
     }
 
     fn nearest_linear(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {

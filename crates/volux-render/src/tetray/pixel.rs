@@ -159,12 +159,13 @@ impl<'a> PixelContext<'a> {
     }
 
     /// Walks the ray `o + t d` and colours it; `segments` is scratch space. With `visible`
-    /// (per-segment colours only) the walk leaves out the cells that colour as transparent
-    /// black ([`super::skip`]), which does not change the pixel.
+    /// (per-segment colours only: the visible cells and the ray parameter past which none is
+    /// met) the walk leaves out the cells that colour as transparent black
+    /// ([`super::skip`]), which does not change the pixel.
     pub fn pixel(
         &self,
         walker: &Walker<'_>,
-        visible: Option<&Visibility>,
+        visible: Option<(&Visibility, f64)>,
         o: DVec3,
         d: DVec3,
         scratch: &mut Scratch,
@@ -194,7 +195,7 @@ impl<'a> PixelContext<'a> {
                     self.early.is_none_or(|e| acc[3] < e)
                 };
                 let outcome = match visible {
-                    Some(vis) => walker.trace_visible(vis, o, d, scratch, sink),
+                    Some((vis, t_limit)) => walker.trace_visible(vis, t_limit, o, d, scratch, sink),
                     None => walker.trace(o, d, scratch, sink),
                 };
                 let out = PixelOut {

@@ -367,19 +367,22 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             let mut stats = TetRayStats::default();
             let mut scratch = Scratch::default();
             let mut segments = Vec::new();
-            let empty = visible.map(|v| empty_blocks(&v.bvh, &rays, r));
+            let reach = visible.map(|v| block_reach(&v.bvh, &rays, r));
             for y in r.y0..r.y1 {
                 for x in r.x0..r.x1 {
-                    if empty.as_ref().is_some_and(|e| e.contains(x, y)) {
+                    let ray = rays.ray(x as f64 + 0.5, y as f64 + 0.5);
+                    let t_limit = reach
+                        .as_ref()
+                        .map_or(f64::INFINITY, |b| b.t_limit(x, y, ray.origin, ray.dir));
+                    if t_limit < 0.0 {
                         // No visible cell meets this block's rays: nothing to walk.
                         stats.add_ray(&PixelOut::default(), &WalkOutcome::default());
                         out.push(PixelOut::default());
                         continue;
                     }
-                    let ray = rays.ray(x as f64 + 0.5, y as f64 + 0.5);
                     let (px, outcome) = ctx.pixel(
                         &walker,
-                        visible,
+                        visible.map(|v| (v, t_limit)),
                         ray.origin,
                         ray.dir,
                         &mut scratch,
@@ -415,27 +418,46 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
 /// visible cells.
 const BLOCK: usize = 4;
 
-/// The blocks of a tile whose rays meet no visible cell ([`Bvh::may_meet`] of the block's
-/// frustum), as a bit per block.
-struct EmptyBlocks {
+/// Relative margin on a block's reach (far above the rounding of the distances).
+const REACH_MARGIN: f64 = 1e-9;
+
+/// Which blocks of a tile meet visible cells ([`Bvh::may_meet`] of the block's frustum),
+/// and how far the tile's rays may meet them ([`Bvh::reach`] of the tile's frustum): no ray
+/// of an empty block finds a visible cell, and past the reach no ray of the tile does (the
+/// walk stops there).
+struct BlockReach {
     rect: Rect,
     /// Blocks per row.
     across: usize,
+    /// Per block: whether no visible cell meets its rays.
     empty: Vec<bool>,
+    /// The origin the reach is measured from, and the reach (`inf`: unknown, the frustum
+    /// could not be built).
+    from: DVec3,
+    reach: f64,
 }
 
-impl EmptyBlocks {
-    /// Whether pixel `(x, y)` of the tile lies in an empty block.
+impl BlockReach {
+    /// The largest ray parameter at which the ray `o + t dir` of pixel `(x, y)` of the tile
+    /// may meet a visible cell; negative when its block is empty.
     #[inline]
-    fn contains(&self, x: usize, y: usize) -> bool {
+    fn t_limit(&self, x: usize, y: usize, o: DVec3, dir: DVec3) -> f64 {
         let (bx, by) = ((x - self.rect.x0) / BLOCK, (y - self.rect.y0) / BLOCK);
-        self.empty[by * self.across + bx]
+        if self.empty[by * self.across + bx] {
+            return -1.0;
+        }
+        let t = (self.reach + (o - self.from).length()) / dir.length() * (1.0 + REACH_MARGIN);
+        if t.is_nan() {
+            f64::INFINITY
+        } else {
+            t
+        }
     }
 }
 
-/// The empty blocks of tile `rect` for the hierarchy `bvh` of visible cells and the rays
-/// `rays` (a block whose frustum cannot be built is not empty).
-fn empty_blocks(bvh: &Bvh, rays: &RayGenerator, rect: Rect) -> EmptyBlocks {
+/// The empty blocks and the reach of tile `rect` for the hierarchy `bvh` of visible cells
+/// and the rays `rays` (a block whose frustum cannot be built is not empty).
+fn block_reach(bvh: &Bvh, rays: &RayGenerator, rect: Rect) -> BlockReach {
     let (across, down) = (rect.width().div_ceil(BLOCK), rect.height().div_ceil(BLOCK));
     let mut empty = Vec::with_capacity(across * down);
     for by in 0..down {
@@ -448,10 +470,23 @@ fn empty_blocks(bvh: &Bvh, rays: &RayGenerator, rect: Rect) -> EmptyBlocks {
             empty.push(Frustum::of_block(rays, block).is_some_and(|f| !bvh.may_meet(&f)));
         }
     }
-    EmptyBlocks {
+    let tile = [rect.x0, rect.y0, rect.x1, rect.y1].map(|v| v as f64);
+    let from = rays
+        .ray(0.5 * (tile[0] + tile[2]), 0.5 * (tile[1] + tile[3]))
+        .origin;
+    let reach = if empty.iter().all(|&e| e) {
+        f64::NEG_INFINITY
+    } else {
+        Frustum::of_block(rays, tile).map_or(f64::INFINITY, |f| {
+            bvh.reach(&f, from).unwrap_or(f64::INFINITY)
+        })
+    };
+    BlockReach {
         rect,
         across,
         empty,
+        from,
+        reach,
     }
 }
 

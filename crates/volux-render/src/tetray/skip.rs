@@ -12,9 +12,10 @@
 //! (`under`) leaves the pixel unchanged bit for bit, so leaving it out changes nothing.
 //!
 //! The visible cells are boxed in a [`Bvh`]; the walk over them ([`Walker::trace_visible`])
-//! steps across faces while the neighbour is visible and otherwise asks the hierarchy for the
-//! first visible cell past the exit, which covers invisible runs, boundary exits and
-//! re-entries (non-convex meshes) and rays leaving through edges or vertices alike. The
+//! steps across faces while the neighbour is visible, through short invisible runs, and
+//! otherwise asks the hierarchy for the first visible cell past the exit, which covers long
+//! invisible runs, boundary exits and re-entries (non-convex meshes) and rays leaving
+//! through edges or vertices alike. The
 //! structure depends on the TF and the isovalues only, so it is built once per TF
 //! (classification) and kept by the caster while they do not change.
 //!

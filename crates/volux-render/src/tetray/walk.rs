@@ -30,6 +30,11 @@ use super::skip::Visibility;
 /// Most cells the local search around an edge or vertex visits.
 pub(crate) const LOCAL_SEARCH: usize = 512;
 
+/// Most invisible cells [`Walker::trace_visible`] walks through before it asks the hierarchy
+/// of visible cells for the next one: short invisible runs (and the last run up to the ray's
+/// reach) are cheaper to walk than to query.
+pub(crate) const INVISIBLE_RUN: usize = 16;
+
 /// One segment of a ray in one cell.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WalkSegment {
@@ -160,18 +165,21 @@ impl Walker<'_> {
 
     /// Walks the ray `o + t d`, `t >= 0`, through the visible cells of `vis` only
     /// ([`super::skip`]), calling `sink` with each of their segments in front-to-back order
-    /// until it returns `false` or no visible cell is left. The walk steps across the exit
-    /// face while the neighbour is visible and continues the ray; otherwise (an invisible
-    /// neighbour, a boundary exit, an exit through an edge or a vertex) the hierarchy of
-    /// visible cells gives the first one past the exit. The segments are those of
-    /// [`Walker::trace`] less the invisible cells' (up to the choice among cells tied at an
-    /// edge or vertex, and the rounding of a segment's start there). Counted: hierarchy
-    /// queries past an invisible neighbour that found a cell as `skips`, past a boundary face
-    /// as `reentries`, and visible neighbours that did not continue the ray as
-    /// `local_searches` (resolved by the hierarchy here).
+    /// until it returns `false` or no visible cell is left; no visible cell is met past
+    /// `t_limit` (the ray's block's [`Bvh::reach`], or infinity). The walk steps across the
+    /// exit face while the neighbour is visible and continues the ray, and through up to
+    /// [`INVISIBLE_RUN`] invisible cells (without segments) until it enters a visible one or
+    /// passes `t_limit`; otherwise (a longer invisible run, a boundary exit, an exit through an
+    /// edge or a vertex) the hierarchy of visible cells gives the first one past the exit.
+    /// The segments are those of [`Walker::trace`] less the invisible cells' (up to the choice
+    /// among cells tied at an edge or vertex, and the rounding of a segment's start there).
+    /// Counted: visible cells reached past invisible ones as `skips`, past a boundary face as
+    /// `reentries`, and visible neighbours that did not continue the ray as `local_searches`
+    /// (resolved by the hierarchy here).
     pub fn trace_visible(
         &self,
         vis: &Visibility,
+        t_limit: f64,
         o: DVec3,
         d: DVec3,
         scratch: &mut Scratch,
@@ -186,7 +194,7 @@ impl Walker<'_> {
         let candidate = scratch
             .first
             .and_then(|c| geo.clip(c as usize, o, d).map(|clip| Hit { tet: c, clip }));
-        let mut next = vis.bvh.nearest_from(geo, o, d, 0.0, candidate);
+        let mut next = vis.bvh.nearest_from(geo, o, d, [0.0, t_limit], candidate);
         if let Some(h) = next {
             scratch.first = Some(h.tet);
         }
@@ -199,29 +207,92 @@ impl Walker<'_> {
             }
             let seg = self.segment(&hit, o, d, t);
             out.segments += 1;
+            t = seg.t_out;
+            // The neighbour is clipped before the segment is coloured: its cell record and
+            // face planes load while the segment's integral is computed.
+            let nb = geo.adj(hit.tet as usize)[hit.clip.exit as usize];
+            let entered = if nb != NO_NEIGHBOR {
+                self.enter_neighbour(&hit, nb, o, d, t)
+            } else {
+                None
+            };
             if !sink(&seg) {
                 break;
             }
-            t = seg.t_out;
-            let nb = geo.adj(hit.tet as usize)[hit.clip.exit as usize];
-            let shown = nb != NO_NEIGHBOR && vis.is_visible(nb);
-            if shown {
-                if let Some(h) = self.enter_neighbour(&hit, nb, o, d, t) {
-                    next = Some(h);
-                    continue;
+            next = match entered {
+                Some(h) if vis.is_visible(nb) => Some(h),
+                Some(h) => self.cross_invisible(vis, h, t, t_limit, o, d, &mut out),
+                None => {
+                    if nb != NO_NEIGHBOR && vis.is_visible(nb) {
+                        out.local_searches += 1;
+                    }
+                    self.jump(vis, nb == NO_NEIGHBOR, t, t_limit, o, d, &mut out)
                 }
-                out.local_searches += 1;
-            }
-            next = vis.bvh.nearest(geo, o, d, t);
-            if next.is_some() {
-                if nb == NO_NEIGHBOR {
-                    out.reentries += 1;
-                } else if !shown {
-                    out.skips += 1;
-                }
-            }
+            };
         }
         out
+    }
+
+    /// The first visible cell past the invisible cell `hit` entered at `t`: found by walking
+    /// through up to [`INVISIBLE_RUN`] invisible cells, `None` once the walk passes `t_limit`,
+    /// otherwise from the hierarchy ([`Walker::jump`]).
+    #[allow(clippy::too_many_arguments)]
+    fn cross_invisible(
+        &self,
+        vis: &Visibility,
+        mut hit: Hit,
+        mut t: f64,
+        t_limit: f64,
+        o: DVec3,
+        d: DVec3,
+        out: &mut WalkOutcome,
+    ) -> Option<Hit> {
+        for _ in 0..INVISIBLE_RUN {
+            if t >= t_limit {
+                return None;
+            }
+            let t_out = hit.clip.t_out;
+            let nb = self.geo.adj(hit.tet as usize)[hit.clip.exit as usize];
+            if nb == NO_NEIGHBOR {
+                return self.jump(vis, true, t_out, t_limit, o, d, out);
+            }
+            match self.enter_neighbour(&hit, nb, o, d, t_out) {
+                Some(h) if vis.is_visible(nb) => {
+                    out.skips += 1;
+                    return Some(h);
+                }
+                Some(h) => (hit, t) = (h, t_out),
+                None => return self.jump(vis, false, t_out, t_limit, o, d, out),
+            }
+        }
+        self.jump(vis, false, t, t_limit, o, d, out)
+    }
+
+    /// The first visible cell past `t` before `t_limit` from the hierarchy, counted as a
+    /// re-entry past a `boundary` exit and as a skip otherwise.
+    #[allow(clippy::too_many_arguments)]
+    fn jump(
+        &self,
+        vis: &Visibility,
+        boundary: bool,
+        t: f64,
+        t_limit: f64,
+        o: DVec3,
+        d: DVec3,
+        out: &mut WalkOutcome,
+    ) -> Option<Hit> {
+        if t >= t_limit {
+            return None;
+        }
+        let next = vis.bvh.nearest_from(self.geo, o, d, [t, t_limit], None);
+        if next.is_some() {
+            if boundary {
+                out.reentries += 1;
+            } else {
+                out.skips += 1;
+            }
+        }
+        next
     }
 
     /// The neighbour `nb` entered through the exit face of `hit` at `t`, when the ray goes
