@@ -90,6 +90,7 @@ def run_new(exe, file, opts, frames):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--base"), ap.add_argument("--new"), ap.add_argument("--data", required=True)
+    ap.add_argument("--also", help="a third binary (today's CLI, e.g. an earlier build), timed too")
     ap.add_argument("--frames", type=int, default=8), ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--only", default=""), ap.add_argument("--setup", action="store_true")
     a = ap.parse_args()
@@ -100,16 +101,23 @@ def main():
         for name, file, opts in workloads(a.data):
             if not all(w in name for w in a.only.split()):
                 continue
-            b = run_base(a.base, file, opts, a.frames)
-            n = run_new(a.new, file, opts, a.frames)
-            old = best.get(name, ((1e9, 1e9), (1e9, 1e9)))
-            best[name] = (min(old[0], b, key=lambda x: x[1]), min(old[1], n, key=lambda x: x[1]))
-            print(f"round {r} {name}: base {b[1]:.1f} ms, new {n[1]:.1f} ms ({b[1] / n[1]:.2f}x)",
+            runs = [run_base(a.base, file, opts, a.frames)]
+            if a.also:
+                runs.append(run_new(a.also, file, opts, a.frames))
+            runs.append(run_new(a.new, file, opts, a.frames))
+            old = best.get(name, [(1e9, 1e9)] * len(runs))
+            best[name] = [min(o, x, key=lambda t: t[1]) for o, x in zip(old, runs)]
+            print(f"round {r} {name}: " + ", ".join(f"{x[1]:.1f}" for x in runs) + " ms",
                   file=sys.stderr, flush=True)
-    print("| workload | ad4dc05 first / warm (ms) | now first / warm (ms) | speed-up (warm) |")
-    print("|---|---:|---:|---:|")
-    for name, (b, n) in best.items():
-        print(f"| {name} | {b[0]:.1f} / {b[1]:.1f} | {n[0]:.1f} / {n[1]:.1f} | {b[1] / n[1]:.2f}x |")
+    also = " | also first / warm (ms) | now vs also" if a.also else ""
+    print(f"| workload | ad4dc05 first / warm (ms){also.split(' | now')[0]} | now first / warm (ms) "
+          f"| speed-up (warm){' | now vs also' if a.also else ''} |")
+    print("|---|---:|---:|---:" + ("|---:|---:" if a.also else "") + "|")
+    for name, runs in best.items():
+        b, n = runs[0], runs[-1]
+        cells = [f"{x[0]:.1f} / {x[1]:.1f}" for x in runs]
+        extra = f" | {runs[1][1] / n[1]:.2f}x" if a.also else ""
+        print(f"| {name} | {' | '.join(cells)} | {b[1] / n[1]:.2f}x{extra} |")
 
 
 if __name__ == "__main__":
