@@ -78,9 +78,7 @@ pub fn standard_factor(err: f64, tol: f64) -> f64 {
     if err * FACTOR_LO_RATIO > tol {
         return lo;
     }
-    // In f32: the factor is a step-size heuristic, and f32's roots and division take about
-    // two thirds of f64's latency on the accepted step's dependency chain.
-    let f = f64::from(CONTROLLER_SAFETY as f32 * (tol as f32 / err as f32).sqrt().sqrt());
+    let f = CONTROLLER_SAFETY * (tol / err).sqrt().sqrt();
     // Selects: NaN (0 / 0) goes to the largest growth.
     let f = if f > lo { f } else { lo };
     if f < hi {

@@ -277,8 +277,8 @@ fn breakpoints_along_samples_agree_with_each_pair() {
 #[test]
 fn standard_factor_follows_the_fourth_root() {
     use super::adaptive::{standard_factor, standard_growth};
-    assert!((standard_factor(1.0, 1.0) - 0.9).abs() < 1e-6);
-    assert!((standard_factor(1.0, 16.0) - 1.8).abs() < 1e-6);
+    assert!((standard_factor(1.0, 1.0) - 0.9).abs() < 1e-12);
+    assert!((standard_factor(1.0, 16.0) - 1.8).abs() < 1e-12);
     assert_eq!(standard_factor(1.0, 1e9), 5.0);
     assert_eq!(standard_factor(1e9, 1.0), 0.2);
     assert_eq!(standard_factor(0.0, 1.0), 5.0);
