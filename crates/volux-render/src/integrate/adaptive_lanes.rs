@@ -498,7 +498,7 @@ impl AdaptiveLanes {
     }
 
     /// Per ray, the first quarter of its step (1 to 4; 0: none) where two or more breakpoints
-    /// lie strictly between the values of its two end points: the transfer function then has
+    /// lie strictly between the values at its two ends: the transfer function then has
     /// a peak or valley no sample shows, and the step is refined down to `hmin` (as
     /// [`hides_breakpoints_along`](super::hides_breakpoints_along), from the counts of
     /// [`LaneMedia`]).
