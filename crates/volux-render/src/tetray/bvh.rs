@@ -88,6 +88,14 @@ fn may_hold((near, far): (f64, f64), t_lo: f64, best_key: f64) -> bool {
     !(far < t_lo || near > far || near > best_key)
 }
 
+/// The largest distance from `from` to a corner of `node`'s box.
+#[inline]
+fn far_corner(node: &Node, from: DVec3) -> f64 {
+    let lo = DVec3::from_array(node.lo.map(f64::from)) - from;
+    let hi = DVec3::from_array(node.hi.map(f64::from)) - from;
+    lo.abs().max(hi.abs()).length()
+}
+
 /// The hierarchy.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Bvh {
@@ -350,50 +358,17 @@ impl Bvh {
         best
     }
 
-    /// Whether some primitive's box may meet `frustum`: `false` proves that no ray of the
-    /// frustum hits a primitive ([`Bvh::nearest`] gives `None` for each of them).
-    pub fn may_meet(&self, frustum: &Frustum) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
-        let mut stack: [u32; 64] = [0; 64];
-        let mut sp = 1usize;
-        while sp > 0 {
-            sp -= 1;
-            let node = &self.nodes[stack[sp] as usize];
-            if !frustum.may_meet(node) {
-                continue;
-            }
-            if node.count > 0 {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                if self.prim_boxes[range].iter().any(|b| frustum.may_meet(b)) {
-                    return true;
-                }
-                continue;
-            }
-            if sp + 2 > stack.len() {
-                return true;
-            }
-            stack[sp] = node.first;
-            stack[sp + 1] = node.first + 1;
-            sp += 2;
-        }
-        false
-    }
-
     /// The largest distance from `from` to a corner of a primitive box that may meet
-    /// `frustum`, `None` when none may ([`Bvh::may_meet`] is `false`). A ray of the frustum
+    /// `frustum`, `None` when none may. A ray of the frustum
     /// from origin `o` meets the primitives only at distances from `o` up to this plus
-    /// `|o - from|`: past it, no primitive's clip reaches.
+    /// `|o - from|`: past it, no primitive's clip reaches. (The renderer takes it from
+    /// [`Bvh::gather`]; this is its check.)
+    #[cfg(test)]
     pub fn reach(&self, frustum: &Frustum, from: DVec3) -> Option<f64> {
         if self.nodes.is_empty() {
             return None;
         }
-        let far = |n: &Node| {
-            let lo = DVec3::from_array(n.lo.map(f64::from)) - from;
-            let hi = DVec3::from_array(n.hi.map(f64::from)) - from;
-            lo.abs().max(hi.abs()).length()
-        };
+        let far = |n: &Node| far_corner(n, from);
         let mut best: Option<f64> = None;
         let mut stack: [u32; 64] = [0; 64];
         let mut sp = 1usize;
@@ -423,6 +398,48 @@ impl Bvh {
             sp += 2;
         }
         best
+    }
+
+    /// The primitives whose box may meet `frustum` (not entirely outside one of its planes), as
+    /// `(cell, farthest distance from `from` to a corner of its box)`, appended to `out` in
+    /// hierarchy order: every cell a ray of the frustum hits is among them, and the largest
+    /// distance is [`Bvh::reach`].
+    pub fn gather(&self, frustum: &Frustum, from: DVec3, out: &mut Vec<(u32, f64)>) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let start = out.len();
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if !frustum.may_meet(node) {
+                continue;
+            }
+            if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                for (&t, b) in self.prims[range.clone()]
+                    .iter()
+                    .zip(&self.prim_boxes[range])
+                {
+                    if frustum.may_meet(b) {
+                        out.push((t, far_corner(b, from)));
+                    }
+                }
+                continue;
+            }
+            if sp + 2 > stack.len() {
+                // Unreachable for median splits; stay correct: every primitive.
+                out.truncate(start);
+                let all = self.prims.iter().zip(&self.prim_boxes);
+                out.extend(all.map(|(&t, b)| (t, far_corner(b, from))));
+                return;
+            }
+            stack[sp] = node.first;
+            stack[sp + 1] = node.first + 1;
+            sp += 2;
+        }
     }
 
     fn nearest_linear(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {

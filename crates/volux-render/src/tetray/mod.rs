@@ -81,6 +81,7 @@
 //!
 //! [`render_mesh_reference`]: crate::pt::reference::render_mesh_reference
 mod bvh;
+mod first;
 mod geom;
 mod options;
 mod pixel;

@@ -20,9 +20,8 @@ use glam::{DVec3, Vec3};
 use volux_core::{TetMesh, TransferFunction};
 
 use super::options::TetRayOptions;
-use super::skip::Visibility;
 use super::tables::Tables;
-use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
+use super::walk::{Scratch, VisibleRay, WalkOutcome, WalkSegment, Walker};
 use crate::composite::under64;
 use crate::integrate::adaptive::{adaptive_simpson_intervals, AdaptiveParams};
 use crate::integrate::fragment::FragmentShader;
@@ -165,7 +164,7 @@ impl<'a> PixelContext<'a> {
     pub fn pixel(
         &self,
         walker: &Walker<'_>,
-        visible: Option<(&Visibility, f64)>,
+        visible: Option<VisibleRay<'_>>,
         o: DVec3,
         d: DVec3,
         scratch: &mut Scratch,
@@ -195,7 +194,7 @@ impl<'a> PixelContext<'a> {
                     self.early.is_none_or(|e| acc[3] < e)
                 };
                 let outcome = match visible {
-                    Some((vis, t_limit)) => walker.trace_visible(vis, t_limit, o, d, scratch, sink),
+                    Some(start) => walker.trace_visible(&start, o, d, sink),
                     None => walker.trace(o, d, scratch, sink),
                 };
                 let out = PixelOut {

@@ -8,22 +8,23 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::mesh::{FACES, NO_NEIGHBOR};
-use volux_core::{Camera, Image, Projection, RayGenerator, TetMesh, TransferFunction};
+use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
-use super::bvh::{Bvh, Frustum};
+use super::bvh::Bvh;
+use super::first::{FirstHits, Projector};
 use super::geom::Geometry;
 use super::options::TetRayOptions;
 use super::pixel::{PixelContext, PixelOut};
 use super::skip::Visibility;
 use super::tables::Tables;
-use super::walk::{Scratch, WalkOutcome, WalkSegment, Walker};
+use super::walk::{Scratch, VisibleRay, WalkOutcome, WalkSegment, Walker};
 use crate::error::RenderError;
 use crate::frame::{Frame, MethodStats, Rebuilt, TetRayStats};
 use crate::integrate::psi::PsiTable;
 use crate::integrate::SegmentRule;
 use crate::renderer::{frame, wrong_method, Renderer};
 use crate::scene::{Method, Scene, MESH_UNITS_PER_DIAGONAL};
-use crate::tiles::{render_tiles, Control, Rect, TileGrid, TILE};
+use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 
 impl TetRayStats {
     /// Counts one ray's pixel and walk.
@@ -361,28 +362,56 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
         };
         let ctx = PixelContext::new(&self.mesh, opts, &tables, gradients, psi);
         let rays = opts.camera.rays(w, h);
+        let proj = Projector::new(&opts.camera, w, h);
+        let (mesh, geo) = (self.mesh(), &self.geo);
         let grid = TileGrid::new(w, h, TILE);
         let tiled = render_tiles(&grid, &opts.control, |_, r| {
             let mut out = Vec::with_capacity(r.area());
             let mut stats = TetRayStats::default();
             let mut scratch = Scratch::default();
             let mut segments = Vec::new();
-            let reach = visible.map(|v| block_reach(&v.bvh, &rays, r));
+            let hits = visible.and_then(|v| FirstHits::new(&v.bvh, geo, mesh, &proj, &rays, r));
             for y in r.y0..r.y1 {
                 for x in r.x0..r.x1 {
-                    let ray = rays.ray(x as f64 + 0.5, y as f64 + 0.5);
-                    let t_limit = reach
-                        .as_ref()
-                        .map_or(f64::INFINITY, |b| b.t_limit(x, y, ray.origin, ray.dir));
-                    if t_limit < 0.0 {
-                        // No visible cell meets this block's rays: nothing to walk.
-                        stats.add_ray(&PixelOut::default(), &WalkOutcome::default());
-                        out.push(PixelOut::default());
-                        continue;
-                    }
+                    let (ray, start) = match (visible, &hits) {
+                        (Some(vis), Some(hits)) => match hits.at(x, y) {
+                            Some((ray, t_limit, first)) => {
+                                let first = Some(first);
+                                (
+                                    ray,
+                                    Some(VisibleRay {
+                                        vis,
+                                        t_limit,
+                                        first,
+                                    }),
+                                )
+                            }
+                            None => {
+                                // The ray meets no visible cell: nothing to walk.
+                                stats.add_ray(&PixelOut::default(), &WalkOutcome::default());
+                                out.push(PixelOut::default());
+                                continue;
+                            }
+                        },
+                        (Some(vis), None) => {
+                            let ray = rays.ray(x as f64 + 0.5, y as f64 + 0.5);
+                            let t_limit = f64::INFINITY;
+                            let (o, d) = (ray.origin, ray.dir);
+                            let first = walker.first_visible(vis, t_limit, o, d, &mut scratch);
+                            (
+                                ray,
+                                Some(VisibleRay {
+                                    vis,
+                                    t_limit,
+                                    first,
+                                }),
+                            )
+                        }
+                        (None, _) => (rays.ray(x as f64 + 0.5, y as f64 + 0.5), None),
+                    };
                     let (px, outcome) = ctx.pixel(
                         &walker,
-                        visible.map(|v| (v, t_limit)),
+                        start,
                         ray.origin,
                         ray.dir,
                         &mut scratch,
@@ -411,82 +440,6 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
             error_map,
             stats,
         })
-    }
-}
-
-/// Side in pixels of the blocks whose rays are culled together against the hierarchy of
-/// visible cells.
-const BLOCK: usize = 4;
-
-/// Relative margin on a block's reach (far above the rounding of the distances).
-const REACH_MARGIN: f64 = 1e-9;
-
-/// Which blocks of a tile meet visible cells ([`Bvh::may_meet`] of the block's frustum),
-/// and how far the tile's rays may meet them ([`Bvh::reach`] of the tile's frustum): no ray
-/// of an empty block finds a visible cell, and past the reach no ray of the tile does (the
-/// walk stops there).
-struct BlockReach {
-    rect: Rect,
-    /// Blocks per row.
-    across: usize,
-    /// Per block: whether no visible cell meets its rays.
-    empty: Vec<bool>,
-    /// The origin the reach is measured from, and the reach (`inf`: unknown, the frustum
-    /// could not be built).
-    from: DVec3,
-    reach: f64,
-}
-
-impl BlockReach {
-    /// The largest ray parameter at which the ray `o + t dir` of pixel `(x, y)` of the tile
-    /// may meet a visible cell; negative when its block is empty.
-    #[inline]
-    fn t_limit(&self, x: usize, y: usize, o: DVec3, dir: DVec3) -> f64 {
-        let (bx, by) = ((x - self.rect.x0) / BLOCK, (y - self.rect.y0) / BLOCK);
-        if self.empty[by * self.across + bx] {
-            return -1.0;
-        }
-        let t = (self.reach + (o - self.from).length()) / dir.length() * (1.0 + REACH_MARGIN);
-        if t.is_nan() {
-            f64::INFINITY
-        } else {
-            t
-        }
-    }
-}
-
-/// The empty blocks and the reach of tile `rect` for the hierarchy `bvh` of visible cells
-/// and the rays `rays` (a block whose frustum cannot be built is not empty).
-fn block_reach(bvh: &Bvh, rays: &RayGenerator, rect: Rect) -> BlockReach {
-    let (across, down) = (rect.width().div_ceil(BLOCK), rect.height().div_ceil(BLOCK));
-    let mut empty = Vec::with_capacity(across * down);
-    for by in 0..down {
-        for bx in 0..across {
-            let x0 = rect.x0 + bx * BLOCK;
-            let y0 = rect.y0 + by * BLOCK;
-            let (x1, y1) = ((x0 + BLOCK).min(rect.x1), (y0 + BLOCK).min(rect.y1));
-            // The pixel centres' extent, widened to the pixels' edges.
-            let block = [x0 as f64, y0 as f64, x1 as f64, y1 as f64];
-            empty.push(Frustum::of_block(rays, block).is_some_and(|f| !bvh.may_meet(&f)));
-        }
-    }
-    let tile = [rect.x0, rect.y0, rect.x1, rect.y1].map(|v| v as f64);
-    let from = rays
-        .ray(0.5 * (tile[0] + tile[2]), 0.5 * (tile[1] + tile[3]))
-        .origin;
-    let reach = if empty.iter().all(|&e| e) {
-        f64::NEG_INFINITY
-    } else {
-        Frustum::of_block(rays, tile).map_or(f64::INFINITY, |f| {
-            bvh.reach(&f, from).unwrap_or(f64::INFINITY)
-        })
-    };
-    BlockReach {
-        rect,
-        across,
-        empty,
-        from,
-        reach,
     }
 }
 

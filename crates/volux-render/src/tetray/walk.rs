@@ -69,6 +69,18 @@ pub struct WalkOutcome {
     pub skips: u64,
 }
 
+/// Where a ray's walk over the visible cells starts ([`Walker::trace_visible`]).
+pub(crate) struct VisibleRay<'v> {
+    /// The visible cells.
+    pub vis: &'v Visibility,
+    /// The ray parameter past which no visible cell is met (the tile's [`Bvh::reach`], or
+    /// infinity).
+    pub t_limit: f64,
+    /// The ray's first visible cell from `t = 0` ([`Walker::first_visible`], or per tile in
+    /// [`super::first`]), `None` when it meets none.
+    pub first: Option<Hit>,
+}
+
 /// Reusable buffers of the local search.
 #[derive(Debug, Default)]
 pub(crate) struct Scratch {
@@ -163,10 +175,11 @@ impl Walker<'_> {
         }
     }
 
-    /// Walks the ray `o + t d`, `t >= 0`, through the visible cells of `vis` only
-    /// ([`super::skip`]), calling `sink` with each of their segments in front-to-back order
-    /// until it returns `false` or no visible cell is left; no visible cell is met past
-    /// `t_limit` (the ray's block's [`Bvh::reach`], or infinity). The walk steps across the
+    /// Walks the ray `o + t d`, `t >= 0`, through the visible cells of `start.vis` only
+    /// ([`super::skip`]) from its first visible cell `start.first`, calling `sink` with each
+    /// of their segments in front-to-back order until it returns `false` or no visible cell
+    /// is left; no visible cell is met past `start.t_limit` (the ray's tile's
+    /// [`Bvh::reach`], or infinity). The walk steps across the
     /// exit face while the neighbour is visible and continues the ray, and through up to
     /// [`INVISIBLE_RUN`] invisible cells (without segments) until it enters a visible one or
     /// passes `t_limit`; otherwise (a longer invisible run, a boundary exit, an exit through an
@@ -178,26 +191,19 @@ impl Walker<'_> {
     /// (resolved by the hierarchy here).
     pub fn trace_visible(
         &self,
-        vis: &Visibility,
-        t_limit: f64,
+        start: &VisibleRay<'_>,
         o: DVec3,
         d: DVec3,
-        scratch: &mut Scratch,
         mut sink: impl FnMut(&WalkSegment) -> bool,
     ) -> WalkOutcome {
         let mut out = WalkOutcome::default();
         if !(o.is_finite() && d.is_finite()) || d == DVec3::ZERO {
             return out;
         }
+        let (vis, t_limit) = (start.vis, start.t_limit);
         let geo = self.geo;
         let mut t = 0.0f64;
-        let candidate = scratch
-            .first
-            .and_then(|c| geo.clip(c as usize, o, d).map(|clip| Hit { tet: c, clip }));
-        let mut next = vis.bvh.nearest_from(geo, o, d, [0.0, t_limit], candidate);
-        if let Some(h) = next {
-            scratch.first = Some(h.tet);
-        }
+        let mut next = start.first;
         let mut steps = 0usize;
         while let Some(hit) = next {
             steps += 1;
@@ -231,6 +237,31 @@ impl Walker<'_> {
             };
         }
         out
+    }
+
+    /// The first visible cell of the ray `o + t d` from `t = 0` (before `t_limit`), from the
+    /// hierarchy of visible cells, pruned against the previous ray's first cell (kept in
+    /// `scratch`).
+    pub fn first_visible(
+        &self,
+        vis: &Visibility,
+        t_limit: f64,
+        o: DVec3,
+        d: DVec3,
+        scratch: &mut Scratch,
+    ) -> Option<Hit> {
+        if !(o.is_finite() && d.is_finite()) || d == DVec3::ZERO {
+            return None;
+        }
+        let geo = self.geo;
+        let candidate = scratch
+            .first
+            .and_then(|c| geo.clip(c as usize, o, d).map(|clip| Hit { tet: c, clip }));
+        let first = vis.bvh.nearest_from(geo, o, d, [0.0, t_limit], candidate);
+        if let Some(h) = first {
+            scratch.first = Some(h.tet);
+        }
+        first
     }
 
     /// The first visible cell past the invisible cell `hit` entered at `t`: found by walking
