@@ -20,7 +20,6 @@
 //! first, children culled before they are pushed, with pruning against the best hit (which
 //! a caller may seed with a candidate, e.g. the neighbouring ray's answer).
 use glam::DVec3;
-use volux_core::RayGenerator;
 
 use super::geom::{Clip, Geometry};
 
@@ -104,51 +103,6 @@ pub(crate) struct Bvh {
     /// The padded box of each primitive (as a node without children), tested before its
     /// clip.
     prim_boxes: Vec<Node>,
-}
-
-/// The region swept by the rays of a block of pixels: four planes `n . (p - a) >= 0` through
-/// the block's corner rays (a pyramid from a perspective eye, a prism for an orthographic
-/// camera), built by [`Frustum::of_block`].
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Frustum {
-    planes: [(DVec3, DVec3); 4],
-}
-
-impl Frustum {
-    /// The frustum of the pixel centres in `[x0, x1] x [y0, y1]` (pixel coordinates) of the
-    /// rays of `rays`: the corner rays span the others (directions and origins are affine in
-    /// the pixel coordinates before normalization). `None` when a plane is degenerate.
-    pub fn of_block(rays: &RayGenerator, [x0, y0, x1, y1]: [f64; 4]) -> Option<Self> {
-        let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| rays.ray(x, y));
-        let centre = rays.ray(0.5 * (x0 + x1), 0.5 * (y0 + y1));
-        let inside = centre.origin + centre.dir;
-        let mut planes = [(DVec3::ZERO, DVec3::ZERO); 4];
-        for (i, plane) in planes.iter_mut().enumerate() {
-            let (a, b) = (corners[i], corners[(i + 1) % 4]);
-            let n = a.dir.cross(b.origin + b.dir - a.origin);
-            let side = n.dot(inside - a.origin);
-            if !(n.is_finite() && side.is_finite() && side != 0.0) {
-                return None;
-            }
-            *plane = (if side > 0.0 { n } else { -n }, a.origin);
-        }
-        Some(Self { planes })
-    }
-
-    /// Whether the box may meet the frustum: not entirely outside one of its planes (with a
-    /// relative margin far above the rounding of the test).
-    #[inline]
-    fn may_meet(&self, node: &Node) -> bool {
-        let lo = DVec3::from_array(node.lo.map(f64::from));
-        let hi = DVec3::from_array(node.hi.map(f64::from));
-        let (c, e) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
-        self.planes.iter().all(|&(n, a)| {
-            let reach = n.abs().dot(e);
-            let s = n.dot(c - a) + reach;
-            let tol = 1e-9 * (n.length() * (c - a).length() + reach);
-            s >= -tol || s.is_nan()
-        })
-    }
 }
 
 /// A hit of [`Bvh::nearest`]: the tet and its clip.
@@ -281,7 +235,7 @@ impl Bvh {
 
     /// [`Bvh::nearest`] past `t_lo` given a `candidate`, a hit of one of the primitives (e.g.
     /// the answer for a neighbouring ray, clipped with this one), and a bound `t_hi` known to
-    /// be at or past the start of the answer, if there is one (e.g. from [`Bvh::reach`]): the
+    /// be at or past the start of the answer, if there is one (e.g. a tile's reach): the
     /// answer is the same, but the traversal prunes against the candidate and the bound from
     /// the start.
     pub fn nearest_from(
@@ -358,88 +312,15 @@ impl Bvh {
         best
     }
 
-    /// The largest distance from `from` to a corner of a primitive box that may meet
-    /// `frustum`, `None` when none may. A ray of the frustum
-    /// from origin `o` meets the primitives only at distances from `o` up to this plus
-    /// `|o - from|`: past it, no primitive's clip reaches. (The renderer takes it from
-    /// [`Bvh::gather`]; this is its check.)
-    #[cfg(test)]
-    pub fn reach(&self, frustum: &Frustum, from: DVec3) -> Option<f64> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let far = |n: &Node| far_corner(n, from);
-        let mut best: Option<f64> = None;
-        let mut stack: [u32; 64] = [0; 64];
-        let mut sp = 1usize;
-        while sp > 0 {
-            sp -= 1;
-            let node = &self.nodes[stack[sp] as usize];
-            if best.is_some_and(|b| far(node) <= b) || !frustum.may_meet(node) {
-                continue;
-            }
-            if node.count > 0 {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                for b in self.prim_boxes[range]
-                    .iter()
-                    .filter(|b| frustum.may_meet(b))
-                {
-                    best = Some(best.map_or(far(b), |x| x.max(far(b))));
-                }
-                continue;
-            }
-            if sp + 2 > stack.len() {
-                return Some(f64::INFINITY);
-            }
-            // The child reaching farther is visited first: it raises the bound soonest.
-            let (l, r) = (node.first, node.first + 1);
-            let (a, b) = (far(&self.nodes[l as usize]), far(&self.nodes[r as usize]));
-            (stack[sp], stack[sp + 1]) = if a <= b { (l, r) } else { (r, l) };
-            sp += 2;
-        }
-        best
+    /// Primitive `i` (hierarchy order).
+    pub fn prim(&self, i: usize) -> u32 {
+        self.prims[i]
     }
 
-    /// The primitives whose box may meet `frustum` (not entirely outside one of its planes), as
-    /// `(cell, farthest distance from `from` to a corner of its box)`, appended to `out` in
-    /// hierarchy order: every cell a ray of the frustum hits is among them, and the largest
-    /// distance is [`Bvh::reach`].
-    pub fn gather(&self, frustum: &Frustum, from: DVec3, out: &mut Vec<(u32, f64)>) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let start = out.len();
-        let mut stack: [u32; 64] = [0; 64];
-        let mut sp = 1usize;
-        while sp > 0 {
-            sp -= 1;
-            let node = &self.nodes[stack[sp] as usize];
-            if !frustum.may_meet(node) {
-                continue;
-            }
-            if node.count > 0 {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                for (&t, b) in self.prims[range.clone()]
-                    .iter()
-                    .zip(&self.prim_boxes[range])
-                {
-                    if frustum.may_meet(b) {
-                        out.push((t, far_corner(b, from)));
-                    }
-                }
-                continue;
-            }
-            if sp + 2 > stack.len() {
-                // Unreachable for median splits; stay correct: every primitive.
-                out.truncate(start);
-                let all = self.prims.iter().zip(&self.prim_boxes);
-                out.extend(all.map(|(&t, b)| (t, far_corner(b, from))));
-                return;
-            }
-            stack[sp] = node.first;
-            stack[sp + 1] = node.first + 1;
-            sp += 2;
-        }
+    /// The largest distance from `from` to a corner of primitive `i`'s padded box: every
+    /// point of the cell lies at most this far from `from`.
+    pub fn far_corner(&self, i: usize, from: DVec3) -> f64 {
+        far_corner(&self.prim_boxes[i], from)
     }
 
     fn nearest_linear(&self, geo: &Geometry, o: DVec3, d: DVec3, t_lo: f64) -> Option<Hit> {

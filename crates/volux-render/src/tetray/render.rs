@@ -11,7 +11,7 @@ use volux_core::mesh::{FACES, NO_NEIGHBOR};
 use volux_core::{Camera, Image, Projection, TetMesh, TransferFunction};
 
 use super::bvh::Bvh;
-use super::first::{FirstHits, Projector};
+use super::first::{FirstHits, Projector, TileBins};
 use super::geom::Geometry;
 use super::options::TetRayOptions;
 use super::pixel::{PixelContext, PixelOut};
@@ -365,12 +365,16 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
         let proj = Projector::new(&opts.camera, w, h);
         let (mesh, geo) = (self.mesh(), &self.geo);
         let grid = TileGrid::new(w, h, TILE);
-        let tiled = render_tiles(&grid, &opts.control, |_, r| {
+        let margin = 1e-9 * geo.scale;
+        let bins = visible.and_then(|v| TileBins::new(&v.bvh, mesh, &proj, &grid, margin));
+        let tiled = render_tiles(&grid, &opts.control, |i, r| {
             let mut out = Vec::with_capacity(r.area());
             let mut stats = TetRayStats::default();
             let mut scratch = Scratch::default();
             let mut segments = Vec::new();
-            let hits = visible.and_then(|v| FirstHits::new(&v.bvh, geo, mesh, &proj, &rays, r));
+            let hits = visible
+                .zip(bins.as_ref())
+                .map(|(v, bins)| FirstHits::new(bins, &v.bvh, geo, &proj, &rays, (i, r)));
             for y in r.y0..r.y1 {
                 for x in r.x0..r.x1 {
                     let (ray, start) = match (visible, &hits) {

@@ -177,7 +177,7 @@ fn non_convex_torus_matches_the_reference_with_reentries() {
 }
 
 /// A lattice of `n^3` points spacing 0.25 (exact in binary) with the scalar `x + 2 y + 3 z`.
-fn lattice(n: usize) -> TetMesh {
+pub(super) fn lattice(n: usize) -> TetMesh {
     let mut vals = Vec::new();
     for k in 0..n {
         for j in 0..n {
@@ -846,7 +846,7 @@ fn timing_512_smooth_200k() {
 
 /// A TF with zero extinction over `[0, 0.25]` and `[0.62, 0.72]` of the range: runs of
 /// invisible cells for empty-space skipping.
-fn gappy_tf() -> TransferFunction {
+pub(super) fn gappy_tf() -> TransferFunction {
     TransferFunction::from_json(
         r#"{"space": "normalized", "color": [[0, 0.1, 0.2, 0.9], [0.5, 1, 0.6, 0.1], [1, 0.3, 1, 0.5]],
             "extinction": [[0, 0], [0.25, 0], [0.4, 3], [0.55, 3], [0.62, 0], [0.72, 0], [0.85, 5], [1, 2]]}"#,
@@ -856,7 +856,7 @@ fn gappy_tf() -> TransferFunction {
 
 /// A TF visible only over `[0.3, 0.45]` of the range (the torus's field is mostly visible
 /// under [`gappy_tf`]).
-fn band_tf() -> TransferFunction {
+pub(super) fn band_tf() -> TransferFunction {
     TransferFunction::from_json(
         r#"{"space": "normalized", "color": [[0, 0.1, 0.2, 0.9], [0.5, 1, 0.6, 0.1], [1, 0.3, 1, 0.5]],
             "extinction": [[0, 0], [0.3, 0], [0.35, 4], [0.4, 4], [0.45, 0], [1, 0]]}"#,

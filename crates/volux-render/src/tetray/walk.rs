@@ -73,8 +73,8 @@ pub struct WalkOutcome {
 pub(crate) struct VisibleRay<'v> {
     /// The visible cells.
     pub vis: &'v Visibility,
-    /// The ray parameter past which no visible cell is met (the tile's [`Bvh::reach`], or
-    /// infinity).
+    /// The ray parameter past which no visible cell is met (the tile's reach,
+    /// [`super::first`], or infinity).
     pub t_limit: f64,
     /// The ray's first visible cell from `t = 0` ([`Walker::first_visible`], or per tile in
     /// [`super::first`]), `None` when it meets none.
@@ -178,8 +178,8 @@ impl Walker<'_> {
     /// Walks the ray `o + t d`, `t >= 0`, through the visible cells of `start.vis` only
     /// ([`super::skip`]) from its first visible cell `start.first`, calling `sink` with each
     /// of their segments in front-to-back order until it returns `false` or no visible cell
-    /// is left; no visible cell is met past `start.t_limit` (the ray's tile's
-    /// [`Bvh::reach`], or infinity). The walk steps across the
+    /// is left; no visible cell is met past `start.t_limit` (the ray's tile's reach,
+    /// or infinity). The walk steps across the
     /// exit face while the neighbour is visible and continues the ray, and through up to
     /// [`INVISIBLE_RUN`] invisible cells (without segments) until it enters a visible one or
     /// passes `t_limit`; otherwise (a longer invisible run, a boundary exit, an exit through an
