@@ -116,7 +116,8 @@ enum Place {
 
 /// The visible cells of a frame binned to the tiles their rectangles meet.
 pub(crate) struct TileBins {
-    /// Tile `i`'s cells are `cells[offsets[i]..offsets[i + 1]]`, in hierarchy order.
+    /// Tile `i`'s cells are `cells[offsets[i]..offsets[i + 1]]`, near to far (by depth,
+    /// then index).
     offsets: Vec<usize>,
     cells: Vec<Splat>,
 }
@@ -144,6 +145,8 @@ impl TileBins {
                 Place::Across => return None,
             }
         }
+        // Near to far (each tile's cells stay in this order).
+        on.par_sort_unstable_by(|a, b| a.depth.total_cmp(&b.depth).then(a.tet.cmp(&b.tet)));
         let tiles = |s: &Splat| {
             let side = grid.side as u32;
             let [x0, y0, x1, y1] = s.rect;
@@ -253,8 +256,9 @@ struct PixelRay {
     origin_depth: f64,
     depth_rate: f64,
     best: Option<Hit>,
-    /// The start of `best` (infinite without one).
-    key: f64,
+    /// The depth at the start of `best`, widened by a relative `1e-9` (infinite without
+    /// one): a cell wholly deeper starts after it.
+    limit: f64,
 }
 
 /// The rays of one tile with their first visible cells and the tile's reach.
@@ -277,7 +281,7 @@ impl FirstHits {
         rays: &RayGenerator,
         (i, rect): (usize, Rect),
     ) -> Self {
-        let mut cells = bins.tile(i).to_vec();
+        let cells = bins.tile(i);
         let centre = (
             0.5 * (rect.x0 + rect.x1) as f64,
             0.5 * (rect.y0 + rect.y1) as f64,
@@ -304,7 +308,7 @@ impl FirstHits {
                         origin_depth,
                         depth_rate: rate,
                         best: None,
-                        key: f64::INFINITY,
+                        limit: f64::INFINITY,
                     });
                 }
             }
@@ -315,9 +319,8 @@ impl FirstHits {
             from,
             reach,
         };
-        cells.sort_unstable_by(|a, b| a.depth.total_cmp(&b.depth).then(a.tet.cmp(&b.tet)));
         let margin = 1e-9 * geo.scale;
-        for s in &cells {
+        for s in cells {
             hits.draw(geo, s, margin);
         }
         hits
@@ -328,13 +331,13 @@ impl FirstHits {
     fn draw(&mut self, geo: &Geometry, s: &Splat, margin: f64) {
         let (r, width) = (self.rect, self.rect.width());
         let [x0, y0, x1, y1] = s.rect.map(|v| v as usize);
+        let near = s.depth - margin;
         let (x0, x1) = (x0.max(r.x0) - r.x0, x1.min(r.x1) - r.x0);
         for y in y0.max(r.y0) - r.y0..y1.min(r.y1) - r.y0 {
             for px in &mut self.pixels[y * width + x0..y * width + x1] {
                 // Every point of the cell lies at depth `s.depth` or more, so at `t` of at
                 // least `(s.depth - origin_depth) / depth_rate`.
-                let bound = px.origin_depth + px.key * px.depth_rate;
-                if s.depth - margin > bound + 1e-9 * bound.abs() {
+                if near > px.limit {
                     continue;
                 }
                 let Some(clip) = geo.clip(s.tet as usize, px.ray.origin, px.ray.dir) else {
@@ -342,7 +345,8 @@ impl FirstHits {
                 };
                 let hit = Hit { tet: s.tet, clip };
                 if clip.t_out > 0.0 && px.best.is_none_or(|b| hit.before(&b, 0.0)) {
-                    px.key = hit.key(0.0);
+                    let depth = px.origin_depth + hit.key(0.0) * px.depth_rate;
+                    px.limit = depth + 1e-9 * depth.abs();
                     px.best = Some(hit);
                 }
             }
