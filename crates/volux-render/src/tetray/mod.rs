@@ -51,17 +51,20 @@
 //! so the image is the one of the full walk (equal in the tests, bit for bit on the bench
 //! meshes); the statistics then count the visible cells' segments only, with the jumps over
 //! invisible runs as `skips`. With more than 90 % of the cells visible the full walk is used.
-//! Before walking, each tile's 4 x 4 pixel blocks whose frustum (the planes through the
-//! block's corner rays) meets no visible cell's box are left empty without a query: no ray of
-//! such a block can find a visible cell, so this changes nothing either. The tile's frustum
-//! also bounds how far its rays may meet a visible cell (the farthest corner of a visible
-//! box it meets), so an invisible neighbour is walked through (up to 16 cells, without
-//! segments) until a visible cell or that bound, and the hierarchy is asked only past longer
-//! invisible runs, boundary exits and edge or vertex exits: the query after a ray's last
-//! visible cell, which used to be most of the queries, is mostly gone.
+//! The first visible cell of each ray is found per tile, not per ray (`first.rs`): once per
+//! frame the visible cells are projected to pixel rectangles and binned to tiles, and each
+//! tile clips its cells, near to far, against the rays of their rectangles, keeping per pixel
+//! the hit that starts first: the hierarchy's answer, exactly, for a fraction of the cost;
+//! rays that meet no visible cell are not walked (a frame with a visible cell across a
+//! perspective eye's plane queries the hierarchy per ray instead). The farthest box corner
+//! of a tile's cells bounds how far its rays may meet a visible cell, so an invisible
+//! neighbour is walked through (up to 16 cells, without segments) until a visible cell or
+//! that bound, and the hierarchy is asked only past longer invisible runs, boundary exits and
+//! edge or vertex exits: the query after a ray's last visible cell, which used to be most of
+//! the queries, is mostly gone.
 //! On the issue-17 workload (`tets_200k`, the 37-knot TF, 512 x 512) 28 % of the segments
-//! are visible; the walk makes about 1.3 hierarchy queries per ray (the entry, a few jumps,
-//! the last exit).
+//! are visible; the walk used to make about 1.3 hierarchy queries per ray (the entry, a few
+//! jumps, the last exit), of which the entry is now found per tile.
 //!
 //! **Adaptive Simpson** ([`SegmentRule::AdaptiveSimpson`](crate::integrate::SegmentRule::AdaptiveSimpson), seed `001` ch. 4): the walked
 //! segments of a ray form the medium (scalar linear per segment, exact TF classification,
