@@ -80,7 +80,8 @@ impl Projector {
         let d = p - self.eye;
         let div = if self.perspective {
             let z = d.dot(f);
-            if !(z > 0.0) {
+            // NaN included: not in front of the eye.
+            if z.is_nan() || z <= 0.0 {
                 return None;
             }
             z * self.scale
