@@ -32,13 +32,13 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
-use super::classify::Classification;
 use super::classify::{ternary_code, TERNARY_TABLE};
+use super::planes::CellPlanes;
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
 use super::raster::{bin, fixed, tiles, Bins, Triangle};
 use super::setup::{classify_fixed, projection_tests_screen};
-use super::shade::{Batch, CellColour, Gather};
+use super::shade::{Batch, CellColour, CellValues, Gather};
 use super::sort;
 use crate::composite::under;
 use crate::error::RenderError;
@@ -684,6 +684,24 @@ impl TileContext<'_> {
                 });
             }
             for g in &gathered {
+                // Every fragment's values lie in the cell's vertex range: where the TF is
+                // linear over it, the colour needs no table lookup or breakpoint search.
+                let [v0, v1, v2, v3] = g.scalars;
+                let (lo, hi) = (v0.min(v1).min(v2.min(v3)), v0.max(v1).max(v2.max(v3)));
+                if colour.plan(shader, lo, hi) {
+                    if let Some(cell) = CellPlanes::new(&g.screen, &g.scalars, PERSP) {
+                        let values = CellValues {
+                            offset: cell.offset,
+                            lo,
+                            hi,
+                        };
+                        self.draw_batch::<PERSP>(
+                            &mut batch, &gather, &colour, &cell, values, rect, &mut acc,
+                            &mut frags, &mut count,
+                        );
+                    }
+                    continue;
+                }
                 let q = g.screen.map(|v| fixed([v[0], v[1]]));
                 let c = classify_fixed(screen_points(&g.screen), q);
                 let tet = &tets[g.id as usize];
@@ -706,29 +724,9 @@ impl TileContext<'_> {
                     continue;
                 };
                 let pos = [q[0], q[1], q[2], q[3], fixed(fan[4].xy)];
-                // Every fragment's values lie in the cell's vertex range: where the TF is
-                // linear over it, the colour needs no table lookup or breakpoint search.
-                let [v0, v1, v2, v3] = g.scalars;
-                let (lo, hi) = (v0.min(v1).min(v2.min(v3)), v0.max(v1).max(v2.max(v3)));
                 // Per fan point `1 / z_f` and `1 / z_b` (perspective) or 1, computed once.
                 let kf = fan.map(|v| if PERSP { 1.0 / v.z_f } else { 1.0 });
                 let kb = fan.map(|v| if PERSP { 1.0 / v.z_b } else { 1.0 });
-                if colour.plan(shader, lo, hi) {
-                    // The attribute planes of every fan point (see `shade`).
-                    let planes = std::array::from_fn(|k| {
-                        let v = &fan[k];
-                        if PERSP {
-                            [kf[k], kf[k] * v.s_f, kb[k], kb[k] * v.s_b]
-                        } else {
-                            [v.z_f, v.s_f, v.z_b, v.s_b]
-                        }
-                    });
-                    self.draw_batch::<PERSP>(
-                        &mut batch, &gather, &colour, &c, &pos, &planes, rect, &mut acc,
-                        &mut frags, &mut count,
-                    );
-                    continue;
-                }
                 let finite = g.scalars.iter().all(|v| v.is_finite());
                 let piece = if finite {
                     shader.linear_on(lo, hi)
@@ -796,9 +794,9 @@ impl TileContext<'_> {
 
 impl TileContext<'_> {
     /// Draws one cell through the lanes of [`shade`](super::shade): gathers the fragments of
-    /// its fan triangles (`pos`: the fixed-point fan points, `planes`: their attribute
-    /// planes), colours them with `colour` and composites them (or keeps them for the
-    /// per-pixel sort).
+    /// its drawn face triangles with their entry and exit from its planes `cell`
+    /// ([`super::planes`]), colours them with `colour` and composites them (or keeps them
+    /// for the per-pixel sort).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn draw_batch<const PERSP: bool>(
@@ -806,9 +804,8 @@ impl TileContext<'_> {
         batch: &mut Batch,
         gather: &Gather<'_>,
         colour: &CellColour,
-        c: &Classification,
-        pos: &[[i64; 2]; 5],
-        planes: &[[f32; 4]; 5],
+        cell: &CellPlanes,
+        values: CellValues,
         rect: Rect,
         acc: &mut [[f32; 4]],
         frags: &mut Vec<Fragment>,
@@ -817,7 +814,7 @@ impl TileContext<'_> {
         let table = self.shader.psi;
         let per_pixel = self.per_pixel;
         let mut flush = |batch: &mut Batch, acc: &mut [[f32; 4]]| {
-            batch.shade::<PERSP>(colour, table);
+            batch.shade::<PERSP>(colour, table, values);
             *count += batch.len() as u64;
             if per_pixel {
                 frags.extend(batch.fragments().map(|(pixel, depth, rgba)| Fragment {
@@ -830,12 +827,11 @@ impl TileContext<'_> {
             }
             batch.clear();
         };
-        for tri in c.fan.triangles() {
-            let idx = tri.map(|k| usize::from(k) % 5);
-            let Some(raster) = Triangle::new(idx.map(|k| pos[k]), rect) else {
+        for face in cell.draws() {
+            let Some(raster) = Triangle::new(face.tri, rect) else {
                 continue;
             };
-            gather.triangle(batch, acc, &raster, idx.map(|k| planes[k]), &mut flush);
+            gather.face::<PERSP>(batch, acc, &raster, cell, &face, &mut flush);
         }
         flush(batch, acc);
     }
