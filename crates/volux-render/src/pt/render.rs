@@ -13,12 +13,17 @@
 //!    the seeds; see [`sort`]);
 //! 3. **visibility order** (view changes only): centroid radix sort, or the exact order
 //!    (MPVO on a convex mesh; a per-pixel fragment sort otherwise);
-//! 4. **binning** of the ordered tetrahedra into screen tiles;
+//! 4. **binning** of the ordered tetrahedra into screen tiles, by the tile ranges the
+//!    per-tetrahedron pass computed;
 //! 5. **rasterization and compositing**, tiles in parallel, each compositing its own
 //!    fragments front to back in the global order (so the image does not depend on the
-//!    number of threads): classification and thick vertex ([`super::classify`],
-//!    `fan_vertices`), scanline rasterization with the top-left rule, perspective-correct
-//!    `(s_f, s_b, l)` and gradients, the fragment colour of [`FragmentShader`].
+//!    number of threads). Cells the lanes of [`super::shade`] can colour are drawn in the
+//!    plane form of [`super::planes`]: the triangles of their front or back faces, once each,
+//!    with each pixel's entry and exit from the face planes. The others (the exact model,
+//!    isosurfaces, non-finite values) take the seeds' path: classification and thick vertex
+//!    ([`super::classify`], `fan_vertices`), the fan's triangles, perspective-correct
+//!    `(s_f, s_b, l)` and gradients, the fragment colour of [`FragmentShader`]. Both draw
+//!    with the top-left rule, so each covers the cell's projection exactly once.
 //!
 //! A TF change that keeps the zero set re-runs only step 5 (recolouring without
 //! re-projecting). Compositing is front to back (the "under" operator, equivalent to the
@@ -36,7 +41,7 @@ use super::classify::{ternary_code, TERNARY_TABLE};
 use super::planes::CellPlanes;
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
-use super::raster::{bin, fixed, tiles, Bins, Triangle};
+use super::raster::{bin_by_range, fixed, tile_range, tiles, Bins, Triangle, NO_TILES};
 use super::setup::{classify_fixed, projection_tests_screen};
 use super::shade::{Batch, CellColour, CellValues, Gather};
 use super::sort;
@@ -151,9 +156,9 @@ struct ViewData {
 }
 
 /// Bytes per tetrahedron of PT's per-frame buffers, at their peak: the fate of each cell
-/// (8), the drawn ids and depths (8), the sorted order and its keys (16), the face adjacency
-/// (16) and the visibility sort's work lists (16).
-const FRAME_BYTES_PER_TET: u64 = 64;
+/// (8), its tile range (8), the drawn ids and depths (8), the sorted order and its keys (16),
+/// the face adjacency (16) and the visibility sort's work lists (16).
+const FRAME_BYTES_PER_TET: u64 = 72;
 
 /// Checks PT's per-frame buffers for `mesh` (the projected vertices and the per-cell lists
 /// of [`FRAME_BYTES_PER_TET`]) against the memory budget, before they are allocated.
@@ -345,17 +350,19 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             Degenerate,
             Drawn(f32),
         }
-        let fates: Vec<Fate> = mesh
+        let tiles = tiles(opts.width, opts.height);
+        // Each cell's tile range comes with its fate, for the binning (step 4).
+        let (fates, ranges): (Vec<Fate>, Vec<[u16; 4]>) = mesh
             .tets()
             .par_iter()
             .zip(kept.par_iter())
             .with_min_len(4096)
             .map(|(t, &k)| {
                 if !k {
-                    return Fate::Skip;
+                    return (Fate::Skip, NO_TILES);
                 }
                 let Some(v) = proj.tet(t) else {
-                    return Fate::Clipped;
+                    return (Fate::Clipped, NO_TILES);
                 };
                 let code = ternary_code(projection_tests_screen(&v));
                 if TERNARY_TABLE[usize::from(code)].is_valid() {
@@ -363,12 +370,13 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
                     let c = t
                         .iter()
                         .fold(DVec3::ZERO, |a, &i| a + p[i as usize].as_dvec3());
-                    Fate::Drawn(view_dir.depth(c * 0.25) as f32)
+                    let depth = view_dir.depth(c * 0.25) as f32;
+                    (Fate::Drawn(depth), tile_range(Some(v), &tiles))
                 } else {
-                    Fate::Degenerate
+                    (Fate::Degenerate, NO_TILES)
                 }
             })
-            .collect();
+            .unzip();
         let (mut ids, mut depths) = (Vec::new(), Vec::new());
         let (mut degenerate, mut clipped) = (0, 0);
         for (i, f) in fates.iter().enumerate() {
@@ -449,8 +457,8 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         stats.diagnostics_s = diagnostics;
         opts.control.check()?;
         let t = Instant::now();
-        let tiles = tiles(opts.width, opts.height);
-        let bins = bin(&order, mesh.tets(), &proj, &tiles)?;
+        let bins = bin_by_range(&order, &ranges, &tiles)?;
+        drop(ranges);
         stats.bin_s = t.elapsed().as_secs_f64();
         self.spare_view = self.view.take();
         self.view = Some(ViewData {

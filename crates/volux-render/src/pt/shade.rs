@@ -260,11 +260,9 @@ impl Gather<'_> {
         cell: &CellPlanes,
         face: &FaceDraw,
     ) {
-        const MASK: usize = CAPACITY - 1;
         let start = ((row.y - self.y0) * self.width + row.lo - self.x0) as usize;
         let width = (row.hi - row.lo + 1) as usize;
         let n = batch.len;
-        let pixels = &acc[start..start + width];
         let secant = &self.secant[start..start + width];
         let dx = row.lo as f32 + 0.5 - cell.origin[0];
         let dy = row.y as f32 + 0.5 - cell.origin[1];
@@ -273,34 +271,39 @@ impl Gather<'_> {
         let s0 = cell.sigma.at(dx, dy);
         let (ka, oa, sa) = (face.known.a, face.others.map(|p| p.a), cell.sigma.a);
         let (gamma, w0) = (cell.gamma, cell.w0);
-        let (pixel, out) = (&mut *batch.pixel, &mut *batch.secant);
+        // Whole slices of the row's length (`fits` was checked): one bounds check per row,
+        // and a loop the compiler can vectorize.
+        let range = n..n + width;
+        let pixel = &mut batch.pixel[range.clone()];
+        let out = &mut batch.secant[range.clone()];
         let [a0, a1, a2, a3] = &mut *batch.attr;
         let (kw, ks, ow, os) = if face.known_front {
             (a0, a1, a2, a3)
         } else {
             (a2, a3, a0, a1)
         };
-        let mut opaque = false;
-        let mut i = 0.0f32;
-        for (x, (&s, a)) in secant.iter().zip(pixels).enumerate() {
-            let j = (n + x) & MASK;
-            pixel[j] = (start + x) as u32;
-            out[j] = s;
+        let (kw, ks) = (&mut kw[range.clone()], &mut ks[range.clone()]);
+        let (ow, os) = (&mut ow[range.clone()], &mut os[range]);
+        let less = |a: f32, b: f32| if a < b { a } else { b };
+        let more = |a: f32, b: f32| if a > b { a } else { b };
+        for x in 0..width {
+            let i = x as f32;
+            pixel[x] = (start + x) as u32;
+            out[x] = secant[x];
             let k = k0 + i * ka;
             let [p, q, r] = [0, 1, 2].map(|m| o[m] + i * oa[m]);
             let e = if MIN {
-                p.min(q).min(r)
+                less(less(p, q), r)
             } else {
-                p.max(q).max(r)
+                more(more(p, q), r)
             };
             let sigma = s0 + i * sa;
-            kw[j] = k;
-            ks[j] = sigma + gamma * (k - w0);
-            ow[j] = e;
-            os[j] = sigma + gamma * (e - w0);
-            opaque |= a[3] >= self.early;
-            i += 1.0;
+            kw[x] = k;
+            ks[x] = sigma + gamma * (k - w0);
+            ow[x] = e;
+            os[x] = sigma + gamma * (e - w0);
         }
+        let opaque = acc[start..start + width].iter().any(|a| a[3] >= self.early);
         batch.len = if opaque {
             batch.keep_live(n, n + width, |p| acc[p as usize][3] < self.early)
         } else {
