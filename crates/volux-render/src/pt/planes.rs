@@ -25,6 +25,7 @@
 //! fixed-point signed areas of the projected faces (the two sides of the projection) and the
 //! sign of the cell's volume in `(x, y, w)`; a wrong volume sign (only for nearly flat cells)
 //! swaps entry and exit, which gives a zero length and a transparent fragment.
+use super::project::SUBPIXEL;
 use super::raster::fixed;
 
 /// An affine function of the pixel centre: `c + a dx + b dy`, with `(dx, dy)` from the
@@ -109,13 +110,14 @@ impl CellPlanes {
             }
         });
         let (ox, oy) = (f64::from(screen[0][0]), f64::from(screen[0][1]));
-        let d = |i: usize| {
+        let dv: [[f64; 3]; 4] = std::array::from_fn(|i| {
             [
                 f64::from(screen[i][0]) - ox,
                 f64::from(screen[i][1]) - oy,
                 w[i] - w[0],
             ]
-        };
+        });
+        let d = |i: usize| dv[i];
         let m = [d(1), d(2), d(3)];
         let s0 = f64::from(scalars[0]);
         let r = [1, 2, 3].map(|i| {
@@ -126,34 +128,33 @@ impl CellPlanes {
                 ds
             }
         });
-        let det = det3(m);
+        // M^-1 = [m2 x m3, m3 x m1, m1 x m2] / det, as columns.
+        let adj = [cross3(m[1], m[2]), cross3(m[2], m[0]), cross3(m[0], m[1])];
+        let det = dot3(m[0], adj[0]);
         if !(det.is_finite() && det != 0.0) {
             return None;
         }
-        let col = |k: usize| {
-            let mut mk = m;
-            for (row, &v) in mk.iter_mut().zip(&r) {
-                row[k] = v;
-            }
-            det3(mk) / det
-        };
-        let (alpha, beta, gamma) = (col(0), col(1), col(2));
-        let sign = det.signum() as i64;
+        let inv = 1.0 / det;
+        let solved: [f64; 3] =
+            std::array::from_fn(|k| (adj[0][k] * r[0] + adj[1][k] * r[1] + adj[2][k] * r[2]) * inv);
+        let (alpha, beta, gamma) = (solved[0], solved[1], solved[2]);
+        let sign = if det > 0.0 { 1 } else { -1 };
+        // (x, y, w): w grows toward the eye under perspective, away from it otherwise.
+        let toward_eye = if perspective { sign } else { -sign };
         let (mut front, mut back) = (0u8, 0u8);
-        let faces = std::array::from_fn(|j| {
+        let mut faces = [Plane::default(); 4];
+        for (j, face) in faces.iter_mut().enumerate() {
             let [i, k, l] = FACE[j];
             // The outward orientation of face j is (-1)^j (i, k, l).
             let area = cross(q[i], q[k], q[l]);
             let outward = if j % 2 == 0 { area } else { -area };
-            // (x, y, w): w grows toward the eye under perspective, away from it otherwise.
-            let toward = (outward.signum() * sign) * if perspective { 1 } else { -1 };
-            match toward {
-                1 => front |= 1 << j,
-                -1 => back |= 1 << j,
-                _ => {}
+            match (outward.signum() * toward_eye).cmp(&0) {
+                std::cmp::Ordering::Greater => front |= 1 << j,
+                std::cmp::Ordering::Less => back |= 1 << j,
+                std::cmp::Ordering::Equal => continue,
             }
-            face_plane([d(i), d(k), d(l)], w[0])
-        });
+            *face = face_plane([d(i), d(k), d(l)], area, w[0]);
+        }
         if front == 0 || back == 0 {
             return None;
         }
@@ -203,25 +204,31 @@ impl CellPlanes {
     }
 }
 
-/// The 3 x 3 determinant of rows `m`.
+/// The cross product `a x b`.
 #[inline(always)]
-fn det3(m: [[f64; 3]; 3]) -> f64 {
-    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
-/// The plane `w(dx, dy)` through three points `(dx, dy, w - w0)` (offsets from the origin);
-/// zero for an edge-on face.
+/// The dot product.
 #[inline(always)]
-fn face_plane(p: [[f64; 3]; 3], w0: f64) -> Plane {
+fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The plane `w(dx, dy)` through three points `(dx, dy, w - w0)` (offsets from the origin)
+/// whose projection has the fixed-point doubled area `area` (non-zero).
+#[inline(always)]
+fn face_plane(p: [[f64; 3]; 3], area: i64, w0: f64) -> Plane {
     let (u, v) = (sub(p[1], p[0]), sub(p[2], p[0]));
-    let den = u[0] * v[1] - u[1] * v[0];
-    if den == 0.0 {
-        return Plane::default();
-    }
-    let a = (u[2] * v[1] - v[2] * u[1]) / den;
-    let b = (u[0] * v[2] - v[0] * u[2]) / den;
+    // The fixed-point area is exact: SUBPIXEL^2 times the area in pixels.
+    let inv = f64::from(SUBPIXEL * SUBPIXEL) / area as f64;
+    let a = (u[2] * v[1] - v[2] * u[1]) * inv;
+    let b = (u[0] * v[2] - v[0] * u[2]) * inv;
     let c = w0 + p[0][2] - a * p[0][0] - b * p[0][1];
     Plane {
         a: a as f32,

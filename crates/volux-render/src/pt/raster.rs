@@ -44,6 +44,18 @@ pub fn screen_box(v: &[[f32; 3]; 4]) -> ([f32; 2], [f32; 2]) {
     (min, max)
 }
 
+/// Whether the screen box of the projected vertices `v` holds the centre of a pixel of
+/// `clip`: when it does not, none of the cell's triangles draws a pixel there (each lies in
+/// the box), so the cell can be skipped before any set-up.
+#[inline]
+pub fn box_holds_centre(v: &[[f32; 3]; 4], clip: Rect) -> bool {
+    let (min, max) = screen_box(v);
+    // Pixel x has centre x + 0.5 (exact for snapped positions).
+    let lo = |v: f32, c: usize| (v - 0.5).ceil().max(c as f32);
+    let hi = |v: f32, c: usize| (v - 0.5).floor().min(c as f32 - 1.0);
+    lo(min[0], clip.x0) <= hi(max[0], clip.x1) && lo(min[1], clip.y0) <= hi(max[1], clip.y1)
+}
+
 /// For every tile, the tetrahedra overlapping it, in drawing order (a CSR layout: the items of
 /// tile `i` are `items[offsets[i]..offsets[i + 1]]`).
 #[derive(Clone, Debug, Default)]

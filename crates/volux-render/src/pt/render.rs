@@ -41,7 +41,9 @@ use super::classify::{ternary_code, TERNARY_TABLE};
 use super::planes::CellPlanes;
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
-use super::raster::{bin_by_range, fixed, tile_range, tiles, Bins, Triangle, NO_TILES};
+use super::raster::{
+    bin_by_range, box_holds_centre, fixed, tile_range, tiles, Bins, Triangle, NO_TILES,
+};
 use super::setup::{classify_fixed, projection_tests_screen};
 use super::shade::{Batch, CellColour, CellValues, Gather};
 use super::sort;
@@ -692,6 +694,9 @@ impl TileContext<'_> {
                 });
             }
             for g in &gathered {
+                if !box_holds_centre(&g.screen, rect) {
+                    continue;
+                }
                 // Every fragment's values lie in the cell's vertex range: where the TF is
                 // linear over it, the colour needs no table lookup or breakpoint search.
                 let [v0, v1, v2, v3] = g.scalars;

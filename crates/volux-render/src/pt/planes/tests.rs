@@ -220,3 +220,8 @@ fn split_cube_is_drawn_once_with_its_exact_thickness() {
         assert!(inside > 300, "{inside} pixels inside");
     }
 }
+
+/// The 3 x 3 determinant of rows `m`.
+fn det3(m: [[f64; 3]; 3]) -> f64 {
+    dot3(m[0], cross3(m[1], m[2]))
+}
