@@ -50,10 +50,7 @@ pub fn screen_box(v: &[[f32; 3]; 4]) -> ([f32; 2], [f32; 2]) {
 #[inline]
 pub fn box_holds_centre(v: &[[f32; 3]; 4], clip: Rect) -> bool {
     let (min, max) = screen_box(v);
-    // Pixel x has centre x + 0.5 (exact for snapped positions).
-    let lo = |v: f32, c: usize| (v - 0.5).ceil().max(c as f32);
-    let hi = |v: f32, c: usize| (v - 0.5).floor().min(c as f32 - 1.0);
-    lo(min[0], clip.x0) <= hi(max[0], clip.x1) && lo(min[1], clip.y0) <= hi(max[1], clip.y1)
+    centre_box(min, max, clip).is_some()
 }
 
 /// For every tile, the tetrahedra overlapping it, in drawing order (a CSR layout: the items of
@@ -88,10 +85,29 @@ pub fn tile_range(v: Option<[[f32; 3]; 4]>, tiles: &TileGrid) -> [u16; 4] {
         return NO_TILES;
     };
     let (min, max) = screen_box(&v);
-    match tiles.range(min, max) {
-        Some(r) => r.map(|x| x as u16),
+    let full = Rect {
+        x0: 0,
+        y0: 0,
+        x1: tiles.width,
+        y1: tiles.height,
+    };
+    match centre_box(min, max, full) {
+        Some(b) => b.map(|p| (p as usize / tiles.side) as u16),
         None => NO_TILES,
     }
+}
+
+/// The pixels `[x0, y0, x1, y1]` (inclusive) of `clip` whose centres lie in the screen box
+/// `[min, max]`, or `None`: in fixed point, with the rasterizer's own rounding of the box
+/// ([`Triangle::new`]), so a cell is binned to every tile in which it can draw a pixel.
+#[inline]
+fn centre_box(min: [f32; 2], max: [f32; 2], clip: Rect) -> Option<[i64; 4]> {
+    let (lo, hi) = (fixed(min), fixed(max));
+    let x0 = first_centre(lo[0]).max(clip.x0 as i64);
+    let x1 = last_centre(hi[0]).min(clip.x1 as i64 - 1);
+    let y0 = first_centre(lo[1]).max(clip.y0 as i64);
+    let y1 = last_centre(hi[1]).min(clip.y1 as i64 - 1);
+    (x0 <= x1 && y0 <= y1).then_some([x0, y0, x1, y1])
 }
 
 /// The empty tile range.
@@ -604,6 +620,29 @@ mod tests {
             });
         }
         count
+    }
+
+    #[test]
+    fn tile_ranges_are_the_tile_grids_on_snapped_boxes() {
+        let tiles = TileGrid::new(200, 130, TILE);
+        let mut rnd = xorshift(0x7157_ab1e_2024_0001);
+        for _ in 0..20_000 {
+            // Snapped positions around and across the image, some on pixel centres.
+            let mut p = || (rnd(300 * ONE) - 50 * ONE) as f32 / SUBPIXEL;
+            let v: [[f32; 3]; 4] = std::array::from_fn(|_| [p(), p(), 1.0]);
+            let (min, max) = screen_box(&v);
+            let expected = tiles
+                .range(min, max)
+                .map_or(NO_TILES, |r| r.map(|x| x as u16));
+            assert_eq!(tile_range(Some(v), &tiles), expected, "{v:?}");
+            let all = Rect {
+                x0: 0,
+                y0: 0,
+                x1: 200,
+                y1: 130,
+            };
+            assert_eq!(box_holds_centre(&v, all), expected != NO_TILES, "{v:?}");
+        }
     }
 
     #[test]
