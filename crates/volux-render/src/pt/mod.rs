@@ -51,6 +51,7 @@
 //!   reference of the tests.
 
 pub mod classify;
+pub mod planes;
 pub mod project;
 pub mod raster;
 pub mod reference;

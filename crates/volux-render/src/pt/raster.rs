@@ -19,7 +19,7 @@
 //! row's span of columns is the intersection of three half-lines solved with exact integer
 //! floor and ceiling divisions; the pixels of the span are then walked with incremental
 //! `E`s. Barycentric coordinates are `E / area`.
-use super::project::{ViewProjection, SUBPIXEL};
+use super::project::SUBPIXEL;
 use crate::error::RenderError;
 use crate::tiles::{Rect, TileGrid};
 
@@ -42,6 +42,15 @@ pub fn screen_box(v: &[[f32; 3]; 4]) -> ([f32; 2], [f32; 2]) {
         max = [max[0].max(p[0]), max[1].max(p[1])];
     }
     (min, max)
+}
+
+/// Whether the screen box of the projected vertices `v` holds the centre of a pixel of
+/// `clip`: when it does not, none of the cell's triangles draws a pixel there (each lies in
+/// the box), so the cell can be skipped before any set-up.
+#[inline]
+pub fn box_holds_centre(v: &[[f32; 3]; 4], clip: Rect) -> bool {
+    let (min, max) = screen_box(v);
+    centre_box(min, max, clip).is_some()
 }
 
 /// For every tile, the tetrahedra overlapping it, in drawing order (a CSR layout: the items of
@@ -67,50 +76,78 @@ impl Bins {
     }
 }
 
-/// Bins the tetrahedra of `order` (ids into `tets`) into `tiles`, keeping the order within
-/// every tile (a two-pass counting sort). Tetrahedra whose vertices could not be projected or
-/// whose box covers no pixel centre are left out. Errors, before the bins are allocated, when
-/// they would exceed the memory budget or hold more entries than `u32` offsets can count.
-pub fn bin(
+/// A tetrahedron's tile range `[tx0, ty0, tx1, ty1]` (inclusive) in `tiles`, or
+/// [`NO_TILES`] when its vertices could not be projected or its box covers no pixel centre;
+/// tile indices fit in 16 bits (images are at most 32768 pixels wide).
+#[inline]
+pub fn tile_range(v: Option<[[f32; 3]; 4]>, tiles: &TileGrid) -> [u16; 4] {
+    let Some(v) = v else {
+        return NO_TILES;
+    };
+    let (min, max) = screen_box(&v);
+    let full = Rect {
+        x0: 0,
+        y0: 0,
+        x1: tiles.width,
+        y1: tiles.height,
+    };
+    match centre_box(min, max, full) {
+        Some(b) => b.map(|p| (p as usize / tiles.side) as u16),
+        None => NO_TILES,
+    }
+}
+
+/// The pixels `[x0, y0, x1, y1]` (inclusive) of `clip` whose centres lie in the screen box
+/// `[min, max]`, or `None`: in fixed point, with the rasterizer's own rounding of the box
+/// ([`Triangle::new`]), so a cell is binned to every tile in which it can draw a pixel.
+#[inline]
+fn centre_box(min: [f32; 2], max: [f32; 2], clip: Rect) -> Option<[i64; 4]> {
+    let (lo, hi) = (fixed(min), fixed(max));
+    let x0 = first_centre(lo[0]).max(clip.x0 as i64);
+    let x1 = last_centre(hi[0]).min(clip.x1 as i64 - 1);
+    let y0 = first_centre(lo[1]).max(clip.y0 as i64);
+    let y1 = last_centre(hi[1]).min(clip.y1 as i64 - 1);
+    (x0 <= x1 && y0 <= y1).then_some([x0, y0, x1, y1])
+}
+
+/// The empty tile range.
+pub const NO_TILES: [u16; 4] = [1, 1, 0, 0];
+
+/// Bins the tetrahedra of `order` into `tiles` by their tile ranges `ranges` (indexed by
+/// tetrahedron id, as [`tile_range`] gives them), keeping the order within every tile (a
+/// two-pass counting sort: counts per tile, prefix sums, fill). Errors, before the bins are
+/// allocated, when they would exceed the memory budget or hold more entries than `u32`
+/// offsets can count, or when `order` names a tetrahedron `ranges` does not hold.
+pub fn bin_by_range(
     order: &[u32],
-    tets: &[[u32; 4]],
-    proj: &ViewProjection,
+    ranges: &[[u16; 4]],
     tiles: &TileGrid,
 ) -> Result<Bins, RenderError> {
-    use rayon::prelude::*;
     let n = tiles.count();
-    // Every tetrahedron's tile range, once and in parallel (the random reads of the vertices
-    // are the cost); tile indices fit in 16 bits (images are at most 32768 pixels wide).
-    const NONE: [u16; 4] = [1, 1, 0, 0];
-    let ranges: Vec<[u16; 4]> = order
-        .par_iter()
-        .with_min_len(4096)
-        .map(|&t| {
-            let Some(v) = tets.get(t as usize).and_then(|tet| proj.tet(tet)) else {
-                return NONE;
-            };
-            let (min, max) = screen_box(&v);
-            match tiles.range(min, max) {
-                Some(r) => r.map(|x| x as u16),
-                None => NONE,
-            }
+    let range = |t: u32| {
+        ranges.get(t as usize).copied().ok_or_else(|| {
+            RenderError::InvalidOptions(format!("binning: tetrahedron {t} has no tile range"))
         })
-        .collect();
-    check_bins(&ranges)?;
+    };
     let mut counts = vec![0u32; n + 1];
-    for &[x0, y0, x1, y1] in &ranges {
+    let mut entries = 0u64;
+    for &t in order {
+        let [x0, y0, x1, y1] = range(t)?;
         for ty in usize::from(y0)..=usize::from(y1) {
             for tx in usize::from(x0)..=usize::from(x1) {
                 counts[ty * tiles.cols + tx + 1] += 1;
+                entries += 1;
             }
         }
     }
+    check_bins(entries)?;
     for i in 0..n {
         counts[i + 1] += counts[i];
     }
     let mut items = vec![0u32; counts[n] as usize];
     let mut cursor = counts.clone();
-    for (&t, &[x0, y0, x1, y1]) in order.iter().zip(&ranges) {
+    for &t in order {
+        let [x0, y0, x1, y1] = range(t)?;
         for ty in usize::from(y0)..=usize::from(y1) {
             for tx in usize::from(x0)..=usize::from(x1) {
                 let c = &mut cursor[ty * tiles.cols + tx];
@@ -125,21 +162,9 @@ pub fn bin(
     })
 }
 
-/// Checks the number of bin entries the tile `ranges` make (one per tile a tetrahedron
-/// overlaps) against the memory budget (4 bytes each) and the `u32` offsets.
-fn check_bins(ranges: &[[u16; 4]]) -> Result<(), RenderError> {
-    let entries: u64 = ranges
-        .iter()
-        .map(|&[x0, y0, x1, y1]| {
-            let w = u64::from(x1)
-                .saturating_add(1)
-                .saturating_sub(u64::from(x0));
-            let h = u64::from(y1)
-                .saturating_add(1)
-                .saturating_sub(u64::from(y0));
-            w * h
-        })
-        .fold(0, u64::saturating_add);
+/// Checks the number of bin `entries` (one per tile a tetrahedron overlaps) against the
+/// memory budget (4 bytes each) and the `u32` offsets.
+fn check_bins(entries: u64) -> Result<(), RenderError> {
     volux_core::limits::check_alloc("PT's tile bins", entries, 4)?;
     if entries > u64::from(u32::MAX) {
         return Err(RenderError::InvalidOptions(format!(
@@ -595,6 +620,52 @@ mod tests {
             });
         }
         count
+    }
+
+    #[test]
+    fn tile_ranges_are_the_tile_grids_on_snapped_boxes() {
+        let tiles = TileGrid::new(200, 130, TILE);
+        let mut rnd = xorshift(0x7157_ab1e_2024_0001);
+        for _ in 0..20_000 {
+            // Snapped positions around and across the image, some on pixel centres.
+            let mut p = || (rnd(300 * ONE) - 50 * ONE) as f32 / SUBPIXEL;
+            let v: [[f32; 3]; 4] = std::array::from_fn(|_| [p(), p(), 1.0]);
+            let (min, max) = screen_box(&v);
+            let expected = tiles
+                .range(min, max)
+                .map_or(NO_TILES, |r| r.map(|x| x as u16));
+            assert_eq!(tile_range(Some(v), &tiles), expected, "{v:?}");
+            let all = Rect {
+                x0: 0,
+                y0: 0,
+                x1: 200,
+                y1: 130,
+            };
+            assert_eq!(box_holds_centre(&v, all), expected != NO_TILES, "{v:?}");
+        }
+    }
+
+    #[test]
+    fn bins_keep_the_order_and_the_tile_ranges() {
+        let tiles = TileGrid::new(3 * TILE, 2 * TILE, TILE);
+        // Tetrahedron t's range, indexed by id; the order visits them out of id order.
+        let ranges = [
+            [0, 0, 1, 0],
+            NO_TILES,
+            [1, 0, 2, 1],
+            [0, 1, 0, 1],
+            [2, 1, 2, 1],
+        ];
+        let order = [4, 2, 0, 1, 3];
+        let bins = bin_by_range(&order, &ranges, &tiles).unwrap();
+        let expected: [&[u32]; 6] = [&[0], &[2, 0], &[2], &[3], &[2], &[4, 2]];
+        for (i, e) in expected.iter().enumerate() {
+            assert_eq!(bins.tile(i), *e, "tile {i}");
+        }
+        assert!(
+            bin_by_range(&[5], &ranges, &tiles).is_err(),
+            "an id without a range"
+        );
     }
 
     #[test]

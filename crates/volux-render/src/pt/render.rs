@@ -13,12 +13,17 @@
 //!    the seeds; see [`sort`]);
 //! 3. **visibility order** (view changes only): centroid radix sort, or the exact order
 //!    (MPVO on a convex mesh; a per-pixel fragment sort otherwise);
-//! 4. **binning** of the ordered tetrahedra into screen tiles;
+//! 4. **binning** of the ordered tetrahedra into screen tiles, by the tile ranges the
+//!    per-tetrahedron pass computed;
 //! 5. **rasterization and compositing**, tiles in parallel, each compositing its own
 //!    fragments front to back in the global order (so the image does not depend on the
-//!    number of threads): classification and thick vertex ([`super::classify`],
-//!    `fan_vertices`), scanline rasterization with the top-left rule, perspective-correct
-//!    `(s_f, s_b, l)` and gradients, the fragment colour of [`FragmentShader`].
+//!    number of threads). Cells the lanes of [`super::shade`] can colour are drawn in the
+//!    plane form of [`super::planes`]: the triangles of their front or back faces, once each,
+//!    with each pixel's entry and exit from the face planes. The others (the exact model,
+//!    isosurfaces, non-finite values) take the seeds' path: classification and thick vertex
+//!    ([`super::classify`], `fan_vertices`), the fan's triangles, perspective-correct
+//!    `(s_f, s_b, l)` and gradients, the fragment colour of [`FragmentShader`]. Both draw
+//!    with the top-left rule, so each covers the cell's projection exactly once.
 //!
 //! A TF change that keeps the zero set re-runs only step 5 (recolouring without
 //! re-projecting). Compositing is front to back (the "under" operator, equivalent to the
@@ -32,13 +37,15 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
-use super::classify::Classification;
 use super::classify::{ternary_code, TERNARY_TABLE};
+use super::planes::CellPlanes;
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
-use super::raster::{bin, fixed, tiles, Bins, Triangle};
+use super::raster::{
+    bin_by_range, box_holds_centre, fixed, tile_range, tiles, Bins, Triangle, NO_TILES,
+};
 use super::setup::{classify_fixed, projection_tests_screen};
-use super::shade::{Batch, CellColour, Gather};
+use super::shade::{Batch, CellColour, CellValues, Gather};
 use super::sort;
 use crate::composite::under;
 use crate::error::RenderError;
@@ -151,9 +158,9 @@ struct ViewData {
 }
 
 /// Bytes per tetrahedron of PT's per-frame buffers, at their peak: the fate of each cell
-/// (8), the drawn ids and depths (8), the sorted order and its keys (16), the face adjacency
-/// (16) and the visibility sort's work lists (16).
-const FRAME_BYTES_PER_TET: u64 = 64;
+/// (8), its tile range (8), the drawn ids and depths (8), the sorted order and its keys (16),
+/// the face adjacency (16) and the visibility sort's work lists (16).
+const FRAME_BYTES_PER_TET: u64 = 72;
 
 /// Checks PT's per-frame buffers for `mesh` (the projected vertices and the per-cell lists
 /// of [`FRAME_BYTES_PER_TET`]) against the memory budget, before they are allocated.
@@ -345,17 +352,19 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             Degenerate,
             Drawn(f32),
         }
-        let fates: Vec<Fate> = mesh
+        let tiles = tiles(opts.width, opts.height);
+        // Each cell's tile range comes with its fate, for the binning (step 4).
+        let (fates, ranges): (Vec<Fate>, Vec<[u16; 4]>) = mesh
             .tets()
             .par_iter()
             .zip(kept.par_iter())
             .with_min_len(4096)
             .map(|(t, &k)| {
                 if !k {
-                    return Fate::Skip;
+                    return (Fate::Skip, NO_TILES);
                 }
                 let Some(v) = proj.tet(t) else {
-                    return Fate::Clipped;
+                    return (Fate::Clipped, NO_TILES);
                 };
                 let code = ternary_code(projection_tests_screen(&v));
                 if TERNARY_TABLE[usize::from(code)].is_valid() {
@@ -363,12 +372,13 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
                     let c = t
                         .iter()
                         .fold(DVec3::ZERO, |a, &i| a + p[i as usize].as_dvec3());
-                    Fate::Drawn(view_dir.depth(c * 0.25) as f32)
+                    let depth = view_dir.depth(c * 0.25) as f32;
+                    (Fate::Drawn(depth), tile_range(Some(v), &tiles))
                 } else {
-                    Fate::Degenerate
+                    (Fate::Degenerate, NO_TILES)
                 }
             })
-            .collect();
+            .unzip();
         let (mut ids, mut depths) = (Vec::new(), Vec::new());
         let (mut degenerate, mut clipped) = (0, 0);
         for (i, f) in fates.iter().enumerate() {
@@ -449,8 +459,8 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         stats.diagnostics_s = diagnostics;
         opts.control.check()?;
         let t = Instant::now();
-        let tiles = tiles(opts.width, opts.height);
-        let bins = bin(&order, mesh.tets(), &proj, &tiles)?;
+        let bins = bin_by_range(&order, &ranges, &tiles)?;
+        drop(ranges);
         stats.bin_s = t.elapsed().as_secs_f64();
         self.spare_view = self.view.take();
         self.view = Some(ViewData {
@@ -684,6 +694,27 @@ impl TileContext<'_> {
                 });
             }
             for g in &gathered {
+                if !box_holds_centre(&g.screen, rect) {
+                    continue;
+                }
+                // Every fragment's values lie in the cell's vertex range: where the TF is
+                // linear over it, the colour needs no table lookup or breakpoint search.
+                let [v0, v1, v2, v3] = g.scalars;
+                let (lo, hi) = (v0.min(v1).min(v2.min(v3)), v0.max(v1).max(v2.max(v3)));
+                if colour.plan(shader, lo, hi) {
+                    if let Some(cell) = CellPlanes::new(&g.screen, &g.scalars, PERSP) {
+                        let values = CellValues {
+                            offset: cell.offset,
+                            lo,
+                            hi,
+                        };
+                        self.draw_batch::<PERSP>(
+                            &mut batch, &gather, &colour, &cell, values, rect, &mut acc,
+                            &mut frags, &mut count,
+                        );
+                    }
+                    continue;
+                }
                 let q = g.screen.map(|v| fixed([v[0], v[1]]));
                 let c = classify_fixed(screen_points(&g.screen), q);
                 let tet = &tets[g.id as usize];
@@ -706,29 +737,9 @@ impl TileContext<'_> {
                     continue;
                 };
                 let pos = [q[0], q[1], q[2], q[3], fixed(fan[4].xy)];
-                // Every fragment's values lie in the cell's vertex range: where the TF is
-                // linear over it, the colour needs no table lookup or breakpoint search.
-                let [v0, v1, v2, v3] = g.scalars;
-                let (lo, hi) = (v0.min(v1).min(v2.min(v3)), v0.max(v1).max(v2.max(v3)));
                 // Per fan point `1 / z_f` and `1 / z_b` (perspective) or 1, computed once.
                 let kf = fan.map(|v| if PERSP { 1.0 / v.z_f } else { 1.0 });
                 let kb = fan.map(|v| if PERSP { 1.0 / v.z_b } else { 1.0 });
-                if colour.plan(shader, lo, hi) {
-                    // The attribute planes of every fan point (see `shade`).
-                    let planes = std::array::from_fn(|k| {
-                        let v = &fan[k];
-                        if PERSP {
-                            [kf[k], kf[k] * v.s_f, kb[k], kb[k] * v.s_b]
-                        } else {
-                            [v.z_f, v.s_f, v.z_b, v.s_b]
-                        }
-                    });
-                    self.draw_batch::<PERSP>(
-                        &mut batch, &gather, &colour, &c, &pos, &planes, rect, &mut acc,
-                        &mut frags, &mut count,
-                    );
-                    continue;
-                }
                 let finite = g.scalars.iter().all(|v| v.is_finite());
                 let piece = if finite {
                     shader.linear_on(lo, hi)
@@ -796,9 +807,9 @@ impl TileContext<'_> {
 
 impl TileContext<'_> {
     /// Draws one cell through the lanes of [`shade`](super::shade): gathers the fragments of
-    /// its fan triangles (`pos`: the fixed-point fan points, `planes`: their attribute
-    /// planes), colours them with `colour` and composites them (or keeps them for the
-    /// per-pixel sort).
+    /// its drawn face triangles with their entry and exit from its planes `cell`
+    /// ([`super::planes`]), colours them with `colour` and composites them (or keeps them
+    /// for the per-pixel sort).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn draw_batch<const PERSP: bool>(
@@ -806,9 +817,8 @@ impl TileContext<'_> {
         batch: &mut Batch,
         gather: &Gather<'_>,
         colour: &CellColour,
-        c: &Classification,
-        pos: &[[i64; 2]; 5],
-        planes: &[[f32; 4]; 5],
+        cell: &CellPlanes,
+        values: CellValues,
         rect: Rect,
         acc: &mut [[f32; 4]],
         frags: &mut Vec<Fragment>,
@@ -817,7 +827,7 @@ impl TileContext<'_> {
         let table = self.shader.psi;
         let per_pixel = self.per_pixel;
         let mut flush = |batch: &mut Batch, acc: &mut [[f32; 4]]| {
-            batch.shade::<PERSP>(colour, table);
+            batch.shade::<PERSP>(colour, table, values);
             *count += batch.len() as u64;
             if per_pixel {
                 frags.extend(batch.fragments().map(|(pixel, depth, rgba)| Fragment {
@@ -830,12 +840,11 @@ impl TileContext<'_> {
             }
             batch.clear();
         };
-        for tri in c.fan.triangles() {
-            let idx = tri.map(|k| usize::from(k) % 5);
-            let Some(raster) = Triangle::new(idx.map(|k| pos[k]), rect) else {
+        for face in cell.draws() {
+            let Some(raster) = Triangle::new(face.tri, rect) else {
                 continue;
             };
-            gather.triangle(batch, acc, &raster, idx.map(|k| planes[k]), &mut flush);
+            gather.face::<PERSP>(batch, acc, &raster, cell, &face, &mut flush);
         }
         flush(batch, acc);
     }

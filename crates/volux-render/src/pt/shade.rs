@@ -1,19 +1,19 @@
 //! The second pass of PT on lanes: one tetrahedron's fragments in one tile are gathered
 //! by the rasterizer into a [`Batch`], then interpolated and coloured [`LANES`] at a time
 //! and composited (seed `000` §4.3, seed `002` §4.3 and §4.4: per fragment, `s_f`, `s_b` and
-//! `l` from the fan's interpolated attributes, the TF at both ends and the ψ colour).
+//! `l`, here from the cell's face planes, the TF at both ends and the ψ colour).
 //!
-//! The fragments of one cell in one tile cover distinct pixels (the fan's triangles are
+//! The fragments of one cell in one tile cover distinct pixels (the drawn face triangles are
 //! interior-disjoint and the fill rule draws a shared edge once), so gathering them before
 //! compositing any of them changes nothing: the early-termination test of each fragment
 //! sees the pixel as it was before the cell, as it would drawing them one by one.
 //!
 //! # Attributes
 //!
-//! Under a perspective projection `1/z` and `s/z` are affine in screen space, so the
-//! rasterizer steps the four planes `1/z_f`, `s_f/z_f`, `1/z_b`, `s_b/z_b` along each row
-//! (one multiply-add each per pixel) and the lanes divide; orthographic views step
-//! `z_f`, `s_f`, `z_b`, `s_b` themselves.
+//! The rasterizer draws a cell's face triangles ([`super::planes`]) and writes, per pixel,
+//! `w_f`, `σ_f`, `w_b`, `σ_b`: the entry and exit `w` (`1/z` under perspective, `z`
+//! otherwise) from the face planes, and `σ` there (`(s - s_0) / z` or `s - s_0`), each one
+//! multiply-add per pixel along a row; the lanes divide (perspective) and add `s_0` back.
 //!
 //! # Colour ([`CellColour`])
 //!
@@ -29,6 +29,7 @@ use std::cmp::Ordering;
 
 use glam::Vec4;
 
+use super::planes::{CellPlanes, FaceDraw};
 use super::raster::{Row, Triangle, TILE};
 use crate::composite::under;
 use crate::integrate::fragment::FragmentShader;
@@ -128,6 +129,19 @@ impl CellColour {
     }
 }
 
+/// What [`Batch::shade`] needs of the cell: its values are `offset + σ / w` (perspective) or
+/// `offset + σ` (orthographic), clamped to its vertex range `[lo, hi]` (which rounding, or
+/// the fit of a nearly flat cell, could leave).
+#[derive(Clone, Copy, Debug)]
+pub struct CellValues {
+    /// The scalar at the cell's origin ([`CellPlanes::offset`]).
+    pub offset: f32,
+    /// The least vertex value.
+    pub lo: f32,
+    /// The greatest vertex value.
+    pub hi: f32,
+}
+
 /// Capacity of a [`Batch`]: a power of two above a tile's pixels (a cell covers each at most
 /// once), a row and a lane group of padding, so that masked indices need no bounds check.
 const CAPACITY: usize = 8192;
@@ -188,7 +202,7 @@ impl Batch {
     }
 }
 
-/// What the rasterizer needs to gather one triangle's fragments into a [`Batch`].
+/// What the rasterizer needs to gather one cell's fragments into a [`Batch`].
 pub struct Gather<'a> {
     /// Per tile pixel, the secant of its ray to the view direction.
     pub secant: &'a [f32],
@@ -203,56 +217,93 @@ pub struct Gather<'a> {
 }
 
 impl Gather<'_> {
-    /// Appends the covered, not yet opaque pixels of `tri` to `batch` with the attribute
-    /// planes `q[j]` of its vertex `j` (in the order given to [`Triangle::new`]); calls
-    /// `flush` first whenever a row might not fit (never for a single cell in a tile).
-    /// `acc` holds the tile's accumulated pixels, read for early termination.
+    /// Appends the covered, not yet opaque pixels of the face triangle `tri` (set up from
+    /// `face.tri`) of the cell `cell` to `batch`, with their entry and exit attributes from
+    /// the cell's planes ([`super::planes`]); calls `flush` first whenever a row might not
+    /// fit (never for a single cell in a tile). `acc` holds the tile's accumulated pixels,
+    /// read for early termination.
     #[inline(always)]
-    pub fn triangle(
+    pub fn face<const PERSP: bool>(
         &self,
         batch: &mut Batch,
         acc: &mut [[f32; 4]],
         tri: &Triangle,
-        q: [[f32; 4]; 3],
+        cell: &CellPlanes,
+        face: &FaceDraw,
         mut flush: impl FnMut(&mut Batch, &mut [[f32; 4]]),
     ) {
-        let inv = tri.inv_area();
-        let mut step = None;
+        // The other side's extreme: the farthest entry, the nearest exit (in `w`, which
+        // grows toward the eye under perspective and away from it otherwise).
+        let min = face.known_front != PERSP;
         tri.spans(|row| {
             let width = (row.hi - row.lo + 1) as usize;
             if !batch.fits(width) {
                 flush(batch, acc);
             }
-            let dq = *step.get_or_insert_with(|| plane_step(&row, inv, &q));
-            self.row(batch, acc, &row, plane_at(&row, inv, &q), dq);
+            if min {
+                self.row::<true>(batch, acc, &row, cell, face);
+            } else {
+                self.row::<false>(batch, acc, &row, cell, face);
+            }
         });
     }
 
-    /// One span of [`Gather::triangle`]: its pixels are appended (one pass, no bounds check
-    /// per pixel), then the opaque ones (if any) removed.
+    /// One span of [`Gather::face`] (`MIN`: the other side's crossing is the least of its
+    /// planes): its pixels are appended (one pass, no bounds check per pixel), then the
+    /// opaque ones (if any) removed.
     #[inline(always)]
-    fn row(&self, batch: &mut Batch, acc: &[[f32; 4]], row: &Row, q0: [f32; 4], dq: [f32; 4]) {
-        const MASK: usize = CAPACITY - 1;
+    fn row<const MIN: bool>(
+        &self,
+        batch: &mut Batch,
+        acc: &[[f32; 4]],
+        row: &Row,
+        cell: &CellPlanes,
+        face: &FaceDraw,
+    ) {
         let start = ((row.y - self.y0) * self.width + row.lo - self.x0) as usize;
         let width = (row.hi - row.lo + 1) as usize;
         let n = batch.len;
-        let pixels = &acc[start..start + width];
         let secant = &self.secant[start..start + width];
-        let (pixel, out) = (&mut *batch.pixel, &mut *batch.secant);
+        let dx = row.lo as f32 + 0.5 - cell.origin[0];
+        let dy = row.y as f32 + 0.5 - cell.origin[1];
+        let k0 = face.known.at(dx, dy);
+        let o = face.others.map(|p| p.at(dx, dy));
+        let s0 = cell.sigma.at(dx, dy);
+        let (ka, oa, sa) = (face.known.a, face.others.map(|p| p.a), cell.sigma.a);
+        let (gamma, w0) = (cell.gamma, cell.w0);
+        // Whole slices of the row's length (`fits` was checked): one bounds check per row,
+        // and a loop the compiler can vectorize.
+        let range = n..n + width;
+        let pixel = &mut batch.pixel[range.clone()];
+        let out = &mut batch.secant[range.clone()];
         let [a0, a1, a2, a3] = &mut *batch.attr;
-        let mut opaque = false;
-        let mut i = 0.0f32;
-        for (x, (&s, a)) in secant.iter().zip(pixels).enumerate() {
-            let j = (n + x) & MASK;
-            pixel[j] = (start + x) as u32;
-            out[j] = s;
-            a0[j] = q0[0] + i * dq[0];
-            a1[j] = q0[1] + i * dq[1];
-            a2[j] = q0[2] + i * dq[2];
-            a3[j] = q0[3] + i * dq[3];
-            opaque |= a[3] >= self.early;
-            i += 1.0;
+        let (kw, ks, ow, os) = if face.known_front {
+            (a0, a1, a2, a3)
+        } else {
+            (a2, a3, a0, a1)
+        };
+        let (kw, ks) = (&mut kw[range.clone()], &mut ks[range.clone()]);
+        let (ow, os) = (&mut ow[range.clone()], &mut os[range]);
+        let less = |a: f32, b: f32| if a < b { a } else { b };
+        let more = |a: f32, b: f32| if a > b { a } else { b };
+        for x in 0..width {
+            let i = x as f32;
+            pixel[x] = (start + x) as u32;
+            out[x] = secant[x];
+            let k = k0 + i * ka;
+            let [p, q, r] = [0, 1, 2].map(|m| o[m] + i * oa[m]);
+            let e = if MIN {
+                less(less(p, q), r)
+            } else {
+                more(more(p, q), r)
+            };
+            let sigma = s0 + i * sa;
+            kw[x] = k;
+            ks[x] = sigma + gamma * (k - w0);
+            ow[x] = e;
+            os[x] = sigma + gamma * (e - w0);
         }
+        let opaque = acc[start..start + width].iter().any(|a| a[3] >= self.early);
         batch.len = if opaque {
             batch.keep_live(n, n + width, |p| acc[p as usize][3] < self.early)
         } else {
@@ -280,20 +331,6 @@ impl Batch {
     }
 }
 
-/// The attribute planes at the first column of `row`.
-#[inline(always)]
-fn plane_at(row: &Row, inv: f32, q: &[[f32; 4]; 3]) -> [f32; 4] {
-    let l = row.e.map(|e| e as f32 * inv);
-    std::array::from_fn(|c| l[0] * q[0][c] + l[1] * q[1][c] + l[2] * q[2][c])
-}
-
-/// The attribute planes' increments per column (the same on every row).
-#[inline(always)]
-fn plane_step(row: &Row, inv: f32, q: &[[f32; 4]; 3]) -> [f32; 4] {
-    let l = row.d.map(|d| d as f32 * inv);
-    std::array::from_fn(|c| l[0] * q[0][c] + l[1] * q[1][c] + l[2] * q[2][c])
-}
-
 /// A lane group of the batch's array `v` from `i`.
 #[inline(always)]
 fn load(v: &[f32], i: usize) -> Lanes {
@@ -314,7 +351,12 @@ fn piece_at(piece: &LinearPiece, s: &Lanes) -> [Lanes; 4] {
 impl Batch {
     /// Interpolates and colours every fragment (`PERSP`: the attributes are the perspective
     /// planes): fills the front depths and the premultiplied RGBA.
-    pub fn shade<const PERSP: bool>(&mut self, colour: &CellColour, table: &PsiTable) {
+    pub fn shade<const PERSP: bool>(
+        &mut self,
+        colour: &CellColour,
+        table: &PsiTable,
+        values: CellValues,
+    ) {
         if self.len == 0 {
             return;
         }
@@ -336,8 +378,12 @@ impl Batch {
             let sec = load(&self.secant[..], i);
             let z_f = lanes(|k| if PERSP { 1.0 / wf[k] } else { wf[k] });
             let z_b = lanes(|k| if PERSP { 1.0 / wb[k] } else { wb[k] });
-            let s_f = lanes(|k| if PERSP { nf[k] * z_f[k] } else { nf[k] });
-            let s_b = lanes(|k| if PERSP { nb[k] * z_b[k] } else { nb[k] });
+            let value = |n: f32, z: f32| {
+                let s = values.offset + if PERSP { n * z } else { n };
+                s.max(values.lo).min(values.hi)
+            };
+            let s_f = lanes(|k| value(nf[k], z_f[k]));
+            let s_b = lanes(|k| value(nb[k], z_b[k]));
             let len = lanes(|k| ((z_b[k] - z_f[k]) * sec[k]).max(0.0));
             let rgba = colour.lanes(table, &s_f, &s_b, &len);
             // Transparent black for unusable inputs, as the scalar models give (a finite
