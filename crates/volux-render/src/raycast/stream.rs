@@ -848,6 +848,25 @@ mod tests {
         assert_eq!(ceil_index(1e300), i32::MAX / 2);
     }
 
+    /// A run ends with the first lane to reach its end; idle lanes never end it, and a run is
+    /// one sample at least.
+    #[test]
+    fn a_run_ends_with_the_first_lane_to_end() {
+        let mut lattice = LaneLattice::new();
+        assert_eq!(lattice.run(), i32::MAX);
+        lattice.enter(3, 10, 17);
+        lattice.enter(9, 0, 40);
+        assert_eq!(lattice.run(), 7);
+        for _ in 0..7 {
+            lattice.advance();
+        }
+        assert_eq!(lattice.ended(), 1 << 3);
+        lattice.idle(3);
+        assert_eq!(lattice.run(), 33);
+        lattice.enter(5, 8, 8);
+        assert_eq!(lattice.run(), 1);
+    }
+
     #[test]
     fn block_order_visits_every_pixel_once() {
         for (tw, th) in [(16, 16), (7, 5), (1, 9), (4, 4)] {
