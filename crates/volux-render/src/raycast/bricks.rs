@@ -132,9 +132,11 @@ impl Bricks {
     /// The eight corners of the cell whose first sample is at `offset`, x fastest.
     #[inline(always)]
     fn corners(&self, offset: i32) -> [f32; 8] {
+        // One test (`offset` zero-extended, so the end cannot overflow) instead of two.
+        let at = offset as u32 as usize;
         let c = self
             .samples
-            .get(offset as usize..)
+            .get(at..at + REACH)
             .and_then(|s| s.first_chunk::<REACH>())
             .unwrap_or(&self.spare);
         CORNERS.map(|o| c[o])
@@ -148,25 +150,25 @@ impl Bricks {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn sample_raw_lanes<const N: usize>(&self, p: &[[f32; N]; 3]) -> [f32; N] {
-        let mut cell = [[0i32; N]; 3];
-        let mut frac = [[0.0f32; N]; 3];
-        for a in 0..3 {
-            for l in 0..N {
-                (cell[a][l], frac[a][l]) = clamped_cell(p[a][l], self.hi[a], self.cell_max[a]);
-            }
-        }
         let mut out = [0.0f32; N];
+        // Four lanes at a time from the positions on, so that their cells and fractions stay
+        // in registers (16-lane arrays of them went through the stack, zeroed first).
         for g in (0..N).step_by(4) {
+            let (mut cell, mut frac) = ([[0i32; 4]; 3], [[0.0f32; 4]; 3]);
+            for a in 0..3 {
+                for k in 0..4 {
+                    (cell[a][k], frac[a][k]) =
+                        clamped_cell(p[a][g + k], self.hi[a], self.cell_max[a]);
+                }
+            }
             let mut c = [[0.0f32; 4]; 8];
             for k in 0..4 {
-                let l = g + k;
-                let corners = self.corners(self.offset([cell[0][l], cell[1][l], cell[2][l]]));
+                let corners = self.corners(self.offset([cell[0][k], cell[1][k], cell[2][k]]));
                 for q in 0..8 {
                     c[q][k] = corners[q];
                 }
             }
-            let f = |a: usize| -> [f32; 4] { std::array::from_fn(|k| frac[a][g + k]) };
-            let (fx, fy, fz) = (f(0), f(1), f(2));
+            let [fx, fy, fz] = frac;
             let lerp = |a: [f32; 4], b: [f32; 4], t: [f32; 4]| -> [f32; 4] {
                 std::array::from_fn(|k| a[k] + (b[k] - a[k]) * t[k])
             };
