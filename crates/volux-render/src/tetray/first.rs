@@ -7,7 +7,7 @@
 //! rays) and its smallest view depth, and it is binned to the tiles its rectangle meets. A
 //! cell wholly behind the eye plane is met by no ray and left out; a cell across the plane
 //! of a perspective eye has no bounded rectangle, and then the frame queries the hierarchy
-//! per ray instead. Per tile ([`FirstHits`]): in order of depth, each of its cells is
+//! per ray instead (as it does when the bins would not fit in the memory budget). Per tile ([`FirstHits`]): in order of depth, each of its cells is
 //! clipped ([`Geometry::clip`]) against the rays of the pixels of its rectangle whose best hit
 //! so far does not start before the cell's depth, and a hit replaces the pixel's best when it
 //! starts first (ties by cell index, [`Hit::before`]). The tile's reach (how far its rays may
@@ -23,6 +23,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 use volux_core::camera::Ray;
+use volux_core::limits::check_alloc_within;
 use volux_core::{Camera, Projection, RayGenerator, TetMesh};
 
 use super::bvh::{Bvh, Hit};
@@ -125,9 +126,24 @@ pub(crate) struct TileBins {
 
 impl TileBins {
     /// The visible cells of `bvh` (cells of `mesh`) binned to the tiles of `grid` for the
-    /// projection `proj`; `None` when a cell lies across a perspective eye's plane. `margin`
-    /// (world units) is far above the rounding of a depth.
+    /// projection `proj`; `None` when a cell lies across a perspective eye's plane, or when
+    /// the bins (one entry per cell and tile it meets) would not fit in the process's memory
+    /// budget: the per-ray hierarchy query needs no bins. `margin` (world units) is far above
+    /// the rounding of a depth.
     pub fn new(
+        bvh: &Bvh,
+        mesh: &TetMesh,
+        proj: &Projector,
+        grid: &TileGrid,
+        margin: f64,
+    ) -> Option<Self> {
+        let budget = volux_core::limits::memory_limit();
+        Self::within(budget, bvh, mesh, proj, grid, margin)
+    }
+
+    /// [`TileBins::new`] with the bins' memory limited to `budget` bytes.
+    fn within(
+        budget: u64,
         bvh: &Bvh,
         mesh: &TetMesh,
         proj: &Projector,
@@ -167,6 +183,11 @@ impl TileBins {
         }
         for i in 1..offsets.len() {
             offsets[i] += offsets[i - 1];
+        }
+        let entries = offsets[grid.count()] as u64;
+        let entry_bytes = std::mem::size_of::<Splat>() as u64;
+        if check_alloc_within(budget, "the tile bins", entries, entry_bytes).is_err() {
+            return None;
         }
         let mut fill = offsets.clone();
         let none = Splat {
@@ -517,5 +538,22 @@ mod tests {
         assert!(bins(&inside).is_none());
         let outside = orbit("perspective", 10.0, 25.0, &mesh);
         assert!(bins(&outside).is_some_and(|b| !b.cells.is_empty()));
+    }
+
+    #[test]
+    fn bins_over_the_memory_budget_leave_the_frame_to_the_hierarchy() {
+        let mesh = synth::smooth_tets(3000).unwrap();
+        let caster = TetRayCaster::new(&mesh).unwrap();
+        let vis = visibility(&mesh, &caster, &gappy_tf());
+        let camera = orbit("perspective", 10.0, 25.0, &mesh);
+        let grid = TileGrid::new(64, 64, TILE);
+        let proj = Projector::new(&camera, 64, 64);
+        let margin = 1e-9 * caster.geo.scale;
+        let bins = |budget| TileBins::within(budget, &vis.bvh, &mesh, &proj, &grid, margin);
+        let full = bins(u64::MAX).expect("bins within an unlimited budget");
+        let bytes = (full.cells.len() * std::mem::size_of::<Splat>()) as u64;
+        assert!(bytes > 0);
+        assert!(bins(bytes).is_some());
+        assert!(bins(bytes - 1).is_none());
     }
 }
