@@ -19,6 +19,8 @@
 //! row's span of columns is the intersection of three half-lines solved with exact integer
 //! floor and ceiling divisions; the pixels of the span are then walked with incremental
 //! `E`s. Barycentric coordinates are `E / area`.
+use rayon::prelude::*;
+
 use super::project::SUBPIXEL;
 use crate::error::RenderError;
 use crate::tiles::{Rect, TileGrid};
@@ -124,20 +126,28 @@ pub fn bin_by_range(
     tiles: &TileGrid,
 ) -> Result<Bins, RenderError> {
     let n = tiles.count();
-    let range = |t: u32| {
-        ranges.get(t as usize).copied().ok_or_else(|| {
-            RenderError::InvalidOptions(format!("binning: tetrahedron {t} has no tile range"))
+    // The ranges in drawing order, gathered once in parallel: the two passes below then
+    // read them in sequence instead of at random (the bench's 1.25 M-cell dense frame: bin
+    // 38-45 ms -> 24-30 ms on 2 threads).
+    let ordered: Vec<[u16; 4]> = order
+        .par_iter()
+        .map(|&t| {
+            ranges.get(t as usize).copied().ok_or_else(|| {
+                RenderError::InvalidOptions(format!("binning: tetrahedron {t} has no tile range"))
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    let tiles_of = |[x0, y0, x1, y1]: [u16; 4]| {
+        (usize::from(y0)..=usize::from(y1)).flat_map(move |ty| {
+            (usize::from(x0)..=usize::from(x1)).map(move |tx| ty * tiles.cols + tx)
         })
     };
     let mut counts = vec![0u32; n + 1];
     let mut entries = 0u64;
-    for &t in order {
-        let [x0, y0, x1, y1] = range(t)?;
-        for ty in usize::from(y0)..=usize::from(y1) {
-            for tx in usize::from(x0)..=usize::from(x1) {
-                counts[ty * tiles.cols + tx + 1] += 1;
-                entries += 1;
-            }
+    for &r in &ordered {
+        for i in tiles_of(r) {
+            counts[i + 1] += 1;
+            entries += 1;
         }
     }
     check_bins(entries)?;
@@ -146,14 +156,10 @@ pub fn bin_by_range(
     }
     let mut items = vec![0u32; counts[n] as usize];
     let mut cursor = counts.clone();
-    for &t in order {
-        let [x0, y0, x1, y1] = range(t)?;
-        for ty in usize::from(y0)..=usize::from(y1) {
-            for tx in usize::from(x0)..=usize::from(x1) {
-                let c = &mut cursor[ty * tiles.cols + tx];
-                items[*c as usize] = t;
-                *c += 1;
-            }
+    for (&t, &r) in order.iter().zip(&ordered) {
+        for i in tiles_of(r) {
+            items[cursor[i] as usize] = t;
+            cursor[i] += 1;
         }
     }
     Ok(Bins {

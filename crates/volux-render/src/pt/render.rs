@@ -158,9 +158,10 @@ struct ViewData {
 }
 
 /// Bytes per tetrahedron of PT's per-frame buffers, at their peak: the fate of each cell
-/// (8), its tile range (8), the drawn ids and depths (8), the sorted order and its keys (16),
-/// the face adjacency (16) and the visibility sort's work lists (16).
-const FRAME_BYTES_PER_TET: u64 = 72;
+/// (8), its tile range (8) and again in drawing order for the binning (8), the drawn ids and
+/// depths (8), the sorted order and its keys (16), the face adjacency (16) and the
+/// visibility sort's work lists (16).
+const FRAME_BYTES_PER_TET: u64 = 80;
 
 /// Checks PT's per-frame buffers for `mesh` (the projected vertices and the per-cell lists
 /// of [`FRAME_BYTES_PER_TET`]) against the memory budget, before they are allocated.
