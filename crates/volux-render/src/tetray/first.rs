@@ -127,22 +127,10 @@ pub(crate) struct TileBins {
 impl TileBins {
     /// The visible cells of `bvh` (cells of `mesh`) binned to the tiles of `grid` for the
     /// projection `proj`; `None` when a cell lies across a perspective eye's plane, or when
-    /// the bins (one entry per cell and tile it meets) would not fit in the process's memory
-    /// budget: the per-ray hierarchy query needs no bins. `margin` (world units) is far above
-    /// the rounding of a depth.
+    /// the bins (one entry per cell and tile it meets) would take more than `budget` bytes:
+    /// the per-ray hierarchy query needs no bins. `margin` (world units) is far above the
+    /// rounding of a depth.
     pub fn new(
-        bvh: &Bvh,
-        mesh: &TetMesh,
-        proj: &Projector,
-        grid: &TileGrid,
-        margin: f64,
-    ) -> Option<Self> {
-        let budget = volux_core::limits::memory_limit();
-        Self::within(budget, bvh, mesh, proj, grid, margin)
-    }
-
-    /// [`TileBins::new`] with the bins' memory limited to `budget` bytes.
-    fn within(
         budget: u64,
         bvh: &Bvh,
         mesh: &TetMesh,
@@ -450,7 +438,7 @@ mod tests {
         let grid = TileGrid::new(n, n, TILE);
         let proj = Projector::new(&camera, n, n);
         let rays = camera.rays(n, n);
-        let bins = TileBins::new(&vis.bvh, mesh, &proj, &grid, 1e-9 * geo.scale)
+        let bins = TileBins::new(u64::MAX, &vis.bvh, mesh, &proj, &grid, 1e-9 * geo.scale)
             .expect("no visible cell across the eye plane");
         let (mut hit, mut miss) = (0, 0);
         for i in 0..grid.count() {
@@ -533,7 +521,14 @@ mod tests {
         let grid = TileGrid::new(32, 32, TILE);
         let bins = |camera: &Camera| {
             let proj = Projector::new(camera, 32, 32);
-            TileBins::new(&vis.bvh, &mesh, &proj, &grid, 1e-9 * caster.geo.scale)
+            TileBins::new(
+                u64::MAX,
+                &vis.bvh,
+                &mesh,
+                &proj,
+                &grid,
+                1e-9 * caster.geo.scale,
+            )
         };
         assert!(bins(&inside).is_none());
         let outside = orbit("perspective", 10.0, 25.0, &mesh);
@@ -549,7 +544,7 @@ mod tests {
         let grid = TileGrid::new(64, 64, TILE);
         let proj = Projector::new(&camera, 64, 64);
         let margin = 1e-9 * caster.geo.scale;
-        let bins = |budget| TileBins::within(budget, &vis.bvh, &mesh, &proj, &grid, margin);
+        let bins = |budget| TileBins::new(budget, &vis.bvh, &mesh, &proj, &grid, margin);
         let full = bins(u64::MAX).expect("bins within an unlimited budget");
         let bytes = (full.cells.len() * std::mem::size_of::<Splat>()) as u64;
         assert!(bytes > 0);
