@@ -365,7 +365,24 @@ impl SegmentIntegrator {
             return acc.rgba();
         }
         let to_t = |s: f64| (len * ((s - s_f) / ds)).clamp(0.0, len);
-        let mut emit = |k: usize, sa: f64, sb: f64, ta: f64, tb: f64| {
+        // The pieces in ray order: `k` is the piece of the current value `sa`, the next
+        // knot strictly between it and `s_b` ends it (one call site, so `piece` inlines).
+        let up = ds > 0.0;
+        let mut k = if up {
+            self.count_at_most(s_f)
+        } else {
+            self.count_below(s_f)
+        };
+        let (mut sa, mut ta) = (s_f, 0.0);
+        loop {
+            let knot = if up {
+                self.knots.get(k).filter(|&&x| x < s_b)
+            } else {
+                k.checked_sub(1)
+                    .and_then(|i| self.knots.get(i))
+                    .filter(|&&x| x > s_b)
+            };
+            let (sb, tb) = knot.map_or((s_b, len), |&x| (x, to_t(x)));
             let line = &self.lines[k];
             acc.piece(
                 tb - ta,
@@ -373,24 +390,11 @@ impl SegmentIntegrator {
                 line.color(sa),
                 line.color(sb),
             );
-        };
-        let (mut sa, mut ta) = (s_f, 0.0);
-        if ds > 0.0 {
-            let mut k = self.count_at_most(s_f);
-            while k < self.knots.len() && self.knots[k] < s_b {
-                let (sb, tb) = (self.knots[k], to_t(self.knots[k]));
-                emit(k, sa, sb, ta, tb);
-                (sa, ta, k) = (sb, tb, k + 1);
+            if knot.is_none() {
+                break;
             }
-            emit(k, sa, s_b, ta, len);
-        } else {
-            let mut k = self.count_below(s_f);
-            while k > 0 && self.knots[k - 1] > s_b {
-                let (sb, tb) = (self.knots[k - 1], to_t(self.knots[k - 1]));
-                emit(k, sa, sb, ta, tb);
-                (sa, ta, k) = (sb, tb, k - 1);
-            }
-            emit(k, sa, s_b, ta, len);
+            (sa, ta) = (sb, tb);
+            k = if up { k + 1 } else { k - 1 };
         }
         acc.rgba()
     }
@@ -429,7 +433,9 @@ impl Accumulator {
     }
 
     /// Adds a piece of length `len` with extinction and colour linear from the first to the
-    /// second value given.
+    /// second value given: one sub-interval ([`Accumulator::single`]) when its optical depth
+    /// is below a depth step, otherwise [`Accumulator::steps`].
+    #[inline(always)]
     fn piece(&mut self, len: f64, tau: [f64; 2], c_a: [f64; 3], c_b: [f64; 3]) {
         if len.is_nan() || len <= 0.0 {
             return;
@@ -443,7 +449,41 @@ impl Accumulator {
         let beta = finite_or_zero((tau[1] - tau[0]) * inv_len);
         let dc = [0, 1, 2].map(|k| finite_or_zero((c_b[k] - c_a[k]) * inv_len));
         // A piece thinner than a depth step is one sub-interval: no step to solve for.
-        let single = self.depth - depth0 < SINGLE_STEP_DEPTH;
+        if self.depth - depth0 < SINGLE_STEP_DEPTH {
+            self.single(len, tau, beta, c_a, dc);
+        } else {
+            self.steps(len, depth0, tau, beta, c_a, dc);
+        }
+    }
+
+    /// The piece as one sub-interval: the loop of [`Accumulator::steps`] run once, with the
+    /// whole piece as its step (the same operations, so the same bits).
+    #[inline(always)]
+    fn single(&mut self, len: f64, tau: [f64; 2], beta: f64, c_a: [f64; 3], dc: [f64; 3]) {
+        self.subintervals += 1;
+        let dq = (0.5 * len * (tau[0] + tau[1])).max(0.0);
+        let em = (-dq).exp_m1();
+        let g = gap_integral(tau[0], beta, len, dq, em);
+        let e0 = self.transmittance;
+        for k in 0..3 {
+            self.color[k] += e0 * (-c_a[k] * em + dc[k] * g);
+        }
+        self.transmittance = e0 * (1.0 + em);
+    }
+
+    /// The piece cut into sub-intervals on which the optical depth grows by at most
+    /// [`DEPTH_STEP`] (`depth0`: the depth before the piece; `beta`, `dc`: the slopes of the
+    /// extinction and the colour).
+    #[inline(never)]
+    fn steps(
+        &mut self,
+        len: f64,
+        depth0: f64,
+        tau: [f64; 2],
+        beta: f64,
+        c_a: [f64; 3],
+        dc: [f64; 3],
+    ) {
         let (mut u0, mut q0) = (0.0, depth0);
         let mut e0 = self.transmittance;
         loop {
@@ -453,11 +493,7 @@ impl Accumulator {
                 (tau[0] + beta * u0).max(0.0)
             };
             let rest = len - u0;
-            let h = if single {
-                f64::INFINITY
-            } else {
-                step_for_depth(alpha, beta, DEPTH_STEP)
-            };
+            let h = step_for_depth(alpha, beta, DEPTH_STEP);
             self.subintervals += 1;
             let last =
                 h.is_nan() || h >= rest || u0 + h <= u0 || self.subintervals >= MAX_SUBINTERVALS;
@@ -579,6 +615,13 @@ const GL8: Rule<8> = {
 /// 30-point rule), as the 8-point rule's does at a depth of `1/2`.
 const GL_DEPTHS: [f64; 3] = [0.006, 0.04, 0.15];
 
+/// The degree of the series of `expm1` with the 4-, 5- and 6-point rules: the degree
+/// [`series_degree`] gives at the rule's largest depth ([`GL_DEPTHS`]), which bounds the
+/// remainder at every smaller depth too. A constant degree makes the series straight-line
+/// code, without a search for the degree or a loop whose length a branch predictor would
+/// have to guess.
+const GL_DEGREES: [usize; 3] = [7, 9, 11];
+
 /// `int_0^h (exp(-q(v)) - exp(-dq)) dv` with `q(v) = alpha v + beta v^2 / 2`, `dq = q(h)`,
 /// `em = expm1(-dq)`, by Gauss-Legendre; written as `exp(-dq) int expm1(dq - q)` when `dq`
 /// is small, the `expm1` of arguments in `[0, dq]` summed as their Taylor series
@@ -588,15 +631,14 @@ fn gap_integral(alpha: f64, beta: f64, h: f64, dq: f64, em: f64) -> f64 {
     let q = |v: f64| alpha * v + 0.5 * beta * v * v;
     let half = 0.5 * h;
     if dq <= 1.0 {
-        let n = series_degree(dq);
         let sum = if dq <= GL_DEPTHS[0] {
-            series_rule(&GL4, q, half, dq, n)
+            series_rule(&GL4, q, half, dq, GL_DEGREES[0])
         } else if dq <= GL_DEPTHS[1] {
-            series_rule(&GL5, q, half, dq, n)
+            series_rule(&GL5, q, half, dq, GL_DEGREES[1])
         } else if dq <= GL_DEPTHS[2] {
-            series_rule(&GL6, q, half, dq, n)
+            series_rule(&GL6, q, half, dq, GL_DEGREES[2])
         } else {
-            series_rule(&GL8, q, half, dq, n)
+            series_rule(&GL8, q, half, dq, series_degree(dq))
         };
         return half * sum * (1.0 + em);
     }
@@ -821,6 +863,13 @@ mod tests {
         }
         eprintln!("split + composite vs whole: max |error| {worst:.2e}");
         assert!(worst < 1e-12, "{worst}");
+    }
+
+    #[test]
+    fn rule_degrees_are_the_degrees_at_the_rule_depths() {
+        for (d, n) in GL_DEPTHS.iter().zip(GL_DEGREES) {
+            assert_eq!(series_degree(*d), n, "depth {d}");
+        }
     }
 
     #[test]
