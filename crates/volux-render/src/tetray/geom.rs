@@ -60,6 +60,13 @@ pub(crate) struct Geometry {
 
 use crate::geometry::{cell_volume6, lex_cmp, lex_negative};
 
+/// `a` when `c`, else `b`, by bit masks: no branch on `c`.
+#[inline(always)]
+fn pick(c: bool, a: f64, b: f64) -> f64 {
+    let m = u64::from(c).wrapping_neg();
+    f64::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
+}
+
 /// The linear field through four points, or `None` for a degenerate or non-finite cell.
 fn cell_field(p: [DVec3; 4], s: [f64; 4]) -> Option<[f64; 4]> {
     if !s.iter().all(|v| v.is_finite()) {
@@ -168,12 +175,6 @@ impl Geometry {
         self.cells[t].adj
     }
 
-    /// The face of slot `f` of tet `t`: its index into `faces` (without [`FLIP`]).
-    #[inline]
-    pub fn face_id(&self, t: usize, f: usize) -> u32 {
-        self.cells[t].faces[f] & !FLIP
-    }
-
     /// Whether tet `t` is rendered (not degenerate, finite scalars).
     #[inline]
     pub fn usable(&self, t: usize) -> bool {
@@ -183,38 +184,51 @@ impl Geometry {
     /// The reference's clip of the ray `o + t d`, `t >= 0`, against tet `t`, with the exit
     /// face (the first of the faces giving the smallest exit parameter). `None` when the ray
     /// misses the cell, touches it in a point or the cell is skipped.
+    ///
+    /// Entered from a neighbour, the entry face's parameter is the neighbour's exit
+    /// parameter, bit for bit (the same plane read with the opposite sign, see the module
+    /// documentation), so the walk needs no special case for it. The four faces are combined
+    /// without branches on the signs of the ray's crossings (which a branch predictor cannot
+    /// learn); a face parallel to the ray sends the cell to [`Geometry::clip_parallel`], the
+    /// same clip with the parallel case.
     #[inline]
     pub fn clip(&self, t: usize, o: DVec3, d: DVec3) -> Option<Clip> {
-        self.clip_entered(t, o, d, u32::MAX, 0.0)
-    }
-
-    /// [`Geometry::clip`] of tet `t` entered through face `face` (an index into `faces`, or
-    /// `u32::MAX` for none) at `t_entry`, where the ray left the neighbour across it: the
-    /// neighbour's exit parameter is bit-identical to the one this clip would compute for
-    /// the face (the same plane read with the opposite sign, see the module documentation),
-    /// so it is taken instead of computed.
-    #[inline]
-    pub fn clip_entered(
-        &self,
-        t: usize,
-        o: DVec3,
-        d: DVec3,
-        face: u32,
-        t_entry: f64,
-    ) -> Option<Clip> {
         let cell = &self.cells[t];
         if cell.field[0].is_nan() {
             return None;
         }
-        let codes = cell.faces;
         let mut t_in = 0.0f64;
         let mut t_out = f64::INFINITY;
         let mut exit = 0u8;
-        for (f, &code) in codes.iter().enumerate() {
-            if code & !FLIP == face {
-                t_in = t_in.max(t_entry);
-                continue;
-            }
+        let mut parallel = false;
+        for (f, &code) in cell.faces.iter().enumerate() {
+            let pl = &self.faces[(code & !FLIP) as usize];
+            let sign = if code & FLIP != 0 { -1.0 } else { 1.0 };
+            let num = pl.n.dot(o - pl.a.as_dvec3()) * sign;
+            let den = pl.n.dot(d) * sign;
+            let te = -num / den;
+            t_in = t_in.max(pick(den < 0.0, te, f64::NEG_INFINITY));
+            let leave = pick(den > 0.0, te, f64::INFINITY);
+            exit = if leave < t_out { f as u8 } else { exit };
+            t_out = t_out.min(leave);
+            parallel |= !((den < 0.0) | (den > 0.0));
+        }
+        if parallel {
+            return self.clip_parallel(t, o, d);
+        }
+        (t_out > t_in && t_out.is_finite()).then_some(Clip { t_in, t_out, exit })
+    }
+
+    /// [`Geometry::clip`] face by face, with the case of a ray parallel to a face plane
+    /// (`den == 0`): inside when the ray is on the inner side, or in the plane and the tie
+    /// rule gives it to this cell (simulation of simplicity, [`lex_negative`]).
+    #[cold]
+    #[inline(never)]
+    fn clip_parallel(&self, t: usize, o: DVec3, d: DVec3) -> Option<Clip> {
+        let mut t_in = 0.0f64;
+        let mut t_out = f64::INFINITY;
+        let mut exit = 0u8;
+        for (f, &code) in self.cells[t].faces.iter().enumerate() {
             let pl = &self.faces[(code & !FLIP) as usize];
             let mut num = pl.n.dot(o - pl.a.as_dvec3());
             let mut den = pl.n.dot(d);

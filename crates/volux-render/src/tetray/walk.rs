@@ -218,7 +218,7 @@ impl Walker<'_> {
             // face planes load while the segment's integral is computed.
             let nb = geo.adj(hit.tet as usize)[hit.clip.exit as usize];
             let entered = if nb != NO_NEIGHBOR {
-                self.enter_neighbour(&hit, nb, o, d, t)
+                self.enter_neighbour(nb, o, d, t)
             } else {
                 None
             };
@@ -287,7 +287,7 @@ impl Walker<'_> {
             if nb == NO_NEIGHBOR {
                 return self.jump(vis, true, t_out, t_limit, o, d, out);
             }
-            match self.enter_neighbour(&hit, nb, o, d, t_out) {
+            match self.enter_neighbour(nb, o, d, t_out) {
                 Some(h) if vis.is_visible(nb) => {
                     out.skips += 1;
                     return Some(h);
@@ -327,11 +327,10 @@ impl Walker<'_> {
     }
 
     /// The neighbour `nb` entered through the exit face of `hit` at `t`, when the ray goes
-    /// on in it (the entry parameter comes from the shared face, bit for bit).
+    /// on in it (its entry parameter is `t`, bit for bit: [`Geometry::clip`]).
     #[inline(always)]
-    fn enter_neighbour(&self, hit: &Hit, nb: u32, o: DVec3, d: DVec3, t: f64) -> Option<Hit> {
-        let face = self.geo.face_id(hit.tet as usize, hit.clip.exit as usize);
-        let clip = self.geo.clip_entered(nb as usize, o, d, face, t)?;
+    fn enter_neighbour(&self, nb: u32, o: DVec3, d: DVec3, t: f64) -> Option<Hit> {
+        let clip = self.geo.clip(nb as usize, o, d)?;
         (clip.t_out > t).then_some(Hit { tet: nb, clip })
     }
 
@@ -367,7 +366,7 @@ impl Walker<'_> {
             t = seg.t_out;
             let nb = geo.adj(tet)[hit.clip.exit as usize];
             if nb != NO_NEIGHBOR {
-                if let Some(h) = self.enter_neighbour(&hit, nb, o, d, t) {
+                if let Some(h) = self.enter_neighbour(nb, o, d, t) {
                     next = Some(h);
                     continue;
                 }
