@@ -684,10 +684,16 @@ impl TileContext<'_> {
             width: tw as i64,
             early,
         };
+        let mut indices = [[0u32; 4]; GATHER];
         for chunk in list.chunks(GATHER) {
             gathered.clear();
-            for &t in chunk {
-                let tet = &tets[t as usize];
+            // The cells' vertex indices first, then their vertices: each pass's loads are
+            // independent of each other, so their cache misses overlap (a dependent chain
+            // tet -> vertex per cell would wait for one miss after the other).
+            for (ids, &t) in indices.iter_mut().zip(chunk) {
+                *ids = tets[t as usize];
+            }
+            for (tet, &t) in indices.iter().zip(chunk) {
                 let Some(screen) = self.proj.tet(tet) else {
                     continue;
                 };
