@@ -52,6 +52,7 @@ use crate::error::RenderError;
 use crate::frame::{Frame, MethodStats, PtStats};
 use crate::integrate::fragment::FragmentShader;
 use crate::integrate::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
+use crate::integrate::psi::lanes::LANES;
 use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;
@@ -648,11 +649,13 @@ impl TileContext<'_> {
         let mut acc = vec![[0.0f32; 4]; tw * th];
         let mut frags: Vec<Fragment> = Vec::new();
         let mut count = 0u64;
+        // Padded by a lane group for the gather's whole groups ([`Gather::secant`]).
         let secant: Vec<f32> = (0..tw * th)
             .map(|p| {
                 let (x, y) = (rect.x0 + p % tw, rect.y0 + p / tw);
                 pixel_secant(self.proj, x as f32 + 0.5, y as f32 + 0.5)
             })
+            .chain([1.0; LANES])
             .collect();
         let (right, up, forward) = self.camera.basis();
         let (w, h) = self.proj.size;
@@ -681,10 +684,16 @@ impl TileContext<'_> {
             width: tw as i64,
             early,
         };
+        let mut indices = [[0u32; 4]; GATHER];
         for chunk in list.chunks(GATHER) {
             gathered.clear();
-            for &t in chunk {
-                let tet = &tets[t as usize];
+            // The cells' vertex indices first, then their vertices: each pass's loads are
+            // independent of each other, so their cache misses overlap (a dependent chain
+            // tet -> vertex per cell would wait for one miss after the other).
+            for (ids, &t) in indices.iter_mut().zip(chunk) {
+                *ids = tets[t as usize];
+            }
+            for (tet, &t) in indices.iter().zip(chunk) {
                 let Some(screen) = self.proj.tet(tet) else {
                     continue;
                 };

@@ -204,7 +204,8 @@ impl Batch {
 
 /// What the rasterizer needs to gather one cell's fragments into a [`Batch`].
 pub struct Gather<'a> {
-    /// Per tile pixel, the secant of its ray to the view direction.
+    /// Per tile pixel, the secant of its ray to the view direction, then [`LANES`] padding
+    /// entries (a row's last lane group reads past its end).
     pub secant: &'a [f32],
     /// The tile's first column.
     pub x0: i64,
@@ -263,7 +264,6 @@ impl Gather<'_> {
         let start = ((row.y - self.y0) * self.width + row.lo - self.x0) as usize;
         let width = (row.hi - row.lo + 1) as usize;
         let n = batch.len;
-        let secant = &self.secant[start..start + width];
         let dx = row.lo as f32 + 0.5 - cell.origin[0];
         let dy = row.y as f32 + 0.5 - cell.origin[1];
         let k0 = face.known.at(dx, dy);
@@ -271,37 +271,38 @@ impl Gather<'_> {
         let s0 = cell.sigma.at(dx, dy);
         let (ka, oa, sa) = (face.known.a, face.others.map(|p| p.a), cell.sigma.a);
         let (gamma, w0) = (cell.gamma, cell.w0);
-        // Whole slices of the row's length (`fits` was checked): one bounds check per row,
-        // and a loop the compiler can vectorize.
-        let range = n..n + width;
-        let pixel = &mut batch.pixel[range.clone()];
-        let out = &mut batch.secant[range.clone()];
-        let [a0, a1, a2, a3] = &mut *batch.attr;
         let (kw, ks, ow, os) = if face.known_front {
-            (a0, a1, a2, a3)
+            (0, 1, 2, 3)
         } else {
-            (a2, a3, a0, a1)
+            (2, 3, 0, 1)
         };
-        let (kw, ks) = (&mut kw[range.clone()], &mut ks[range.clone()]);
-        let (ow, os) = (&mut ow[range.clone()], &mut os[range]);
-        let less = |a: f32, b: f32| if a < b { a } else { b };
-        let more = |a: f32, b: f32| if a > b { a } else { b };
-        for x in 0..width {
-            let i = x as f32;
-            pixel[x] = (start + x) as u32;
-            out[x] = secant[x];
-            let k = k0 + i * ka;
-            let [p, q, r] = [0, 1, 2].map(|m| o[m] + i * oa[m]);
+        // Whole lane groups: the pixels past the row's end (at most `LANES - 1`, which
+        // `fits` and the secant's padding leave room for) are written and not counted, so
+        // every group is one straight-line SIMD step, however short the row.
+        let steps = Vec4::new(0.0, 1.0, 2.0, 3.0);
+        for g in (0..width).step_by(LANES) {
+            let i = steps + Vec4::splat(g as f32);
+            let k = Vec4::splat(k0) + i * ka;
+            let [p, q, r] = [0, 1, 2].map(|j| Vec4::splat(o[j]) + i * oa[j]);
+            // `min` and `max` of SSE2 give the second operand when unordered, as the scalar
+            // selects `if a < b { a } else { b }` did.
             let e = if MIN {
-                less(less(p, q), r)
+                p.min(q).min(r)
             } else {
-                more(more(p, q), r)
+                p.max(q).max(r)
             };
-            let sigma = s0 + i * sa;
-            kw[x] = k;
-            ks[x] = sigma + gamma * (k - w0);
-            ow[x] = e;
-            os[x] = sigma + gamma * (e - w0);
+            let sigma = Vec4::splat(s0) + i * sa;
+            let (ks_v, os_v) = (sigma + (k - w0) * gamma, sigma + (e - w0) * gamma);
+            let (at, px) = (n + g, start + g);
+            for m in 0..LANES {
+                batch.pixel[(at + m) & (CAPACITY - 1)] = (px + m) as u32;
+            }
+            batch.secant[at..at + LANES].copy_from_slice(&self.secant[px..px + LANES]);
+            let attr = &mut *batch.attr;
+            attr[kw][at..at + LANES].copy_from_slice(&k.to_array());
+            attr[ks][at..at + LANES].copy_from_slice(&ks_v.to_array());
+            attr[ow][at..at + LANES].copy_from_slice(&e.to_array());
+            attr[os][at..at + LANES].copy_from_slice(&os_v.to_array());
         }
         let opaque = acc[start..start + width].iter().any(|a| a[3] >= self.early);
         batch.len = if opaque {
