@@ -121,7 +121,7 @@ impl ClassifyTable {
     fn resampled(&self, entry: impl Fn(Classified) -> [f32; 4]) -> LaneTable {
         let n = LANE_TABLE_SIZE;
         let last = (self.entries.len() - 1) as f32;
-        let entries: Vec<[f32; 4]> = (0..n)
+        let mut entries: Vec<[f32; 4]> = (0..n)
             .map(|k| {
                 entry(if self.entries.len() == n {
                     self.entries[k]
@@ -130,11 +130,12 @@ impl ClassifyTable {
                 })
             })
             .collect();
+        entries.push(entries[n - 1]);
         LaneTable {
             entries: entries
                 .into_boxed_slice()
                 .try_into()
-                .unwrap_or_else(|_| Box::new([[0.0; 4]; LANE_TABLE_SIZE])),
+                .unwrap_or_else(|_| Box::new([[0.0; 4]; LANE_TABLE_SIZE + 1])),
             lo: self.lo,
             scale: self.scale * (n - 1) as f32 / last,
         }
@@ -150,7 +151,10 @@ pub const LANE_TABLE_SIZE: usize = 4096;
 /// or colour and extinction ([`ClassifyTable::for_lanes`]).
 #[derive(Clone, Debug)]
 pub struct LaneTable {
-    entries: Box<[[f32; 4]; LANE_TABLE_SIZE]>,
+    /// The entries and a copy of the last one after them (never interpolated towards: the
+    /// lookups' entry `i` is at most `LANE_TABLE_SIZE - 2`), so that a masked `i` and `i + 1`
+    /// need no bounds check and share one address.
+    entries: Box<[[f32; 4]; LANE_TABLE_SIZE + 1]>,
     lo: f32,
     scale: f32,
 }
@@ -182,11 +186,8 @@ impl LaneTable {
     /// The entries `i` and `i + 1` interpolated at fraction `f`.
     #[inline(always)]
     pub fn at(&self, i: u32, f: f32) -> [f32; 4] {
-        let mask = LANE_TABLE_SIZE - 1;
-        let (a, b) = (
-            self.entries[i as usize & mask],
-            self.entries[(i as usize + 1) & mask],
-        );
+        let i = i as usize & (LANE_TABLE_SIZE - 1);
+        let (a, b) = (self.entries[i], self.entries[i + 1]);
         [
             a[0] + (b[0] - a[0]) * f,
             a[1] + (b[1] - a[1]) * f,

@@ -428,6 +428,21 @@ impl LaneLattice {
         pos
     }
 
+    /// The voxel-space positions of the samples `first + k` of the lanes, `first` their
+    /// indices as f32: the same values as [`LaneLattice::positions_at`] (indices below 2^24
+    /// are exact in f32), without converting every lane's index every step.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    pub(super) fn positions_after(&self, first: &[f32; LANES], k: f32) -> Lanes3 {
+        let mut pos = [[0.0f32; LANES]; 3];
+        for a in 0..3 {
+            for l in 0..LANES {
+                pos[a][l] = self.base[a][l] + self.step[a][l] * (first[l] + k);
+            }
+        }
+        pos
+    }
+
     /// The number of samples every lane takes before the first one reaches its end (one at
     /// least): a run of steps that needs no per-lane end test.
     pub(super) fn run(&self) -> i32 {
@@ -543,10 +558,13 @@ impl<F: Field> RayContext<'_, F> {
         // A run of steps that no lane's end interrupts, with the sample indices in a local
         // array: testing each lane's end every step took about 11 instructions per sample (the
         // compiler extracted, incremented and compared each lane's index on its own).
+        // Every lane advances one sample per step: the run counts the steps, and the lanes'
+        // indices advance by that count at its end.
         let run = lanes.lattice.run();
-        let mut i = lanes.lattice.i;
-        for _ in 0..run {
-            let pos = lanes.lattice.positions_at(&i);
+        let first = lanes.lattice.i.map(|i| i as f32);
+        let mut k = 0;
+        while k < run {
+            let pos = lanes.lattice.positions_after(&first, k as f32);
             let v = self.field.sample_lanes(&pos);
             match shading {
                 Some(sh) if LIT => {
@@ -565,9 +583,7 @@ impl<F: Field> RayContext<'_, F> {
             if R::SEGMENTS {
                 lanes.front = v;
             }
-            for l in 0..LANES {
-                i[l] += 1;
-            }
+            k += 1;
             // Whether some lane became opaque, as one i32 mask reduction (a bool one was
             // branch by branch).
             let mut opaque = 0i32;
@@ -578,7 +594,9 @@ impl<F: Field> RayContext<'_, F> {
                 break;
             }
         }
-        lanes.lattice.i = i;
+        for i in lanes.lattice.i.iter_mut() {
+            *i += k;
+        }
         let mut mask = lanes.lattice.ended();
         for l in 0..LANES {
             mask |= u32::from(lanes.acc[l][3] >= lanes.stop[l]) << l;
