@@ -77,6 +77,13 @@ pub enum Error {
     /// A camera that cannot be used.
     #[error("invalid camera: {0}")]
     InvalidCamera(String),
+    /// A clipping plane with a zero or non-finite normal or a non-finite offset.
+    #[error("invalid clip plane {0}")]
+    InvalidClipPlane(String),
+    /// A volume of interest that would enclose no volume (a cut removing everything, or
+    /// leaving only a face, an edge or a point; a flat starting box).
+    #[error("empty volume of interest: {0}")]
+    EmptyVolumeOfInterest(String),
     /// Heat-map arguments that cannot be used (e.g. a scale maximum that is not > 0).
     #[error("invalid heat map: {0}")]
     InvalidHeatMap(String),

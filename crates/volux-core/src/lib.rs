@@ -15,6 +15,7 @@
 //!   transfer function;
 //! - [`camera::Camera`]: perspective and orthographic cameras, JSON;
 //! - [`image::Image`]: the RGBA f32 linear framebuffer and PNG output;
+//! - [`voi::ConvexVoi`]: the convex volume of interest cut by planes (seed `004`, ch. 4);
 //! - [`heatmap`]: heat-map images of per-pixel values with a colour-scale legend;
 //! - [`histogram`]: value histograms (the automatic transfer function is fitted on them);
 //! - [`synth`]: synthetic datasets for tests, benchmarks and the demo;
@@ -40,6 +41,7 @@ pub mod tetrahedralize;
 pub mod transfer;
 pub mod transfer_import;
 pub mod units;
+pub mod voi;
 
 pub use aabb::Aabb;
 pub use camera::{Camera, CameraSpec, Projection, RayGenerator};
