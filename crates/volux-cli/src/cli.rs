@@ -330,6 +330,15 @@ pub struct RenderArgs {
     /// Integrate every ray to its end (no early ray termination).
     #[arg(long)]
     pub no_early_termination: bool,
+    /// Keep the half-space A*x + B*y + C*z + D >= 0, world coordinates (millimetres for
+    /// medical data); repeatable: the volume of interest is the data cut by every plane
+    /// (grids).
+    #[arg(
+        long = "clip-plane",
+        value_name = "A,B,C,D",
+        allow_hyphen_values = true
+    )]
+    pub clip_planes: Vec<String>,
     /// Write the per-pixel estimated integration error as a PNG (rays that missed the
     /// tolerance in magenta).
     #[arg(long)]

@@ -20,6 +20,7 @@ use crate::cli::{
     SortArg, ViewArg,
 };
 use crate::commands::common::CmdError;
+use volux_core::voi::ClipPlane;
 
 /// Parses `WxH`.
 pub fn parse_size(s: &str) -> Result<(usize, usize), CmdError> {
@@ -48,6 +49,21 @@ fn parse_background(s: &str) -> Result<Option<[f32; 3]>, CmdError> {
     match v.as_slice() {
         [r, g, b] if v.iter().all(|c| (0.0..=1.0).contains(c)) => Ok(Some([*r, *g, *b])),
         _ => Err(format!("--background '{s}': expected three values in 0..1 or 'none'").into()),
+    }
+}
+
+/// Parses a `--clip-plane A,B,C,D`.
+pub fn parse_clip_plane(s: &str) -> Result<ClipPlane, CmdError> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--clip-plane '{s}': expected four numbers A,B,C,D"))?;
+    match v.as_slice() {
+        [a, b, c, d] => {
+            ClipPlane::new(*a, *b, *c, *d).map_err(|e| format!("--clip-plane '{s}': {e}").into())
+        }
+        _ => Err(format!("--clip-plane '{s}': expected four numbers A,B,C,D").into()),
     }
 }
 
@@ -425,6 +441,11 @@ impl RenderPlan {
         if args.no_early_termination {
             scene.early_termination = None;
         }
+        scene.clip_planes = args
+            .clip_planes
+            .iter()
+            .map(|s| parse_clip_plane(s))
+            .collect::<Result<_, _>>()?;
         let resolved = scene.method.resolve(volume)?;
         crate::applicable::check_method(args, &resolved, loaded_grid)?;
         resolved.check_appearance(&scene.appearance)?;

@@ -134,6 +134,18 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
             "unlit and without isosurfaces",
         ),
         (
+            &["grid.raw", "--clip-plane", "0,0,0,1"],
+            "must be finite and non-zero",
+        ),
+        (
+            &["grid.raw", "--clip-plane", "1,2,3"],
+            "expected four numbers",
+        ),
+        (
+            &["mesh.vtet", "--clip-plane", "1,0,0,-0.5"],
+            "clip planes are drawn by grid ray casting only",
+        ),
+        (
             &[
                 "mesh.vtet",
                 "--method",
@@ -159,6 +171,19 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
     accepted(
         &[
             "render", "grid.raw", "--mip", "--size", "32x32", "-o", "a.png",
+        ],
+        d,
+    );
+    accepted(
+        &[
+            "render",
+            "grid.raw",
+            "--clip-plane",
+            "-1,0,0,0.5",
+            "--size",
+            "32x32",
+            "-o",
+            "c.png",
         ],
         d,
     );

@@ -51,6 +51,28 @@ impl ClipPlane {
     }
 }
 
+/// The part of `[t0, t1]` where the ray `origin + t dir` is on the kept side of every plane
+/// (the slab test of a box, generalised to any convex set of half-spaces); `None` when no
+/// interval of positive length is left.
+pub fn clip_by_planes<'a>(
+    planes: impl IntoIterator<Item = &'a ClipPlane>,
+    origin: DVec3,
+    dir: DVec3,
+    (mut t0, mut t1): (f64, f64),
+) -> Option<(f64, f64)> {
+    for p in planes {
+        let (d0, rate) = (p.distance(origin), p.normal.dot(dir));
+        if rate > 0.0 {
+            t0 = t0.max(-d0 / rate);
+        } else if rate < 0.0 {
+            t1 = t1.min(-d0 / rate);
+        } else if d0 < 0.0 {
+            return None;
+        }
+    }
+    (t1 > t0).then_some((t0, t1))
+}
+
 /// One face of the VOI: its plane (normal pointing inside) and its vertex loop, counter-
 /// clockwise seen from outside.
 #[derive(Clone, Debug, PartialEq)]
@@ -163,20 +185,7 @@ impl ConvexVoi {
     /// The parameter interval of the segment `origin + t dir`, `t` in `[t0, t1]`, that lies
     /// inside the VOI; `None` when the segment misses it.
     pub fn clip_segment(&self, origin: DVec3, dir: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
-        let (mut lo, mut hi) = (t0, t1);
-        for pl in self.planes() {
-            let (d0, rate) = (pl.distance(origin), pl.normal.dot(dir));
-            if rate == 0.0 {
-                if d0 < 0.0 {
-                    return None;
-                }
-            } else if rate > 0.0 {
-                lo = lo.max(-d0 / rate);
-            } else {
-                hi = hi.min(-d0 / rate);
-            }
-        }
-        (lo <= hi).then_some((lo, hi))
+        clip_by_planes(self.planes(), origin, dir, (t0, t1))
     }
 
     /// The volume enclosed (the divergence theorem over the faces' fans).

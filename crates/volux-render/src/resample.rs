@@ -16,7 +16,7 @@ use volux_core::TetMesh;
 use crate::error::RenderError;
 use crate::frame::Frame;
 use crate::raycast::{grid_frame, render_field, Placement, RenderOptions};
-use crate::renderer::{wrong_method, Renderer};
+use crate::renderer::{no_clip_planes, wrong_method, Renderer};
 use crate::sampling::Trilinear;
 use crate::scene::{Method, Scene};
 use crate::tiles::Control;
@@ -111,6 +111,7 @@ impl Renderer for ResampleRenderer {
             return Err(wrong_method("resample", &scene.method));
         };
         scene.validate()?;
+        no_clip_planes(self.name(), scene)?;
         let built = !matches!(&self.resampled, Some((n, _)) if *n == samples);
         if built {
             self.resampled = Some((samples, resample_mesh(&self.mesh, samples)?));

@@ -27,6 +27,7 @@ use std::sync::Arc;
 
 use volux_core::histogram::Histogram;
 use volux_core::tetrahedralize::grid_to_tets;
+use volux_core::voi::ClipPlane;
 use volux_core::{Aabb, Camera, Grid, TetMesh, TransferFunction};
 
 use crate::error::RenderError;
@@ -388,6 +389,11 @@ pub struct Scene {
     /// Stop a ray (or a pixel's fragments) once its opacity reaches this; `None` integrates
     /// to the end (references).
     pub early_termination: Option<f32>,
+    /// World-space clipping planes, each keeping `normal . x + offset >= 0`: the volume of
+    /// interest is the data box cut by all of them (seed `004`, ch. 4). Drawn by grid ray
+    /// casting (every integrator: rays clipped exactly to the planes); the mesh renderers
+    /// refuse a scene with planes.
+    pub clip_planes: Vec<ClipPlane>,
 }
 
 impl Scene {
@@ -402,6 +408,7 @@ impl Scene {
             appearance: Appearance::new(tf),
             method: Method::Auto,
             early_termination: Some(DEFAULT_EARLY_TERMINATION),
+            clip_planes: Vec::new(),
         }
     }
 
@@ -425,6 +432,17 @@ impl Scene {
             if !(e > 0.0 && e.is_finite()) {
                 return Err(RenderError::InvalidOptions(format!(
                     "early termination {e} must be a positive opacity"
+                )));
+            }
+        }
+        for p in &self.clip_planes {
+            // Planes read from a session file are checked as the CLI's are.
+            let (n, d) = (p.normal, p.offset);
+            ClipPlane::new(n.x, n.y, n.z, d)
+                .map_err(|e| RenderError::InvalidOptions(e.to_string()))?;
+            if (n.length() - 1.0).abs() > 1e-6 {
+                return Err(RenderError::InvalidOptions(format!(
+                    "clip plane {p:?}: the normal must have unit length"
                 )));
             }
         }

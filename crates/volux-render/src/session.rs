@@ -87,6 +87,9 @@ pub struct Session {
     pub method: Method,
     /// Early ray termination opacity (`null`: none).
     pub early_termination: Option<f32>,
+    /// Clipping planes of the volume of interest ([`Scene::clip_planes`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub clip_planes: Vec<volux_core::voi::ClipPlane>,
     /// Colour under the transparent parts of the picture (`null`: a transparent PNG).
     pub background: Option<[f32; 3]>,
     /// The slice views, when the viewer saved them.
@@ -106,6 +109,7 @@ impl Session {
             appearance: scene.appearance.clone(),
             method: scene.method,
             early_termination: scene.early_termination,
+            clip_planes: scene.clip_planes.clone(),
             background,
             slices: None,
         }
@@ -122,6 +126,7 @@ impl Session {
             appearance: self.appearance.clone(),
             method: self.method,
             early_termination: self.early_termination,
+            clip_planes: self.clip_planes.clone(),
         }
     }
 
@@ -251,6 +256,7 @@ mod tests {
             rgba: [1.0, 0.0, 0.0, 0.5],
         }])
         .unwrap();
+        s.clip_planes = vec![volux_core::voi::ClipPlane::new(1.0, -2.0, 0.5, 0.25).unwrap()];
         s
     }
 

@@ -46,7 +46,7 @@ use crate::frame::{Frame, MethodStats, Rebuilt};
 use crate::geometry::TetPlanes;
 pub use crate::geometry::{ray_tet_intersection, TetCrossing};
 use crate::integrate::segment::SegmentIntegrator;
-use crate::renderer::{frame, wrong_method, Renderer};
+use crate::renderer::{frame, no_clip_planes, wrong_method, Renderer};
 use crate::scene::{Method, Scene};
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 
@@ -291,6 +291,7 @@ impl Renderer for MeshReference {
             return Err(wrong_method("mesh-reference", &scene.method));
         }
         scene.validate()?;
+        no_clip_planes(self.name(), scene)?;
         let opts = ReferenceOptions {
             width: scene.view.width,
             height: scene.view.height,

@@ -57,7 +57,7 @@ use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
-use crate::renderer::{frame, wrong_method, Renderer};
+use crate::renderer::{frame, no_clip_planes, wrong_method, Renderer};
 use crate::scene::{Method, PtSettings, Scene, SortMode, DEFAULT_EARLY_TERMINATION};
 use crate::shading::BlinnPhong;
 use crate::tiles::Rect;
@@ -516,6 +516,7 @@ impl<M: Deref<Target = TetMesh> + Send> Renderer for PtRenderer<M> {
             other => return Err(wrong_method("pt", &other)),
         };
         scene.validate()?;
+        no_clip_planes(self.name(), scene)?;
         let r = PtRenderer::render(self, &PtOptions::from_scene(scene, &settings, control))?;
         let rebuilt = r.stats.rebuilt;
         Ok(frame(

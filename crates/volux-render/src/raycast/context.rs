@@ -4,6 +4,7 @@
 use glam::{DVec3, Vec3};
 use volux_core::camera::{Ray, RayGenerator};
 use volux_core::transfer::TransferFunction;
+use volux_core::voi::ClipPlane;
 
 use super::options::{Placement, RenderOptions};
 use crate::classify::{BreakpointRanks, ClassifyTable, LaneTable};
@@ -125,7 +126,26 @@ pub(crate) struct RayContext<'a, F> {
     pub(crate) breakpoints: Vec<f64>,
     /// The camera's rays for this image size, in the grid's local frame.
     pub(crate) rays: LocalRays,
+    /// The clipping planes in the grid's local frame ([`local_clip_planes`]).
+    pub(crate) clip: Vec<ClipPlane>,
     pub(crate) opts: &'a RenderOptions,
+}
+
+/// World clipping planes in a grid's local frame: a world point is `o + R (p - o)` for the
+/// local point `p` (`o` the origin, `R` the direction), so `n . x + d` becomes
+/// `(Rᵀ n) . p + d + n . o - (Rᵀ n) . o`. `R` is orthonormal: the normal stays a unit vector
+/// and distances along rays are unchanged.
+pub(crate) fn local_clip_planes(place: &Placement, planes: &[ClipPlane]) -> Vec<ClipPlane> {
+    planes
+        .iter()
+        .map(|p| {
+            let n = place.vector_to_local(p.normal);
+            ClipPlane {
+                normal: n,
+                offset: p.offset + p.normal.dot(place.origin) - n.dot(place.origin),
+            }
+        })
+        .collect()
 }
 
 /// The camera's world rays turned into a grid's local frame ([`Placement`]): the one place

@@ -1,5 +1,6 @@
 //! Options and results of the grid ray caster.
 use glam::{DMat3, DVec3};
+use volux_core::voi::ClipPlane;
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
 use crate::error::RenderError;
@@ -45,6 +46,9 @@ pub struct RenderOptions {
     /// Maximum intensity projection instead of compositing: each pixel shows the TF colour of
     /// the largest value along its ray.
     pub mip: bool,
+    /// World-space clipping planes: rays sample only where every plane keeps them
+    /// (`normal . x + offset >= 0`).
+    pub clip_planes: Vec<ClipPlane>,
     /// Cancellation and progress.
     pub control: Control,
 }
@@ -72,6 +76,7 @@ impl RenderOptions {
             iso_lighting: Some(a.lighting),
             isosurfaces: a.isosurfaces.clone(),
             mip: a.mip,
+            clip_planes: scene.clip_planes.clone(),
             control: control.clone(),
         }
     }
@@ -93,6 +98,7 @@ impl RenderOptions {
             iso_lighting: None,
             isosurfaces: Isosurfaces::default(),
             mip: false,
+            clip_planes: Vec::new(),
             control: Control::default(),
         }
     }

@@ -2,6 +2,7 @@
 //! loops, isosurfaces, lighting and MIP, one ray at a time (the reference, and the paths the
 //! lane streams do not take).
 use glam::{DVec3, Vec3};
+use volux_core::voi::clip_by_planes;
 use volux_core::TransferFunction;
 
 use super::clip::{ray_box, voxel_crossings};
@@ -157,6 +158,7 @@ impl<F: Field> RayContext<'_, F> {
     ) -> Option<(RaySetup, f64)> {
         let place = &self.place;
         let (t0, t1) = ray_box(origin, dir, place.origin, place.origin + place.extent())?;
+        let (t0, t1) = clip_by_planes(&self.clip, origin, dir, (t0, t1))?;
         let unit = place.spacing.min_element();
         let o_v = (origin - place.origin) / place.spacing;
         let d_v = dir / place.spacing;
@@ -432,6 +434,7 @@ impl<F: Field> RayContext<'_, F> {
     pub(super) fn mip_ray(&self, origin: DVec3, dir: DVec3) -> Option<MipRay> {
         let place = &self.place;
         let (t0, t1) = ray_box(origin, dir, place.origin, place.origin + place.extent())?;
+        let (t0, t1) = clip_by_planes(&self.clip, origin, dir, (t0, t1))?;
         let step = match self.opts.integrator {
             Integrator::Riemann { step } | Integrator::Preintegrated { step } => step,
             _ => 0.5,

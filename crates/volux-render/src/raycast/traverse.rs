@@ -4,7 +4,7 @@ use std::time::Instant;
 
 use volux_core::image::Image;
 
-use super::context::{Classification, Derived, LocalRays, RayContext};
+use super::context::{local_clip_planes, Classification, Derived, LocalRays, RayContext};
 use super::options::{Placement, RenderOptions, Rendered};
 use crate::error::RenderError;
 use crate::frame::{Rebuilt, RenderStats};
@@ -141,6 +141,7 @@ pub(crate) fn render_with<F: Field>(
             world: opts.camera.rays(opts.width, opts.height),
             place,
         },
+        clip: local_clip_planes(&place, &opts.clip_planes),
         opts,
     };
     let grid = TileGrid::new(opts.width, opts.height, TILE);
