@@ -463,6 +463,8 @@ pub enum Suite {
     Tetray,
     /// The grid speed targets, cases in turn.
     Targets,
+    /// The volume of interest (issue 18): plane cuts, and frames with clip planes.
+    Voi,
 }
 
 /// `volux render --method`.

@@ -224,3 +224,36 @@ fn compare_reports_differences_and_rejects_mismatched_sizes() {
     assert!(err.contains("differ in size"), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "one readable line: {err}");
 }
+
+/// The VOI suite cuts the box and a polyhedron of at least 578 vertices and renders a grid with
+/// and without five planes; its JSON row names every figure.
+#[test]
+fn bench_voi_suite_reports_cuts_and_clipped_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = volux(
+        &[
+            "bench",
+            "--suite",
+            "voi",
+            "--frames",
+            "3",
+            "--grid-size",
+            "24",
+            "--json",
+        ],
+        dir.path(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let row = &rows[0];
+    assert_eq!(row["suite"], "voi");
+    assert!(row["many_vertices"].as_u64().unwrap() >= 578);
+    for key in ["cut_us_8", "cut_us_many", "ms", "ms_five_planes"] {
+        let v = row[key].as_f64().unwrap_or(f64::NAN);
+        assert!(v.is_finite() && v > 0.0, "{key}: {v}");
+    }
+}

@@ -239,6 +239,10 @@ fn bench_options_that_change_nothing_are_refused() {
             "--only selects cases",
         ),
         (&["bench", "--frames", "0"], "at least one frame"),
+        (
+            &["bench", "--suite", "voi", "--quick"],
+            "does not apply to --suite voi",
+        ),
     ] {
         let err = refused(args, d);
         assert!(

@@ -18,6 +18,7 @@ mod grid;
 mod pt;
 mod targets;
 mod tetray;
+mod voi;
 
 /// Refuses the options that would change nothing: `--frames` with `--quick` (one frame per
 /// case), `--quick` with the targets (they have no quick form), `--grid-size` with the mesh
@@ -34,6 +35,11 @@ pub fn check_options(
     }
     if quick && given("frames") {
         return Err("--quick renders one frame per case; drop --quick or --frames".into());
+    }
+    if quick && suite == Suite::Voi {
+        return Err(
+            "--quick does not apply to --suite voi: its cuts and frames have no quick form".into(),
+        );
     }
     if quick && suite == Suite::Targets {
         return Err(
@@ -71,6 +77,7 @@ pub fn run(
         Suite::Grid => grid::run(quick, frames, n, as_json, only)?,
         Suite::Pt => pt::run(quick, frames, as_json)?,
         Suite::Tetray => tetray::run(quick, frames, as_json)?,
+        Suite::Voi => voi::run(frames, n, as_json)?,
         Suite::All => {
             let mut rows = grid::run(quick, frames, n, as_json, only)?;
             rows.extend(pt::run(quick, frames, as_json)?);
