@@ -143,7 +143,7 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
         ),
         (
             &["mesh.vtet", "--clip-plane", "1,0,0,-0.5"],
-            "clip planes are drawn by grid ray casting only",
+            "clip planes are drawn by ray casting only",
         ),
         (
             &[

@@ -64,6 +64,8 @@
 #![deny(unsafe_code)]
 
 pub mod classify;
+#[cfg(test)]
+mod clip_tests;
 pub mod composite;
 pub mod engine;
 pub mod error;

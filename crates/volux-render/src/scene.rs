@@ -391,8 +391,9 @@ pub struct Scene {
     pub early_termination: Option<f32>,
     /// World-space clipping planes, each keeping `normal . x + offset >= 0`: the volume of
     /// interest is the data box cut by all of them (seed `004`, ch. 4). Drawn by grid ray
-    /// casting (every integrator: rays clipped exactly to the planes); the mesh renderers
-    /// refuse a scene with planes.
+    /// casting (every integrator: rays clipped exactly to the planes) and tet ray casting
+    /// (segments trimmed exactly); PT, the mesh reference and resampling refuse a scene with
+    /// planes.
     pub clip_planes: Vec<ClipPlane>,
 }
 

@@ -21,8 +21,6 @@
 mod adaptive_stream;
 mod bricks;
 pub mod clip;
-#[cfg(test)]
-mod clip_tests;
 mod context;
 mod mip_stream;
 pub mod options;

@@ -1,6 +1,7 @@
 //! The options of a tetrahedral ray casting frame.
 use volux_core::camera::Camera;
 use volux_core::transfer::TransferFunction;
+use volux_core::voi::ClipPlane;
 
 use crate::error::RenderError;
 use crate::integrate::segment::SegmentRule;
@@ -39,6 +40,9 @@ pub struct TetRayOptions {
     /// them through a hierarchy of the other cells (the `skip` module). The image is the same
     /// up to the choice among cells tied at an edge or vertex; `false` walks every cell.
     pub skip_empty: bool,
+    /// World-space clipping planes (`normal . x + offset >= 0` kept): every segment is
+    /// trimmed exactly to the part of its ray the planes keep (seed `004` ch. 4).
+    pub clip_planes: Vec<ClipPlane>,
     /// Cancellation and progress.
     pub control: Control,
 }
@@ -58,6 +62,7 @@ impl TetRayOptions {
             mip: false,
             early_termination: Some(DEFAULT_EARLY_TERMINATION),
             skip_empty: true,
+            clip_planes: Vec::new(),
             control: Control::default(),
         }
     }
@@ -111,6 +116,7 @@ impl TetRayOptions {
             mip: a.mip,
             early_termination: scene.early_termination,
             skip_empty: true,
+            clip_planes: scene.clip_planes.clone(),
             control: control.clone(),
         }
     }

@@ -17,6 +17,7 @@
 //!   is linear in each cell), shown with its TF colour, opaque, as the grid MIP
 //!   ([`crate::mip`]) does.
 use glam::{DVec3, Vec3};
+use volux_core::voi::{clip_by_planes, ClipPlane};
 use volux_core::{TetMesh, TransferFunction};
 
 use super::options::TetRayOptions;
@@ -63,6 +64,24 @@ pub(crate) struct PixelContext<'a> {
     shading: BlinnPhong,
     gradients: &'a [Vec3],
     early: Option<f64>,
+    clip: &'a [ClipPlane],
+}
+
+/// The part of the segment `s` inside the ray window `[c0, c1]` (the scalar interpolated
+/// linearly, as the field is within a cell); `None` when none of it is.
+fn trim(s: &WalkSegment, (c0, c1): (f64, f64)) -> Option<WalkSegment> {
+    if s.t_out <= c0 || s.t_in >= c1 {
+        return None;
+    }
+    let at = |t: f64| s.s_in + (s.s_out - s.s_in) * ((t - s.t_in) / (s.t_out - s.t_in));
+    let mut out = *s;
+    if s.t_in < c0 {
+        (out.t_in, out.s_in) = (c0, at(c0));
+    }
+    if s.t_out > c1 {
+        (out.t_out, out.s_out) = (c1, at(c1));
+    }
+    Some(out)
 }
 
 impl<'a> PixelContext<'a> {
@@ -95,6 +114,7 @@ impl<'a> PixelContext<'a> {
             shading: opts.shading,
             gradients,
             early: opts.early_termination.map(f64::from),
+            clip: &opts.clip_planes,
         }
     }
 
@@ -170,6 +190,10 @@ impl<'a> PixelContext<'a> {
         scratch: &mut Scratch,
         segments: &mut Vec<WalkSegment>,
     ) -> (PixelOut, WalkOutcome) {
+        let all = (f64::NEG_INFINITY, f64::INFINITY);
+        let Some(window) = clip_by_planes(self.clip, o, d, all) else {
+            return (PixelOut::default(), WalkOutcome::default());
+        };
         match self.mode {
             Mode::Segments => {
                 let mut acc = [0.0f64; 4];
@@ -177,6 +201,11 @@ impl<'a> PixelContext<'a> {
                 let view = d.as_vec3();
                 let iso = !self.isosurfaces.is_empty();
                 let sink = |s: &WalkSegment| {
+                    // Segments before the clipped window are passed, the first after it ends
+                    // the walk.
+                    let Some(s) = &trim(s, window) else {
+                        return s.t_in < window.1;
+                    };
                     let c = if iso {
                         shader
                             .fragment(
@@ -207,6 +236,9 @@ impl<'a> PixelContext<'a> {
             Mode::Mip => {
                 let mut best: Option<f64> = None;
                 let outcome = walker.trace(o, d, scratch, |s| {
+                    let Some(s) = trim(s, window) else {
+                        return s.t_in < window.1;
+                    };
                     let m = s.s_in.max(s.s_out);
                     if m.is_finite() {
                         best = Some(best.map_or(m, |b| b.max(m)));
@@ -230,7 +262,10 @@ impl<'a> PixelContext<'a> {
             Mode::Adaptive(p) => {
                 segments.clear();
                 let outcome = walker.trace(o, d, scratch, |s| {
-                    segments.push(*s);
+                    let Some(s) = trim(s, window) else {
+                        return s.t_in < window.1;
+                    };
+                    segments.push(s);
                     true
                 });
                 (self.adaptive(o, d, segments, &p), outcome)

@@ -22,7 +22,7 @@ use crate::error::RenderError;
 use crate::frame::{Frame, MethodStats, Rebuilt, TetRayStats};
 use crate::integrate::psi::PsiTable;
 use crate::integrate::SegmentRule;
-use crate::renderer::{frame, no_clip_planes, wrong_method, Renderer};
+use crate::renderer::{frame, wrong_method, Renderer};
 use crate::scene::{Method, Scene, MESH_UNITS_PER_DIAGONAL};
 use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 
@@ -460,7 +460,6 @@ impl<M: Deref<Target = TetMesh> + Send + Sync> Renderer for TetRayCaster<M> {
             other => return Err(wrong_method("tet-raycast", &other)),
         };
         scene.validate()?;
-        no_clip_planes(self.name(), scene)?;
         let unit = self.mesh.bounds().diagonal() / MESH_UNITS_PER_DIAGONAL;
         let opts = TetRayOptions::from_scene(scene, rule, unit, control);
         let r = TetRayCaster::render(self, &opts)?;
