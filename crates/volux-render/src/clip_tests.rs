@@ -46,14 +46,7 @@ fn every_integrator_draws_the_clipped_chord_of_a_constant_medium() {
         Integrator::Riemann { step: 0.25 },
         Integrator::Trapezoid { step: 0.25 },
         Integrator::Preintegrated { step: 0.5 },
-        Integrator::AdaptiveSimpson(AdaptiveParams {
-            tol: 1e-3,
-            h0: 0.5,
-            hmin: 0.1,
-            hmax: 4.0,
-            control: StepControl::Coupled,
-            early_termination: None,
-        }),
+        Integrator::AdaptiveSimpson(adaptive()),
         Integrator::Reference,
     ];
     for integrator in integrators {
@@ -82,6 +75,18 @@ fn planes_that_keep_everything_change_nothing() {
     o.clip_planes = vec![ClipPlane::new(1.0, 0.0, 0.0, -100.0).unwrap()];
     let empty = render_grid(&g, &o).unwrap().image;
     assert!((0..16).all(|y| (0..16).all(|x| empty.get(x, y)[3] == 0.0)));
+}
+
+/// Adaptive Simpson tight enough for the closed form, early termination off.
+fn adaptive() -> AdaptiveParams {
+    AdaptiveParams {
+        tol: 1e-3,
+        h0: 0.5,
+        hmin: 0.1,
+        hmax: 4.0,
+        control: StepControl::Coupled,
+        early_termination: None,
+    }
 }
 
 /// The camera, planes and TF of both renderers' tests.
@@ -131,18 +136,10 @@ fn the_tet_ray_caster_draws_the_clipped_chord_of_a_constant_medium() {
     let mesh = volux_core::tetrahedralize::grid_to_tets(&g).unwrap();
     let (cam, planes, tf) = clipped_setup(&g);
     let caster = TetRayCaster::new(&mesh).unwrap();
-    let adaptive = AdaptiveParams {
-        tol: 1e-3,
-        h0: 0.5,
-        hmin: 0.1,
-        hmax: 4.0,
-        control: StepControl::Coupled,
-        early_termination: None,
-    };
     for color in [
         SegmentRule::Exact,
         SegmentRule::Psi,
-        SegmentRule::AdaptiveSimpson(adaptive),
+        SegmentRule::AdaptiveSimpson(adaptive()),
     ] {
         let o = TetRayOptions {
             width: 24,
