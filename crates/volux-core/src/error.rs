@@ -80,6 +80,9 @@ pub enum Error {
     /// A clipping plane with a zero or non-finite normal or a non-finite offset.
     #[error("invalid clip plane {0}")]
     InvalidClipPlane(String),
+    /// A sweep of slices with a step that is not positive or gives too many slices.
+    #[error("invalid sweep: {0}")]
+    InvalidSweep(String),
     /// A volume of interest that would enclose no volume (a cut removing everything, or
     /// leaving only a face, an edge or a point; a flat starting box).
     #[error("empty volume of interest: {0}")]

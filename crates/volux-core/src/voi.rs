@@ -45,6 +45,19 @@ impl ClipPlane {
         })
     }
 
+    /// Checks a plane built field by field (e.g. read from a session file): finite, with a
+    /// unit normal.
+    pub fn check(&self) -> Result<()> {
+        let (n, d) = (self.normal, self.offset);
+        Self::new(n.x, n.y, n.z, d)?;
+        if (n.length() - 1.0).abs() > 1e-6 {
+            return Err(Error::InvalidClipPlane(format!(
+                "{n:?}, {d}: the normal must have unit length"
+            )));
+        }
+        Ok(())
+    }
+
     /// Signed distance of `p` from the plane, positive on the kept side.
     pub fn distance(&self, p: DVec3) -> f64 {
         self.normal.dot(p) + self.offset
@@ -209,8 +222,7 @@ impl ConvexVoi {
     /// Cuts the VOI by `plane`, keeping its kept side (sec. 4.3.2). On error the VOI is left
     /// unchanged.
     pub fn cut(&mut self, plane: &ClipPlane) -> Result<Cut> {
-        let dist: Vec<f64> = self.vertices.iter().map(|&v| plane.distance(v)).collect();
-        let side: Vec<Side> = dist.iter().map(|&d| Side::of(d, self.eps)).collect();
+        let (dist, side) = self.classify(plane);
         if !side.contains(&Side::Out) {
             return Ok(Cut::Unchanged);
         }
@@ -247,8 +259,8 @@ impl ConvexVoi {
         let count = ((hi - lo) / step).floor() + 1.0;
         let usable = step > 0.0 && count <= MAX_SWEEP_SLICES as f64;
         if !usable {
-            return Err(Error::InvalidClipPlane(format!(
-                "sweep step {step}: must be > 0 and give at most {MAX_SWEEP_SLICES} slices"
+            return Err(Error::InvalidSweep(format!(
+                "step {step}: must be > 0 and give at most {MAX_SWEEP_SLICES} slices"
             )));
         }
         let mut out = Vec::with_capacity(count as usize);
@@ -296,11 +308,17 @@ impl ConvexVoi {
 
     /// The support edges of the plane `plane`, in the order of its polygon.
     fn support_edges(&self, plane: &ClipPlane) -> Vec<(u32, u32)> {
-        let dist: Vec<f64> = self.vertices.iter().map(|&v| plane.distance(v)).collect();
-        let side: Vec<Side> = dist.iter().map(|&d| Side::of(d, self.eps)).collect();
+        let (dist, side) = self.classify(plane);
         Cutter::new(&self.vertices, &dist, &side)
             .support_edges(&self.faces)
             .unwrap_or_default()
+    }
+
+    /// Each vertex's signed distance from `plane` and its side.
+    fn classify(&self, plane: &ClipPlane) -> (Vec<f64>, Vec<Side>) {
+        let dist: Vec<f64> = self.vertices.iter().map(|&v| plane.distance(v)).collect();
+        let side = dist.iter().map(|&d| Side::of(d, self.eps)).collect();
+        (dist, side)
     }
 
     /// The points at weight `d` along the support edges `edges`.

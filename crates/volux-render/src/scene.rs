@@ -438,14 +438,8 @@ impl Scene {
         }
         for p in &self.clip_planes {
             // Planes read from a session file are checked as the CLI's are.
-            let (n, d) = (p.normal, p.offset);
-            ClipPlane::new(n.x, n.y, n.z, d)
+            p.check()
                 .map_err(|e| RenderError::InvalidOptions(e.to_string()))?;
-            if (n.length() - 1.0).abs() > 1e-6 {
-                return Err(RenderError::InvalidOptions(format!(
-                    "clip plane {p:?}: the normal must have unit length"
-                )));
-            }
         }
         Ok(())
     }
@@ -547,6 +541,12 @@ mod tests {
         assert!(bad.validate().is_err());
         let mut bad = scene.clone();
         bad.early_termination = Some(f32::NAN);
+        assert!(bad.validate().is_err());
+        let mut bad = scene.clone();
+        bad.clip_planes = vec![ClipPlane {
+            normal: glam::DVec3::new(0.0, 3.0, 0.0),
+            offset: 0.0,
+        }];
         assert!(bad.validate().is_err());
         let mut bad = scene;
         bad.appearance.opacity_scale = -1.0;

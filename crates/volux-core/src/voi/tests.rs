@@ -124,6 +124,12 @@ fn bad_planes_and_flat_boxes_are_errors() {
     assert!(ClipPlane::new(f64::NAN, 1.0, 0.0, 1.0).is_err());
     assert!(ClipPlane::new(1.0, 0.0, 0.0, f64::INFINITY).is_err());
     assert!(ClipPlane::new(1e300, 1e300, 0.0, 1.0).is_err());
+    let long = ClipPlane {
+        normal: DVec3::new(2.0, 0.0, 0.0),
+        offset: 1.0,
+    };
+    assert!(long.check().is_err());
+    assert!(plane(2.0, 0.0, 0.0, 1.0).check().is_ok());
     let flat = Aabb {
         min: DVec3::ZERO,
         max: DVec3::new(1.0, 0.0, 1.0),
@@ -274,8 +280,9 @@ fn the_sweep_matches_direct_sections_and_integrates_to_the_volume() {
 fn bad_sweeps_are_errors() {
     let voi = unit_box();
     assert!(voi.sweep(DVec3::ZERO, 0.1).is_err());
-    assert!(voi.sweep(DVec3::X, 0.0).is_err());
-    assert!(voi.sweep(DVec3::X, f64::NAN).is_err());
-    assert!(voi.sweep(DVec3::X, 1e-12).is_err());
+    for step in [0.0, -1.0, f64::NAN, 1e-12] {
+        let err = voi.sweep(DVec3::X, step).unwrap_err();
+        assert!(matches!(err, Error::InvalidSweep(_)), "step {step}: {err}");
+    }
     assert_eq!(voi.sweep(DVec3::X, 0.25).unwrap().len(), 5);
 }
