@@ -87,6 +87,9 @@ pub enum Error {
     /// leaving only a face, an edge or a point; a flat starting box).
     #[error("empty volume of interest: {0}")]
     EmptyVolumeOfInterest(String),
+    /// A sculpting tool given unusable input (a non-positive radius, no points, label 0).
+    #[error("invalid sculpting input: {0}")]
+    InvalidSculpt(String),
     /// Heat-map arguments that cannot be used (e.g. a scale maximum that is not > 0).
     #[error("invalid heat map: {0}")]
     InvalidHeatMap(String),

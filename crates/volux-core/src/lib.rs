@@ -16,6 +16,8 @@
 //! - [`camera::Camera`]: perspective and orthographic cameras, JSON;
 //! - [`image::Image`]: the RGBA f32 linear framebuffer and PNG output;
 //! - [`voi::ConvexVoi`]: the convex volume of interest cut by planes (seed `004`, ch. 4);
+//! - [`sculpt`]: the full-resolution sculpt mask, the eraser's and digger's regions and
+//!   region labelling (seed `004`, ch. 4-6);
 //! - [`heatmap`]: heat-map images of per-pixel values with a colour-scale legend;
 //! - [`histogram`]: value histograms (the automatic transfer function is fitted on them);
 //! - [`synth`]: synthetic datasets for tests, benchmarks and the demo;
@@ -36,6 +38,7 @@ mod json_shape;
 pub mod limits;
 pub mod mesh;
 pub mod orientation;
+pub mod sculpt;
 pub mod synth;
 pub mod tetrahedralize;
 pub mod transfer;

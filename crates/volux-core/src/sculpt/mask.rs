@@ -1,0 +1,446 @@
+//! The sculpt mask: one bit per voxel in sparse 8³ bricks, with a per-macrocell summary.
+use rayon::prelude::*;
+
+use super::region::{Coverage, Region};
+use crate::error::{Error, Result};
+
+/// Voxels per brick side.
+const B: usize = 8;
+/// Bits of one brick (`B³`), in 64-bit words.
+const WORDS: usize = B * B * B / 64;
+
+/// A macrocell's state: every point in it visible, none, or some.
+const VISIBLE: u8 = 0;
+const REMOVED: u8 = 1;
+const PARTIAL: u8 = 2;
+
+/// One brick of the mask: wholly kept, wholly removed, or one bit per voxel (x fastest, then
+/// y, then z; bit set = kept). Bricks are kept normalized: `Bits` only when its in-range voxels
+/// are mixed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Brick {
+    Kept,
+    Removed,
+    Bits(Box<[u64; WORDS]>),
+}
+
+impl Brick {
+    #[inline]
+    fn get(&self, local: usize) -> bool {
+        match self {
+            Self::Kept => true,
+            Self::Removed => false,
+            Self::Bits(w) => (w[local >> 6] >> (local & 63)) & 1 == 1,
+        }
+    }
+
+    /// The brick of `bits`, normalized against the bits of its in-range voxels `valid`.
+    fn from_bits(bits: [u64; WORDS], valid: &[u64; WORDS]) -> Self {
+        let masked = std::array::from_fn::<u64, WORDS, _>(|w| bits[w] & valid[w]);
+        if masked == *valid {
+            Self::Kept
+        } else if masked.iter().all(|&w| w == 0) {
+            Self::Removed
+        } else {
+            Self::Bits(Box::new(masked))
+        }
+    }
+}
+
+/// The local bit of voxel (`i`, `j`, `k`) in its brick.
+#[inline]
+fn local_bit(i: usize, j: usize, k: usize) -> usize {
+    (i % B) | (j % B) << 3 | (k % B) << 6
+}
+
+/// Which voxels of a grid are kept after sculpting (seed `004` sec. 4.4.1, at full resolution):
+/// see the [module documentation](crate::sculpt). Starts with every voxel kept.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SculptMask {
+    dims: [usize; 3],
+    bricks_per_axis: [usize; 3],
+    bricks: Vec<Brick>,
+    blocks_per_axis: [usize; 3],
+    /// [`VISIBLE`], [`REMOVED`] or [`PARTIAL`] per macrocell.
+    blocks: Vec<u8>,
+    /// Bumped by every change, so that renderers can key caches on it.
+    generation: u64,
+}
+
+/// What one edit changed: the bricks as they were before it, so that
+/// [`SculptMask::restore`] undoes it bit for bit.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct MaskEdit {
+    before: Vec<(usize, Brick)>,
+    removed_voxels: u64,
+}
+
+impl MaskEdit {
+    /// Whether the edit changed nothing.
+    pub fn is_empty(&self) -> bool {
+        self.before.is_empty()
+    }
+
+    /// The bricks (8³ voxels) the edit changed.
+    pub fn bricks_changed(&self) -> usize {
+        self.before.len()
+    }
+
+    /// The voxels the edit removed.
+    pub fn removed_voxels(&self) -> u64 {
+        self.removed_voxels
+    }
+}
+
+impl SculptMask {
+    /// Voxel cells per macrocell side: the same blocks as the renderer's macrocell grid.
+    pub const BLOCK: usize = 8;
+
+    /// A mask of a grid of `dims` samples with every voxel kept. Errors on a zero dimension.
+    pub fn new(dims: [usize; 3]) -> Result<Self> {
+        if dims.contains(&0) {
+            return Err(Error::InvalidDims {
+                dims: dims.map(|d| d as i64),
+                reason: "a sculpt mask needs at least one voxel per axis".into(),
+            });
+        }
+        let bricks_per_axis = dims.map(|d| d.div_ceil(B));
+        let blocks_per_axis = dims.map(|d| d.saturating_sub(1).max(1).div_ceil(Self::BLOCK));
+        let n = crate::limits::count_of(&bricks_per_axis);
+        crate::limits::check_alloc("the sculpt mask's bricks", n, 16)?;
+        let blocks = crate::limits::count_of(&blocks_per_axis) as usize;
+        Ok(Self {
+            dims,
+            bricks_per_axis,
+            bricks: vec![Brick::Kept; n as usize],
+            blocks_per_axis,
+            blocks: vec![VISIBLE; blocks],
+            generation: 0,
+        })
+    }
+
+    /// The mask of `values` (one per voxel, x fastest; non-zero = kept), e.g. read from a
+    /// saved NRRD. Errors when the count is not `dims`' product.
+    pub fn from_values(dims: [usize; 3], values: &[u8]) -> Result<Self> {
+        let mut mask = Self::new(dims)?;
+        let expected = crate::limits::count_of(&dims);
+        if values.len() as u64 != expected {
+            return Err(Error::SizeMismatch {
+                expected,
+                actual: values.len() as u64,
+            });
+        }
+        let kept = |i: usize, j: usize, k: usize| values[i + dims[0] * (j + dims[1] * k)] != 0;
+        mask.bricks = (0..mask.bricks.len())
+            .into_par_iter()
+            .map(|b| mask.brick_of(b, |i, j, k, _| kept(i, j, k)))
+            .collect();
+        mask.update_blocks_all();
+        Ok(mask)
+    }
+
+    /// One byte per voxel, x fastest: 1 where kept, 0 where removed (the NRRD export).
+    pub fn to_values(&self) -> Vec<u8> {
+        let [nx, ny, nz] = self.dims;
+        let mut out = vec![0u8; nx * ny * nz];
+        out.par_chunks_mut(nx * ny)
+            .enumerate()
+            .for_each(|(k, slice)| {
+                for j in 0..ny {
+                    for i in 0..nx {
+                        slice[i + nx * j] = u8::from(self.voxel(i, j, k));
+                    }
+                }
+            });
+        let _ = nz;
+        out
+    }
+
+    /// Samples per axis of the grid the mask belongs to.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// A number that changes whenever the mask does.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Whether no voxel has been removed.
+    pub fn is_untouched(&self) -> bool {
+        self.bricks.iter().all(|b| *b == Brick::Kept)
+    }
+
+    /// Whether voxel (`i`, `j`, `k`) is kept (each index below its dimension).
+    #[inline]
+    pub fn voxel(&self, i: usize, j: usize, k: usize) -> bool {
+        let [bx, by, _] = self.bricks_per_axis;
+        let b = i / B + bx * (j / B + by * (k / B));
+        self.bricks[b].get(local_bit(i, j, k))
+    }
+
+    /// The voxels removed so far.
+    pub fn removed_count(&self) -> u64 {
+        let [nx, ny, nz] = self.dims;
+        (0..nz)
+            .into_par_iter()
+            .map(|k| {
+                let mut n = 0u64;
+                for j in 0..ny {
+                    for i in 0..nx {
+                        n += u64::from(!self.voxel(i, j, k));
+                    }
+                }
+                n
+            })
+            .sum()
+    }
+
+    /// Macrocells per axis (as the renderer's macrocell grid for these dims).
+    pub fn blocks_per_axis(&self) -> [usize; 3] {
+        self.blocks_per_axis
+    }
+
+    /// Whether every point of macrocell `index` (x fastest) is removed: rays skip it.
+    #[inline]
+    pub fn block_removed(&self, index: usize) -> bool {
+        self.blocks[index] == REMOVED
+    }
+
+    /// The interpolated mask at voxel coordinates `p` (the trilinear blend of the kept (1)
+    /// and removed (0) voxels of its cell), clamped to the grid as the samplers clamp.
+    pub fn value(&self, p: [f32; 3]) -> f32 {
+        let (c, f) = self.cell_of(p);
+        self.interpolate(c, f)
+    }
+
+    /// Whether the point at voxel coordinates `p` is visible: [`SculptMask::value`] >= 0.5
+    /// (the seed's threshold), answered from the macrocell's state when it is wholly visible
+    /// or removed.
+    #[inline]
+    pub fn visible(&self, p: [f32; 3]) -> bool {
+        let (c, f) = self.cell_of(p);
+        let [bx, by, _] = self.blocks_per_axis;
+        let b = c[0] / Self::BLOCK + bx * (c[1] / Self::BLOCK + by * (c[2] / Self::BLOCK));
+        match self.blocks[b] {
+            VISIBLE => true,
+            REMOVED => false,
+            _ => self.interpolate(c, f) >= 0.5,
+        }
+    }
+
+    /// The cell of `p` (clamped to the grid) and the position in it.
+    #[inline]
+    fn cell_of(&self, p: [f32; 3]) -> ([usize; 3], [f32; 3]) {
+        let mut c = [0usize; 3];
+        let mut f = [0f32; 3];
+        for a in 0..3 {
+            let hi = (self.dims[a] - 1) as f32;
+            let x = p[a].clamp(0.0, hi);
+            let cell = (x as usize).min(self.dims[a].saturating_sub(2));
+            c[a] = cell;
+            f[a] = if x.is_nan() { 0.0 } else { x - cell as f32 };
+        }
+        (c, f)
+    }
+
+    fn interpolate(&self, c: [usize; 3], f: [f32; 3]) -> f32 {
+        let n = std::array::from_fn::<usize, 3, _>(|a| (c[a] + 1).min(self.dims[a] - 1));
+        let v = |i, j, k| if self.voxel(i, j, k) { 1.0f32 } else { 0.0 };
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        let x00 = lerp(v(c[0], c[1], c[2]), v(n[0], c[1], c[2]), f[0]);
+        let x10 = lerp(v(c[0], n[1], c[2]), v(n[0], n[1], c[2]), f[0]);
+        let x01 = lerp(v(c[0], c[1], n[2]), v(n[0], c[1], n[2]), f[0]);
+        let x11 = lerp(v(c[0], n[1], n[2]), v(n[0], n[1], n[2]), f[0]);
+        lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2])
+    }
+
+    /// Removes every kept voxel of `region` and returns what changed (for
+    /// [`SculptMask::restore`]). Bricks the region covers wholly are removed without looking
+    /// at their voxels; only the bricks it crosses are tested voxel by voxel, in parallel.
+    /// The macrocell states of the bricks changed are updated.
+    pub fn remove(&mut self, region: &(impl Region + ?Sized)) -> MaskEdit {
+        let Some((lo, hi)) = region.index_bounds(self.dims) else {
+            return MaskEdit::default();
+        };
+        let candidates = self.bricks_between(lo, hi);
+        let changed: Vec<(usize, Brick, u64)> = candidates
+            .into_par_iter()
+            .filter_map(|b| self.removed_in(b, region))
+            .collect();
+        let mut edit = MaskEdit::default();
+        for (b, brick, removed) in changed {
+            let old = std::mem::replace(&mut self.bricks[b], brick);
+            edit.before.push((b, old));
+            edit.removed_voxels += removed;
+        }
+        self.after_change(&edit);
+        edit
+    }
+
+    /// Undoes `edit` (the last edit not yet undone): its bricks are put back as they were.
+    pub fn restore(&mut self, edit: &MaskEdit) {
+        for (b, brick) in &edit.before {
+            self.bricks[*b] = brick.clone();
+        }
+        self.after_change(edit);
+    }
+
+    fn after_change(&mut self, edit: &MaskEdit) {
+        if edit.is_empty() {
+            return;
+        }
+        self.generation += 1;
+        let bricks: Vec<usize> = edit.before.iter().map(|(b, _)| *b).collect();
+        self.update_blocks_of(&bricks);
+    }
+
+    /// Brick `b` with `region` removed, and the voxels removed; `None` when nothing changes.
+    fn removed_in(&self, b: usize, region: &(impl Region + ?Sized)) -> Option<(usize, Brick, u64)> {
+        let old = &self.bricks[b];
+        if *old == Brick::Removed {
+            return None;
+        }
+        let (lo, hi) = self.brick_voxels(b);
+        match region.coverage(lo.map(|v| v as f64), hi.map(|v| v as f64)) {
+            Coverage::None => None,
+            Coverage::All => {
+                let kept = self.count_kept(b);
+                Some((b, Brick::Removed, kept))
+            }
+            Coverage::Some => {
+                let mut removed = 0u64;
+                let brick = self.brick_of(b, |i, j, k, local| {
+                    let kept = old.get(local) && !region.contains([i, j, k]);
+                    removed += u64::from(old.get(local) && !kept);
+                    kept
+                });
+                (brick != *old).then_some((b, brick, removed))
+            }
+        }
+    }
+
+    /// The kept voxels of brick `b`.
+    fn count_kept(&self, b: usize) -> u64 {
+        let (lo, hi) = self.brick_voxels(b);
+        match &self.bricks[b] {
+            Brick::Kept => (0..3).map(|a| (hi[a] - lo[a] + 1) as u64).product(),
+            Brick::Removed => 0,
+            Brick::Bits(w) => w.iter().map(|w| u64::from(w.count_ones())).sum(),
+        }
+    }
+
+    /// The brick `b` whose in-range voxel (`i`, `j`, `k`), local bit `local`, is kept when
+    /// `kept` says so.
+    fn brick_of(
+        &self,
+        b: usize,
+        mut kept: impl FnMut(usize, usize, usize, usize) -> bool,
+    ) -> Brick {
+        let (lo, hi) = self.brick_voxels(b);
+        let mut bits = [0u64; WORDS];
+        let mut valid = [0u64; WORDS];
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    let l = local_bit(i, j, k);
+                    valid[l >> 6] |= 1 << (l & 63);
+                    if kept(i, j, k, l) {
+                        bits[l >> 6] |= 1 << (l & 63);
+                    }
+                }
+            }
+        }
+        Brick::from_bits(bits, &valid)
+    }
+
+    /// The first and last voxel of brick `b`.
+    fn brick_voxels(&self, b: usize) -> ([usize; 3], [usize; 3]) {
+        let [bx, by, _] = self.bricks_per_axis;
+        let c = [b % bx, (b / bx) % by, b / (bx * by)];
+        let lo = c.map(|c| c * B);
+        let hi = std::array::from_fn(|a| (lo[a] + B - 1).min(self.dims[a] - 1));
+        (lo, hi)
+    }
+
+    /// The bricks holding voxels between `lo` and `hi` (inclusive).
+    fn bricks_between(&self, lo: [usize; 3], hi: [usize; 3]) -> Vec<usize> {
+        let [bx, by, _] = self.bricks_per_axis;
+        let mut out = Vec::new();
+        for k in lo[2] / B..=hi[2] / B {
+            for j in lo[1] / B..=hi[1] / B {
+                for i in lo[0] / B..=hi[0] / B {
+                    out.push(i + bx * (j + by * k));
+                }
+            }
+        }
+        out
+    }
+
+    /// Recomputes the macrocell states around the bricks `bricks` (a macrocell reads the
+    /// voxels of its own brick and the first layer of the next).
+    fn update_blocks_of(&mut self, bricks: &[usize]) {
+        let [bx, by, _] = self.bricks_per_axis;
+        let [mx, my, mz] = self.blocks_per_axis;
+        let mut blocks: Vec<usize> = Vec::new();
+        for &b in bricks {
+            let c = [b % bx, (b / bx) % by, b / (bx * by)];
+            for dk in 0..2 {
+                for dj in 0..2 {
+                    for di in 0..2 {
+                        let (i, j, k) =
+                            (c[0] as isize - di, c[1] as isize - dj, c[2] as isize - dk);
+                        let inside = i >= 0 && j >= 0 && k >= 0;
+                        if inside && (i as usize) < mx && (j as usize) < my && (k as usize) < mz {
+                            blocks.push(i as usize + mx * (j as usize + my * k as usize));
+                        }
+                    }
+                }
+            }
+        }
+        blocks.sort_unstable();
+        blocks.dedup();
+        let states: Vec<u8> = blocks.par_iter().map(|&m| self.block_state(m)).collect();
+        for (m, s) in blocks.into_iter().zip(states) {
+            self.blocks[m] = s;
+        }
+    }
+
+    fn update_blocks_all(&mut self) {
+        let states: Vec<u8> = (0..self.blocks.len())
+            .into_par_iter()
+            .map(|m| self.block_state(m))
+            .collect();
+        self.blocks = states;
+    }
+
+    /// The state of macrocell `m`: its voxels `[8 I, 8 I + 8]` per axis, clamped to the grid.
+    fn block_state(&self, m: usize) -> u8 {
+        let [mx, my, _] = self.blocks_per_axis;
+        let c = [m % mx, (m / mx) % my, m / (mx * my)];
+        let lo = c.map(|c| c * Self::BLOCK);
+        let hi: [usize; 3] = std::array::from_fn(|a| (lo[a] + Self::BLOCK).min(self.dims[a] - 1));
+        let bricks = self.bricks_between(lo, hi);
+        if bricks.iter().all(|&b| self.bricks[b] == Brick::Kept) {
+            return VISIBLE;
+        }
+        if bricks.iter().all(|&b| self.bricks[b] == Brick::Removed) {
+            return REMOVED;
+        }
+        let (mut any_kept, mut any_removed) = (false, false);
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    let v = self.voxel(i, j, k);
+                    any_kept |= v;
+                    any_removed |= !v;
+                }
+            }
+        }
+        match (any_kept, any_removed) {
+            (true, false) => VISIBLE,
+            (false, true) => REMOVED,
+            _ => PARTIAL,
+        }
+    }
+}
