@@ -83,6 +83,7 @@ pub mod renderer;
 pub mod resample;
 pub mod sampling;
 pub mod scene;
+pub mod sculpt;
 pub mod session;
 pub mod shading;
 pub mod tetray;

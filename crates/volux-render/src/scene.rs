@@ -26,6 +26,7 @@
 use std::sync::Arc;
 
 use volux_core::histogram::Histogram;
+use volux_core::sculpt::SculptMask;
 use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::voi::ClipPlane;
 use volux_core::{Aabb, Camera, Grid, TetMesh, TransferFunction};
@@ -395,6 +396,10 @@ pub struct Scene {
     /// (segments trimmed exactly); PT, the mesh reference and resampling refuse a scene with
     /// planes.
     pub clip_planes: Vec<ClipPlane>,
+    /// The sculpt mask of a grid (seed `004` sec. 4.4-4.5): samples where the interpolated
+    /// mask is under 0.5 are not drawn. Grid ray casting draws it (every integrator); the
+    /// mesh renderers refuse a scene with a mask. Shared, so that cloning a scene is cheap.
+    pub mask: Option<Arc<SculptMask>>,
 }
 
 impl Scene {
@@ -410,6 +415,7 @@ impl Scene {
             method: Method::Auto,
             early_termination: Some(DEFAULT_EARLY_TERMINATION),
             clip_planes: Vec::new(),
+            mask: None,
         }
     }
 

@@ -25,7 +25,8 @@ use volux_core::image::{write_atomically, PngOptions};
 use volux_core::Camera;
 
 use crate::error::RenderError;
-use crate::scene::{Appearance, Method, Scene, View};
+use crate::scene::{Appearance, Method, Scene, View, Volume};
+use crate::sculpt::{Sculpt, SculptStep};
 
 /// The session format's version; files of another version are refused.
 pub const SESSION_VERSION: u32 = 1;
@@ -90,6 +91,11 @@ pub struct Session {
     /// Clipping planes of the volume of interest ([`Scene::clip_planes`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub clip_planes: Vec<volux_core::voi::ClipPlane>,
+    /// The sculpting steps (planes, eraser strokes, digs, picked points), replayed on the
+    /// dataset to rebuild the mask ([`Sculpt::replay`]); when there are steps, the planes are
+    /// those they make.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sculpt: Vec<SculptStep>,
     /// Colour under the transparent parts of the picture (`null`: a transparent PNG).
     pub background: Option<[f32; 3]>,
     /// The slice views, when the viewer saved them.
@@ -110,12 +116,39 @@ impl Session {
             method: scene.method,
             early_termination: scene.early_termination,
             clip_planes: scene.clip_planes.clone(),
+            sculpt: Vec::new(),
             background,
             slices: None,
         }
     }
 
-    /// The scene this session renders.
+    /// This session with the steps of `sculpt`, its planes as the session's planes.
+    pub fn with_sculpt(mut self, sculpt: &Sculpt) -> Self {
+        self.sculpt = sculpt.steps();
+        self.clip_planes = sculpt.planes().to_vec();
+        self
+    }
+
+    /// The scene this session renders on `volume`: [`Session::scene`] with the sculpt steps
+    /// replayed on a grid (their mask and planes); the sculpt state is returned too.
+    pub fn scene_on(&self, volume: &Volume) -> Result<(Scene, Option<Sculpt>), RenderError> {
+        let mut scene = self.scene();
+        if self.sculpt.is_empty() {
+            return Ok((scene, None));
+        }
+        let Volume::Grid(grid) = volume else {
+            return Err(RenderError::InvalidOptions(
+                "the session's sculpt steps apply to grids; this dataset is a tetrahedral mesh"
+                    .into(),
+            ));
+        };
+        let sculpt = Sculpt::replay(grid, &self.sculpt)?;
+        sculpt.apply_to(&mut scene);
+        Ok((scene, Some(sculpt)))
+    }
+
+    /// The scene this session renders, without the sculpt steps' mask (see
+    /// [`Session::scene_on`]).
     pub fn scene(&self) -> Scene {
         Scene {
             view: View {
@@ -127,6 +160,7 @@ impl Session {
             method: self.method,
             early_termination: self.early_termination,
             clip_planes: self.clip_planes.clone(),
+            mask: None,
         }
     }
 

@@ -54,8 +54,9 @@ fn local_bit(i: usize, j: usize, k: usize) -> usize {
 }
 
 /// Which voxels of a grid are kept after sculpting (seed `004` sec. 4.4.1, at full resolution):
-/// see the [module documentation](crate::sculpt). Starts with every voxel kept.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// see the [module documentation](crate::sculpt). Starts with every voxel kept. Two masks are
+/// equal when they keep the same voxels (whatever edits led there).
+#[derive(Clone, Debug)]
 pub struct SculptMask {
     dims: [usize; 3],
     bricks_per_axis: [usize; 3],
@@ -66,6 +67,16 @@ pub struct SculptMask {
     /// Bumped by every change, so that renderers can key caches on it.
     generation: u64,
 }
+
+impl PartialEq for SculptMask {
+    fn eq(&self, other: &Self) -> bool {
+        // Bricks are normalized, so equal voxels are equal bricks; the macrocell states
+        // follow from the bricks.
+        self.dims == other.dims && self.bricks == other.bricks
+    }
+}
+
+impl Eq for SculptMask {}
 
 /// What one edit changed: the bricks as they were before it, so that
 /// [`SculptMask::restore`] undoes it bit for bit.

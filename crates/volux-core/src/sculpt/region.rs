@@ -142,7 +142,9 @@ fn index_box(lo: DVec3, hi: DVec3, dims: [usize; 3]) -> Option<([usize; 3], [usi
         let top = (dims[a] - 1) as f64;
         let (l, h) = (lo[a].ceil().max(0.0), hi[a].floor().min(top));
         // NaN bounds (an unusable region) fall through to None as well.
-        if l.partial_cmp(&h).is_none_or(|o| o == std::cmp::Ordering::Greater) {
+        if l.partial_cmp(&h)
+            .is_none_or(|o| o == std::cmp::Ordering::Greater)
+        {
             return None;
         }
         out.0[a] = l as usize;

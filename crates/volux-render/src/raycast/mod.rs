@@ -33,6 +33,7 @@ mod traverse;
 
 pub use crate::frame::RenderStats;
 pub use clip::{ray_box, to_voxel, voxel_crossings};
+pub(crate) use context::local_clip_planes;
 pub use options::{Placement, RenderOptions, Rendered};
 pub(crate) use renderer::grid_frame;
 pub use renderer::{render_grid, GridRenderer};

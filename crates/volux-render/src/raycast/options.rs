@@ -1,5 +1,8 @@
 //! Options and results of the grid ray caster.
+use std::sync::Arc;
+
 use glam::{DMat3, DVec3};
+use volux_core::sculpt::SculptMask;
 use volux_core::voi::ClipPlane;
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
@@ -49,6 +52,8 @@ pub struct RenderOptions {
     /// World-space clipping planes: rays sample only where every plane keeps them
     /// (`normal . x + offset >= 0`).
     pub clip_planes: Vec<ClipPlane>,
+    /// The sculpt mask: samples it hides are skipped (seed `004` sec. 4.4).
+    pub mask: Option<Arc<SculptMask>>,
     /// Cancellation and progress.
     pub control: Control,
 }
@@ -77,6 +82,7 @@ impl RenderOptions {
             isosurfaces: a.isosurfaces.clone(),
             mip: a.mip,
             clip_planes: scene.clip_planes.clone(),
+            mask: scene.mask.clone(),
             control: control.clone(),
         }
     }
@@ -99,6 +105,7 @@ impl RenderOptions {
             isosurfaces: Isosurfaces::default(),
             mip: false,
             clip_planes: Vec::new(),
+            mask: None,
             control: Control::default(),
         }
     }
@@ -198,7 +205,7 @@ impl Placement {
         }
         self.direction * v
     }
-    pub(super) fn extent(&self) -> DVec3 {
+    pub(crate) fn extent(&self) -> DVec3 {
         DVec3::new(
             (self.dims[0].max(2) - 1) as f64,
             (self.dims[1].max(2) - 1) as f64,

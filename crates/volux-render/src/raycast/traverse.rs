@@ -3,6 +3,7 @@
 use std::time::Instant;
 
 use volux_core::image::Image;
+use volux_core::sculpt::SculptMask;
 
 use super::context::{local_clip_planes, Classification, Derived, LocalRays, RayContext};
 use super::options::{Placement, RenderOptions, Rendered};
@@ -13,6 +14,7 @@ use crate::integrate::preintegrated::PreintegrationTable;
 use crate::intervals::IntervalSource;
 use crate::macrocell::{MacrocellGrid, Occupancy};
 use crate::sampling::Field;
+use crate::sculpt::masked::Masked;
 use crate::tiles::{render_tiles, TileGrid, TILE};
 
 /// Whether empty-space skipping pays for itself: a ray walks every macrocell it crosses (a
@@ -78,7 +80,52 @@ pub fn render_field_in<F: Field>(
     )
 }
 
+/// Renders `field`, seen through the scene's sculpt mask when it has one (every path then
+/// samples [`Masked`], and the macrocells the mask removes wholly are skipped).
 pub(crate) fn render_with<F: Field>(
+    field: &F,
+    place: Placement,
+    range: [f64; 2],
+    opts: &RenderOptions,
+    derived: Derived<'_>,
+) -> Result<Rendered, RenderError> {
+    match opts.mask.as_deref() {
+        Some(mask) => {
+            check_mask(mask, place.dims)?;
+            let masked = Masked { inner: field, mask };
+            render_sampled(&masked, place, range, opts, derived)
+        }
+        None => render_sampled(field, place, range, opts, derived),
+    }
+}
+
+/// Refuses a mask made for a grid of other dimensions.
+fn check_mask(mask: &SculptMask, dims: [usize; 3]) -> Result<(), RenderError> {
+    if mask.dims() == dims {
+        return Ok(());
+    }
+    Err(RenderError::InvalidOptions(format!(
+        "the sculpt mask is {:?} voxels but the grid is {dims:?}: a mask applies to the grid it was made for",
+        mask.dims()
+    )))
+}
+
+/// The empty flags of the macrocells with the mask's wholly removed macrocells added (one
+/// pass over a byte per macrocell: the mask keeps its macrocell states up to date as the tools
+/// edit it, so nothing is rebuilt from the voxels).
+fn with_mask_removed(empty: &[bool], mask: Option<&SculptMask>) -> Option<Vec<bool>> {
+    let mask = mask?;
+    let count: usize = mask.blocks_per_axis().iter().product();
+    (count == empty.len()).then(|| {
+        empty
+            .iter()
+            .enumerate()
+            .map(|(m, &e)| e || mask.block_removed(m))
+            .collect()
+    })
+}
+
+fn render_sampled<F: Field>(
     field: &F,
     place: Placement,
     range: [f64; 2],
@@ -104,9 +151,13 @@ pub(crate) fn render_with<F: Field>(
         }
     };
     let table = &classification.table;
+    let masked_empty = classification
+        .empty
+        .as_deref()
+        .and_then(|e| with_mask_removed(e, opts.mask.as_deref()));
     let occupancy = derived
         .macrocells
-        .zip(classification.empty.as_deref())
+        .zip(masked_empty.as_deref().or(classification.empty.as_deref()))
         .map(|(m, empty)| Occupancy::from_flags(m, empty));
     let intervals = derived
         .intervals
