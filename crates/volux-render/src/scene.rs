@@ -36,6 +36,7 @@ use crate::integrate::integrator::Integrator;
 use crate::integrate::segment::SegmentRule;
 use crate::isosurface::Isosurfaces;
 use crate::sampling::Reconstruction;
+use crate::sculpt::labels::LabelVolume;
 use crate::shading::BlinnPhong;
 
 /// A mesh's unit length is its bounding-box diagonal divided by this ([`Volume::unit_length`]).
@@ -400,6 +401,9 @@ pub struct Scene {
     /// mask is under 0.5 are not drawn. Grid ray casting draws it (every integrator); the
     /// mesh renderers refuse a scene with a mask. Shared, so that cloning a scene is cheap.
     pub mask: Option<Arc<SculptMask>>,
+    /// Region labels of a grid (seed `004` sec. 6.2), drawn by grid ray casting in their
+    /// colours in place of the TF's (maximum intensity projection keeps the TF's colours).
+    pub labels: Option<Arc<LabelVolume>>,
 }
 
 impl Scene {
@@ -416,6 +420,7 @@ impl Scene {
             early_termination: Some(DEFAULT_EARLY_TERMINATION),
             clip_planes: Vec::new(),
             mask: None,
+            labels: None,
         }
     }
 

@@ -161,6 +161,7 @@ impl Session {
             early_termination: self.early_termination,
             clip_planes: self.clip_planes.clone(),
             mask: None,
+            labels: None,
         }
     }
 

@@ -13,6 +13,7 @@ use crate::integrate::medium::RayIntegral;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::intervals::IntervalSource;
 use crate::macrocell::MacrocellGrid;
+use crate::sculpt::labels::LabelVolume;
 use crate::shading::blinn_phong::BlinnPhong;
 use crate::shading::gradient::GradientVolume;
 
@@ -179,6 +180,8 @@ pub(crate) struct GridRay<'a, F> {
     /// Classify exactly with this TF instead of the table (the reference path).
     pub(crate) exact: Option<&'a TransferFunction>,
     pub(crate) breakpoints: &'a [f64],
+    /// Region labels coloured in place of the TF's colour.
+    pub(crate) labels: Option<&'a LabelVolume>,
     /// Shading of the emitted colour: the lighting model and the ray's context.
     pub(crate) shade: Option<RayShading<'a>>,
 }

@@ -3,6 +3,8 @@ use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
 use volux_core::sculpt::SculptMask;
+
+use crate::sculpt::labels::LabelVolume;
 use volux_core::voi::ClipPlane;
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
@@ -54,6 +56,8 @@ pub struct RenderOptions {
     pub clip_planes: Vec<ClipPlane>,
     /// The sculpt mask: samples it hides are skipped (seed `004` sec. 4.4).
     pub mask: Option<Arc<SculptMask>>,
+    /// Region labels drawn in their colours (seed `004` sec. 6.2; rays then go one by one).
+    pub labels: Option<Arc<LabelVolume>>,
     /// Cancellation and progress.
     pub control: Control,
 }
@@ -83,6 +87,7 @@ impl RenderOptions {
             mip: a.mip,
             clip_planes: scene.clip_planes.clone(),
             mask: scene.mask.clone(),
+            labels: scene.labels.clone(),
             control: control.clone(),
         }
     }
@@ -106,6 +111,7 @@ impl RenderOptions {
             mip: false,
             clip_planes: Vec::new(),
             mask: None,
+            labels: None,
             control: Control::default(),
         }
     }

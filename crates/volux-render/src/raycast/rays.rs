@@ -39,6 +39,9 @@ impl<F: Field> RayMedium for GridRay<'_, F> {
             return Medium::default();
         };
         let mut m = self.classify(v);
+        if let Some(rgb) = self.labels.and_then(|l| l.colour_at(p.as_vec3())) {
+            m.rgb = rgb.map(f64::from);
+        }
         if let (Some(sh), true) = (&self.shade, m.tau > 0.0) {
             let p = p.as_vec3();
             let g = match sh.gradients {
@@ -54,7 +57,7 @@ impl<F: Field> RayMedium for GridRay<'_, F> {
     }
 
     fn at4(&mut self, t: [f64; 4]) -> [Medium; 4] {
-        if self.exact.is_some() || self.shade.is_some() {
+        if self.exact.is_some() || self.shade.is_some() || self.labels.is_some() {
             return t.map(|t| self.at(t));
         }
         let mut p = [[0.0f32; 4]; 3];
@@ -182,6 +185,7 @@ impl<F: Field> RayContext<'_, F> {
             table: self.table,
             exact: None,
             breakpoints: &self.breakpoints,
+            labels: self.opts.labels.as_deref(),
             shade: self.opts.shading.as_ref().map(|model| RayShading {
                 model,
                 gradients: self.gradients,
@@ -356,6 +360,9 @@ impl<F: Field> RayContext<'_, F> {
     /// A classified sample at voxel position `p` on a ray of world direction `view`, lit when
     /// shading is on and the sample is not transparent.
     pub(super) fn lit_sample(&self, mut c: Classified, p: Vec3, view: Vec3) -> Classified {
+        if let Some(rgb) = self.opts.labels.as_ref().and_then(|l| l.colour_at(p)) {
+            c.rgb = rgb;
+        }
         if let (Some(sh), true) = (&self.opts.shading, c.tau > 0.0) {
             c.rgb = sh.shade(c.rgb, self.gradient(p), view);
         }
@@ -365,6 +372,11 @@ impl<F: Field> RayContext<'_, F> {
     /// A pre-integrated segment's premultiplied RGBA `e`, its average colour lit with the
     /// gradient at its middle `mid` when shading is on.
     pub(super) fn lit_segment(&self, e: [f32; 4], mid: Vec3, view: Vec3) -> [f32; 4] {
+        let label = self.opts.labels.as_ref().and_then(|l| l.colour_at(mid));
+        let e = match label {
+            Some(c) => [c[0] * e[3], c[1] * e[3], c[2] * e[3], e[3]],
+            None => e,
+        };
         match (&self.opts.shading, e[3] > 0.0) {
             (Some(model), true) => {
                 let c = [e[0] / e[3], e[1] / e[3], e[2] / e[3]];

@@ -89,9 +89,12 @@ pub(crate) fn render_with<F: Field>(
     opts: &RenderOptions,
     derived: Derived<'_>,
 ) -> Result<Rendered, RenderError> {
+    if let Some(l) = &opts.labels {
+        check_dims("label volume", l.dims(), place.dims)?;
+    }
     match opts.mask.as_deref() {
         Some(mask) => {
-            check_mask(mask, place.dims)?;
+            check_dims("sculpt mask", mask.dims(), place.dims)?;
             let masked = Masked { inner: field, mask };
             render_sampled(&masked, place, range, opts, derived)
         }
@@ -99,14 +102,13 @@ pub(crate) fn render_with<F: Field>(
     }
 }
 
-/// Refuses a mask made for a grid of other dimensions.
-fn check_mask(mask: &SculptMask, dims: [usize; 3]) -> Result<(), RenderError> {
-    if mask.dims() == dims {
+/// Refuses a mask or labels made for a grid of other dimensions.
+fn check_dims(what: &str, theirs: [usize; 3], dims: [usize; 3]) -> Result<(), RenderError> {
+    if theirs == dims {
         return Ok(());
     }
     Err(RenderError::InvalidOptions(format!(
-        "the sculpt mask is {:?} voxels but the grid is {dims:?}: a mask applies to the grid it was made for",
-        mask.dims()
+        "the {what} is {theirs:?} voxels but the grid is {dims:?}: it applies to the grid it was made for"
     )))
 }
 
@@ -198,7 +200,8 @@ fn render_sampled<F: Field>(
     let grid = TileGrid::new(opts.width, opts.height, TILE);
     let out = render_tiles(&grid, &opts.control, |_, r| {
         let (x0, y0) = (r.x0, r.y0);
-        let px = if !derived.lanes {
+        // Label colours are looked up ray by ray.
+        let px = if !derived.lanes || opts.labels.is_some() {
             ctx.tile_ray_by_ray(x0, y0)
         } else if opts.mip {
             ctx.mip_stream(x0, y0)

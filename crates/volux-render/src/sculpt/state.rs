@@ -10,6 +10,7 @@ use volux_core::sculpt::{Ball, MaskEdit, ScreenStroke, SculptMask, VoxelFrame};
 use volux_core::voi::ClipPlane;
 use volux_core::{Camera, Grid, Projection};
 
+use super::labels::LabelVolume;
 use super::pick::{pick, SurfacePoint, DEFAULT_PICK_OPACITY};
 use crate::error::RenderError;
 use crate::scene::Scene;
@@ -291,6 +292,16 @@ impl Sculpt {
                 && tf.tau_per_world(f64::from(grid.value(i, j, k))) > 0.0
         };
         Ok(volux_core::sculpt::label_nearest(&frame, &seeds, visible)?)
+    }
+
+    /// [`Sculpt::labels`] with the seeds' colours, ready to draw ([`Scene::labels`]).
+    pub fn label_volume(&self, grid: &Grid, scene: &Scene) -> Result<LabelVolume, RenderError> {
+        let colours: Vec<(u8, [f32; 3])> = self
+            .label_seeds()
+            .into_iter()
+            .map(|(s, c)| (s.label, c))
+            .collect();
+        LabelVolume::new(grid.dims(), self.labels(grid, scene)?, &colours)
     }
 
     /// Puts the planes and the mask (when anything is removed) into `scene`.

@@ -299,3 +299,56 @@ fn labels_go_to_visible_voxels_of_the_volume_of_interest_only() {
     assert_eq!(get(11, 8, 5), 9);
     assert_eq!(get(7, 9, 5), 2);
 }
+
+#[test]
+fn labels_colour_the_rendering_with_every_integrator() {
+    let g = constant_grid();
+    let scene = {
+        let mut s = Scene::new(camera(&g, "{}"), 16, 16, tf());
+        s.early_termination = None;
+        s
+    };
+    let mut sculpt = Sculpt::new(&g).unwrap();
+    let left = g.index_to_world(DVec3::new(2.0, 10.0, 10.0));
+    let right = g.index_to_world(DVec3::new(17.0, 10.0, 10.0));
+    for (point, label, colour) in [(left, 1u8, [1.0, 0.0, 0.0]), (right, 2, [0.0, 0.0, 1.0])] {
+        sculpt
+            .apply(SculptStep::Label {
+                point,
+                label,
+                colour,
+            })
+            .unwrap();
+    }
+    let labels = std::sync::Arc::new(sculpt.label_volume(&g, &scene).unwrap());
+    let adaptive = AdaptiveParams {
+        tol: 1e-3,
+        h0: 0.5,
+        hmin: 0.05,
+        hmax: 2.0,
+        control: StepControl::Coupled,
+        early_termination: None,
+    };
+    for integrator in [
+        Integrator::Riemann { step: 0.5 },
+        Integrator::Trapezoid { step: 0.5 },
+        Integrator::Preintegrated { step: 0.5 },
+        Integrator::AdaptiveSimpson(adaptive),
+    ] {
+        let mut o = RenderOptions::new(scene.view.camera, tf());
+        (o.width, o.height, o.early_termination, o.integrator) = (16, 16, None, integrator);
+        let plain = render_grid(&g, &o).unwrap().image;
+        o.labels = Some(labels.clone());
+        let img = render_grid(&g, &o).unwrap().image;
+        // The default camera looks along +y: +x is to the right of the picture.
+        let (l, r) = (img.get(3, 8), img.get(12, 8));
+        assert!(
+            l[0] > 4.0 * l[2] && r[2] > 4.0 * r[0],
+            "{integrator:?}: left {l:?}, right {r:?}"
+        );
+        assert!(
+            (l[3] - plain.get(3, 8)[3]).abs() < 1e-6,
+            "labels keep the opacity"
+        );
+    }
+}
