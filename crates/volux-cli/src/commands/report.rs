@@ -78,6 +78,7 @@ fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)
             "zero_volume": zero_volume,
             "degenerate_projections": s.degenerate,
             "clipped": s.clipped,
+            "culled": s.culled,
             "tets_per_s": tets_per_s,
             "fragments": s.fragments,
             "sort": value_name(&args.sort),
