@@ -10,7 +10,8 @@
 //!    ([`ViewProjection`]), the four exact orientation tests of every kept tetrahedron
 //!    (degenerate projections are dropped) and its centroid's sort key (distance from the eye
 //!    under perspective, which orders far fewer face pairs wrongly than the view depth of
-//!    the seeds; see [`sort`]);
+//!    the seeds; see [`sort`]); with clipping planes, the cells with all four vertices
+//!    outside one plane are culled here ([`super::clip`], seed `004` sec. 4);
 //! 3. **visibility order** (view changes only): centroid radix sort, or the exact order
 //!    (MPVO on a convex mesh; a per-pixel fragment sort otherwise);
 //! 4. **binning** of the ordered tetrahedra into screen tiles, by the tile ranges the
@@ -23,7 +24,9 @@
 //!    isosurfaces, non-finite values) take the seeds' path: classification and thick vertex
 //!    ([`super::classify`], `fan_vertices`), the fan's triangles, perspective-correct
 //!    `(s_f, s_b, l)` and gradients, the fragment colour of [`FragmentShader`]. Both draw
-//!    with the top-left rule, so each covers the cell's projection exactly once.
+//!    with the top-left rule, so each covers the cell's projection exactly once. With
+//!    clipping planes, both paths trim every fragment to its pixel's depth window inside
+//!    the planes before colouring it ([`super::clip`]); without planes no plane work is done.
 //!
 //! A TF change that keeps the zero set re-runs only step 5 (recolouring without
 //! re-projecting). Compositing is front to back (the "under" operator, equivalent to the
