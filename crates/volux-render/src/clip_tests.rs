@@ -212,6 +212,7 @@ fn pt_draws_the_clipped_chord_of_a_constant_medium() {
             let (worst, clipped) = worst_against_chords(&img, &cam, &planes);
             assert!(clipped > 50, "the planes clip only {clipped} rays");
             let tol = pt_tolerance(color);
+            eprintln!("PT {sort:?} {color:?}: worst opacity error {worst:.2e}");
             assert!(
                 worst < tol,
                 "{sort:?} {color:?}: worst opacity error {worst} (limit {tol})"
