@@ -147,6 +147,18 @@ fn pt_with_planes_equals_the_tet_ray_caster_with_the_same_planes() {
 }
 
 #[test]
+fn the_isosurface_of_the_comparison_is_drawn() {
+    let mesh = marschner_lobb_tets();
+    let cam = camera(&mesh, false);
+    let rule = (SortMode::Exact, SegmentRule::Exact);
+    let (with, _) = both(&mesh, cam, rule, &isosurface(&mesh), &planes());
+    let (without, _) = both(&mesh, cam, rule, &Isosurfaces::default(), &planes());
+    let d = with.compare(&without, 0.0).unwrap().mean_error;
+    eprintln!("the isosurface changes the clipped image by {d:.2e} (mean)");
+    assert!(d > 10.0 * MEAN, "the isosurface changes little ({d:.2e})");
+}
+
+#[test]
 fn pt_with_planes_equals_the_tet_ray_caster_on_a_non_convex_mesh() {
     // The torus takes the per-pixel fragment sort under the exact order.
     let mesh = synth::torus_tets(16).unwrap();
