@@ -142,10 +142,6 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
             "expected four numbers",
         ),
         (
-            &["mesh.vtet", "--clip-plane", "1,0,0,-0.5"],
-            "clip planes are drawn by ray casting only",
-        ),
-        (
             &[
                 "mesh.vtet",
                 "--method",
@@ -187,6 +183,40 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
         ],
         d,
     );
+    // PT culls the cells wholly outside a plane, and says so.
+    let err = accepted(
+        &[
+            "render",
+            "mesh.vtet",
+            "--clip-plane",
+            "1,0,0,-0.5",
+            "--stats",
+            "--size",
+            "32x32",
+            "-o",
+            "m.png",
+        ],
+        d,
+    );
+    assert!(err.contains("culled by clip planes"), "{err}");
+    // Every mesh method draws clip planes (PT by default).
+    for method in ["pt", "raycast", "resample"] {
+        accepted(
+            &[
+                "render",
+                "mesh.vtet",
+                "--method",
+                method,
+                "--clip-plane",
+                "1,0,0,-0.5",
+                "--size",
+                "32x32",
+                "-o",
+                "m.png",
+            ],
+            d,
+        );
+    }
     accepted(
         &[
             "render",

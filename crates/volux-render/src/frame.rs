@@ -94,6 +94,8 @@ pub struct PtStats {
     pub degenerate: usize,
     /// Kept but with a vertex behind the near plane or outside the guard band.
     pub clipped: usize,
+    /// Kept but culled: all four vertices outside one clipping plane.
+    pub culled: usize,
     /// Fragments shaded.
     pub fragments: u64,
     /// Face pairs ordered against the exact face order by the centroid sort (when counted).

@@ -41,18 +41,6 @@ pub(crate) fn wrong_method(renderer: &'static str, method: &Method) -> RenderErr
     ))
 }
 
-/// Refuses a scene with clipping planes in a renderer that does not draw them yet (PT, the
-/// mesh reference, resampling), rather than drawing the whole volume as if they were not
-/// there.
-pub(crate) fn no_clip_planes(renderer: &'static str, scene: &Scene) -> Result<(), RenderError> {
-    if scene.clip_planes.is_empty() {
-        return Ok(());
-    }
-    Err(RenderError::InvalidOptions(format!(
-        "the '{renderer}' renderer does not draw clipping planes yet: clip planes are drawn by ray casting only (grids, and meshes with --method raycast)"
-    )))
-}
-
 /// A frame from an image, the error map where the method estimates one, and the figures.
 pub(crate) fn frame(
     image: Image,

@@ -392,10 +392,11 @@ pub struct Scene {
     /// to the end (references).
     pub early_termination: Option<f32>,
     /// World-space clipping planes, each keeping `normal . x + offset >= 0`: the volume of
-    /// interest is the data box cut by all of them (seed `004`, ch. 4). Drawn by grid ray
-    /// casting (every integrator: rays clipped exactly to the planes) and tet ray casting
-    /// (segments trimmed exactly); PT, the mesh reference and resampling refuse a scene with
-    /// planes.
+    /// interest is the data box cut by all of them (seed `004`, ch. 4). Every renderer draws
+    /// them exactly: grid ray casting (every integrator: rays clipped to the planes) and
+    /// resampling (through it), tet ray casting and the mesh reference (segments trimmed to
+    /// each ray's window), PT (fragments trimmed to each pixel's window, cells wholly outside
+    /// a plane culled).
     pub clip_planes: Vec<ClipPlane>,
     /// The sculpt mask of a grid (seed `004` sec. 4.4-4.5): samples where the interpolated
     /// mask is under 0.5 are not drawn. Grid ray casting draws it (every integrator); the

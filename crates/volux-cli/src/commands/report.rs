@@ -78,6 +78,7 @@ fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)
             "zero_volume": zero_volume,
             "degenerate_projections": s.degenerate,
             "clipped": s.clipped,
+            "culled": s.culled,
             "tets_per_s": tets_per_s,
             "fragments": s.fragments,
             "sort": value_name(&args.sort),
@@ -98,9 +99,14 @@ fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)
     if !args.stats {
         return;
     }
+    // Cells wholly outside a clip plane, named only when there are some.
+    let culled = match s.culled {
+        0 => String::new(),
+        n => format!(" ({n} more culled by clip planes)"),
+    };
     eprintln!(
-        "{}{w}x{h} PT: {:.1} ms ({:.2} M tets/s), {} tets, {} kept, {} drawn, {} zero-volume, \
-         {} degenerate projections, {} fragments, {:.1} bytes/tet per frame",
+        "{}{w}x{h} PT: {:.1} ms ({:.2} M tets/s), {} tets, {} kept, {} drawn{culled}, \
+         {} zero-volume, {} degenerate projections, {} fragments, {:.1} bytes/tet per frame",
         frame_prefix(args),
         s.seconds * 1e3,
         tets_per_s / 1e6,

@@ -47,10 +47,13 @@
 //!   interpolated and coloured several at a time;
 //! - [`render`]: [`PtRenderer`], the stages wired together with the caches of the update step
 //!   (discard, per-tetrahedron pass, order, bins), parallel over tiles and deterministic;
+//! - [`clip`]: clipping planes (seed `004` sec. 4): each pixel's depth window, fragments
+//!   trimmed to it, cells wholly outside a plane culled;
 //! - [`reference`](mod@reference): a brute-force per-pixel ray/tetrahedron integrator, the independent
 //!   reference of the tests.
 
 pub mod classify;
+pub mod clip;
 pub mod planes;
 pub mod project;
 pub mod raster;

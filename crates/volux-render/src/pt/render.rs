@@ -10,7 +10,8 @@
 //!    ([`ViewProjection`]), the four exact orientation tests of every kept tetrahedron
 //!    (degenerate projections are dropped) and its centroid's sort key (distance from the eye
 //!    under perspective, which orders far fewer face pairs wrongly than the view depth of
-//!    the seeds; see [`sort`]);
+//!    the seeds; see [`sort`]); with clipping planes, the cells with all four vertices
+//!    outside one plane are culled here ([`super::clip`], seed `004` sec. 4);
 //! 3. **visibility order** (view changes only): centroid radix sort, or the exact order
 //!    (MPVO on a convex mesh; a per-pixel fragment sort otherwise);
 //! 4. **binning** of the ordered tetrahedra into screen tiles, by the tile ranges the
@@ -23,7 +24,9 @@
 //!    isosurfaces, non-finite values) take the seeds' path: classification and thick vertex
 //!    ([`super::classify`], `fan_vertices`), the fan's triangles, perspective-correct
 //!    `(s_f, s_b, l)` and gradients, the fragment colour of [`FragmentShader`]. Both draw
-//!    with the top-left rule, so each covers the cell's projection exactly once.
+//!    with the top-left rule, so each covers the cell's projection exactly once. With
+//!    clipping planes, both paths trim every fragment to its pixel's depth window inside
+//!    the planes before colouring it ([`super::clip`]); without planes no plane work is done.
 //!
 //! A TF change that keeps the zero set re-runs only step 5 (recolouring without
 //! re-projecting). Compositing is front to back (the "under" operator, equivalent to the
@@ -35,9 +38,11 @@ use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
+use volux_core::voi::ClipPlane;
 use volux_core::{Camera, Image, TetMesh, TransferFunction};
 
 use super::classify::{ternary_code, TERNARY_TABLE};
+use super::clip::{outside_a_plane, tile_windows, trim_gradients, DepthSpan, Window};
 use super::planes::CellPlanes;
 use super::project::{fan_vertices_with, pixel_secant, screen_points, FanVertex};
 use super::project::{TetVertices, ViewProjection};
@@ -57,7 +62,7 @@ use crate::integrate::psi::{CellClassifier, PsiTable};
 use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
-use crate::renderer::{frame, no_clip_planes, wrong_method, Renderer};
+use crate::renderer::{frame, wrong_method, Renderer};
 use crate::scene::{Method, PtSettings, Scene, SortMode, DEFAULT_EARLY_TERMINATION};
 use crate::shading::BlinnPhong;
 use crate::tiles::Rect;
@@ -86,6 +91,9 @@ pub struct PtOptions {
     pub early_termination: Option<f32>,
     /// Count the centroid order's violations of the exact face order (`--stats`).
     pub count_violations: bool,
+    /// World-space clipping planes ([`Scene::clip_planes`]): fragments are trimmed to each
+    /// pixel's window inside them ([`super::clip`], seed `004` sec. 4).
+    pub clip_planes: Vec<ClipPlane>,
     /// Cancellation and progress.
     pub control: Control,
 }
@@ -105,6 +113,7 @@ impl PtOptions {
             shading: BlinnPhong::default(),
             early_termination: Some(DEFAULT_EARLY_TERMINATION),
             count_violations: false,
+            clip_planes: Vec::new(),
             control: Control::default(),
         }
     }
@@ -122,6 +131,10 @@ impl PtOptions {
                  Simpson integrates whole rays (tetrahedral ray casting)"
                     .into(),
             ));
+        }
+        for p in &self.clip_planes {
+            p.check()
+                .map_err(|e| RenderError::InvalidOptions(e.to_string()))?;
         }
         Ok(())
     }
@@ -145,13 +158,14 @@ struct Kept {
 
 /// The view-dependent data.
 struct ViewData {
-    key: (Camera, usize, usize, SortMode, u64),
+    key: (Camera, usize, usize, SortMode, u64, Vec<ClipPlane>),
     proj: ViewProjection,
     bins: Bins,
     per_pixel: bool,
     drawn: usize,
     degenerate: usize,
     clipped: usize,
+    culled: usize,
     violations: Option<u64>,
     strategy: &'static str,
     cycles: usize,
@@ -188,6 +202,9 @@ pub struct PtRenderer<M: Deref<Target = TetMesh> = Arc<TetMesh>> {
     view: Option<ViewData>,
     /// The view before the current one, kept for a preview and a full frame alternating.
     spare_view: Option<ViewData>,
+    /// Cull the cells wholly outside a clipping plane (off only in tests, to show that
+    /// culling does not change the image).
+    cull_outside: bool,
 }
 
 impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
@@ -204,7 +221,16 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             kept_version: 0,
             view: None,
             spare_view: None,
+            cull_outside: true,
         }
+    }
+
+    /// The renderer drawing every cell, even those wholly outside a clipping plane (whose
+    /// fragments the trim then drops one by one).
+    #[cfg(test)]
+    pub(crate) fn without_plane_culling(mut self) -> Self {
+        self.cull_outside = false;
+        self
     }
 
     /// Renders one frame.
@@ -263,6 +289,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             gradients: self.gradients.as_deref(),
             shader: &shader,
             camera: &opts.camera,
+            planes: &opts.clip_planes,
             early: if view.per_pixel {
                 None
             } else {
@@ -280,6 +307,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         stats.tets_drawn = view.drawn;
         stats.degenerate = view.degenerate;
         stats.clipped = view.clipped;
+        stats.culled = view.culled;
         stats.sort_violations = view.violations;
         stats.exact_strategy = view.strategy;
         stats.cycles_broken = view.cycles;
@@ -329,6 +357,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             opts.height,
             opts.sort,
             self.kept_version,
+            opts.clip_planes.clone(),
         );
         let counting = opts.count_violations;
         let fits =
@@ -350,11 +379,14 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         #[derive(Clone, Copy)]
         enum Fate {
             Skip,
+            Culled,
             Clipped,
             Degenerate,
             Drawn(f32),
         }
         let tiles = tiles(opts.width, opts.height);
+        let (planes, positions) = (&opts.clip_planes[..], mesh.positions());
+        let cull = self.cull_outside && !planes.is_empty();
         // Each cell's tile range comes with its fate, for the binning (step 4).
         let (fates, ranges): (Vec<Fate>, Vec<[u16; 4]>) = mesh
             .tets()
@@ -364,6 +396,9 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             .map(|(t, &k)| {
                 if !k {
                     return (Fate::Skip, NO_TILES);
+                }
+                if cull && outside_a_plane(planes, &t.map(|i| positions[i as usize].as_dvec3())) {
+                    return (Fate::Culled, NO_TILES);
                 }
                 let Some(v) = proj.tet(t) else {
                     return (Fate::Clipped, NO_TILES);
@@ -382,7 +417,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             })
             .unzip();
         let (mut ids, mut depths) = (Vec::new(), Vec::new());
-        let (mut degenerate, mut clipped) = (0, 0);
+        let (mut degenerate, mut clipped, mut culled) = (0, 0, 0);
         for (i, f) in fates.iter().enumerate() {
             match *f {
                 Fate::Drawn(d) => {
@@ -391,6 +426,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
                 }
                 Fate::Degenerate => degenerate += 1,
                 Fate::Clipped => clipped += 1,
+                Fate::Culled => culled += 1,
                 Fate::Skip => {}
             }
         }
@@ -473,6 +509,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             drawn: ids.len(),
             degenerate,
             clipped,
+            culled,
             violations,
             strategy,
             cycles,
@@ -498,6 +535,7 @@ impl PtOptions {
             shading: a.lighting,
             early_termination: scene.early_termination,
             count_violations: settings.count_violations,
+            clip_planes: scene.clip_planes.clone(),
             control: control.clone(),
         }
     }
@@ -516,7 +554,6 @@ impl<M: Deref<Target = TetMesh> + Send> Renderer for PtRenderer<M> {
             other => return Err(wrong_method("pt", &other)),
         };
         scene.validate()?;
-        no_clip_planes(self.name(), scene)?;
         let r = PtRenderer::render(self, &PtOptions::from_scene(scene, &settings, control))?;
         let rebuilt = r.stats.rebuilt;
         Ok(frame(
@@ -594,6 +631,8 @@ struct TileContext<'a> {
     gradients: Option<&'a [Vec3]>,
     shader: &'a FragmentShader<'a>,
     camera: &'a Camera,
+    /// The clipping planes; empty: no plane work at all.
+    planes: &'a [ClipPlane],
     early: Option<f32>,
     per_pixel: bool,
 }
@@ -678,8 +717,10 @@ impl TileContext<'_> {
         // The batch's buffers (a third of a MiB) are kept per thread, not zeroed per tile.
         let mut batch = SPARE_BATCH.with(|b| b.take()).unwrap_or_default();
         let mut colour = CellColour::default();
+        let windows = self.windows(rect);
         let gather = Gather {
             secant: &secant,
+            window: windows.as_deref(),
             x0: rect.x0 as i64,
             y0: rect.y0 as i64,
             width: tw as i64,
@@ -778,8 +819,14 @@ impl TileContext<'_> {
                         if a[3] >= early {
                             return;
                         }
-                        count += 1;
                         let (z_f, s_f, z_b, s_b) = interp.at::<PERSP>(l);
+                        let span = DepthSpan { z_f, s_f, z_b, s_b };
+                        let Some((DepthSpan { z_f, s_f, z_b, s_b }, ends)) =
+                            trim(span, &windows, p)
+                        else {
+                            return;
+                        };
+                        count += 1;
                         let len = ((z_b - z_f) * secant[p]).max(0.0);
                         let rgba = match piece {
                             Some(piece) => shader.segment_linear::<M>(piece, s_f, s_b, len),
@@ -787,7 +834,10 @@ impl TileContext<'_> {
                                 s_f,
                                 s_b,
                                 len,
-                                || interp.gradients(l),
+                                || {
+                                    let g = interp.gradients(l);
+                                    ends.map_or(g, |e| trim_gradients(g, e))
+                                },
                                 || view_dir(x, y),
                             ),
                         };
@@ -816,7 +866,27 @@ impl TileContext<'_> {
     }
 }
 
+/// `span` (of tile pixel `p`) trimmed to the pixel's window, with the fractions of it at its
+/// new ends; unchanged, with no fractions, without planes (`windows` is `None`).
+#[inline(always)]
+fn trim(
+    span: DepthSpan,
+    windows: &Option<Vec<Window>>,
+    p: usize,
+) -> Option<(DepthSpan, Option<[f32; 2]>)> {
+    match windows {
+        None => Some((span, None)),
+        Some(w) => span.trim(w[p]).map(|(s, ends)| (s, Some(ends))),
+    }
+}
+
 impl TileContext<'_> {
+    /// The depth windows of the pixels of `rect` ([`super::clip`]); `None` without planes.
+    fn windows(&self, rect: Rect) -> Option<Vec<Window>> {
+        (!self.planes.is_empty())
+            .then(|| tile_windows(self.camera, self.proj.size, self.planes, rect))
+    }
+
     /// Draws one cell through the lanes of [`shade`](super::shade): gathers the fragments of
     /// its drawn face triangles with their entry and exit from its planes `cell`
     /// ([`super::planes`]), colours them with `colour` and composites them (or keeps them
@@ -838,7 +908,7 @@ impl TileContext<'_> {
         let table = self.shader.psi;
         let per_pixel = self.per_pixel;
         let mut flush = |batch: &mut Batch, acc: &mut [[f32; 4]]| {
-            batch.shade::<PERSP>(colour, table, values);
+            batch.shade::<PERSP>(colour, table, values, gather.window);
             *count += batch.len() as u64;
             if per_pixel {
                 frags.extend(batch.fragments().map(|(pixel, depth, rgba)| Fragment {

@@ -29,6 +29,7 @@ use std::cmp::Ordering;
 
 use glam::Vec4;
 
+use super::clip::{DepthSpan, Window, ALL};
 use super::planes::{CellPlanes, FaceDraw};
 use super::raster::{Row, Triangle, TILE};
 use crate::composite::under;
@@ -207,6 +208,9 @@ pub struct Gather<'a> {
     /// Per tile pixel, the secant of its ray to the view direction, then [`LANES`] padding
     /// entries (a row's last lane group reads past its end).
     pub secant: &'a [f32],
+    /// Per tile pixel, its window of view depth inside the clipping planes
+    /// ([`super::clip`]); `None` without planes.
+    pub window: Option<&'a [Window]>,
     /// The tile's first column.
     pub x0: i64,
     /// The tile's first row.
@@ -351,12 +355,14 @@ fn piece_at(piece: &LinearPiece, s: &Lanes) -> [Lanes; 4] {
 
 impl Batch {
     /// Interpolates and colours every fragment (`PERSP`: the attributes are the perspective
-    /// planes): fills the front depths and the premultiplied RGBA.
+    /// planes), trimmed to its pixel's `window` when there are clipping planes: fills the
+    /// front depths and the premultiplied RGBA.
     pub fn shade<const PERSP: bool>(
         &mut self,
         colour: &CellColour,
         table: &PsiTable,
         values: CellValues,
+        window: Option<&[Window]>,
     ) {
         if self.len == 0 {
             return;
@@ -383,8 +389,12 @@ impl Batch {
                 let s = values.offset + if PERSP { n * z } else { n };
                 s.max(values.lo).min(values.hi)
             };
-            let s_f = lanes(|k| value(nf[k], z_f[k]));
-            let s_b = lanes(|k| value(nb[k], z_b[k]));
+            let mut s_f = lanes(|k| value(nf[k], z_f[k]));
+            let mut s_b = lanes(|k| value(nb[k], z_b[k]));
+            let (mut z_f, mut z_b) = (z_f, z_b);
+            if let Some(window) = window {
+                self.trim(i, window, [&mut z_f, &mut s_f, &mut z_b, &mut s_b]);
+            }
             let len = lanes(|k| ((z_b[k] - z_f[k]) * sec[k]).max(0.0));
             let rgba = colour.lanes(table, &s_f, &s_b, &len);
             // Transparent black for unusable inputs, as the scalar models give (a finite
@@ -397,6 +407,26 @@ impl Batch {
             for (out, v) in self.rgba.iter_mut().zip(&rgba) {
                 let v = Vec4::select(ok, Vec4::from(*v), Vec4::ZERO);
                 out[i..i + LANES].copy_from_slice(&v.to_array());
+            }
+        }
+    }
+
+    /// Trims the fragments of the lane group from `i`, given as `[z_f, s_f, z_b, s_b]`, to
+    /// their pixels' windows ([`DepthSpan::trim`]); one wholly outside gets zero length, which
+    /// colours as transparent black (nothing).
+    #[inline(always)]
+    fn trim(&self, i: usize, window: &[Window], [z_f, s_f, z_b, s_b]: [&mut Lanes; 4]) {
+        for k in 0..LANES {
+            let w = window.get(self.pixel[i + k] as usize).copied();
+            let span = DepthSpan {
+                z_f: z_f[k],
+                s_f: s_f[k],
+                z_b: z_b[k],
+                s_b: s_b[k],
+            };
+            match span.trim(w.unwrap_or(ALL)) {
+                Some((t, _)) => (z_f[k], s_f[k], z_b[k], s_b[k]) = (t.z_f, t.s_f, t.z_b, t.s_b),
+                None => z_b[k] = z_f[k],
             }
         }
     }

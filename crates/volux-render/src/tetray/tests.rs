@@ -50,6 +50,7 @@ fn check_against_reference(
             height: n,
             camera,
             tf: opts.tf.clone(),
+            clip_planes: Vec::new(),
         },
     )
     .unwrap();
@@ -286,6 +287,7 @@ fn rays_through_lattice_vertices_and_edges_are_walked_exactly() {
                 height: n,
                 camera,
                 tf: opts.tf.clone(),
+                clip_planes: Vec::new(),
             },
         )
         .unwrap();
@@ -985,6 +987,7 @@ fn empty_space_skipping_matches_the_reference() {
                 height: 48,
                 camera,
                 tf: skip_tf(name),
+                clip_planes: Vec::new(),
             },
         )
         .unwrap();

@@ -48,6 +48,7 @@ fn reference(mesh: &TetMesh, o: &PtOptions) -> Image {
         height: o.height,
         camera: o.camera,
         tf: o.tf.clone(),
+        clip_planes: Vec::new(),
     };
     render_mesh_reference(mesh, &r).unwrap()
 }
