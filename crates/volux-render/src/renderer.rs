@@ -41,6 +41,19 @@ pub(crate) fn wrong_method(renderer: &'static str, method: &Method) -> RenderErr
     ))
 }
 
+/// Refuses a scene with a sculpt mask or region labels in a renderer of tetrahedra: both are
+/// voxel layers of a grid (seed `004`), drawn by grid ray casting; a mesh is cut with planes.
+pub(crate) fn no_voxel_layers(renderer: &'static str, scene: &Scene) -> Result<(), RenderError> {
+    let layer = match (&scene.mask, &scene.labels) {
+        (Some(_), _) => "a sculpt mask",
+        (_, Some(_)) => "region labels",
+        _ => return Ok(()),
+    };
+    Err(RenderError::InvalidOptions(format!(
+        "the '{renderer}' renderer draws tetrahedra and cannot apply {layer}: masks and labels apply to grids (ray cast the grid); cut a mesh with clip planes"
+    )))
+}
+
 /// A frame from an image, the error map where the method estimates one, and the figures.
 pub(crate) fn frame(
     image: Image,

@@ -114,6 +114,7 @@ impl Renderer for ResampleRenderer {
             return Err(wrong_method("resample", &scene.method));
         };
         scene.validate()?;
+        crate::renderer::no_voxel_layers("resample", scene)?;
         let built = !matches!(&self.resampled, Some((n, _)) if *n == samples);
         if built {
             self.resampled = Some((samples, resample_mesh(&self.mesh, samples)?));

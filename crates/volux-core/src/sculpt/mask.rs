@@ -240,6 +240,28 @@ impl SculptMask {
         }
     }
 
+    /// [`SculptMask::visible`] for `N` points at once (lane `l` at `x[l]`, `y[l]`, `z[l]`):
+    /// the macrocells are found for all lanes together (straight-line code the compiler
+    /// vectorizes), and only lanes in partly removed macrocells interpolate. `keep[l]` is
+    /// cleared where the point is hidden.
+    #[inline]
+    pub fn visible_lanes<const N: usize>(&self, p: &[[f32; N]; 3], keep: &mut [bool; N]) {
+        let [bx, by, _] = self.blocks_per_axis;
+        let top: [f32; 3] = std::array::from_fn(|a| self.dims[a].saturating_sub(2) as f32);
+        let mut block = [0u32; N];
+        for (l, b) in block.iter_mut().enumerate() {
+            // The cell's macrocell: floor of the clamped coordinate (NaN clamps to 0).
+            let c: [u32; 3] = std::array::from_fn(|a| p[a][l].max(0.0).min(top[a]) as u32 >> 3);
+            *b = c[0] + bx as u32 * (c[1] + by as u32 * c[2]);
+        }
+        for l in 0..N {
+            let state = self.blocks[block[l] as usize];
+            if state != VISIBLE {
+                keep[l] &= state == PARTIAL && self.visible([p[0][l], p[1][l], p[2][l]]);
+            }
+        }
+    }
+
     /// The cell of `p` (clamped to the grid) and the position in it.
     #[inline]
     fn cell_of(&self, p: [f32; 3]) -> ([usize; 3], [f32; 3]) {

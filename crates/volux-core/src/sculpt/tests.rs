@@ -176,6 +176,25 @@ fn visibility_is_the_interpolated_mask_at_one_half_and_block_states_agree() {
         partial_seen += usize::from(v > 0.0 && v < 1.0);
     }
     assert!(partial_seen > 100);
+    // The lane-wise answer is the one-point answer, out-of-range and NaN lanes included.
+    for _ in 0..2000 {
+        let mut p = [[0f32; 8]; 3];
+        for a in 0..3 {
+            for l in 0..8 {
+                p[a][l] = rnd(34) as f32 - 2.0;
+            }
+        }
+        p[1][3] = f32::NAN;
+        let mut keep = [true; 8];
+        mask.visible_lanes(&p, &mut keep);
+        for l in 0..8 {
+            assert_eq!(
+                keep[l],
+                mask.visible([p[0][l], p[1][l], p[2][l]]),
+                "lane {l}"
+            );
+        }
+    }
     // A removed block is removed at every point.
     let m = mask.blocks_per_axis();
     let removed = (0..m[0] * m[1] * m[2])

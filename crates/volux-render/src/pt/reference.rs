@@ -327,6 +327,7 @@ impl Renderer for MeshReference {
             return Err(wrong_method("mesh-reference", &scene.method));
         }
         scene.validate()?;
+        crate::renderer::no_voxel_layers("mesh-reference", scene)?;
         let opts = ReferenceOptions {
             width: scene.view.width,
             height: scene.view.height,

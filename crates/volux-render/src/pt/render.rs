@@ -554,6 +554,7 @@ impl<M: Deref<Target = TetMesh> + Send> Renderer for PtRenderer<M> {
             other => return Err(wrong_method("pt", &other)),
         };
         scene.validate()?;
+        crate::renderer::no_voxel_layers("pt", scene)?;
         let r = PtRenderer::render(self, &PtOptions::from_scene(scene, &settings, control))?;
         let rebuilt = r.stats.rebuilt;
         Ok(frame(

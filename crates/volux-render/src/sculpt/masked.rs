@@ -31,8 +31,10 @@ impl<F: Field> Field for Masked<'_, F> {
     #[inline]
     fn sample_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
         let mut v = self.inner.sample_lanes(p);
-        for (l, v) in v.iter_mut().enumerate() {
-            if !self.mask.visible([p[0][l], p[1][l], p[2][l]]) {
+        let mut keep = [true; LANES];
+        self.mask.visible_lanes(p, &mut keep);
+        for (v, keep) in v.iter_mut().zip(keep) {
+            if !keep {
                 *v = f32::NAN;
             }
         }
@@ -42,8 +44,10 @@ impl<F: Field> Field for Masked<'_, F> {
     #[inline]
     fn sample4(&self, p: &[[f32; 4]; 3]) -> [f32; 4] {
         let mut v = self.inner.sample4(p);
-        for (l, v) in v.iter_mut().enumerate() {
-            if !self.mask.visible([p[0][l], p[1][l], p[2][l]]) {
+        let mut keep = [true; 4];
+        self.mask.visible_lanes(p, &mut keep);
+        for (v, keep) in v.iter_mut().zip(keep) {
+            if !keep {
                 *v = f32::NAN;
             }
         }

@@ -352,3 +352,27 @@ fn labels_colour_the_rendering_with_every_integrator() {
         );
     }
 }
+
+#[test]
+fn the_mesh_renderers_refuse_a_mask_with_the_reason() {
+    use crate::engine::create_renderer;
+    use crate::integrate::SegmentRule;
+    use crate::scene::{PtSettings, Volume};
+    let g = constant_grid();
+    let mesh = Volume::from(g.clone()).to_tets().unwrap();
+    let mut scene = Scene::new(camera(&g, "{}"), 8, 8, tf());
+    scene.mask = Some(dug_mask(&g, DVec3::splat(9.5), 4.0));
+    for method in [
+        Method::ProjectedTetrahedra(PtSettings::default()),
+        Method::TetRaycast(SegmentRule::Psi),
+        Method::MeshReference,
+    ] {
+        scene.method = method;
+        let mut r = create_renderer(&mesh, &method).unwrap();
+        let e = r
+            .render(&scene, &Default::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("masks and labels apply to grids"), "{e}");
+    }
+}

@@ -460,6 +460,7 @@ impl<M: Deref<Target = TetMesh> + Send + Sync> Renderer for TetRayCaster<M> {
             other => return Err(wrong_method("tet-raycast", &other)),
         };
         scene.validate()?;
+        crate::renderer::no_voxel_layers("tet-raycast", scene)?;
         let unit = self.mesh.bounds().diagonal() / MESH_UNITS_PER_DIAGONAL;
         let opts = TetRayOptions::from_scene(scene, rule, unit, control);
         let r = TetRayCaster::render(self, &opts)?;
