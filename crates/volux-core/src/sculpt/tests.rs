@@ -179,10 +179,8 @@ fn visibility_is_the_interpolated_mask_at_one_half_and_block_states_agree() {
     // The lane-wise answer is the one-point answer, out-of-range and NaN lanes included.
     for _ in 0..2000 {
         let mut p = [[0f32; 8]; 3];
-        for a in 0..3 {
-            for l in 0..8 {
-                p[a][l] = rnd(34) as f32 - 2.0;
-            }
+        for v in p.iter_mut().flatten() {
+            *v = rnd(34) as f32 - 2.0;
         }
         p[1][3] = f32::NAN;
         let mut keep = [true; 8];
