@@ -57,8 +57,14 @@ where
     if let Some((name, sub)) = matches.subcommand() {
         args.given = given_options(name, sub);
     }
-    if let cli::Command::Render(r) = &mut args.command {
-        r.given = args.given.clone();
+    match &mut args.command {
+        cli::Command::Render(r) => r.given = args.given.clone(),
+        cli::Command::Sculpt(s) => {
+            if let Some((_, sub)) = matches.subcommand() {
+                s.fill_order(sub);
+            }
+        }
+        _ => {}
     }
     Ok(args)
 }

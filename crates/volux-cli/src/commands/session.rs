@@ -43,7 +43,7 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
     if mesh_method && matches!(volume, Volume::Grid(_)) {
         volume = volume.to_tets()?;
     }
-    let scene = session.scene();
+    let (scene, _) = session.scene_on(&volume)?;
     scene
         .method
         .resolve(&volume)?
