@@ -234,8 +234,9 @@ pub struct RenderArgs {
     /// The file (or DICOM folder) to render (none with --session: the session names it).
     #[arg(required_unless_present = "session")]
     pub file: Option<PathBuf>,
-    /// Render a session saved by volux-view (dataset, camera, TF, method, size,
-    /// background): the viewer's picture, to the pixel; only -o goes with it.
+    /// Render a session saved by volux-view or `volux sculpt --session-out` (dataset,
+    /// camera, TF, method, size, background, clip planes and sculpt steps, replayed): the
+    /// viewer's picture, to the pixel; only -o goes with it.
     #[arg(long, value_name = "S.json", conflicts_with = "file")]
     pub session: Option<PathBuf>,
     /// Output PNG [default: out.png, and it says so when it replaces a file].

@@ -134,8 +134,8 @@ fn apply(bench: &mut Workbench, tool: &Tool, what: &str) -> Result<(), CmdError>
                 .ok_or_else(|| workbench::no_surface(what, *pixel))?;
         }
     }
-    let removed = bench.sculpt.mask().removed_count() - before;
     let ms = t.elapsed().as_secs_f64() * 1e3;
+    let removed = bench.sculpt.mask().removed_count() - before;
     eprintln!("{what}: {removed} voxels removed, {ms:.1} ms");
     Ok(())
 }

@@ -147,7 +147,10 @@ pub fn add_mask(
         )
         .into());
     };
-    scene.mask = Some(Arc::new(read_mask(path, grid, file)?));
+    let mask = read_mask(path, grid, file)?;
+    // A mask that removes nothing changes no pixel: leave the scene without one, as the
+    // engine's sculpt state does (`Sculpt::apply_to`).
+    scene.mask = (!mask.is_untouched()).then(|| Arc::new(mask));
     Ok(())
 }
 
