@@ -1,7 +1,7 @@
 //! Command-line arguments.
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{ArgMatches, Args, FromArgMatches, Parser, Subcommand, ValueEnum};
 
 /// Volux: accurate, fast volume visualization of regular grids and tetrahedral meshes.
 #[derive(Debug, Parser)]
@@ -70,6 +70,19 @@ pub enum Command {
     /// Render a file to PNG.
     #[command(after_help = "JSON formats: `volux help tf`, `volux help camera`.")]
     Render(Box<RenderArgs>),
+    /// Carve a grid (seed `004` sec. 4.4-4.5): erase discs and strokes through the whole
+    /// depth and dig balls at the visible surface, in the order given, and write the sculpt
+    /// mask as NRRD (u8: 1 kept, 0 removed; the grid's spacing, origin and direction).
+    #[command(after_help = SCULPT_HELP)]
+    Sculpt(Box<SculptArgs>),
+    /// Measure on the visible surface (seed `004` sec. 6.2): pick points by pixel and print
+    /// them (world coordinates) and the polyline's length in millimetres.
+    #[command(after_help = PIXELS_HELP)]
+    Measure(Box<MeasureArgs>),
+    /// Label the visible voxels by their nearest picked seed (seed `004` sec. 6.2, world
+    /// distance with the data's spacing) and write the labels as NRRD (u8, 0: none).
+    #[command(after_help = PIXELS_HELP)]
+    Regions(Box<RegionsArgs>),
     /// Transfer functions: print a preset as JSON to start from.
     Tf {
         /// What to do.
@@ -221,8 +234,9 @@ pub struct RenderArgs {
     /// The file (or DICOM folder) to render (none with --session: the session names it).
     #[arg(required_unless_present = "session")]
     pub file: Option<PathBuf>,
-    /// Render a session saved by volux-view (dataset, camera, TF, method, size,
-    /// background): the viewer's picture, to the pixel; only -o goes with it.
+    /// Render a session saved by volux-view or `volux sculpt --session-out` (dataset,
+    /// camera, TF, method, size, background, clip planes and sculpt steps, replayed): the
+    /// viewer's picture, to the pixel; only -o goes with it.
     #[arg(long, value_name = "S.json", conflicts_with = "file")]
     pub session: Option<PathBuf>,
     /// Output PNG [default: out.png, and it says so when it replaces a file].
@@ -339,6 +353,10 @@ pub struct RenderArgs {
         allow_hyphen_values = true
     )]
     pub clip_planes: Vec<String>,
+    /// Apply a sculpt mask saved by `volux sculpt` (NRRD or any grid format, the grid's
+    /// dims; non-zero voxels are kept, zero voxels removed) (grids).
+    #[arg(long, value_name = "MASK.nrrd")]
+    pub mask: Option<PathBuf>,
     /// Write the per-pixel estimated integration error as a PNG (rays that missed the
     /// tolerance in magenta).
     #[arg(long)]
@@ -557,4 +575,202 @@ pub fn value_name(v: &impl ValueEnum) -> String {
     v.to_possible_value()
         .map(|p| p.get_name().to_string())
         .unwrap_or_default()
+}
+
+/// How the sculpting commands take pixels.
+const PIXELS_HELP: &str = "Pixels are those of the PNG `volux render` writes with the same \
+file, camera, size and transfer-function options: x to the right, y down from the top-left \
+corner, continuous (pixel (i, j) spans i..i+1, j..j+1; its centre is i+0.5, j+0.5). A pixel \
+is picked where the opacity along its ray reaches 0.5, after the clip planes and the mask.";
+
+/// `volux sculpt`'s help after the options.
+const SCULPT_HELP: &str = "The tools apply in the order given (--dig 200,180,12 --erase \
+200,180,30 differs from the reverse). Pixels are those of the PNG `volux render` writes \
+with the same file, camera, size and transfer-function options: x to the right, y down from \
+the top-left corner, continuous (pixel (i, j)'s centre is i+0.5, j+0.5). Render the result \
+with `volux render FILE --mask MASK.nrrd` and the same view options.";
+
+/// The view that the sculpting commands pick in: the file, camera, image size, transfer
+/// function, clip planes and a starting mask, defaulted as `volux render` defaults them.
+#[derive(Debug, Args, Clone)]
+pub struct ToolViewArgs {
+    /// The grid file (or DICOM folder).
+    pub file: PathBuf,
+    /// Camera JSON file (look-at or orbit form); overrides the angle options.
+    #[arg(long)]
+    pub camera: Option<PathBuf>,
+    /// Orbit azimuth in degrees (as `volux render`).
+    #[arg(long, allow_hyphen_values = true)]
+    pub azimuth: Option<f64>,
+    /// Orbit elevation in degrees.
+    #[arg(long, allow_hyphen_values = true)]
+    pub elevation: Option<f64>,
+    /// A named view (as `volux render`).
+    #[arg(long, value_enum)]
+    pub view: Option<ViewArg>,
+    /// Up direction X,Y,Z of the orbit camera.
+    #[arg(long, allow_hyphen_values = true)]
+    pub up: Option<String>,
+    /// What the camera frames: `visible` or `all` (as `volux render`).
+    #[arg(long, value_enum, default_value_t = FrameArg::Visible)]
+    pub frame: FrameArg,
+    /// Zoom factor.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
+    pub zoom: f64,
+    /// Use an orthographic projection.
+    #[arg(long)]
+    pub orthographic: bool,
+    /// Image size WxH the pixels refer to.
+    #[arg(long, default_value = "512x512")]
+    pub size: String,
+    /// Transfer function (preset or file; repeatable, as `volux render`): picking finds
+    /// the surface it makes visible [default: auto].
+    #[arg(long)]
+    pub tf: Vec<String>,
+    /// Multiply the extinction of the transfer function.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
+    pub opacity_scale: f64,
+    /// An isosurface VALUE:R,G,B,A (repeatable).
+    #[arg(long = "iso", allow_hyphen_values = true)]
+    pub isos: Vec<String>,
+    /// Keep the half-space A*x + B*y + C*z + D >= 0 (world coordinates; repeatable).
+    #[arg(
+        long = "clip-plane",
+        value_name = "A,B,C,D",
+        allow_hyphen_values = true
+    )]
+    pub clip_planes: Vec<String>,
+    /// Start from this sculpt mask (as written by `volux sculpt`; the grid's dims).
+    #[arg(long, value_name = "MASK.nrrd")]
+    pub mask: Option<PathBuf>,
+    #[command(flatten)]
+    pub load: LoadArgs,
+}
+
+impl ToolViewArgs {
+    /// The `volux render` arguments of this view (every other option at its default), so
+    /// that the camera, size and transfer function are those `volux render` would use;
+    /// `given`: the options typed.
+    pub fn render_args(&self, given: &[String]) -> RenderArgs {
+        let command = RenderArgs::augment_args(clap::Command::new("render"));
+        let matches = command
+            .try_get_matches_from(["render", "file"])
+            .expect("the render defaults parse");
+        let mut r = RenderArgs::from_arg_matches(&matches).expect("the render defaults parse");
+        r.file = Some(self.file.clone());
+        r.camera = self.camera.clone();
+        (r.azimuth, r.elevation, r.view) = (self.azimuth, self.elevation, self.view);
+        (r.up, r.frame, r.zoom) = (self.up.clone(), self.frame, self.zoom);
+        (r.orthographic, r.size) = (self.orthographic, self.size.clone());
+        (r.tf, r.opacity_scale, r.isos) = (self.tf.clone(), self.opacity_scale, self.isos.clone());
+        r.clip_planes = self.clip_planes.clone();
+        r.load = self.load.clone();
+        r.given = given
+            .iter()
+            .filter(|g| VIEW_OPTIONS.contains(&g.as_str()))
+            .cloned()
+            .collect();
+        r
+    }
+}
+
+/// The options of [`ToolViewArgs`] that `volux render` checks against each other.
+const VIEW_OPTIONS: [&str; 12] = [
+    "camera",
+    "azimuth",
+    "elevation",
+    "view",
+    "up",
+    "frame",
+    "zoom",
+    "orthographic",
+    "size",
+    "tf",
+    "opacity-scale",
+    "iso",
+];
+
+/// `volux sculpt` options.
+#[derive(Debug, Args, Clone)]
+pub struct SculptArgs {
+    #[command(flatten)]
+    pub view: ToolViewArgs,
+    /// Erase a disc: centre X,Y and radius R in pixels, through the whole depth
+    /// (repeatable).
+    #[arg(long, value_name = "X,Y,R", allow_hyphen_values = true)]
+    pub erase: Vec<String>,
+    /// Erase along a stroke: a disc of radius R pixels swept through the points
+    /// (repeatable).
+    #[arg(long, value_name = "X1,Y1,X2,Y2,...,R", allow_hyphen_values = true)]
+    pub stroke: Vec<String>,
+    /// Dig at pixel X,Y: remove a ball about the visible surface point there, R pixels in
+    /// radius at its depth (repeatable; repeated digs go deeper).
+    #[arg(long, value_name = "X,Y,R", allow_hyphen_values = true)]
+    pub dig: Vec<String>,
+    /// The mask written (NRRD, u8: 1 kept, 0 removed).
+    #[arg(long, short, value_name = "MASK.nrrd")]
+    pub output: PathBuf,
+    /// Also save a session (for `volux render --session` and volux-view) holding the view
+    /// and the sculpt steps.
+    #[arg(long, value_name = "S.json")]
+    pub session_out: Option<PathBuf>,
+    /// The tools in command-line order (filled after parsing).
+    #[arg(skip)]
+    pub order: Vec<(ToolKind, usize)>,
+}
+
+/// A sculpting tool of `volux sculpt`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum ToolKind {
+    /// `--erase`.
+    Erase,
+    /// `--stroke`.
+    Stroke,
+    /// `--dig`.
+    Dig,
+}
+
+impl SculptArgs {
+    /// Records the order of the `--erase`, `--stroke` and `--dig` options of `matches` (as
+    /// `(tool, index among that tool's options)`): the tools apply in that order.
+    pub fn fill_order(&mut self, matches: &ArgMatches) {
+        let mut all = Vec::new();
+        for (kind, id) in [
+            (ToolKind::Erase, "erase"),
+            (ToolKind::Stroke, "stroke"),
+            (ToolKind::Dig, "dig"),
+        ] {
+            if let Some(at) = matches.indices_of(id) {
+                all.extend(at.enumerate().map(|(n, at)| (at, kind, n)));
+            }
+        }
+        all.sort_unstable();
+        self.order = all.into_iter().map(|(_, kind, n)| (kind, n)).collect();
+    }
+}
+
+/// `volux measure` options.
+#[derive(Debug, Args, Clone)]
+pub struct MeasureArgs {
+    #[command(flatten)]
+    pub view: ToolViewArgs,
+    /// A pixel X,Y to pick (at least two; a polyline in the order given).
+    #[arg(long = "point", value_name = "X,Y", allow_hyphen_values = true)]
+    pub points: Vec<String>,
+    /// Print `{"points": [[x,y,z], ...], "length_mm": L}`.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `volux regions` options.
+#[derive(Debug, Args, Clone)]
+pub struct RegionsArgs {
+    #[command(flatten)]
+    pub view: ToolViewArgs,
+    /// A seed: pixel X,Y picked on the visible surface, and its LABEL (1..255); repeatable.
+    #[arg(long = "seed", value_name = "X,Y,LABEL", allow_hyphen_values = true)]
+    pub seeds: Vec<String>,
+    /// The label volume written (NRRD, u8, 0: no label).
+    #[arg(long, short, value_name = "LABELS.nrrd")]
+    pub output: PathBuf,
 }

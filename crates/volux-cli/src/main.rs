@@ -57,8 +57,14 @@ where
     if let Some((name, sub)) = matches.subcommand() {
         args.given = given_options(name, sub);
     }
-    if let cli::Command::Render(r) = &mut args.command {
-        r.given = args.given.clone();
+    match &mut args.command {
+        cli::Command::Render(r) => r.given = args.given.clone(),
+        cli::Command::Sculpt(s) => {
+            if let Some((_, sub)) = matches.subcommand() {
+                s.fill_order(sub);
+            }
+        }
+        _ => {}
     }
     Ok(args)
 }
@@ -107,7 +113,38 @@ fn one_line(text: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::one_line;
+    use super::{one_line, parse_from};
+    use crate::cli::{Command, ToolKind};
+
+    /// `volux sculpt` keeps the tools in command-line order, whichever option names them.
+    #[test]
+    fn sculpt_tools_keep_their_order() {
+        let argv = [
+            "volux",
+            "sculpt",
+            "a.nrrd",
+            "--dig",
+            "1,1,1",
+            "--erase",
+            "2,2,2",
+            "--stroke",
+            "1,1,2,2,3",
+            "--dig",
+            "3,3,3",
+            "-o",
+            "m.nrrd",
+        ];
+        let Command::Sculpt(s) = parse_from(argv).unwrap().command else {
+            panic!("a sculpt command")
+        };
+        let want = [
+            (ToolKind::Dig, 0),
+            (ToolKind::Erase, 0),
+            (ToolKind::Stroke, 0),
+            (ToolKind::Dig, 1),
+        ];
+        assert_eq!(s.order, want);
+    }
 
     #[test]
     fn clap_errors_fit_one_line_with_what_they_list() {

@@ -8,12 +8,16 @@ mod compare;
 mod convert;
 mod help;
 mod info;
+mod measure;
 mod orbit;
+mod regions;
 mod render;
 mod report;
+mod sculpt;
 mod session;
 mod tf;
 mod view;
+mod workbench;
 
 use crate::cli::{Cli, Command, TfCommand};
 use crate::progress;
@@ -31,6 +35,9 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
         } => convert::run(&input, &output, &load, show),
         Command::Generate { kind, size, output } => convert::generate(kind, size, &output),
         Command::Render(args) => render::run(&args, show),
+        Command::Sculpt(args) => sculpt::run(&args, &cli.given, show),
+        Command::Measure(args) => measure::run(&args, &cli.given, show),
+        Command::Regions(args) => regions::run(&args, &cli.given, show),
         Command::Demo { output } => render::demo(&output, show),
         Command::View { path, rest } => view::run(path.as_deref(), &rest),
         Command::Help { topic } => help::run(topic.as_deref()),

@@ -30,7 +30,10 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let (data, format) = super::common::load(file, &args.load, show)?;
     let loaded_grid = matches!(data, Dataset::Grid(_));
     let volume = crate::settings::volume(data, args)?;
-    let scene = plan.scene(args, &volume, loaded_grid)?;
+    let mut scene = plan.scene(args, &volume, loaded_grid)?;
+    if let Some(mask) = &args.mask {
+        super::workbench::add_mask(mask, &volume, file, &mut scene)?;
+    }
     let invisible = warn_invisible(&volume, &scene, format);
     if let Some(spec) = &args.orbit {
         return super::orbit::run(args, spec, &volume, &scene, &plan.png);

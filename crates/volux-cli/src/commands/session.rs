@@ -1,7 +1,9 @@
 //! `volux render --session S.json`: a view saved by `volux-view` rendered in batch. The
 //! session holds the whole scene (dataset and reader options, camera, image size, TF,
-//! method and every setting, background), so nothing is taken from defaults that could
-//! differ, and the PNG equals the viewer's screenshot of the same session.
+//! method and every setting, background, clip planes and sculpt steps, seed `004`), so
+//! nothing is taken from defaults that could differ, and the PNG equals the viewer's
+//! screenshot of the same session. The sculpt steps are replayed on the grid to rebuild
+//! its mask ([`Session::scene_on`]).
 use std::path::Path;
 
 use volux_render::scene::Volume;
@@ -43,7 +45,7 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
     if mesh_method && matches!(volume, Volume::Grid(_)) {
         volume = volume.to_tets()?;
     }
-    let scene = session.scene();
+    let (scene, _) = session.scene_on(&volume)?;
     scene
         .method
         .resolve(&volume)?

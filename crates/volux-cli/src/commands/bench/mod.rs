@@ -16,6 +16,7 @@ mod common;
 pub mod file;
 mod grid;
 mod pt;
+mod sculpt;
 mod targets;
 mod tetray;
 mod voi;

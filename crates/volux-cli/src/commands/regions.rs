@@ -1,0 +1,72 @@
+//! `volux regions`: region labelling (seed `004` sec. 6.2). Each `--seed X,Y,LABEL` is picked
+//! on the visible surface; every visible voxel of the volume of interest (inside the clip
+//! planes and the mask, with a non-zero extinction under the transfer function) takes the
+//! label of its nearest seed in world distance (the data's anisotropic spacing, not texture
+//! space), and the labels are written as NRRD `u8` with the grid's geometry.
+use volux_render::sculpt::SculptStep;
+
+use super::common::CmdError;
+use super::workbench::{self, Workbench};
+use crate::cli::RegionsArgs;
+
+/// Colours given to labels in turn (linear RGB), as saved in the sculpt steps.
+const PALETTE: [[f32; 3]; 6] = [
+    [0.9, 0.2, 0.2],
+    [0.2, 0.7, 0.9],
+    [0.3, 0.85, 0.3],
+    [0.95, 0.8, 0.2],
+    [0.75, 0.35, 0.9],
+    [0.95, 0.55, 0.2],
+];
+
+/// Runs `volux regions`.
+pub fn run(args: &RegionsArgs, given: &[String], show: bool) -> Result<(), CmdError> {
+    workbench::nrrd_path(&args.output, "--output")?;
+    if args.seeds.is_empty() {
+        return Err("give at least one --seed X,Y,LABEL".into());
+    }
+    let seeds = args
+        .seeds
+        .iter()
+        .map(|s| seed(s))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut bench = Workbench::open(&args.view, given, show)?;
+    for ((pixel, label), typed) in seeds.iter().zip(&args.seeds) {
+        let what = format!("--seed {typed}");
+        workbench::in_image(&what, *pixel, bench.size())?;
+        let point = bench.pick(*pixel, &what)?.world;
+        let colour = PALETTE[usize::from(label - 1) % PALETTE.len()];
+        bench.sculpt.apply(SculptStep::Label {
+            point,
+            label: *label,
+            colour,
+        })?;
+    }
+    let labels = bench.sculpt.labels(&bench.grid, &bench.scene)?;
+    let counts = count(&labels);
+    bench.write_u8(labels, &args.output)?;
+    for (label, n) in counts.iter().enumerate().skip(1).filter(|(_, n)| **n > 0) {
+        println!("label {label}: {n} voxels");
+    }
+    println!("unlabelled: {} voxels", counts[0]);
+    eprintln!("wrote {}", args.output.display());
+    Ok(())
+}
+
+/// Parses `--seed X,Y,LABEL`.
+fn seed(s: &str) -> Result<([f64; 2], u8), CmdError> {
+    let form = "X,Y,LABEL (pixels, and a label from 1 to 255)";
+    match workbench::numbers("seed", s, form)?.as_slice() {
+        [x, y, l] if l.fract() == 0.0 && (1.0..=255.0).contains(l) => Ok(([*x, *y], *l as u8)),
+        _ => Err(format!("--seed '{s}': expected {form}").into()),
+    }
+}
+
+/// Voxels per label value.
+fn count(labels: &[u8]) -> [u64; 256] {
+    let mut n = [0u64; 256];
+    for &l in labels {
+        n[usize::from(l)] += 1;
+    }
+    n
+}
