@@ -25,6 +25,8 @@ impl ViewerApp {
             Purpose::SaveTf => "tf.json",
             Purpose::SaveSession => "session.json",
             Purpose::SaveScreenshot => "screenshot.png",
+            Purpose::ExportMask => "mask.nrrd",
+            Purpose::ExportLabels => "labels.nrrd",
             _ => "",
         };
         self.dialog.open(purpose, &folder, name);
@@ -49,6 +51,8 @@ impl ViewerApp {
                 self.export_screenshot(path, self.export_size);
                 Ok(None)
             }
+            Purpose::ExportMask => self.export_mask(path).map(|_| None),
+            Purpose::ExportLabels => self.export_labels(path).map(|_| None),
         };
         match result {
             Ok(m) => self.status = m,

@@ -1,12 +1,14 @@
 //! The 3D view: the render thread's latest frame, the camera gestures, the overlay
 //! (ms/frame, fps, the method's figure), the orientation letters on the edges, and the
-//! slice planes' outlines.
+//! slice planes' outlines. In a sculpting tool's mode ([`crate::sculpt_tools`]) the left
+//! button is the tool's; the right button orbits, the middle button pans, Alt+left navigates.
 use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect, Sense, Stroke};
 use glam::DVec3;
 use volux_render::engine::{FrameStats, MethodStats};
 
 use crate::app::ViewerApp;
 use crate::navigation::{self, StandardView};
+use crate::sculpt_tools;
 use crate::slices::{direction_name, Plane};
 
 /// Draws the 3D view in the central panel and applies the gestures to the camera.
@@ -67,11 +69,14 @@ fn gestures(app: &mut ViewerApp, ui: &egui::Ui, response: &egui::Response) {
     let delta = response.drag_delta();
     let (dx, dy) = (delta.x as f64, delta.y as f64);
     let shift = ui.input(|i| i.modifiers.shift);
-    if response.dragged_by(egui::PointerButton::Middle)
-        || (response.dragged_by(egui::PointerButton::Primary) && shift)
-    {
+    let tool = sculpt_tools::tool_owns_left_button(app, ui);
+    if tool {
+        sculpt_tools::gestures(app, ui, response);
+    }
+    let left = response.dragged_by(egui::PointerButton::Primary) && !tool;
+    if response.dragged_by(egui::PointerButton::Middle) || (left && shift) {
         app.scene.view.camera = navigation::pan(&camera, dx, dy, response.rect.height() as f64);
-    } else if response.dragged_by(egui::PointerButton::Primary) {
+    } else if left || response.dragged_by(egui::PointerButton::Secondary) {
         app.scene.view.camera = navigation::orbit(&camera, dx, dy);
     }
     let scroll = if response.hovered() {
@@ -83,7 +88,7 @@ fn gestures(app: &mut ViewerApp, ui: &egui::Ui, response: &egui::Response) {
         let factor = (scroll as f64 * 0.0025).exp();
         app.scene.view.camera = navigation::zoom(&app.scene.view.camera, factor);
     }
-    if response.double_clicked() {
+    if response.double_clicked() && !tool {
         reset_camera(app);
     }
     let pointer_down = ui.input(|i| i.pointer.any_down());
@@ -127,6 +132,7 @@ fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
         if app.show_planes {
             plane_outlines(app, &painter, rect);
         }
+        sculpt_tools::overlay(app, ui, &painter, rect);
     }
 }
 

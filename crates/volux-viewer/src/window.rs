@@ -16,6 +16,7 @@ pub fn frame(app: &mut ViewerApp, ctx: &egui::Context) {
     if let Some((purpose, path)) = app.dialog.show(ctx) {
         app.chosen(purpose, &path);
     }
+    crate::sculpt_tools::shortcuts(app, ctx);
     crate::slice_views::show(app, ctx);
     crate::view3d::show(app, ctx);
     app.submit_if_changed();
