@@ -106,7 +106,7 @@ fn planes(app: &mut ViewerApp, ui: &mut egui::Ui) {
             changed |= slider(ui, &mut pose.elevation, -90.0..=90.0, "elevation °");
         });
         if changed {
-            if let Ok(p) = pose.plane(centre) {
+            if let Ok(p) = pose.plane(plane, centre) {
                 let continuing = app.tools.plane_gesture == Some(i);
                 app.set_plane(i, p, continuing);
                 app.tools.plane_gesture = ui.input(|i| i.pointer.any_down()).then_some(i);
@@ -157,11 +157,16 @@ impl PlanePose {
         }
     }
 
-    /// The plane of this pose about `centre`: through `centre + distance * normal`, keeping
-    /// the side the normal points to.
-    pub fn plane(&self, centre: DVec3) -> Result<ClipPlane, String> {
+    /// `old` moved to this pose about `centre`: through `centre + distance * normal`, keeping
+    /// the side the normal points to; `old`'s normal exactly while the angles are its own.
+    pub fn plane(&self, old: &ClipPlane, centre: DVec3) -> Result<ClipPlane, String> {
         let (az, el) = (self.azimuth.to_radians(), self.elevation.to_radians());
-        let n = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+        let tilted = Self::of(old, centre);
+        let n = if (tilted.azimuth, tilted.elevation) == (self.azimuth, self.elevation) {
+            old.normal
+        } else {
+            DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin())
+        };
         let d = -(n.dot(centre) + self.distance);
         ClipPlane::new(n.x, n.y, n.z, d).map_err(|e| e.to_string())
     }

@@ -520,3 +520,77 @@ fn a_saved_session_rebuilds_the_same_mask() {
         .collect();
     assert_eq!(values, mask);
 }
+
+/// A mesh gets planes only: Add plane reaches tet ray casting; a session with sculpt steps on
+/// the mesh shows the engine's error and opens with its planes.
+#[test]
+fn a_mesh_gets_planes_and_refuses_sculpt_steps_from_a_session() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("smooth.vtet");
+    volux_io::vtet::write(&synth::smooth_tets(3000).unwrap(), &path).unwrap();
+    let mut h = harness(Some(path));
+    loaded_with_frame(&mut h);
+    assert!(app(&h).sculpt_grid().is_none());
+    app_mut(&mut h).set_method(volux_render::scene::Method::TetRaycast(
+        volux_render::integrate::segment::SegmentRule::Psi,
+    ));
+    app_mut(&mut h).add_plane();
+    assert_eq!(rendered_scene(&mut h).clip_planes.len(), 1);
+    let session = dir.path().join("mesh.json");
+    app(&h).save_session(&session).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&session).unwrap()).unwrap();
+    assert!(
+        json.get("sculpt").is_none(),
+        "a mesh's planes are saved as planes"
+    );
+    let plane = app(&h).sculpt.as_ref().unwrap().planes()[0];
+    let step = volux_render::sculpt::SculptStep::AddPlane { plane };
+    json["sculpt"] = serde_json::json!([serde_json::to_value(step).unwrap()]);
+    std::fs::write(&session, json.to_string()).unwrap();
+    let mut h2 = harness(Some(session));
+    loaded_with_frame(&mut h2);
+    let message = app(&h2)
+        .error
+        .clone()
+        .expect("the session's steps are refused");
+    assert!(message.contains("tetrahedral mesh"), "{message}");
+    assert_eq!(app(&h2).sculpt.as_ref().unwrap().planes(), [plane]);
+    assert_eq!(app(&h2).shown_scene().unwrap().clip_planes, [plane]);
+}
+
+/// Dragging a plane's offset slider moves the plane in one undo step.
+#[test]
+fn a_plane_slider_drag_is_one_undo_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    app_mut(&mut h).add_plane();
+    h.step();
+    let added = app(&h).sculpt.as_ref().unwrap().planes()[0];
+    let rect = h
+        .get_by_role_and_label(egui::accesskit::Role::Slider, "offset")
+        .rect();
+    assert!(rect.bottom() < 800.0, "the slider is on screen: {rect:?}");
+    let from = rect.center() - egui::vec2(rect.width() * 0.1, 0.0);
+    drag(
+        &mut h,
+        from,
+        from + egui::vec2(40.0, 0.0),
+        egui::PointerButton::Primary,
+        egui::Modifiers::NONE,
+    );
+    let sculpt = app(&h).sculpt.as_ref().unwrap();
+    let moved = sculpt.planes()[0];
+    assert!(
+        (moved.offset - added.offset).abs() > 1e-6,
+        "{added:?} -> {moved:?}"
+    );
+    assert_eq!(
+        moved.normal, added.normal,
+        "the offset slider keeps the normal"
+    );
+    assert_eq!(sculpt.steps().len(), 2, "{:?}", sculpt.steps());
+    app_mut(&mut h).undo();
+    assert_eq!(app(&h).sculpt.as_ref().unwrap().planes(), [added]);
+}
