@@ -19,7 +19,8 @@
 //! - [`slices`]: the axial, coronal and sagittal planes cut from the data;
 //!   [`slice_views`]: their views, crosshair and window/level;
 //! - [`sculpt_state`]: the sculpting tools' settings; [`sculpt_actions`]: what the tools do
-//!   (steps of the engine's sculpt, undo, exports); [`sculpt_panel`]: their panel;
+//!   (steps of the engine's sculpt, undo); [`sculpt_exports`]: label counts and NRRD exports;
+//!   [`sculpt_panel`]: their panel;
 //!   [`sculpt_tools`]: their gestures and overlay in the 3D view (seed `004` ch. 4-6);
 //! - [`tf_editor`]: the transfer-function editor over the histogram;
 //! - [`panels`]: the menu and the settings panel; [`file_dialog`]: the file dialog;
@@ -34,6 +35,7 @@ pub mod navigation;
 pub mod panels;
 pub mod render_service;
 pub mod sculpt_actions;
+pub mod sculpt_exports;
 pub mod sculpt_panel;
 pub mod sculpt_state;
 pub mod sculpt_tools;
