@@ -90,7 +90,8 @@ impl ViewerApp {
             self.error = Some(e);
             return;
         }
-        let mut scene = self.scene.clone();
+        // The sculpt's planes and mask too.
+        let mut scene = self.render_scene();
         scene.view.width = size.0.max(1);
         scene.view.height = size.1.max(1);
         let mesh_method = scene.method.draws_tets();

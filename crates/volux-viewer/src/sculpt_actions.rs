@@ -15,6 +15,7 @@ use volux_render::sculpt::{Sculpt, SculptStep};
 use volux_render::session::Session;
 
 use crate::app::ViewerApp;
+use crate::sculpt_state::Tool;
 
 impl ViewerApp {
     /// Shows a tool's error (it stays until the next action or dismiss).
@@ -36,6 +37,9 @@ impl ViewerApp {
         self.tools.stroke.clear();
         self.tools.label_counts = None;
         self.tools.labels_job = None;
+        if self.sculpt_grid().is_none() {
+            self.tools.tool = Tool::Navigate;
+        }
         let steps: Vec<_> = planes
             .iter()
             .map(|&plane| SculptStep::AddPlane { plane })

@@ -91,8 +91,13 @@ fn gestures(app: &mut ViewerApp, ui: &egui::Ui, response: &egui::Response) {
     if response.double_clicked() && !tool {
         reset_camera(app);
     }
-    let pointer_down = ui.input(|i| i.pointer.any_down());
-    app.interacting = response.dragged()
+    // A tool's left button changes the scene once, on release: no previews meanwhile.
+    let navigating = |i: &egui::InputState| {
+        let other = i.pointer.middle_down() || i.pointer.secondary_down();
+        other || (i.pointer.primary_down() && !tool)
+    };
+    let pointer_down = ui.input(navigating);
+    app.interacting = (response.dragged() && pointer_down)
         || (scroll != 0.0)
         || (pointer_down && response.is_pointer_button_down_on());
 }
