@@ -81,6 +81,8 @@ pub struct SculptTools {
     pub labels_job: Option<Job<Vec<(u8, u64)>>>,
     /// The plane whose slider is being dragged (its moves make one undo step).
     pub plane_gesture: Option<usize>,
+    /// The plane whose tilt handle is being dragged, and whether it moved yet.
+    pub handle_drag: Option<(usize, bool)>,
 }
 
 impl Default for SculptTools {
@@ -95,6 +97,7 @@ impl Default for SculptTools {
             label_counts: None,
             labels_job: None,
             plane_gesture: None,
+            handle_drag: None,
         }
     }
 }

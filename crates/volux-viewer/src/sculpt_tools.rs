@@ -129,7 +129,7 @@ pub fn overlay(app: &ViewerApp, ui: &egui::Ui, painter: &egui::Painter, rect: Re
 }
 
 /// `p` in the view (points), or `None` behind the camera.
-fn project(camera: &Camera, rect: Rect, p: DVec3) -> Option<Pos2> {
+pub fn project(camera: &Camera, rect: Rect, p: DVec3) -> Option<Pos2> {
     let (w, h) = (
         rect.width().max(1.0) as usize,
         rect.height().max(1.0) as usize,

@@ -2,14 +2,15 @@
 //! (ms/frame, fps, the method's figure), the orientation letters on the edges, and the
 //! slice planes' outlines. In a sculpting tool's mode ([`crate::sculpt_tools`]) the left
 //! button is the tool's; the right button orbits, the middle button pans, Alt+left navigates.
+//! A clipping plane's tilt handle ([`crate::plane_handle`]) takes a left drag in any mode.
 use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect, Sense, Stroke};
 use glam::DVec3;
 use volux_render::engine::{FrameStats, MethodStats};
 
 use crate::app::ViewerApp;
 use crate::navigation::{self, StandardView};
-use crate::sculpt_tools;
 use crate::slices::{direction_name, Plane};
+use crate::{plane_handle, sculpt_tools};
 
 /// Draws the 3D view in the central panel and applies the gestures to the camera.
 pub fn show(app: &mut ViewerApp, ctx: &egui::Context) {
@@ -69,11 +70,12 @@ fn gestures(app: &mut ViewerApp, ui: &egui::Ui, response: &egui::Response) {
     let delta = response.drag_delta();
     let (dx, dy) = (delta.x as f64, delta.y as f64);
     let shift = ui.input(|i| i.modifiers.shift);
-    let tool = sculpt_tools::tool_owns_left_button(app, ui);
+    let handle = plane_handle::gesture(app, ui, response);
+    let tool = !handle && sculpt_tools::tool_owns_left_button(app, ui);
     if tool {
         sculpt_tools::gestures(app, ui, response);
     }
-    let left = response.dragged_by(egui::PointerButton::Primary) && !tool;
+    let left = response.dragged_by(egui::PointerButton::Primary) && !tool && !handle;
     if response.dragged_by(egui::PointerButton::Middle) || (left && shift) {
         app.scene.view.camera = navigation::pan(&camera, dx, dy, response.rect.height() as f64);
     } else if left || response.dragged_by(egui::PointerButton::Secondary) {
@@ -138,6 +140,7 @@ fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
             plane_outlines(app, &painter, rect);
         }
         sculpt_tools::overlay(app, ui, &painter, rect);
+        plane_handle::draw(app, &painter, rect);
     }
 }
 

@@ -594,3 +594,40 @@ fn a_plane_slider_drag_is_one_undo_step() {
     app_mut(&mut h).undo();
     assert_eq!(app(&h).sculpt.as_ref().unwrap().planes(), [added]);
 }
+
+/// Dragging a plane's tilt handle tilts the plane about the data's centre (its distance from
+/// the centre kept) in one undo step, without turning the camera.
+#[test]
+fn dragging_a_tilt_handle_tilts_the_plane() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    app_mut(&mut h).add_plane();
+    h.step();
+    let added = app(&h).sculpt.as_ref().unwrap().planes()[0];
+    let camera = app(&h).scene.view.camera;
+    let tip = volux_viewer::plane_handle::tips(app(&h))[0];
+    let rect = app(&h).view_rect;
+    let at = volux_viewer::sculpt_tools::project(&camera, rect, tip).unwrap();
+    drag(
+        &mut h,
+        at,
+        at + egui::vec2(60.0, -40.0),
+        egui::PointerButton::Primary,
+        egui::Modifiers::NONE,
+    );
+    assert_eq!(app(&h).scene.view.camera, camera, "the camera stays");
+    let sculpt = app(&h).sculpt.as_ref().unwrap();
+    let tilted = sculpt.planes()[0];
+    assert!(
+        tilted.normal.dot(added.normal) < 0.999,
+        "{added:?} -> {tilted:?}"
+    );
+    let centre = app(&h).volume().unwrap().bounds().center();
+    assert!((tilted.distance(centre) - added.distance(centre)).abs() < 1e-9);
+    assert_eq!(sculpt.steps().len(), 2, "one drag, one step");
+    // The tip now sits under the pointer.
+    let tip = volux_viewer::plane_handle::tips(app(&h))[0];
+    let now = volux_viewer::sculpt_tools::project(&camera, rect, tip).unwrap();
+    assert!(now.distance(at + egui::vec2(60.0, -40.0)) < 1.0, "{now:?}");
+}
