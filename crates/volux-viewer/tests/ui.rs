@@ -467,6 +467,24 @@ fn label_clicks_and_compute_labels_count_voxels() {
     h.step();
     let text = format!("label 1: {} voxels", counts[0].1);
     assert!(h.query_by_label(&text).is_some(), "the panel shows {text}");
+    // The exported label volume holds the same counts.
+    let out = dir.path().join("labels.nrrd");
+    app_mut(&mut h).export_labels(&out).unwrap();
+    step_until(&mut h, "the export", |a| {
+        a.error.is_some() || a.status.as_deref().is_some_and(|s| s.starts_with("saved"))
+    });
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    let (data, _) = volux_io::load(&out, &Default::default()).unwrap();
+    let volux_io::Dataset::Grid(g) = data else {
+        panic!("a grid")
+    };
+    let d = g.dims();
+    let mut exported = [0u64; 3];
+    for n in 0..d[0] * d[1] * d[2] {
+        let v = g.value(n % d[0], n / d[0] % d[1], n / (d[0] * d[1])) as usize;
+        exported[v.min(2)] += 1;
+    }
+    assert_eq!(exported[1..], [counts[0].1, counts[1].1]);
 }
 
 /// A session with sculpt steps reopens to the same mask and planes; the exported mask reads
