@@ -13,6 +13,7 @@ use volux_core::{Camera, TransferFunction};
 use volux_io::progress::{with_progress, LoadProgress};
 use volux_render::framing::visible_bounds;
 use volux_render::scene::{Method, Scene, Volume};
+use volux_render::sculpt::Sculpt;
 use volux_render::session::{DatasetRef, Session, SliceState};
 
 use crate::dataset::{self, Loaded};
@@ -20,6 +21,7 @@ use crate::file_dialog::FileDialog;
 use crate::jobs::{Job, Poll};
 use crate::navigation;
 use crate::render_service::{Event, RenderService, Rendered};
+use crate::sculpt_state::SculptTools;
 use crate::tf_editor::{in_value_space, TfEditor};
 
 /// How the viewer was started.
@@ -68,6 +70,8 @@ pub struct ViewerApp {
     pub(crate) export_job: Option<Job<String>>,
     /// The error shown in the window (the viewer stays usable).
     pub error: Option<String>,
+    /// The error came from rendering: the next frame of the newest request clears it.
+    pub(crate) render_error: bool,
     /// A passing message (what was saved).
     pub status: Option<String>,
     /// Camera, appearance and method (the image size follows the 3D view).
@@ -82,6 +86,10 @@ pub struct ViewerApp {
     pub show_planes: bool,
     /// The TF editor (with a dataset).
     pub editor: Option<TfEditor>,
+    /// The sculpt state (seed `004` ch. 4-6): planes, mask, picks, undo (with a dataset).
+    pub sculpt: Option<Sculpt>,
+    /// The sculpting tools' settings.
+    pub tools: SculptTools,
     pub(crate) shown: Option<Shown>,
     pub(crate) slice_textures: Vec<Option<egui::TextureHandle>>,
     pub(crate) slices_key: Option<(u64, [f64; 2], [usize; 3])>,
@@ -122,6 +130,7 @@ impl ViewerApp {
             split_job: None,
             export_job: None,
             error: None,
+            render_error: false,
             status: None,
             scene: Scene::new(camera, 640, 480, placeholder_tf),
             background: BACKGROUND,
@@ -129,6 +138,8 @@ impl ViewerApp {
             crosshair: DVec3::ZERO,
             show_planes: false,
             editor: None,
+            sculpt: None,
+            tools: SculptTools::default(),
             shown: None,
             slice_textures: vec![None, None, None],
             slices_key: None,
@@ -214,6 +225,7 @@ impl ViewerApp {
 
     /// Takes the results of finished background jobs.
     pub(crate) fn poll_jobs(&mut self) {
+        self.poll_sculpt_jobs();
         if let Some(job) = &mut self.load_job {
             if let Poll::Done(r) = job.poll() {
                 self.load_job = None;
@@ -290,6 +302,7 @@ impl ViewerApp {
         self.slices_key = None;
         self.error = None;
         self.data = Some(loaded);
+        self.reset_sculpt(&[]);
         if let Some(s) = self.pending_session.take() {
             self.apply_session(&s);
         }
@@ -299,6 +312,8 @@ impl ViewerApp {
 
     fn apply_session(&mut self, s: &Session) {
         self.scene = s.scene();
+        self.scene.clip_planes.clear();
+        self.apply_session_sculpt(s);
         self.scene.appearance.tf = in_value_space(&s.appearance.tf, self.range());
         self.background = s.background.unwrap_or(BACKGROUND);
         // A screenshot of a session is taken at its size (the batch render's); on screen the
@@ -357,6 +372,10 @@ impl ViewerApp {
             &self.render_scene(),
             Some(self.background),
         );
+        // A grid's sculpt is saved as its steps; a mesh's planes as the session's planes.
+        if let (Some(sculpt), Some(_)) = (&self.sculpt, self.sculpt_grid()) {
+            s = s.with_sculpt(sculpt);
+        }
         s.slices = Some(SliceState {
             window: self.window,
             crosshair: self.crosshair.to_array(),
@@ -364,12 +383,15 @@ impl ViewerApp {
         Some(s)
     }
 
-    /// The scene at the render size.
+    /// The scene at the render size, with the sculpt's planes and mask.
     pub fn render_scene(&self) -> Scene {
         let (w, h) = self.options.size.unwrap_or(self.view_size);
         let mut scene = self.scene.clone();
         scene.view.width = w.max(1);
         scene.view.height = h.max(1);
+        if let Some(s) = &self.sculpt {
+            s.apply_to(&mut scene);
+        }
         scene
     }
 
@@ -403,6 +425,7 @@ impl ViewerApp {
             .and_then(|m| m.check_appearance(&scene.appearance))
         {
             self.error = Some(e.to_string());
+            self.render_error = true;
             self.submitted = Some(now);
             return;
         }
@@ -426,8 +449,9 @@ impl ViewerApp {
                     while self.frame_times.len() > 30 {
                         self.frame_times.pop_front();
                     }
-                    if f.generation == self.service.generation() {
+                    if f.generation == self.service.generation() && self.render_error {
                         self.error = None;
+                        self.render_error = false;
                     }
                     self.shown = Some(Shown { texture, frame: *f });
                 }
@@ -437,6 +461,7 @@ impl ViewerApp {
                 } => {
                     if generation == self.service.generation() {
                         self.error = Some(message);
+                        self.render_error = true;
                     }
                 }
             }

@@ -18,6 +18,10 @@ pub enum Purpose {
     SaveSession,
     /// Save a screenshot PNG.
     SaveScreenshot,
+    /// Export the sculpt mask as NRRD `u8` (seed `004` ch. 4).
+    ExportMask,
+    /// Export the region labels as NRRD `u8` (seed `004` sec. 6.2).
+    ExportLabels,
 }
 
 impl Purpose {
@@ -28,13 +32,19 @@ impl Purpose {
             Purpose::SaveTf => "Save the transfer function",
             Purpose::SaveSession => "Save the session",
             Purpose::SaveScreenshot => "Save a screenshot",
+            Purpose::ExportMask => "Export the sculpt mask (NRRD)",
+            Purpose::ExportLabels => "Export the labels (NRRD)",
         }
     }
 
     fn saves(self) -> bool {
         matches!(
             self,
-            Purpose::SaveTf | Purpose::SaveSession | Purpose::SaveScreenshot
+            Purpose::SaveTf
+                | Purpose::SaveSession
+                | Purpose::SaveScreenshot
+                | Purpose::ExportMask
+                | Purpose::ExportLabels
         )
     }
 }

@@ -25,6 +25,8 @@ impl ViewerApp {
             Purpose::SaveTf => "tf.json",
             Purpose::SaveSession => "session.json",
             Purpose::SaveScreenshot => "screenshot.png",
+            Purpose::ExportMask => "mask.nrrd",
+            Purpose::ExportLabels => "labels.nrrd",
             _ => "",
         };
         self.dialog.open(purpose, &folder, name);
@@ -49,6 +51,8 @@ impl ViewerApp {
                 self.export_screenshot(path, self.export_size);
                 Ok(None)
             }
+            Purpose::ExportMask => self.export_mask(path).map(|_| None),
+            Purpose::ExportLabels => self.export_labels(path).map(|_| None),
         };
         match result {
             Ok(m) => self.status = m,
@@ -86,7 +90,8 @@ impl ViewerApp {
             self.error = Some(e);
             return;
         }
-        let mut scene = self.scene.clone();
+        // The sculpt's planes and mask too.
+        let mut scene = self.render_scene();
         scene.view.width = size.0.max(1);
         scene.view.height = size.1.max(1);
         let mesh_method = scene.method.draws_tets();

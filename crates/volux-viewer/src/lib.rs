@@ -18,6 +18,11 @@
 //!   as pure functions (orbit, pan, zoom, standard views);
 //! - [`slices`]: the axial, coronal and sagittal planes cut from the data;
 //!   [`slice_views`]: their views, crosshair and window/level;
+//! - [`sculpt_state`]: the sculpting tools' settings; [`sculpt_actions`]: what the tools do
+//!   (steps of the engine's sculpt, undo); [`sculpt_exports`]: label counts and NRRD exports;
+//!   [`sculpt_panel`]: their panel;
+//!   [`sculpt_tools`]: their gestures and overlay in the 3D view (seed `004` ch. 4-6);
+//!   [`plane_handle`]: the clipping planes' tilt handles;
 //! - [`tf_editor`]: the transfer-function editor over the histogram;
 //! - [`panels`]: the menu and the settings panel; [`file_dialog`]: the file dialog;
 //!   [`files`]: TF files, sessions and screenshots read and written; [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
@@ -29,7 +34,13 @@ pub mod files;
 pub mod jobs;
 pub mod navigation;
 pub mod panels;
+pub mod plane_handle;
 pub mod render_service;
+pub mod sculpt_actions;
+pub mod sculpt_exports;
+pub mod sculpt_panel;
+pub mod sculpt_state;
+pub mod sculpt_tools;
 pub mod slice_views;
 pub mod slices;
 pub mod tf_editor;

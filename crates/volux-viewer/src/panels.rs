@@ -1,5 +1,6 @@
 //! The menu bar and the settings panel: file actions, method and its settings, shading,
-//! MIP, isosurfaces, background, the TF editor and presets.
+//! MIP, isosurfaces, background, sculpting ([`crate::sculpt_panel`]), the TF editor and
+//! presets.
 use eframe::egui;
 use volux_render::integrate::integrator::Integrator;
 use volux_render::integrate::segment::SegmentRule;
@@ -100,6 +101,8 @@ fn settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
     method_settings(app, ui);
     ui.separator();
     appearance_settings(app, ui);
+    ui.separator();
+    crate::sculpt_panel::show(app, ui);
     ui.separator();
     tf_section(app, ui);
 }

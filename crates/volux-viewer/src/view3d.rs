@@ -1,6 +1,8 @@
 //! The 3D view: the render thread's latest frame, the camera gestures, the overlay
 //! (ms/frame, fps, the method's figure), the orientation letters on the edges, and the
-//! slice planes' outlines.
+//! slice planes' outlines. In a sculpting tool's mode ([`crate::sculpt_tools`]) the left
+//! button is the tool's; the right button orbits, the middle button pans, Alt+left navigates.
+//! A clipping plane's tilt handle ([`crate::plane_handle`]) takes a left drag in any mode.
 use eframe::egui::{self, Align2, Color32, FontId, Pos2, Rect, Sense, Stroke};
 use glam::DVec3;
 use volux_render::engine::{FrameStats, MethodStats};
@@ -8,6 +10,7 @@ use volux_render::engine::{FrameStats, MethodStats};
 use crate::app::ViewerApp;
 use crate::navigation::{self, StandardView};
 use crate::slices::{direction_name, Plane};
+use crate::{plane_handle, sculpt_tools};
 
 /// Draws the 3D view in the central panel and applies the gestures to the camera.
 pub fn show(app: &mut ViewerApp, ctx: &egui::Context) {
@@ -67,11 +70,15 @@ fn gestures(app: &mut ViewerApp, ui: &egui::Ui, response: &egui::Response) {
     let delta = response.drag_delta();
     let (dx, dy) = (delta.x as f64, delta.y as f64);
     let shift = ui.input(|i| i.modifiers.shift);
-    if response.dragged_by(egui::PointerButton::Middle)
-        || (response.dragged_by(egui::PointerButton::Primary) && shift)
-    {
+    let handle = plane_handle::gesture(app, ui, response);
+    let tool = !handle && sculpt_tools::tool_owns_left_button(app, ui);
+    if tool {
+        sculpt_tools::gestures(app, ui, response);
+    }
+    let left = response.dragged_by(egui::PointerButton::Primary) && !tool && !handle;
+    if response.dragged_by(egui::PointerButton::Middle) || (left && shift) {
         app.scene.view.camera = navigation::pan(&camera, dx, dy, response.rect.height() as f64);
-    } else if response.dragged_by(egui::PointerButton::Primary) {
+    } else if left || response.dragged_by(egui::PointerButton::Secondary) {
         app.scene.view.camera = navigation::orbit(&camera, dx, dy);
     }
     let scroll = if response.hovered() {
@@ -83,11 +90,16 @@ fn gestures(app: &mut ViewerApp, ui: &egui::Ui, response: &egui::Response) {
         let factor = (scroll as f64 * 0.0025).exp();
         app.scene.view.camera = navigation::zoom(&app.scene.view.camera, factor);
     }
-    if response.double_clicked() {
+    if response.double_clicked() && !tool {
         reset_camera(app);
     }
-    let pointer_down = ui.input(|i| i.pointer.any_down());
-    app.interacting = response.dragged()
+    // A tool's left button changes the scene once, on release: no previews meanwhile.
+    let navigating = |i: &egui::InputState| {
+        let other = i.pointer.middle_down() || i.pointer.secondary_down();
+        other || (i.pointer.primary_down() && !tool)
+    };
+    let pointer_down = ui.input(navigating);
+    app.interacting = (response.dragged() && pointer_down)
         || (scroll != 0.0)
         || (pointer_down && response.is_pointer_button_down_on());
 }
@@ -127,6 +139,8 @@ fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
         if app.show_planes {
             plane_outlines(app, &painter, rect);
         }
+        sculpt_tools::overlay(app, ui, &painter, rect);
+        plane_handle::draw(app, &painter, rect);
     }
 }
 

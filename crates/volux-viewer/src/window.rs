@@ -16,11 +16,12 @@ pub fn frame(app: &mut ViewerApp, ctx: &egui::Context) {
     if let Some((purpose, path)) = app.dialog.show(ctx) {
         app.chosen(purpose, &path);
     }
+    crate::sculpt_tools::shortcuts(app, ctx);
     crate::slice_views::show(app, ctx);
     crate::view3d::show(app, ctx);
     app.submit_if_changed();
     app.finish_screenshot(ctx);
-    if app.busy() || app.export_job.is_some() {
+    if app.busy() || app.export_job.is_some() || app.tools.labels_job.is_some() {
         ctx.request_repaint_after(Duration::from_millis(100));
     }
 }

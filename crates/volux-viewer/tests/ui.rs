@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use eframe::egui::{self, Pos2};
+use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use volux_core::synth;
 use volux_viewer::app::{Options, ViewerApp};
@@ -260,4 +261,391 @@ fn a_session_with_a_mesh_method_on_a_grid_splits_it() {
     loaded_with_frame(&mut h2);
     assert_eq!(app(&h2).shown_scene().unwrap().method.name(), "pt");
     assert!(app(&h2).data.as_ref().unwrap().tets.is_some());
+}
+
+// Sculpting (seed `004` ch. 4-6): the Sculpt panel, the tools in the 3D view, undo, sessions.
+
+fn app_mut<'a>(h: &'a mut Harness<'static, App>) -> &'a mut ViewerApp {
+    h.state_mut()
+        .as_mut()
+        .expect("the app starts on the first step")
+}
+
+/// A press and a release at `pos` (one frame each), with `modifiers`.
+fn click(h: &mut Harness<'static, App>, pos: Pos2, modifiers: egui::Modifiers) {
+    h.hover_at(pos);
+    h.step();
+    for pressed in [true, false] {
+        let event = egui::Event::PointerButton {
+            pos,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers,
+        };
+        h.event_modifiers(event, modifiers);
+        h.step();
+    }
+    h.step();
+}
+
+/// The number of voxels the sculpt mask removes.
+fn removed(h: &Harness<'static, App>) -> u64 {
+    app(h).sculpt.as_ref().unwrap().mask().removed_count()
+}
+
+/// Waits for the full frame of the newest scene and returns its scene.
+fn rendered_scene(h: &mut Harness<'static, App>) -> volux_render::scene::Scene {
+    loaded_with_frame(h);
+    app(h).shown_scene().unwrap().clone()
+}
+
+/// The Add plane button adds a plane facing the camera through the VOI's centre; the render
+/// thread gets it; Ctrl+Z takes it away and Ctrl+Shift+Z puts it back.
+#[test]
+fn adding_a_plane_reaches_the_renderer_and_undo_removes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    assert!(rendered_scene(&mut h).clip_planes.is_empty());
+    h.get_by_label("Add plane").click_accesskit();
+    h.step();
+    let scene = rendered_scene(&mut h);
+    assert_eq!(
+        scene.clip_planes.len(),
+        1,
+        "the rendered scene has the plane"
+    );
+    let camera = app(&h).scene.view.camera;
+    let forward = (camera.target - camera.eye).normalize();
+    assert!((scene.clip_planes[0].normal - forward).length() < 1e-9);
+    let centre = app(&h).volume().unwrap().bounds().center();
+    assert!(scene.clip_planes[0].distance(centre).abs() < 1e-9);
+    assert!(h.query_by_label("plane 1").is_some(), "the panel lists it");
+    h.key_combination_modifiers(egui::Modifiers::COMMAND, &[egui::Key::Z]);
+    h.step();
+    assert!(rendered_scene(&mut h).clip_planes.is_empty(), "undone");
+    h.key_combination_modifiers(
+        egui::Modifiers::COMMAND | egui::Modifiers::SHIFT,
+        &[egui::Key::Z],
+    );
+    h.step();
+    assert_eq!(rendered_scene(&mut h).clip_planes.len(), 1, "redone");
+}
+
+/// A plane that would cut everything away is refused with an error; the window goes on.
+#[test]
+fn a_plane_removing_everything_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let plane = volux_core::voi::ClipPlane::new(1.0, 0.0, 0.0, -1e6).unwrap();
+    let applied = app_mut(&mut h).sculpt_step(volux_render::sculpt::SculptStep::AddPlane { plane });
+    assert!(!applied);
+    let message = app(&h).error.clone().unwrap();
+    assert!(message.contains("whole volume of interest"), "{message}");
+    assert!(app(&h).sculpt.as_ref().unwrap().planes().is_empty());
+    h.step();
+    assert!(
+        app(&h).error.is_some(),
+        "the error stays until the next action"
+    );
+}
+
+/// An eraser drag (key E) removes voxels in one undoable step; undo restores the mask bit
+/// for bit, and the rendered scene carries the mask.
+#[test]
+fn an_erase_drag_changes_the_mask_and_undo_restores_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    h.key_press(egui::Key::E);
+    h.step();
+    assert_eq!(app(&h).tools.tool, volux_viewer::sculpt_state::Tool::Erase);
+    let before = app(&h).sculpt.as_ref().unwrap().mask().to_values();
+    let camera = app(&h).scene.view.camera;
+    let c = app(&h).view_rect.center();
+    drag(
+        &mut h,
+        c - egui::vec2(60.0, 0.0),
+        c + egui::vec2(60.0, 0.0),
+        egui::PointerButton::Primary,
+        egui::Modifiers::NONE,
+    );
+    assert_eq!(app(&h).scene.view.camera, camera, "erasing does not turn");
+    assert!(removed(&h) > 0, "the stroke removed voxels");
+    let steps = app(&h).sculpt.as_ref().unwrap().steps();
+    assert_eq!(steps.len(), 1, "one stroke, one step: {steps:?}");
+    let volux_render::sculpt::SculptStep::Erase { points, size, .. } = &steps[0] else {
+        panic!("{steps:?}")
+    };
+    assert!(points.len() > 2, "a swept stroke: {points:?}");
+    let scene = rendered_scene(&mut h);
+    assert_eq!(*size, [scene.view.width, scene.view.height]);
+    assert!(scene.mask.is_some(), "the renderer gets the mask");
+    h.get_by_label("Undo").click_accesskit();
+    h.step();
+    assert_eq!(removed(&h), 0);
+    assert_eq!(app(&h).sculpt.as_ref().unwrap().mask().to_values(), before);
+    assert!(rendered_scene(&mut h).mask.is_none());
+}
+
+/// A dig click at the centre of the view removes a ball at the visible surface.
+#[test]
+fn a_dig_click_removes_voxels() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    app_mut(&mut h).tools.tool = volux_viewer::sculpt_state::Tool::Dig;
+    let c = app(&h).view_rect.center();
+    click(&mut h, c, egui::Modifiers::NONE);
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    assert!(removed(&h) > 0, "the dig removed voxels");
+    let steps = app(&h).sculpt.as_ref().unwrap().steps();
+    assert!(matches!(
+        steps.as_slice(),
+        [volux_render::sculpt::SculptStep::Dig { .. }]
+    ));
+    // A click beside the data hits nothing: an error, nothing removed.
+    let count = removed(&h);
+    let corner = app(&h).view_rect.left_top() + egui::vec2(3.0, 3.0);
+    click(&mut h, corner, egui::Modifiers::NONE);
+    assert!(app(&h)
+        .error
+        .as_deref()
+        .unwrap()
+        .contains("nothing visible"));
+    assert_eq!(removed(&h), count);
+}
+
+/// Two measure clicks make a line whose length in mm the panel shows; Shift+click starts a
+/// new line.
+#[test]
+fn two_measure_clicks_show_a_length_in_mm() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    h.key_press(egui::Key::M);
+    h.step();
+    let c = app(&h).view_rect.center();
+    click(&mut h, c - egui::vec2(30.0, 10.0), egui::Modifiers::NONE);
+    click(&mut h, c + egui::vec2(30.0, 10.0), egui::Modifiers::NONE);
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    let lines = app(&h).sculpt.as_ref().unwrap().measurements();
+    assert_eq!(lines.len(), 1);
+    assert_eq!(lines[0].len(), 2);
+    let length = volux_render::sculpt::polyline_length(&lines[0]);
+    assert!(length > 0.0);
+    let text = format!("measurement 1: {length:.2} mm (2 points)");
+    assert!(h.query_by_label(&text).is_some(), "the panel shows {text}");
+    click(&mut h, c, egui::Modifiers::SHIFT);
+    let lines = app(&h).sculpt.as_ref().unwrap().measurements();
+    assert_eq!(lines.iter().map(Vec::len).collect::<Vec<_>>(), [2, 1]);
+}
+
+/// Label seeds are picked with the panel's label; Compute labels counts the voxels of each.
+#[test]
+fn label_clicks_and_compute_labels_count_voxels() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    app_mut(&mut h).tools.tool = volux_viewer::sculpt_state::Tool::Label;
+    let c = app(&h).view_rect.center();
+    click(&mut h, c - egui::vec2(40.0, 0.0), egui::Modifiers::NONE);
+    app_mut(&mut h).tools.label = 2;
+    click(&mut h, c + egui::vec2(40.0, 0.0), egui::Modifiers::NONE);
+    assert_eq!(app(&h).sculpt.as_ref().unwrap().label_seeds().len(), 2);
+    h.get_by_label("Compute labels").click_accesskit();
+    step_until(&mut h, "the label counts", |a| {
+        a.tools.label_counts.is_some()
+    });
+    let counts = app(&h).tools.label_counts.clone().unwrap();
+    assert_eq!(
+        counts.iter().map(|c| c.0).collect::<Vec<_>>(),
+        [1, 2],
+        "{counts:?}"
+    );
+    h.step();
+    let text = format!("label 1: {} voxels", counts[0].1);
+    assert!(h.query_by_label(&text).is_some(), "the panel shows {text}");
+    // The exported label volume holds the same counts.
+    let out = dir.path().join("labels.nrrd");
+    app_mut(&mut h).export_labels(&out).unwrap();
+    step_until(&mut h, "the export", |a| {
+        a.error.is_some() || a.status.as_deref().is_some_and(|s| s.starts_with("saved"))
+    });
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    let (data, _) = volux_io::load(&out, &Default::default()).unwrap();
+    let volux_io::Dataset::Grid(g) = data else {
+        panic!("a grid")
+    };
+    let d = g.dims();
+    let mut exported = [0u64; 3];
+    for n in 0..d[0] * d[1] * d[2] {
+        let v = g.value(n % d[0], n / d[0] % d[1], n / (d[0] * d[1])) as usize;
+        exported[v.min(2)] += 1;
+    }
+    assert_eq!(exported[1..], [counts[0].1, counts[1].1]);
+}
+
+/// A session with sculpt steps reopens to the same mask and planes; the exported mask reads
+/// back with the data's geometry.
+#[test]
+fn a_saved_session_rebuilds_the_same_mask() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    app_mut(&mut h).add_plane();
+    app_mut(&mut h).tools.tool = volux_viewer::sculpt_state::Tool::Erase;
+    let c = app(&h).view_rect.center();
+    drag(
+        &mut h,
+        c - egui::vec2(50.0, 20.0),
+        c + egui::vec2(50.0, 20.0),
+        egui::PointerButton::Primary,
+        egui::Modifiers::NONE,
+    );
+    assert!(removed(&h) > 0);
+    let session = dir.path().join("sculpted.json");
+    app(&h).save_session(&session).unwrap();
+    let a = app(&h).sculpt.as_ref().unwrap();
+    let (mask, planes) = (a.mask().to_values(), a.planes().to_vec());
+    let mut h2 = harness(Some(session));
+    loaded_with_frame(&mut h2);
+    let b = app(&h2).sculpt.as_ref().unwrap();
+    assert_eq!(b.planes(), planes.as_slice());
+    assert_eq!(b.mask().to_values(), mask, "the same mask, bit for bit");
+    assert_eq!(b.steps().len(), 2);
+    assert!(app(&h2).shown_scene().unwrap().mask.is_some());
+    let out = dir.path().join("mask.nrrd");
+    app_mut(&mut h2).export_mask(&out).unwrap();
+    step_until(&mut h2, "the export", |a| {
+        a.error.is_some() || a.status.as_deref().is_some_and(|s| s.starts_with("saved"))
+    });
+    assert!(app(&h2).error.is_none(), "{:?}", app(&h2).error);
+    let (data, _) = volux_io::load(&out, &Default::default()).unwrap();
+    let volux_io::Dataset::Grid(g) = data else {
+        panic!("a grid")
+    };
+    let source = app(&h2).sculpt_grid().unwrap();
+    assert_eq!(g.dims(), source.dims());
+    assert_eq!(g.spacing(), source.spacing());
+    assert_eq!(g.origin(), source.origin());
+    let values: Vec<u8> = (0..mask.len())
+        .map(|n| {
+            let d = g.dims();
+            g.value(n % d[0], n / d[0] % d[1], n / (d[0] * d[1])) as u8
+        })
+        .collect();
+    assert_eq!(values, mask);
+}
+
+/// A mesh gets planes only: Add plane reaches tet ray casting; a session with sculpt steps on
+/// the mesh shows the engine's error and opens with its planes.
+#[test]
+fn a_mesh_gets_planes_and_refuses_sculpt_steps_from_a_session() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("smooth.vtet");
+    volux_io::vtet::write(&synth::smooth_tets(3000).unwrap(), &path).unwrap();
+    let mut h = harness(Some(path));
+    loaded_with_frame(&mut h);
+    assert!(app(&h).sculpt_grid().is_none());
+    app_mut(&mut h).set_method(volux_render::scene::Method::TetRaycast(
+        volux_render::integrate::segment::SegmentRule::Psi,
+    ));
+    app_mut(&mut h).add_plane();
+    assert_eq!(rendered_scene(&mut h).clip_planes.len(), 1);
+    let session = dir.path().join("mesh.json");
+    app(&h).save_session(&session).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&session).unwrap()).unwrap();
+    assert!(
+        json.get("sculpt").is_none(),
+        "a mesh's planes are saved as planes"
+    );
+    let plane = app(&h).sculpt.as_ref().unwrap().planes()[0];
+    let step = volux_render::sculpt::SculptStep::AddPlane { plane };
+    json["sculpt"] = serde_json::json!([serde_json::to_value(step).unwrap()]);
+    std::fs::write(&session, json.to_string()).unwrap();
+    let mut h2 = harness(Some(session));
+    loaded_with_frame(&mut h2);
+    let message = app(&h2)
+        .error
+        .clone()
+        .expect("the session's steps are refused");
+    assert!(message.contains("tetrahedral mesh"), "{message}");
+    assert_eq!(app(&h2).sculpt.as_ref().unwrap().planes(), [plane]);
+    assert_eq!(app(&h2).shown_scene().unwrap().clip_planes, [plane]);
+}
+
+/// Dragging a plane's offset slider moves the plane in one undo step.
+#[test]
+fn a_plane_slider_drag_is_one_undo_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    app_mut(&mut h).add_plane();
+    h.step();
+    let added = app(&h).sculpt.as_ref().unwrap().planes()[0];
+    let rect = h
+        .get_by_role_and_label(egui::accesskit::Role::Slider, "offset")
+        .rect();
+    assert!(rect.bottom() < 800.0, "the slider is on screen: {rect:?}");
+    let from = rect.center() - egui::vec2(rect.width() * 0.1, 0.0);
+    drag(
+        &mut h,
+        from,
+        from + egui::vec2(40.0, 0.0),
+        egui::PointerButton::Primary,
+        egui::Modifiers::NONE,
+    );
+    let sculpt = app(&h).sculpt.as_ref().unwrap();
+    let moved = sculpt.planes()[0];
+    assert!(
+        (moved.offset - added.offset).abs() > 1e-6,
+        "{added:?} -> {moved:?}"
+    );
+    assert_eq!(
+        moved.normal, added.normal,
+        "the offset slider keeps the normal"
+    );
+    assert_eq!(sculpt.steps().len(), 2, "{:?}", sculpt.steps());
+    app_mut(&mut h).undo();
+    assert_eq!(app(&h).sculpt.as_ref().unwrap().planes(), [added]);
+}
+
+/// Dragging a plane's tilt handle tilts the plane about the data's centre (its distance from
+/// the centre kept) in one undo step, without turning the camera.
+#[test]
+fn dragging_a_tilt_handle_tilts_the_plane() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    app_mut(&mut h).add_plane();
+    h.step();
+    let added = app(&h).sculpt.as_ref().unwrap().planes()[0];
+    let camera = app(&h).scene.view.camera;
+    let tip = volux_viewer::plane_handle::tips(app(&h))[0];
+    let rect = app(&h).view_rect;
+    let at = volux_viewer::sculpt_tools::project(&camera, rect, tip).unwrap();
+    drag(
+        &mut h,
+        at,
+        at + egui::vec2(60.0, -40.0),
+        egui::PointerButton::Primary,
+        egui::Modifiers::NONE,
+    );
+    assert_eq!(app(&h).scene.view.camera, camera, "the camera stays");
+    let sculpt = app(&h).sculpt.as_ref().unwrap();
+    let tilted = sculpt.planes()[0];
+    assert!(
+        tilted.normal.dot(added.normal) < 0.999,
+        "{added:?} -> {tilted:?}"
+    );
+    let centre = app(&h).volume().unwrap().bounds().center();
+    assert!((tilted.distance(centre) - added.distance(centre)).abs() < 1e-9);
+    assert_eq!(sculpt.steps().len(), 2, "one drag, one step");
+    // The tip now sits under the pointer.
+    let tip = volux_viewer::plane_handle::tips(app(&h))[0];
+    let now = volux_viewer::sculpt_tools::project(&camera, rect, tip).unwrap();
+    assert!(now.distance(at + egui::vec2(60.0, -40.0)) < 1.0, "{now:?}");
 }
