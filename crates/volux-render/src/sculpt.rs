@@ -1,7 +1,7 @@
 //! Sculpting a grid (seed `004_...txt` ch. 4-6) on top of the engine: the sculpt mask as part
-//! of field sampling ([`masked`], used by every path of the grid ray caster), picking the
-//! visible surface ([`pick`]), label colouring ([`labels`]) and the sculpt state with undo, redo and saved steps
-//! ([`state`]). The mask and the tools' regions are in [`volux_core::sculpt`].
+//! of field sampling (`masked.rs`, used by every path of the grid ray caster), picking the
+//! visible surface ([`mod@pick`]), label colouring ([`labels`]) and the sculpt state with
+//! undo, redo and saved steps ([`state`]). The mask and the tools' regions are in [`volux_core::sculpt`].
 
 pub mod labels;
 pub(crate) mod masked;
