@@ -57,6 +57,12 @@
 //! - [`tetray`]: cell-to-cell ray casting of meshes;
 //! - [`resample`]: meshes resampled onto a grid and ray cast.
 //!
+//! ## Sculpting (seed `004`)
+//!
+//! - [`sculpt`]: the sculpt mask seen through field sampling (every grid integrator), picking
+//!   the visible surface, label colouring, and the sculpt state (planes, eraser strokes, digs,
+//!   measurement and label picks) with undo, redo and replayable steps.
+//!
 //! `docs/seeds.md` in the repository says which seed document each number names.
 #![deny(missing_docs)]
 // One `unsafe` block, proven by a benchmark: the lane sampler's unchecked corner loads

@@ -35,7 +35,7 @@ pub fn label_nearest(
             s.label, s.point
         )));
     }
-    let [nx, ny, nz] = frame.dims;
+    let [nx, ny, _] = frame.dims;
     let n = crate::limits::count_of(&frame.dims);
     crate::limits::check_alloc("the label volume", n, 1)?;
     // Distances in index space scaled by the spacing are world distances (the direction is
@@ -59,7 +59,6 @@ pub fn label_nearest(
                 }
             }
         });
-    let _ = nz;
     Ok(out)
 }
 

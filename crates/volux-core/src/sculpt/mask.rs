@@ -152,8 +152,8 @@ impl SculptMask {
 
     /// One byte per voxel, x fastest: 1 where kept, 0 where removed (the NRRD export).
     pub fn to_values(&self) -> Vec<u8> {
-        let [nx, ny, nz] = self.dims;
-        let mut out = vec![0u8; nx * ny * nz];
+        let [nx, ny, _] = self.dims;
+        let mut out = vec![0u8; self.dims.iter().product()];
         out.par_chunks_mut(nx * ny)
             .enumerate()
             .for_each(|(k, slice)| {
@@ -163,7 +163,6 @@ impl SculptMask {
                     }
                 }
             });
-        let _ = nz;
         out
     }
 
