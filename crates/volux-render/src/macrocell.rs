@@ -94,37 +94,76 @@ impl MacrocellGrid {
     }
 }
 
-/// The macrocells of one render: geometry plus empty flags for the current TF.
+/// What rays do in a macrocell, for one render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum CellClass {
+    /// Nothing to see (zero extinction, no isovalue, or wholly removed by the sculpt mask):
+    /// rays skip it.
+    Skip,
+    /// Sampled; the sculpt mask, if any, hides none of it.
+    Sample,
+    /// Sampled through the sculpt mask, which hides part of it (seed `004` sec. 4.4.1).
+    SampleMasked,
+}
+
+impl CellClass {
+    /// `Skip` for an empty macrocell, else `Sample`.
+    pub fn of_empty(empty: bool) -> Self {
+        if empty {
+            Self::Skip
+        } else {
+            Self::Sample
+        }
+    }
+}
+
+/// The macrocells of one render: geometry plus the class of each for the current TF (and
+/// sculpt mask). Runs of macrocells of one class make an interval, so a run that the mask
+/// hides in part and one it does not are separate intervals.
 #[derive(Clone, Debug)]
 pub struct Occupancy<'a> {
     grid: &'a MacrocellGrid,
-    empty: Cow<'a, [bool]>,
+    classes: Cow<'a, [CellClass]>,
 }
 
 impl<'a> Occupancy<'a> {
     /// Empty flags of `grid` for `table` and `isovalues`.
     pub fn new(grid: &'a MacrocellGrid, table: &ClassifyTable, isovalues: &[f32]) -> Self {
+        let empty = grid.empty_flags(table, isovalues);
         Self {
             grid,
-            empty: Cow::Owned(grid.empty_flags(table, isovalues)),
+            classes: Cow::Owned(empty.into_iter().map(CellClass::of_empty).collect()),
         }
     }
 
-    /// `grid` with empty flags computed before ([`MacrocellGrid::empty_flags`]).
-    pub fn from_flags(grid: &'a MacrocellGrid, empty: &'a [bool]) -> Self {
+    /// `grid` with classes computed before (one per macrocell, x fastest).
+    pub fn from_classes(grid: &'a MacrocellGrid, classes: &'a [CellClass]) -> Self {
         Self {
             grid,
-            empty: Cow::Borrowed(empty),
+            classes: Cow::Borrowed(classes),
         }
     }
 
-    /// Fraction of macrocells that are empty.
+    /// Fraction of macrocells that are skipped.
     pub fn empty_fraction(&self) -> f64 {
-        self.empty.iter().filter(|e| **e).count() as f64 / self.empty.len().max(1) as f64
+        let skipped = self.classes.iter().filter(|c| **c == CellClass::Skip);
+        skipped.count() as f64 / self.classes.len().max(1) as f64
+    }
+
+    /// The class of the macrocell holding the voxel-space point `p` (clamped to the grid).
+    pub fn class_at(&self, p: DVec3) -> CellClass {
+        let b = MacrocellGrid::BLOCK as f64;
+        let c: [usize; 3] = std::array::from_fn(|a| {
+            let i = (p[a] / b).floor().max(0.0) as usize;
+            i.min(self.grid.counts[a] - 1)
+        });
+        let [nx, ny, _] = self.grid.counts;
+        self.classes[c[0] + nx * (c[1] + ny * c[2])]
     }
 
     /// The occupied intervals of the voxel-space ray `o + t d`, `t` in `[t0, t1]`, front to
-    /// back: maximal runs of non-empty macrocells, each with the range of values its samples
+    /// back: maximal runs of sampled macrocells of one class, each with the range of values its samples
     /// take (Open VKL's interval iterator: `tRange`, `valueRange`).
     pub fn intervals(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> std::vec::IntoIter<Interval> {
         let mut out = Vec::new();
@@ -158,7 +197,7 @@ impl<'a> Occupancy<'a> {
 
     /// The 3D DDA (Amanatides and Woo) of [`Occupancy::intervals`]: per macrocell, one
     /// comparison chain to pick the axis crossed first and one add to advance it; a run of
-    /// non-empty macrocells becomes one interval, handed to `emit` with its value range when
+    /// sampled macrocells of one class becomes one interval, handed to `emit` with its value range when
     /// `VALUES` (the hot path leaves the ranges out: it was measured 15 to 25 % slower on the
     /// phantom with them gathered through an iterator's state). The walk stops in the first
     /// empty macrocell of non-zero length it enters at or after `limit`, and returns where
@@ -176,7 +215,7 @@ impl<'a> Occupancy<'a> {
         let b = MacrocellGrid::BLOCK as f64;
         let counts = self.grid.counts;
         let ranges = &self.grid.ranges;
-        let empty_flags: &[bool] = &self.empty;
+        let classes: &[CellClass] = &self.classes;
         let p = (o + d * t0) / b;
         let cell: [i64; 3] =
             std::array::from_fn(|a| (p[a].floor() as i64).clamp(0, counts[a] as i64 - 1));
@@ -210,7 +249,8 @@ impl<'a> Occupancy<'a> {
             }
         });
         let [mut tx, mut ty, mut tz] = t_next;
-        let mut run: Option<f64> = None;
+        // The start and class of the current run.
+        let mut run: Option<(f64, CellClass)> = None;
         let mut values = [f32::INFINITY, f32::NEG_INFINITY];
         let mut t = t0;
         while t < t1 {
@@ -220,14 +260,18 @@ impl<'a> Occupancy<'a> {
             let t01 = if y_first { ty } else { tx };
             let z_first = tz < t01;
             let exit = if z_first { tz } else { t01 };
-            let empty = empty_flags.get(idx as usize).copied().unwrap_or(true);
-            match (empty, run) {
-                (false, None) => run = Some(t),
-                (true, Some(start)) => {
+            let class = classes
+                .get(idx as usize)
+                .copied()
+                .unwrap_or(CellClass::Skip);
+            let empty = class == CellClass::Skip;
+            match run {
+                Some((start, c)) if c != class => {
                     emit([start, t], values);
-                    run = None;
+                    run = (!empty).then_some((t, class));
                     values = [f32::INFINITY, f32::NEG_INFINITY];
                 }
+                None if !empty => run = Some((t, class)),
                 _ => {}
             }
             if VALUES && !empty {
@@ -250,7 +294,7 @@ impl<'a> Occupancy<'a> {
             ty = if my { ty + delta[1] } else { ty };
             tz = if mz { tz + delta[2] } else { tz };
         }
-        if let Some(start) = run {
+        if let Some((start, _)) = run {
             emit([start, t.min(t1)], values);
         }
         t1
@@ -407,7 +451,7 @@ mod tests {
                 let c = [0, 1, 2].map(|a| (p[a].floor() as usize).min(g.counts[a] - 1));
                 let m = c[0] + g.counts[0] * (c[1] + g.counts[1] * c[2]);
                 let inside = it.iter().find(|i| i.t[0] <= t && t <= i.t[1]);
-                if !occ.empty[m] {
+                if occ.classes[m] != CellClass::Skip {
                     let i = inside.unwrap_or_else(|| panic!("t {t} in macrocell {c:?} missed"));
                     assert!(i.values[0] <= g.ranges[m][0] && g.ranges[m][1] <= i.values[1]);
                 }

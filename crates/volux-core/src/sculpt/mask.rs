@@ -53,6 +53,19 @@ fn local_bit(i: usize, j: usize, k: usize) -> usize {
     (i % B) | (j % B) << 3 | (k % B) << 6
 }
 
+/// The trilinear blend at `f` of a cell's kept (1) and removed (0) corners, `bits` as
+/// [`SculptMask::corner_bits`] gives them.
+#[inline]
+fn blend(bits: u8, f: [f32; 3]) -> f32 {
+    let v = |corner: u8| f32::from((bits >> corner) & 1);
+    let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+    let x00 = lerp(v(0), v(1), f[0]);
+    let x10 = lerp(v(2), v(3), f[0]);
+    let x01 = lerp(v(4), v(5), f[0]);
+    let x11 = lerp(v(6), v(7), f[0]);
+    lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2])
+}
+
 /// Which voxels of a grid are kept after sculpting (seed `004` sec. 4.4.1, at full resolution):
 /// see the [module documentation](crate::sculpt). Starts with every voxel kept. Two masks are
 /// equal when they keep the same voxels (whatever edits led there).
@@ -217,6 +230,13 @@ impl SculptMask {
         self.blocks[index] == REMOVED
     }
 
+    /// Whether macrocell `index` (x fastest) is partly removed: its points are visible or not
+    /// by [`SculptMask::visible`]'s interpolation (elsewhere all or none of them are).
+    #[inline]
+    pub fn block_partial(&self, index: usize) -> bool {
+        self.blocks[index] == PARTIAL
+    }
+
     /// The interpolated mask at voxel coordinates `p` (the trilinear blend of the kept (1)
     /// and removed (0) voxels of its cell), clamped to the grid as the samplers clamp.
     pub fn value(&self, p: [f32; 3]) -> f32 {
@@ -235,7 +255,7 @@ impl SculptMask {
         match self.blocks[b] {
             VISIBLE => true,
             REMOVED => false,
-            _ => self.interpolate(c, f) >= 0.5,
+            _ => self.visible_in_cell(c, f),
         }
     }
 
@@ -277,14 +297,49 @@ impl SculptMask {
     }
 
     fn interpolate(&self, c: [usize; 3], f: [f32; 3]) -> f32 {
+        blend(self.corner_bits(c), f)
+    }
+
+    /// Whether the point at `f` in cell `c` is visible: from the corners' bits alone when they
+    /// agree (no arithmetic), else by the interpolation.
+    #[inline]
+    fn visible_in_cell(&self, c: [usize; 3], f: [f32; 3]) -> bool {
+        match self.corner_bits(c) {
+            0xFF => true,
+            0 => false,
+            bits => blend(bits, f) >= 0.5,
+        }
+    }
+
+    /// Which corners of cell `c` are kept: bit `dx + 2 dy + 4 dz` for the corner at
+    /// `c + (dx, dy, dz)` (clamped to the grid). A cell inside one brick (seven in eight
+    /// along each axis) reads that brick once: its two z layers are two words, each corner
+    /// pair a shift and a mask.
+    #[inline]
+    fn corner_bits(&self, c: [usize; 3]) -> u8 {
+        let inside = (0..3).all(|a| c[a] % B != B - 1 && c[a] + 1 < self.dims[a]);
+        if inside {
+            let [bx, by, _] = self.bricks_per_axis;
+            let b = c[0] / B + bx * (c[1] / B + by * (c[2] / B));
+            return match &self.bricks[b] {
+                Brick::Kept => 0xFF,
+                Brick::Removed => 0,
+                Brick::Bits(w) => {
+                    // Word `k` holds z layer `k` (bit `i + 8 j`, as `local_bit`).
+                    let shift = c[0] % B + B * (c[1] % B);
+                    let (near, far) = (w[c[2] % B] >> shift, w[c[2] % B + 1] >> shift);
+                    let pair = |w: u64, dy: usize| ((w >> (B * dy)) & 3) as u8;
+                    pair(near, 0) | pair(near, 1) << 2 | pair(far, 0) << 4 | pair(far, 1) << 6
+                }
+            };
+        }
         let n = std::array::from_fn::<usize, 3, _>(|a| (c[a] + 1).min(self.dims[a] - 1));
-        let v = |i, j, k| if self.voxel(i, j, k) { 1.0f32 } else { 0.0 };
-        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
-        let x00 = lerp(v(c[0], c[1], c[2]), v(n[0], c[1], c[2]), f[0]);
-        let x10 = lerp(v(c[0], n[1], c[2]), v(n[0], n[1], c[2]), f[0]);
-        let x01 = lerp(v(c[0], c[1], n[2]), v(n[0], c[1], n[2]), f[0]);
-        let x11 = lerp(v(c[0], n[1], n[2]), v(n[0], n[1], n[2]), f[0]);
-        lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2])
+        let mut bits = 0u8;
+        for corner in 0..8 {
+            let pick = |a: usize| if corner >> a & 1 == 1 { n[a] } else { c[a] };
+            bits |= u8::from(self.voxel(pick(0), pick(1), pick(2))) << corner;
+        }
+        bits
     }
 
     /// Removes every kept voxel of `region` and returns what changed (for

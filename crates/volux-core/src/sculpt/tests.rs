@@ -148,6 +148,29 @@ fn a_ball_removes_the_voxels_within_its_world_radius_and_undo_restores_bit_for_b
     assert_eq!(mask.removed_count(), 0);
 }
 
+/// The mask's value at `p` from its voxels, corner by corner (the independent reference of
+/// [`SculptMask::value`]).
+fn trilinear_of_voxels(mask: &SculptMask, p: [f32; 3]) -> f32 {
+    let d = mask.dims();
+    let c: [usize; 3] = std::array::from_fn(|a| (p[a].floor() as usize).min(d[a] - 2));
+    let f: [f32; 3] = std::array::from_fn(|a| p[a] - c[a] as f32);
+    let mut sum = 0.0;
+    for corner in 0..8usize {
+        let at = |a: usize| c[a] + (corner >> a & 1);
+        let w: f32 = (0..3)
+            .map(|a| {
+                if corner >> a & 1 == 1 {
+                    f[a]
+                } else {
+                    1.0 - f[a]
+                }
+            })
+            .product();
+        sum += w * f32::from(u8::from(mask.voxel(at(0), at(1), at(2))));
+    }
+    sum
+}
+
 #[test]
 fn visibility_is_the_interpolated_mask_at_one_half_and_block_states_agree() {
     let g = grid([30, 26, 19], false);
@@ -172,6 +195,11 @@ fn visibility_is_the_interpolated_mask_at_one_half_and_block_states_agree() {
     for _ in 0..20000 {
         let p = [rnd(30) as f32, rnd(26) as f32, rnd(19) as f32];
         let v = mask.value(p);
+        let want = trilinear_of_voxels(&mask, p);
+        assert!(
+            (v - want).abs() < 1e-6,
+            "at {p:?}: value {v}, voxels give {want}"
+        );
         assert_eq!(mask.visible(p), v >= 0.5, "at {p:?}: value {v}");
         partial_seen += usize::from(v > 0.0 && v < 1.0);
     }

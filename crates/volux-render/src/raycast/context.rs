@@ -12,7 +12,7 @@ use crate::composite::RayAccumulator;
 use crate::integrate::medium::RayIntegral;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::intervals::IntervalSource;
-use crate::macrocell::MacrocellGrid;
+use crate::macrocell::{CellClass, MacrocellGrid, Occupancy};
 use crate::sculpt::labels::LabelVolume;
 use crate::shading::blinn_phong::BlinnPhong;
 use crate::shading::gradient::GradientVolume;
@@ -55,16 +55,16 @@ pub(crate) struct Derived<'a> {
 }
 
 /// The classification of a render, what depends on the transfer function: its table and
-/// the macrocells' empty flags (zero extinction over a macrocell's range and no isovalue in
-/// it). A renderer keeps it between frames ([`Classification::is_for`]).
+/// the macrocells' classes, skipped where empty (zero extinction over a macrocell's range
+/// and no isovalue in it). A renderer keeps it between frames ([`Classification::is_for`]).
 pub(crate) struct Classification {
     /// What it was built from: the TF as given, the data range, the isovalues.
     pub(crate) tf: TransferFunction,
     pub(crate) range: [f64; 2],
     pub(crate) isovalues: Vec<f32>,
     pub(crate) table: ClassifyTable,
-    /// Empty flags per macrocell (when built for a macrocell grid).
-    pub(crate) empty: Option<Vec<bool>>,
+    /// The class of each macrocell, skipped or sampled (when built for a macrocell grid).
+    pub(crate) classes: Option<Vec<CellClass>>,
 }
 
 impl Classification {
@@ -76,18 +76,21 @@ impl Classification {
     ) -> Self {
         let table = ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE);
         let isovalues = isovalues(opts);
-        let empty = cells.map(|m| m.empty_flags(&table, &isovalues));
+        let classes = cells.map(|m| {
+            let empty = m.empty_flags(&table, &isovalues);
+            empty.into_iter().map(CellClass::of_empty).collect()
+        });
         Self {
             tf: opts.tf.clone(),
             range,
             isovalues,
             table,
-            empty,
+            classes,
         }
     }
 
     /// Whether this was built for `opts`' TF and isovalues, `range`, and (when `cells` is
-    /// given) has the empty flags.
+    /// given) has the macrocell classes.
     pub(crate) fn is_for(
         &self,
         opts: &RenderOptions,
@@ -97,7 +100,7 @@ impl Classification {
         self.tf == opts.tf
             && self.range == range
             && self.isovalues == isovalues(opts)
-            && (cells.is_none() || self.empty.is_some())
+            && (cells.is_none() || self.classes.is_some())
     }
 }
 
@@ -116,6 +119,10 @@ pub(crate) struct RayContext<'a, F> {
     pub(crate) table: &'a ClassifyTable,
     /// Where rays sample (`None`: everywhere between entry and exit).
     pub(crate) intervals: Option<&'a dyn IntervalSource>,
+    /// The macrocells, when their classes tell where the sculpt mask hides nothing (the
+    /// intervals are then theirs, split where that changes): the lane stream samples the
+    /// data without the mask there.
+    pub(crate) mask_classes: Option<&'a Occupancy<'a>>,
     pub(crate) preintegration: Option<&'a PreintegrationTable>,
     pub(crate) gradients: Option<&'a GradientVolume>,
     /// The classification for the lane-wise paths: per-slab colour and opacity for the
@@ -203,6 +210,28 @@ pub(crate) struct MipRay {
     pub(crate) t0: f64,
     pub(crate) t1: f64,
     pub(crate) step: f64,
+}
+
+/// The first index `i >= 0` of the sample lattice `start + i h` with `start + i h >= b`, by
+/// exact comparisons: spans that touch share their boundary sample neither twice nor never.
+pub(crate) fn first_at_or_after(start: f64, h: f64, b: f64) -> i32 {
+    let t = |i: i32| start + h * f64::from(i);
+    let mut k = ceil_index((b - start) / h);
+    while k > 0 && t(k - 1) >= b {
+        k -= 1;
+    }
+    while t(k) < b {
+        k += 1;
+    }
+    k
+}
+
+/// `ceil(x)` clamped to `[0, i32::MAX / 2]`, without `f64::ceil` (a library call on
+/// baseline x86-64, paid per ray and span).
+pub(crate) fn ceil_index(x: f64) -> i32 {
+    let x = x.clamp(0.0, f64::from(i32::MAX / 2));
+    let c = x as i32;
+    c + i32::from(f64::from(c) < x)
 }
 
 /// A deterministic pseudo-random number in [0, 1) for pixel (x, y) (a 32-bit integer hash), so

@@ -6,7 +6,9 @@ use volux_core::voi::clip_by_planes;
 use volux_core::TransferFunction;
 
 use super::clip::{ray_box, voxel_crossings};
-use super::context::{pixel, pixel_hash, GridRay, MipRay, PixelOut, RayContext, RayShading};
+use super::context::{
+    first_at_or_after, pixel, pixel_hash, GridRay, MipRay, PixelOut, RayContext, RayShading,
+};
 use super::stream::TrapezoidRule;
 use crate::classify::{Classified, LaneTable};
 use crate::composite::{under_partial, RayAccumulator};
@@ -325,7 +327,7 @@ impl<F: Field> RayContext<'_, F> {
         let mut crossings = Vec::new();
         let start = t0 + jitter * h;
         'spans: for &(a, b) in spans {
-            let mut i = ((a - start) / h).ceil().max(0.0) as u64;
+            let mut i = first_at_or_after(start, h, a) as u64;
             loop {
                 let t = start + h * i as f64;
                 if t >= b {

@@ -20,13 +20,14 @@
 //! `[t_(i-1), t_i]`, clipped to the ray, as in [`RayContext::preintegrated`].
 use glam::{DVec3, Vec3};
 
-use super::context::{pixel_hash, PixelOut, RayContext};
+use super::context::{first_at_or_after, pixel_hash, PixelOut, RayContext};
 use crate::classify::LaneTable;
 use crate::composite::{under_if, under_partial, RayAccumulator};
 use crate::integrate::adaptive_lanes::exp_lanes;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{riemann_step, Integrator};
 use crate::intervals::IntervalSource;
+use crate::macrocell::CellClass;
 use crate::sampling::{Field, LANES};
 use crate::shading::{BlinnPhong, GradientVolume, Lanes3};
 use crate::tiles::TILE;
@@ -301,15 +302,7 @@ struct LaneRay {
 impl LaneRay {
     /// The first sample index `i` with `start + i h >= b` (0 at least).
     fn first_at_or_after(&self, b: f64) -> i32 {
-        let t = |i: i32| self.start + self.h * f64::from(i);
-        let mut k = ceil_index((b - self.start) / self.h);
-        while k > 0 && t(k - 1) >= b {
-            k -= 1;
-        }
-        while t(k) < b {
-            k += 1;
-        }
-        k
+        first_at_or_after(self.start, self.h, b)
     }
 
     /// The first sample index `i` with `start + i h > a`.
@@ -492,6 +485,9 @@ struct Lanes {
     lit: [bool; LANES],
     rays: [LaneRay; LANES],
     live: [bool; LANES],
+    /// The lanes whose current span the field may hide part of (a sculpt mask's partly
+    /// removed macrocells, or unknown): only their samples are tested against the mask.
+    hiding: u32,
 }
 
 impl Lanes {
@@ -507,12 +503,14 @@ impl Lanes {
             lit: [false; LANES],
             rays: std::array::from_fn(|_| LaneRay::default()),
             live: [false; LANES],
+            hiding: 0,
         }
     }
 
     /// Makes lane `l` idle (it keeps stepping in place, its results unused).
     fn idle(&mut self, l: usize) {
         self.live[l] = false;
+        self.hiding &= !(1 << l);
         self.stop[l] = f32::INFINITY;
         self.lattice.idle(l);
     }
@@ -565,7 +563,10 @@ impl<F: Field> RayContext<'_, F> {
         let mut k = 0;
         while k < run {
             let pos = lanes.lattice.positions_after(&first, k as f32);
-            let v = self.field.sample_lanes(&pos);
+            let mut v = self.field.sample_lanes_unhidden(&pos);
+            if lanes.hiding != 0 {
+                self.field.hide_lanes(&pos, &mut v, lanes.hiding);
+            }
             match shading {
                 Some(sh) if LIT => {
                     let mut e = rule.entries(&lanes.front, &v);
@@ -664,6 +665,10 @@ impl<F: Field> RayContext<'_, F> {
             }
             let (a, b) = r.spans[r.span];
             r.span += 1;
+            let hides = self
+                .mask_classes
+                .is_none_or(|o| o.class_at(r.o_v + r.d_v * (0.5 * (a + b))) != CellClass::Sample);
+            lanes.hiding = (lanes.hiding & !(1 << l)) | (u32::from(hides) << l);
             let (first, after, lane_first) = if R::SEGMENTS {
                 // The segments that overlap `[a, b]` and are not composited yet; segment 0
                 // (before `t_0`) is shortened.
@@ -672,7 +677,10 @@ impl<F: Field> RayContext<'_, F> {
                 r.next = after;
                 (first, after, first.max(1).min(after))
             } else {
-                let first = ceil_index((a - r.start) / r.h);
+                // The exact comparison of `first_at_or_after`: spans that touch (a run the
+                // mask hides in part next to one it does not) share their boundary sample
+                // neither twice nor never.
+                let first = r.first_at_or_after(a);
                 (first, r.first_at_or_after(b).max(first), first)
             };
             if R::SEGMENTS && first < after {
@@ -828,14 +836,6 @@ impl<F: Field> RayContext<'_, F> {
     }
 }
 
-/// `ceil(x)` clamped to `[0, i32::MAX / 2]`, without `f64::ceil` (a library call on
-/// baseline x86-64, paid per ray and span).
-fn ceil_index(x: f64) -> i32 {
-    let x = x.clamp(0.0, f64::from(i32::MAX / 2));
-    let c = x as i32;
-    c + i32::from(f64::from(c) < x)
-}
-
 /// Pixel indices of a `tw` x `th` tile in [`BLOCK`] x [`BLOCK`] blocks, row-major within
 /// and across blocks.
 pub(super) fn block_order(tw: usize, th: usize) -> Vec<usize> {
@@ -855,6 +855,7 @@ pub(super) fn block_order(tw: usize, th: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::raycast::context::ceil_index;
 
     #[test]
     fn ceil_index_is_the_clamped_ceiling() {

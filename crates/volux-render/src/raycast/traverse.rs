@@ -12,7 +12,7 @@ use crate::frame::{Rebuilt, RenderStats};
 use crate::integrate::integrator::Integrator;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::intervals::IntervalSource;
-use crate::macrocell::{MacrocellGrid, Occupancy};
+use crate::macrocell::{CellClass, MacrocellGrid, Occupancy};
 use crate::sampling::Field;
 use crate::sculpt::masked::Masked;
 use crate::tiles::{render_tiles, TileGrid, TILE};
@@ -112,17 +112,22 @@ fn check_dims(what: &str, theirs: [usize; 3], dims: [usize; 3]) -> Result<(), Re
     )))
 }
 
-/// The empty flags of the macrocells with the mask's wholly removed macrocells added (one
-/// pass over a byte per macrocell: the mask keeps its macrocell states up to date as the tools
-/// edit it, so nothing is rebuilt from the voxels).
-fn with_mask_removed(empty: &[bool], mask: Option<&SculptMask>) -> Option<Vec<bool>> {
+/// The macrocell classes with the sculpt mask's states folded in (one pass over a byte per
+/// macrocell: the mask keeps its macrocell states up to date as the tools edit it, so
+/// nothing is rebuilt from the voxels): wholly removed macrocells are skipped, partly removed
+/// ones sampled through the mask. `None` without a mask, or for a mask of other macrocells.
+fn with_mask_states(classes: &[CellClass], mask: Option<&SculptMask>) -> Option<Vec<CellClass>> {
     let mask = mask?;
     let count: usize = mask.blocks_per_axis().iter().product();
-    (count == empty.len()).then(|| {
-        empty
+    (count == classes.len()).then(|| {
+        classes
             .iter()
             .enumerate()
-            .map(|(m, &e)| e || mask.block_removed(m))
+            .map(|(m, &c)| match c {
+                CellClass::Sample if mask.block_removed(m) => CellClass::Skip,
+                CellClass::Sample if mask.block_partial(m) => CellClass::SampleMasked,
+                c => c,
+            })
             .collect()
     })
 }
@@ -153,18 +158,30 @@ fn render_sampled<F: Field>(
         }
     };
     let table = &classification.table;
-    let masked_empty = classification
-        .empty
+    let masked_classes = classification
+        .classes
         .as_deref()
-        .and_then(|e| with_mask_removed(e, opts.mask.as_deref()));
+        .and_then(|c| with_mask_states(c, opts.mask.as_deref()));
     let occupancy = derived
         .macrocells
-        .zip(masked_empty.as_deref().or(classification.empty.as_deref()))
-        .map(|(m, empty)| Occupancy::from_flags(m, empty));
+        .zip(
+            masked_classes
+                .as_deref()
+                .or(classification.classes.as_deref()),
+        )
+        .map(|(m, classes)| Occupancy::from_classes(m, classes));
+    // With a mask, the macrocells' intervals tell where it hides nothing: always walked
+    // (unless the caller brings its own intervals, which do not tell).
+    let mask_classes = occupancy
+        .as_ref()
+        .filter(|_| masked_classes.is_some() && derived.intervals.is_none() && !opts.mip);
     let intervals = derived
         .intervals
         .or(occupancy.as_ref().map(|o| o as &dyn IntervalSource))
-        .filter(|i| !opts.mip && worth_skipping(i.empty_fraction(), &opts.integrator));
+        .filter(|i| {
+            !opts.mip
+                && (mask_classes.is_some() || worth_skipping(i.empty_fraction(), &opts.integrator))
+        });
     let breakpoints = opts.tf.resolved(range).breakpoints();
     let (lane_table, breakpoint_ranks) = match opts.integrator {
         Integrator::Riemann { step } => (
@@ -184,6 +201,7 @@ fn render_sampled<F: Field>(
         place,
         table,
         intervals,
+        mask_classes,
         preintegration: derived.preintegration,
         gradients: derived.gradients,
         lane_table,

@@ -28,7 +28,7 @@ impl<F: Field> Field for Masked<'_, F> {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn sample_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
         let mut v = self.inner.sample_lanes(p);
         let mut keep = [true; LANES];
@@ -41,7 +41,26 @@ impl<F: Field> Field for Masked<'_, F> {
         v
     }
 
-    #[inline]
+    #[inline(always)]
+    fn sample_lanes_unhidden(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
+        self.inner.sample_lanes(p)
+    }
+
+    /// Lane by lane: only lanes in partly removed macrocells are asked for (a few along the
+    /// cut surfaces), so the others pay nothing for the mask.
+    #[inline(always)]
+    fn hide_lanes(&self, p: &[[f32; LANES]; 3], v: &mut [f32; LANES], lanes: u32) {
+        let mut left = lanes;
+        while left != 0 {
+            let l = left.trailing_zeros() as usize;
+            left &= left - 1;
+            if !self.mask.visible([p[0][l], p[1][l], p[2][l]]) {
+                v[l] = f32::NAN;
+            }
+        }
+    }
+
+    #[inline(always)]
     fn sample4(&self, p: &[[f32; 4]; 3]) -> [f32; 4] {
         let mut v = self.inner.sample4(p);
         let mut keep = [true; 4];
