@@ -90,6 +90,10 @@ pub enum Error {
     /// A sculpting tool given unusable input (a non-positive radius, no points, label 0).
     #[error("invalid sculpting input: {0}")]
     InvalidSculpt(String),
+    /// A chunked (bricked) volume that cannot be used: a bad layout, a chunk outside the
+    /// grid, a chunk that cannot be read or decoded (the message names it).
+    #[error("chunked volume: {0}")]
+    Chunked(String),
     /// Heat-map arguments that cannot be used (e.g. a scale maximum that is not > 0).
     #[error("invalid heat map: {0}")]
     InvalidHeatMap(String),

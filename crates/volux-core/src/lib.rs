@@ -6,6 +6,9 @@
 //! - [`aabb::Aabb`]: world-space bounding boxes;
 //! - [`grid::Grid`]: a regular grid of scalars kept in their native type, possibly memory-mapped,
 //!   placed in LPS world millimetres by an origin, spacing and direction matrix;
+//! - [`bricked`]: volumes stored in chunks and read a chunk at a time ([`bricked::ChunkSource`],
+//!   one level; [`bricked::Multiscale`], the pyramid), the seam between chunked storage and the
+//!   bricked renderer (seed `003`);
 //! - [`orientation`]: direction matrices and their patient-orientation letters (LPS, RAS);
 //! - [`mesh::TetMesh`]: a tetrahedral mesh with one scalar per vertex, validation, boundary faces,
 //!   face adjacency and per-vertex gradients;
@@ -28,6 +31,7 @@
 #![deny(unsafe_code)]
 
 pub mod aabb;
+pub mod bricked;
 pub mod camera;
 pub mod error;
 pub mod grid;
