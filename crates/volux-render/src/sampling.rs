@@ -32,13 +32,13 @@ pub trait Field: Sync {
     /// field's data, mask unread): exact at points where the caller knows the field hides
     /// nothing ([`CellClass::Sample`](crate::macrocell::CellClass) macrocells), and with
     /// [`Field::hide_lanes`] for the others. The same as `sample_lanes` by default.
-    #[inline]
+    #[inline(always)]
     fn sample_lanes_unhidden(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
         self.sample_lanes(p)
     }
     /// Sets to NaN the samples `v` of the lanes in the bit mask `lanes` whose points `p` this
     /// field hides (after [`Field::sample_lanes_unhidden`]). Nothing by default.
-    #[inline]
+    #[inline(always)]
     fn hide_lanes(&self, _p: &[[f32; LANES]; 3], _v: &mut [f32; LANES], _lanes: u32) {}
     /// Four samples at once, as [`Field::sample_lanes`] (for integrators that sample a ray at
     /// four points together).

@@ -2,6 +2,9 @@
 use rayon::prelude::*;
 
 use super::region::{Coverage, Region};
+use cells::{CellStates, Corners};
+
+mod cells;
 use crate::error::{Error, Result};
 
 /// Voxels per brick side.
@@ -77,6 +80,8 @@ pub struct SculptMask {
     blocks_per_axis: [usize; 3],
     /// [`VISIBLE`], [`REMOVED`] or [`PARTIAL`] per macrocell.
     blocks: Vec<u8>,
+    /// The cells' corner states of each partly removed macrocell.
+    cells: Vec<Option<Box<CellStates>>>,
     /// Bumped by every change, so that renderers can key caches on it.
     generation: u64,
 }
@@ -139,6 +144,7 @@ impl SculptMask {
             bricks: vec![Brick::Kept; n as usize],
             blocks_per_axis,
             blocks: vec![VISIBLE; blocks],
+            cells: vec![None; blocks],
             generation: 0,
         })
     }
@@ -246,8 +252,8 @@ impl SculptMask {
 
     /// Whether the point at voxel coordinates `p` is visible: [`SculptMask::value`] >= 0.5
     /// (the seed's threshold), answered from the macrocell's state when it is wholly visible
-    /// or removed.
-    #[inline]
+    /// or removed, then from the cell's corners when they agree.
+    #[inline(always)]
     pub fn visible(&self, p: [f32; 3]) -> bool {
         let (c, f) = self.cell_of(p);
         let [bx, by, _] = self.blocks_per_axis;
@@ -255,7 +261,11 @@ impl SculptMask {
         match self.blocks[b] {
             VISIBLE => true,
             REMOVED => false,
-            _ => self.visible_in_cell(c, f),
+            _ => match self.cells[b].as_deref().map(|s| s.corners(c)) {
+                Some(Corners::Kept) => true,
+                Some(Corners::Removed) => false,
+                _ => self.visible_in_cell(c, f),
+            },
         }
     }
 
@@ -302,7 +312,7 @@ impl SculptMask {
 
     /// Whether the point at `f` in cell `c` is visible: from the corners' bits alone when they
     /// agree (no arithmetic), else by the interpolation.
-    #[inline]
+    #[inline(never)]
     fn visible_in_cell(&self, c: [usize; 3], f: [f32; 3]) -> bool {
         match self.corner_bits(c) {
             0xFF => true,
@@ -462,72 +472,5 @@ impl SculptMask {
             }
         }
         out
-    }
-
-    /// Recomputes the macrocell states around the bricks `bricks` (a macrocell reads the
-    /// voxels of its own brick and the first layer of the next).
-    fn update_blocks_of(&mut self, bricks: &[usize]) {
-        let [bx, by, _] = self.bricks_per_axis;
-        let [mx, my, mz] = self.blocks_per_axis;
-        let mut blocks: Vec<usize> = Vec::new();
-        for &b in bricks {
-            let c = [b % bx, (b / bx) % by, b / (bx * by)];
-            for dk in 0..2 {
-                for dj in 0..2 {
-                    for di in 0..2 {
-                        let (i, j, k) =
-                            (c[0] as isize - di, c[1] as isize - dj, c[2] as isize - dk);
-                        let inside = i >= 0 && j >= 0 && k >= 0;
-                        if inside && (i as usize) < mx && (j as usize) < my && (k as usize) < mz {
-                            blocks.push(i as usize + mx * (j as usize + my * k as usize));
-                        }
-                    }
-                }
-            }
-        }
-        blocks.sort_unstable();
-        blocks.dedup();
-        let states: Vec<u8> = blocks.par_iter().map(|&m| self.block_state(m)).collect();
-        for (m, s) in blocks.into_iter().zip(states) {
-            self.blocks[m] = s;
-        }
-    }
-
-    fn update_blocks_all(&mut self) {
-        let states: Vec<u8> = (0..self.blocks.len())
-            .into_par_iter()
-            .map(|m| self.block_state(m))
-            .collect();
-        self.blocks = states;
-    }
-
-    /// The state of macrocell `m`: its voxels `[8 I, 8 I + 8]` per axis, clamped to the grid.
-    fn block_state(&self, m: usize) -> u8 {
-        let [mx, my, _] = self.blocks_per_axis;
-        let c = [m % mx, (m / mx) % my, m / (mx * my)];
-        let lo = c.map(|c| c * Self::BLOCK);
-        let hi: [usize; 3] = std::array::from_fn(|a| (lo[a] + Self::BLOCK).min(self.dims[a] - 1));
-        let bricks = self.bricks_between(lo, hi);
-        if bricks.iter().all(|&b| self.bricks[b] == Brick::Kept) {
-            return VISIBLE;
-        }
-        if bricks.iter().all(|&b| self.bricks[b] == Brick::Removed) {
-            return REMOVED;
-        }
-        let (mut any_kept, mut any_removed) = (false, false);
-        for k in lo[2]..=hi[2] {
-            for j in lo[1]..=hi[1] {
-                for i in lo[0]..=hi[0] {
-                    let v = self.voxel(i, j, k);
-                    any_kept |= v;
-                    any_removed |= !v;
-                }
-            }
-        }
-        match (any_kept, any_removed) {
-            (true, false) => VISIBLE,
-            (false, true) => REMOVED,
-            _ => PARTIAL,
-        }
     }
 }

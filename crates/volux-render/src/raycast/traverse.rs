@@ -115,8 +115,14 @@ fn check_dims(what: &str, theirs: [usize; 3], dims: [usize; 3]) -> Result<(), Re
 /// The macrocell classes with the sculpt mask's states folded in (one pass over a byte per
 /// macrocell: the mask keeps its macrocell states up to date as the tools edit it, so
 /// nothing is rebuilt from the voxels): wholly removed macrocells are skipped, partly removed
-/// ones sampled through the mask. `None` without a mask, or for a mask of other macrocells.
-fn with_mask_states(classes: &[CellClass], mask: Option<&SculptMask>) -> Option<Vec<CellClass>> {
+/// ones sampled through the mask. Empty macrocells stay skipped only when `skip_empty`
+/// (skipping pays, [`worth_skipping`]): otherwise they are sampled, so that intervals break
+/// only where the mask changes. `None` without a mask, or for a mask of other macrocells.
+fn with_mask_states(
+    classes: &[CellClass],
+    mask: Option<&SculptMask>,
+    skip_empty: bool,
+) -> Option<Vec<CellClass>> {
     let mask = mask?;
     let count: usize = mask.blocks_per_axis().iter().product();
     (count == classes.len()).then(|| {
@@ -124,9 +130,10 @@ fn with_mask_states(classes: &[CellClass], mask: Option<&SculptMask>) -> Option<
             .iter()
             .enumerate()
             .map(|(m, &c)| match c {
-                CellClass::Sample if mask.block_removed(m) => CellClass::Skip,
-                CellClass::Sample if mask.block_partial(m) => CellClass::SampleMasked,
-                c => c,
+                _ if mask.block_removed(m) => CellClass::Skip,
+                CellClass::Skip if skip_empty => CellClass::Skip,
+                _ if mask.block_partial(m) => CellClass::SampleMasked,
+                _ => CellClass::Sample,
             })
             .collect()
     })
@@ -158,10 +165,15 @@ fn render_sampled<F: Field>(
         }
     };
     let table = &classification.table;
+    let skip_empty = |classes: &[CellClass]| {
+        let empty = classes.iter().filter(|c| **c == CellClass::Skip).count();
+        let fraction = empty as f64 / classes.len().max(1) as f64;
+        worth_skipping(fraction, &opts.integrator)
+    };
     let masked_classes = classification
         .classes
         .as_deref()
-        .and_then(|c| with_mask_states(c, opts.mask.as_deref()));
+        .and_then(|c| with_mask_states(c, opts.mask.as_deref(), skip_empty(c)));
     let occupancy = derived
         .macrocells
         .zip(
