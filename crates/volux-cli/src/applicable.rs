@@ -26,6 +26,13 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
             "--error-map writes one map; render the frame of interest without --orbit".into(),
         );
     }
+    if !args.measure.is_empty() && (args.orbit.is_some() || args.json) {
+        return Err(
+            "--measure draws on one picture and prints its length as text; measure \
+                    without --orbit and --json (`volux measure --json` prints JSON)"
+                .into(),
+        );
+    }
     if args.given("json") && !args.stats {
         return Err("--json prints the --stats figures as JSON; add --stats".into());
     }

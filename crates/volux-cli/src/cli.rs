@@ -357,6 +357,12 @@ pub struct RenderArgs {
     /// dims; non-zero voxels are kept, zero voxels removed) (grids).
     #[arg(long, value_name = "MASK.nrrd")]
     pub mask: Option<PathBuf>,
+    /// Measure on the visible surface, as `volux measure` does, and draw it: pixel X,Y
+    /// (at least two; a polyline in the order given) picked where the opacity along its ray
+    /// reaches 0.5 after the clip planes and the mask; the points and the polyline are drawn
+    /// on the picture and the length in world units (mm) is printed (grids).
+    #[arg(long = "measure", value_name = "X,Y", allow_hyphen_values = true)]
+    pub measure: Vec<String>,
     /// Write the per-pixel estimated integration error as a PNG (rays that missed the
     /// tolerance in magenta).
     #[arg(long)]
