@@ -36,7 +36,7 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
     if args.given("json") && !args.stats {
         return Err("--json prints the --stats figures as JSON; add --stats".into());
     }
-    if args.camera.is_some() {
+    if args.view_args.camera.is_some() {
         if let Some(o) = ORBIT.iter().find(|o| args.given(o)) {
             return Err(format!(
                 "--{o} sets the orbit camera, which --camera FILE replaces; put it in the file \
@@ -45,7 +45,7 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
             .into());
         }
     }
-    if args.view.is_some() && args.given("up") {
+    if args.view_args.view.is_some() && args.given("up") {
         return Err(
             "--view sets the up direction (z; y for top and bottom); turn from a view \
                     with --azimuth/--elevation, or give --up without --view"
@@ -68,7 +68,7 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
                 .into(),
         );
     }
-    let lit = args.shade || !args.isos.is_empty();
+    let lit = args.shade || !args.view_args.isos.is_empty();
     if let Some(l) = LIGHTING.iter().find(|l| args.given(l)) {
         if !lit {
             return Err(format!(

@@ -31,7 +31,7 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let loaded_grid = matches!(data, Dataset::Grid(_));
     let volume = crate::settings::volume(data, args)?;
     let mut scene = plan.scene(args, &volume, loaded_grid)?;
-    if let Some(mask) = &args.mask {
+    if let Some(mask) = &args.view_args.mask {
         super::workbench::add_mask(mask, &volume, file, &mut scene)?;
     }
     let measured = super::measure::Drawn::pick(args, &volume, &scene, loaded_grid)?;
