@@ -26,10 +26,17 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
             "--error-map writes one map; render the frame of interest without --orbit".into(),
         );
     }
+    if !args.measure.is_empty() && (args.orbit.is_some() || args.json) {
+        return Err(
+            "--measure draws on one picture and prints its length as text; measure \
+                    without --orbit and --json (`volux measure --json` prints JSON)"
+                .into(),
+        );
+    }
     if args.given("json") && !args.stats {
         return Err("--json prints the --stats figures as JSON; add --stats".into());
     }
-    if args.camera.is_some() {
+    if args.view_args.camera.is_some() {
         if let Some(o) = ORBIT.iter().find(|o| args.given(o)) {
             return Err(format!(
                 "--{o} sets the orbit camera, which --camera FILE replaces; put it in the file \
@@ -38,7 +45,7 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
             .into());
         }
     }
-    if args.view.is_some() && args.given("up") {
+    if args.view_args.view.is_some() && args.given("up") {
         return Err(
             "--view sets the up direction (z; y for top and bottom); turn from a view \
                     with --azimuth/--elevation, or give --up without --view"
@@ -61,7 +68,7 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
                 .into(),
         );
     }
-    let lit = args.shade || !args.isos.is_empty();
+    let lit = args.shade || !args.view_args.isos.is_empty();
     if let Some(l) = LIGHTING.iter().find(|l| args.given(l)) {
         if !lit {
             return Err(format!(

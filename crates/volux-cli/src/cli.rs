@@ -242,48 +242,8 @@ pub struct RenderArgs {
     /// Output PNG [default: out.png, and it says so when it replaces a file].
     #[arg(long, short)]
     pub output: Option<PathBuf>,
-    /// Transfer function: a preset (auto, grayscale, ct-bone, ct-skin, ct-soft-tissue,
-    /// mr-default, viridis, inferno, cool-warm) or a file: Volux JSON, a ParaView preset or a
-    /// Slicer .vp (`volux help tf`); repeat it
-    /// to layer several, each optionally weighted as NAME:WEIGHT (`--tf ct-bone --tf
-    /// ct-skin:0.2`: bone under a faint skin) [default: auto].
-    #[arg(long)]
-    pub tf: Vec<String>,
-    /// Multiply the extinction of the transfer function.
-    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
-    pub opacity_scale: f64,
-    /// Camera JSON file (look-at or orbit form); overrides the angle options.
-    #[arg(long)]
-    pub camera: Option<PathBuf>,
-    /// Orbit azimuth in degrees (default 0: looking along +y; thin slabs are seen along z).
-    #[arg(long, allow_hyphen_values = true)]
-    pub azimuth: Option<f64>,
-    /// Orbit elevation in degrees (default 0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub elevation: Option<f64>,
-    /// A named view: front, back, left, right (the camera on -y, +y, -x, +x, z up), top,
-    /// bottom (on +z, -z, y up); --azimuth and --elevation turn from it. The world is LPS
-    /// (+x left, +y posterior, +z superior), scans placed by their orientation: front faces
-    /// the patient's face.
-    #[arg(long, value_enum)]
-    pub view: Option<ViewArg>,
-    /// Up direction X,Y,Z of the orbit camera (default 0,0,1; e.g. 0,0,-1 for scans stored
-    /// head down).
-    #[arg(long, allow_hyphen_values = true)]
-    pub up: Option<String>,
-    /// What the camera frames: `visible` (what the transfer function and isosurfaces show,
-    /// fitted to the image) or `all` (the whole bounding box, as a camera file sees it).
-    #[arg(long, value_enum, default_value_t = FrameArg::Visible)]
-    pub frame: FrameArg,
-    /// Zoom factor.
-    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
-    pub zoom: f64,
-    /// Use an orthographic projection.
-    #[arg(long)]
-    pub orthographic: bool,
-    /// Image size WxH.
-    #[arg(long, default_value = "512x512")]
-    pub size: String,
+    #[command(flatten)]
+    pub view_args: ViewArgs,
     /// Integrator: riemann, trapezoid, simpson (fixed step), adaptive-simpson (error
     /// control), preintegrated (table over front/back values), reference (f64 ground
     /// truth, slow); for tetrahedral meshes with --method raycast: exact or psi.
@@ -332,9 +292,6 @@ pub struct RenderArgs {
     /// Shading: light direction X,Y,Z (towards the light), or `headlight`.
     #[arg(long, allow_hyphen_values = true, default_value = "headlight")]
     pub light: String,
-    /// An isosurface VALUE:R,G,B,A (repeatable; grids: riemann integrator; PT: any colour).
-    #[arg(long = "iso", allow_hyphen_values = true)]
-    pub isos: Vec<String>,
     /// Maximum intensity projection.
     #[arg(long)]
     pub mip: bool,
@@ -344,19 +301,12 @@ pub struct RenderArgs {
     /// Integrate every ray to its end (no early ray termination).
     #[arg(long)]
     pub no_early_termination: bool,
-    /// Keep the half-space A*x + B*y + C*z + D >= 0, world coordinates (millimetres for
-    /// medical data); repeatable: the volume of interest is the data cut by every plane
-    /// (grids).
-    #[arg(
-        long = "clip-plane",
-        value_name = "A,B,C,D",
-        allow_hyphen_values = true
-    )]
-    pub clip_planes: Vec<String>,
-    /// Apply a sculpt mask saved by `volux sculpt` (NRRD or any grid format, the grid's
-    /// dims; non-zero voxels are kept, zero voxels removed) (grids).
-    #[arg(long, value_name = "MASK.nrrd")]
-    pub mask: Option<PathBuf>,
+    /// Measure on the visible surface, as `volux measure` does, and draw it: pixel X,Y
+    /// (at least two; a polyline in the order given) picked where the opacity along its ray
+    /// reaches 0.5 after the clip planes and the mask; the points and the polyline are drawn
+    /// on the picture and the length in world units (mm) is printed (grids).
+    #[arg(long = "measure", value_name = "X,Y", allow_hyphen_values = true)]
+    pub measure: Vec<String>,
     /// Write the per-pixel estimated integration error as a PNG (rays that missed the
     /// tolerance in magenta).
     #[arg(long)]
@@ -411,6 +361,74 @@ pub struct RenderArgs {
     /// that an option that would change nothing is refused rather than ignored.
     #[arg(skip)]
     pub given: Vec<String>,
+}
+
+/// The view options `volux render` and the sculpting commands share: the camera, the image
+/// size, the transfer function and isosurfaces, the clip planes and a sculpt mask (so that
+/// a pixel of `sculpt`, `measure` or `regions` is the pixel `render` draws with the same
+/// options).
+#[derive(Debug, Args, Clone)]
+pub struct ViewArgs {
+    /// Transfer function: a preset (auto, grayscale, ct-bone, ct-skin, ct-soft-tissue,
+    /// mr-default, viridis, inferno, cool-warm) or a file: Volux JSON, a ParaView preset or a
+    /// Slicer .vp (`volux help tf`); repeat it
+    /// to layer several, each optionally weighted as NAME:WEIGHT (`--tf ct-bone --tf
+    /// ct-skin:0.2`: bone under a faint skin) [default: auto].
+    #[arg(long)]
+    pub tf: Vec<String>,
+    /// Multiply the extinction of the transfer function.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
+    pub opacity_scale: f64,
+    /// Camera JSON file (look-at or orbit form); overrides the angle options.
+    #[arg(long)]
+    pub camera: Option<PathBuf>,
+    /// Orbit azimuth in degrees (default 0: looking along +y; thin slabs are seen along z).
+    #[arg(long, allow_hyphen_values = true)]
+    pub azimuth: Option<f64>,
+    /// Orbit elevation in degrees (default 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub elevation: Option<f64>,
+    /// A named view: front, back, left, right (the camera on -y, +y, -x, +x, z up), top,
+    /// bottom (on +z, -z, y up); --azimuth and --elevation turn from it. The world is LPS
+    /// (+x left, +y posterior, +z superior), scans placed by their orientation: front faces
+    /// the patient's face.
+    #[arg(long, value_enum)]
+    pub view: Option<ViewArg>,
+    /// Up direction X,Y,Z of the orbit camera (default 0,0,1; e.g. 0,0,-1 for scans stored
+    /// head down).
+    #[arg(long, allow_hyphen_values = true)]
+    pub up: Option<String>,
+    /// What the camera frames: `visible` (what the transfer function and isosurfaces show,
+    /// fitted to the image) or `all` (the whole bounding box, as a camera file sees it).
+    #[arg(long, value_enum, default_value_t = FrameArg::Visible)]
+    pub frame: FrameArg,
+    /// Zoom factor.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
+    pub zoom: f64,
+    /// Use an orthographic projection.
+    #[arg(long)]
+    pub orthographic: bool,
+    /// Image size WxH (for `sculpt`, `measure` and `regions`: the image the pixels refer
+    /// to).
+    #[arg(long, default_value = "512x512")]
+    pub size: String,
+    /// An isosurface VALUE:R,G,B,A (repeatable; grids: riemann integrator; PT: any colour).
+    #[arg(long = "iso", allow_hyphen_values = true)]
+    pub isos: Vec<String>,
+    /// Keep the half-space A*x + B*y + C*z + D >= 0, world coordinates (millimetres for
+    /// medical data); repeatable: the volume of interest is the data cut by every plane
+    /// (grids).
+    #[arg(
+        long = "clip-plane",
+        value_name = "A,B,C,D",
+        allow_hyphen_values = true
+    )]
+    pub clip_planes: Vec<String>,
+    /// A sculpt mask saved by `volux sculpt` (NRRD or any grid format, the grid's dims;
+    /// non-zero voxels are kept, zero voxels removed): `render` applies it, `sculpt`,
+    /// `measure` and `regions` start from it (grids).
+    #[arg(long, value_name = "MASK.nrrd")]
+    pub mask: Option<PathBuf>,
 }
 
 impl RenderArgs {
@@ -596,53 +614,8 @@ with `volux render FILE --mask MASK.nrrd` and the same view options.";
 pub struct ToolViewArgs {
     /// The grid file (or DICOM folder).
     pub file: PathBuf,
-    /// Camera JSON file (look-at or orbit form); overrides the angle options.
-    #[arg(long)]
-    pub camera: Option<PathBuf>,
-    /// Orbit azimuth in degrees (as `volux render`).
-    #[arg(long, allow_hyphen_values = true)]
-    pub azimuth: Option<f64>,
-    /// Orbit elevation in degrees.
-    #[arg(long, allow_hyphen_values = true)]
-    pub elevation: Option<f64>,
-    /// A named view (as `volux render`).
-    #[arg(long, value_enum)]
-    pub view: Option<ViewArg>,
-    /// Up direction X,Y,Z of the orbit camera.
-    #[arg(long, allow_hyphen_values = true)]
-    pub up: Option<String>,
-    /// What the camera frames: `visible` or `all` (as `volux render`).
-    #[arg(long, value_enum, default_value_t = FrameArg::Visible)]
-    pub frame: FrameArg,
-    /// Zoom factor.
-    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
-    pub zoom: f64,
-    /// Use an orthographic projection.
-    #[arg(long)]
-    pub orthographic: bool,
-    /// Image size WxH the pixels refer to.
-    #[arg(long, default_value = "512x512")]
-    pub size: String,
-    /// Transfer function (preset or file; repeatable, as `volux render`): picking finds
-    /// the surface it makes visible [default: auto].
-    #[arg(long)]
-    pub tf: Vec<String>,
-    /// Multiply the extinction of the transfer function.
-    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
-    pub opacity_scale: f64,
-    /// An isosurface VALUE:R,G,B,A (repeatable).
-    #[arg(long = "iso", allow_hyphen_values = true)]
-    pub isos: Vec<String>,
-    /// Keep the half-space A*x + B*y + C*z + D >= 0 (world coordinates; repeatable).
-    #[arg(
-        long = "clip-plane",
-        value_name = "A,B,C,D",
-        allow_hyphen_values = true
-    )]
-    pub clip_planes: Vec<String>,
-    /// Start from this sculpt mask (as written by `volux sculpt`; the grid's dims).
-    #[arg(long, value_name = "MASK.nrrd")]
-    pub mask: Option<PathBuf>,
+    #[command(flatten)]
+    pub view_args: ViewArgs,
     #[command(flatten)]
     pub load: LoadArgs,
 }
@@ -658,12 +631,7 @@ impl ToolViewArgs {
             .expect("the render defaults parse");
         let mut r = RenderArgs::from_arg_matches(&matches).expect("the render defaults parse");
         r.file = Some(self.file.clone());
-        r.camera = self.camera.clone();
-        (r.azimuth, r.elevation, r.view) = (self.azimuth, self.elevation, self.view);
-        (r.up, r.frame, r.zoom) = (self.up.clone(), self.frame, self.zoom);
-        (r.orthographic, r.size) = (self.orthographic, self.size.clone());
-        (r.tf, r.opacity_scale, r.isos) = (self.tf.clone(), self.opacity_scale, self.isos.clone());
-        r.clip_planes = self.clip_planes.clone();
+        r.view_args = self.view_args.clone();
         r.load = self.load.clone();
         r.given = given
             .iter()
@@ -773,4 +741,45 @@ pub struct RegionsArgs {
     /// The label volume written (NRRD, u8, 0: no label).
     #[arg(long, short, value_name = "LABELS.nrrd")]
     pub output: PathBuf,
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    use super::*;
+
+    /// The option `id` of `command`.
+    fn option<'a>(command: &'a clap::Command, id: &clap::Id) -> &'a clap::Arg {
+        command
+            .get_arguments()
+            .find(|a| a.get_id() == id)
+            .unwrap_or_else(|| panic!("{} has no {id}", command.get_name()))
+    }
+
+    /// `volux render` and the sculpting commands take the same view options: the same
+    /// flags, help texts and defaults, from one struct.
+    #[test]
+    fn render_and_the_sculpting_commands_share_the_view_options() {
+        let cli = Cli::command();
+        let view = ViewArgs::augment_args(clap::Command::new("view"));
+        let ids: Vec<_> = view.get_arguments().map(|a| a.get_id().clone()).collect();
+        assert_eq!(ids.len(), 14, "{ids:?}");
+        let render = cli.find_subcommand("render").unwrap();
+        for name in ["sculpt", "measure", "regions"] {
+            let tool = cli.find_subcommand(name).unwrap();
+            for id in &ids {
+                let (r, t) = (option(render, id), option(tool, id));
+                assert_eq!(r.get_long(), t.get_long(), "{name} {id}");
+                assert_eq!(r.get_help(), t.get_help(), "{name} {id}");
+                assert_eq!(
+                    r.get_default_values(),
+                    t.get_default_values(),
+                    "{name} {id}"
+                );
+            }
+        }
+        let size = option(render, &clap::Id::from("size"));
+        assert_eq!(size.get_default_values(), ["512x512"]);
+    }
 }

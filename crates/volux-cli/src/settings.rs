@@ -161,6 +161,7 @@ pub fn lighting(args: &RenderArgs) -> Result<BlinnPhong, CmdError> {
 /// The `--iso` options.
 pub fn isosurfaces(args: &RenderArgs) -> Result<Isosurfaces, CmdError> {
     let values = args
+        .view_args
         .isos
         .iter()
         .map(|s| parse_iso(s).map_err(|e| format!("--iso '{s}': {e}")))
@@ -300,12 +301,15 @@ pub fn method(args: &RenderArgs, volume: &Volume) -> Result<Method, CmdError> {
 /// The camera of the command line: `--camera FILE`, or the orbit options (`--view`,
 /// `--azimuth`, `--elevation`, `--up`, `--zoom`, `--orthographic`).
 pub fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
-    if let Some(p) = &args.camera {
+    if let Some(p) = &args.view_args.camera {
         let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
         return Ok(CameraSpec::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?);
     }
-    let (azimuth, up) = match args.view {
-        None => (None, args.up.as_deref().map(parse_up).transpose()?),
+    let (azimuth, up) = match args.view_args.view {
+        None => (
+            None,
+            args.view_args.up.as_deref().map(parse_up).transpose()?,
+        ),
         Some(v) => view_angles(v),
     };
     let turn = |a: Option<f64>, b: Option<f64>| match (a, b) {
@@ -314,17 +318,17 @@ pub fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
     };
     Ok(CameraSpec {
         projection: Some(
-            if args.orthographic {
+            if args.view_args.orthographic {
                 "orthographic"
             } else {
                 "perspective"
             }
             .into(),
         ),
-        azimuth: turn(azimuth, args.azimuth),
-        elevation: args.elevation,
+        azimuth: turn(azimuth, args.view_args.azimuth),
+        elevation: args.view_args.elevation,
         up,
-        zoom: Some(args.zoom),
+        zoom: Some(args.view_args.zoom),
         ..Default::default()
     })
 }
@@ -401,7 +405,7 @@ impl RenderPlan {
         if let Some(p) = &args.error_map {
             png_path(p, "--error-map")?;
         }
-        let size = parse_size(&args.size)?;
+        let size = parse_size(&args.view_args.size)?;
         let png = PngOptions {
             background: parse_background(&args.background)?,
             sixteen_bit: args.sixteen_bit,
@@ -427,13 +431,13 @@ impl RenderPlan {
         volume: &Volume,
         loaded_grid: bool,
     ) -> Result<Scene, CmdError> {
-        let tf = layered_tf(&args.tf, volume)?;
+        let tf = layered_tf(&args.view_args.tf, volume)?;
         let method = method(args, volume)?;
         let placeholder = self.camera.resolve(&volume.bounds())?;
         let mut scene = Scene::new(placeholder, self.size.0, self.size.1, tf);
         scene.method = method;
         let a = &mut scene.appearance;
-        a.opacity_scale = args.opacity_scale;
+        a.opacity_scale = args.view_args.opacity_scale;
         a.lighting = self.lighting;
         a.shade_volume = args.shade;
         a.isosurfaces = self.isosurfaces.clone();
@@ -442,6 +446,7 @@ impl RenderPlan {
             scene.early_termination = None;
         }
         scene.clip_planes = args
+            .view_args
             .clip_planes
             .iter()
             .map(|s| parse_clip_plane(s))
@@ -462,13 +467,13 @@ impl RenderPlan {
         volume: &Volume,
         scene: &Scene,
     ) -> Result<Camera, CmdError> {
-        let bounds = match args.frame {
+        let bounds = match args.view_args.frame {
             FrameArg::All => volume.bounds(),
             FrameArg::Visible => {
                 visible_bounds(volume, &scene.appearance).unwrap_or_else(|_| volume.bounds())
             }
         };
-        if args.camera.is_some() {
+        if args.view_args.camera.is_some() {
             return Ok(self.camera.resolve(&bounds)?);
         }
         let unzoomed = CameraSpec {
@@ -477,7 +482,7 @@ impl RenderPlan {
         };
         let camera = unzoomed.resolve(&bounds)?;
         let aspect = self.size.0 as f64 / self.size.1 as f64;
-        Ok(fit_to_box(&camera, &bounds, aspect, args.zoom))
+        Ok(fit_to_box(&camera, &bounds, aspect, args.view_args.zoom))
     }
 }
 

@@ -2,7 +2,8 @@
 //! commands" block runs (from the repository root, as a user would) into a temporary file,
 //! which must match the committed picture it names (the tolerance of
 //! [`common::png_close`]). A command whose shared dataset is absent is skipped with a
-//! message. `VOLUX_UPDATE_GALLERY=1` rewrites the pictures after a deliberate change.
+//! message. `VOLUX_UPDATE_GALLERY=1` rewrites the pictures after a deliberate change. A
+//! command that measures (`--measure`) must print the length the README states.
 use std::path::{Path, PathBuf};
 
 mod common;
@@ -28,6 +29,24 @@ fn gallery_commands() -> Vec<Vec<String>> {
         .filter(|l| l.starts_with("volux "))
         .map(|l| l.split_whitespace().skip(1).map(str::to_string).collect())
         .collect()
+}
+
+/// A measured picture's length, printed by its command, is the one the README states (to
+/// 0.1 mm).
+fn the_readme_states_the_length(picture: &str, stdout: &str) {
+    let length: f64 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("length: "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{picture}: no length printed in {stdout:?}"));
+    let stated = format!("{length:.1} mm");
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    assert!(
+        readme.contains(&stated),
+        "{picture}: the command measures {stated}, which the README does not state"
+    );
+    eprintln!("{picture}: measured {stated}");
 }
 
 #[test]
@@ -62,6 +81,9 @@ fn every_gallery_picture_is_made_by_its_command() {
             "{picture}: {}",
             String::from_utf8_lossy(&run.stderr)
         );
+        if args.iter().any(|a| a == "--measure") {
+            the_readme_states_the_length(&picture, &String::from_utf8_lossy(&run.stdout));
+        }
         let committed = root().join(&picture);
         if update {
             std::fs::copy(&out, &committed).unwrap();

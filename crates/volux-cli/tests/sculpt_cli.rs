@@ -433,6 +433,65 @@ fn bad_input_is_one_line_and_writes_nothing() {
             vec!["mesh.vtet", "--mask", "small.nrrd", "-o", "out.png"],
             "--mask applies to grids",
         ),
+        (
+            "render",
+            view("ortho.json", &["--measure", "80,60", "-o", "out.png"]),
+            "at least two --measure",
+        ),
+        (
+            "render",
+            view(
+                "ortho.json",
+                &["--measure", "80,60", "--measure", "2,2", "-o", "out.png"],
+            ),
+            "--measure 2,2: pixel (2, 2) shows no visible surface",
+        ),
+        (
+            "render",
+            view(
+                "ortho.json",
+                &["--measure", "80,60", "--measure", "80,600", "-o", "out.png"],
+            ),
+            "lies outside the 160x120 image",
+        ),
+        (
+            "render",
+            view(
+                "ortho.json",
+                &["--measure", "80,60", "--measure", "x", "-o", "out.png"],
+            ),
+            "--measure 'x': expected X,Y",
+        ),
+        (
+            "render",
+            vec![
+                "mesh.vtet",
+                "--measure",
+                "1,1",
+                "--measure",
+                "2,2",
+                "-o",
+                "out.png",
+            ],
+            "--measure picks on grids",
+        ),
+        (
+            "render",
+            view(
+                "ortho.json",
+                &[
+                    "--measure",
+                    "80,60",
+                    "--measure",
+                    "90,60",
+                    "--orbit",
+                    "3",
+                    "-o",
+                    "out.png",
+                ],
+            ),
+            "--measure draws on one picture",
+        ),
     ];
     for (command, args, expected) in cases {
         let out = run(command, &args, d);
@@ -447,5 +506,52 @@ fn bad_input_is_one_line_and_writes_nothing() {
         for stray in ["out.nrrd", "out.png"] {
             assert!(!d.join(stray).exists(), "{command} {args:?} wrote {stray}");
         }
+    }
+}
+
+/// `render --measure` prints the length `volux measure` prints for the same pixels and view,
+/// and draws the line between them on the picture (yellow over the white box), leaving
+/// pixels away from it as they were.
+#[test]
+fn render_measure_draws_the_line_and_prints_the_length() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    inputs(d);
+    let Projection::Orthographic { height } = camera(d, "ortho.json").projection else {
+        panic!("an orthographic camera")
+    };
+    // Two points 2 mm either side of the centre, on the box's front face.
+    let half = (2.0 / (height / SIZE.1 as f64)).round() as usize;
+    let (x0, x1) = (SIZE.0 / 2 - half, SIZE.0 / 2 + half);
+    let (a, b) = (format!("{x0}.5,60.5"), format!("{x1}.5,60.5"));
+    let (a, b) = (a.as_str(), b.as_str());
+    let measured = ok(&run(
+        "measure",
+        &view("ortho.json", &["--point", a, "--point", b]),
+        d,
+    ));
+    let rest = ["--measure", a, "--measure", b, "-o", "m.png"];
+    let printed = ok(&run("render", &view("ortho.json", &rest), d));
+    assert_eq!(
+        printed, measured,
+        "render --measure prints what measure prints"
+    );
+    ok(&run("render", &view("ortho.json", &["-o", "plain.png"]), d));
+    let (w, _, marked) = png_pixels(&d.join("m.png"));
+    let (_, _, plain) = png_pixels(&d.join("plain.png"));
+    let at = |px: &[Vec<u8>], x: usize, y: usize| px[y * w as usize + x].clone();
+    assert!(x1 - x0 > 10, "a line of {} pixels", x1 - x0);
+    for x in x0..=x1 {
+        let p = at(&marked, x, 60);
+        assert!(p[0] > 200 && p[1] > 150 && p[2] < 120, "({x}, 60) is {p:?}");
+        assert_eq!(at(&plain, x, 60)[2], 255, "the box is white under the line");
+    }
+    let off = [(80, 50), (80, 70), (x0 - 8, 60), (x1 + 8, 60), (5, 5)];
+    for (x, y) in off {
+        assert_eq!(
+            at(&marked, x, y),
+            at(&plain, x, y),
+            "({x}, {y}) is off the line"
+        );
     }
 }

@@ -226,6 +226,7 @@ impl ViewerApp {
     /// Takes the results of finished background jobs.
     pub(crate) fn poll_jobs(&mut self) {
         self.poll_sculpt_jobs();
+        self.update_label_colours();
         if let Some(job) = &mut self.load_job {
             if let Poll::Done(r) = job.poll() {
                 self.load_job = None;
@@ -392,6 +393,7 @@ impl ViewerApp {
         if let Some(s) = &self.sculpt {
             s.apply_to(&mut scene);
         }
+        scene.labels = self.scene_labels(&scene);
         scene
     }
 
@@ -478,6 +480,11 @@ impl ViewerApp {
     /// The scene of the frame on screen.
     pub fn shown_scene(&self) -> Option<&Scene> {
         self.shown.as_ref().map(|s| &s.frame.scene)
+    }
+
+    /// The rendered image of the frame on screen (premultiplied linear RGBA).
+    pub fn shown_image(&self) -> Option<&volux_core::Image> {
+        self.shown.as_ref().map(|s| &s.frame.image)
     }
 
     /// Frames per second over the last frames shown.

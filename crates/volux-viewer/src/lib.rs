@@ -38,6 +38,7 @@ pub mod plane_handle;
 pub mod render_service;
 pub mod sculpt_actions;
 pub mod sculpt_exports;
+pub mod sculpt_labels;
 pub mod sculpt_panel;
 pub mod sculpt_state;
 pub mod sculpt_tools;

@@ -1,13 +1,15 @@
 //! The Sculpt section of the settings panel (seed `004_*.txt` ch. 4-6): undo and redo, the
 //! tool modes and their radius, the clipping planes (sec. 4.3: offset from the data's centre,
 //! the normal's azimuth and elevation, remove, add), the measured lengths (sec. 6.2), the
-//! labelling seeds' label and colour with their counts (sec. 6.2), and the exports.
+//! labelling seeds' label and colour with their counts and "Colour by labels" (sec. 6.2),
+//! and the exports.
 use eframe::egui;
 use glam::DVec3;
 use volux_core::voi::ClipPlane;
 
 use crate::app::ViewerApp;
 use crate::file_dialog::Purpose;
+use crate::sculpt_labels::LabelColours;
 use crate::sculpt_state::Tool;
 
 /// Draws the section.
@@ -223,12 +225,29 @@ fn labels(app: &mut ViewerApp, ui: &mut egui::Ui) {
             ui.spinner();
         }
     });
+    colour_by_labels(app, ui);
     if let Some(counts) = &app.tools.label_counts {
         for (label, count) in counts {
             ui.small(format!("label {label}: {count} voxels"));
         }
         if counts.is_empty() {
             ui.small("no visible voxel is labelled");
+        }
+    }
+}
+
+/// The "Colour by labels" checkbox, and why the rendering shows no labels when it cannot.
+fn colour_by_labels(app: &mut ViewerApp, ui: &mut egui::Ui) {
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut app.tools.label_colours.on, "Colour by labels")
+            .on_hover_text("the visible voxels take the colour of their nearest seed");
+        if app.tools.label_colours.on && app.tools.label_colours.computing() {
+            ui.spinner();
+        }
+    });
+    if app.tools.label_colours.on {
+        if let Some(why) = LabelColours::not_drawn(&app.render_scene()) {
+            ui.small(why);
         }
     }
 }

@@ -5,6 +5,7 @@
 use eframe::egui;
 
 use crate::jobs::Job;
+use crate::sculpt_labels::LabelColours;
 
 /// What a left click or drag does in the 3D view.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -83,6 +84,8 @@ pub struct SculptTools {
     pub plane_gesture: Option<usize>,
     /// The plane whose tilt handle is being dragged, and whether it moved yet.
     pub handle_drag: Option<(usize, bool)>,
+    /// "Colour by labels" and its label volume.
+    pub label_colours: LabelColours,
 }
 
 impl Default for SculptTools {
@@ -98,6 +101,7 @@ impl Default for SculptTools {
             labels_job: None,
             plane_gesture: None,
             handle_drag: None,
+            label_colours: LabelColours::default(),
         }
     }
 }

@@ -21,7 +21,11 @@ pub fn frame(app: &mut ViewerApp, ctx: &egui::Context) {
     crate::view3d::show(app, ctx);
     app.submit_if_changed();
     app.finish_screenshot(ctx);
-    if app.busy() || app.export_job.is_some() || app.tools.labels_job.is_some() {
+    if app.busy()
+        || app.export_job.is_some()
+        || app.tools.labels_job.is_some()
+        || app.tools.label_colours.computing()
+    {
         ctx.request_repaint_after(Duration::from_millis(100));
     }
 }

@@ -487,6 +487,97 @@ fn label_clicks_and_compute_labels_count_voxels() {
     assert_eq!(exported[1..], [counts[0].1, counts[1].1]);
 }
 
+/// The straight (unpremultiplied) colour of the shown image at the screen point `pos`.
+fn shown_colour(h: &Harness<'static, App>, pos: Pos2) -> [f32; 3] {
+    let a = app(h);
+    let [x, y] = volux_viewer::sculpt_tools::image_pixel(a, a.view_rect, pos);
+    let image = a.shown_image().expect("a frame on screen");
+    let p = image.get(x as usize, y as usize);
+    assert!(p[3] > 0.2, "the data shows at {pos:?}: {p:?}");
+    [p[0] / p[3], p[1] / p[3], p[2] / p[3]]
+}
+
+/// Whether `c` has the hue of `label`: its largest channel is the label's, by a wide margin.
+fn has_hue(c: [f32; 3], label: [f32; 3]) -> bool {
+    let top = |v: [f32; 3]| (0..3).max_by(|&i, &j| v[i].total_cmp(&v[j])).unwrap();
+    let k = top(label);
+    k == top(c) && (0..3).all(|i| i == k || c[i] < 0.6 * c[k])
+}
+
+/// Label seeds colour the rendering in their labels' colours ("Colour by labels" turns on
+/// with the first seed); turning it off brings the transfer function's colours back.
+#[test]
+fn label_seeds_colour_the_rendering_until_turned_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let before = app(&h).shown_image().unwrap().clone();
+    app_mut(&mut h).tools.tool = volux_viewer::sculpt_state::Tool::Label;
+    let c = app(&h).view_rect.center();
+    let (left, right) = (c - egui::vec2(40.0, 0.0), c + egui::vec2(40.0, 0.0));
+    let (red, blue) = ([0.9, 0.1, 0.1], [0.1, 0.2, 0.95]);
+    app_mut(&mut h).tools.colour = red;
+    click(&mut h, left, egui::Modifiers::NONE);
+    assert!(app(&h).tools.label_colours.on, "on with the first seed");
+    app_mut(&mut h).tools.label = 2;
+    app_mut(&mut h).tools.colour = blue;
+    click(&mut h, right, egui::Modifiers::NONE);
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    step_until(&mut h, "a frame coloured by two seeds' labels", |a| {
+        let seeds = a.sculpt.as_ref().unwrap().label_seeds().len();
+        !a.tools.label_colours.computing()
+            && a.shown_full()
+            && a.shown_scene().and_then(|s| s.labels.as_ref()).is_some()
+            && seeds == 2
+    });
+    let near = |p: Pos2| p + egui::vec2(0.0, 3.0);
+    for (pos, colour) in [(left, red), (right, blue)] {
+        let tf_colour = {
+            let [x, y] =
+                volux_viewer::sculpt_tools::image_pixel(app(&h), app(&h).view_rect, near(pos));
+            let p = before.get(x as usize, y as usize);
+            [p[0] / p[3], p[1] / p[3], p[2] / p[3]]
+        };
+        assert!(
+            !has_hue(tf_colour, colour),
+            "the TF alone is not {colour:?}: {tf_colour:?}"
+        );
+        let shown = shown_colour(&h, near(pos));
+        assert!(
+            has_hue(shown, colour),
+            "near the seed {shown:?}, label {colour:?}"
+        );
+    }
+    // Frames without a change compute nothing again.
+    let first = app(&h).render_scene().labels.unwrap();
+    for _ in 0..5 {
+        h.step();
+    }
+    assert!(!app(&h).tools.label_colours.computing(), "computed again");
+    assert!(std::sync::Arc::ptr_eq(
+        &first,
+        &app(&h).render_scene().labels.unwrap()
+    ));
+    // MIP draws no labels, and the panel says so.
+    app_mut(&mut h).scene.appearance.mip = true;
+    h.step();
+    assert!(app(&h).render_scene().labels.is_none());
+    let why = "labels colour the composited rendering; MIP shows the TF's colours";
+    assert!(h.query_by_label(why).is_some(), "the panel says {why}");
+    app_mut(&mut h).scene.appearance.mip = false;
+    h.step();
+    assert!(app(&h).render_scene().labels.is_some());
+    h.get_by_label("Colour by labels").click_accesskit();
+    h.step();
+    assert!(!app(&h).tools.label_colours.on);
+    step_until(&mut h, "a frame without labels", |a| {
+        a.shown_full() && a.shown_scene().is_some_and(|s| s.labels.is_none())
+    });
+    let after = app(&h).shown_image().unwrap();
+    let diff = after.compare(&before, 1e-3).unwrap();
+    assert!(diff.max_error < 1e-5, "the TF's colours again: {diff:?}");
+}
+
 /// A session with sculpt steps reopens to the same mask and planes; the exported mask reads
 /// back with the data's geometry.
 #[test]

@@ -2,13 +2,17 @@
 //! pixel is picked where the opacity along its ray reaches 0.5 (after the clip planes and
 //! the mask), and the polyline through the points is measured in world units: millimetres
 //! from the data's spacing, not texture space (the seed's sec. 4.5.1 flaw).
+//! `volux render --measure` measures the same way in the scene it renders and draws the
+//! points and the polyline on the picture ([`Drawn`]).
 use glam::DVec3;
 use serde_json::json;
-use volux_render::sculpt::polyline_length;
+use volux_core::Image;
+use volux_render::scene::{Scene, Volume};
+use volux_render::sculpt::{pick, polyline_length, DEFAULT_PICK_OPACITY};
 
 use super::common::CmdError;
 use super::workbench::{self, Workbench};
-use crate::cli::MeasureArgs;
+use crate::cli::{MeasureArgs, RenderArgs};
 
 /// Runs `volux measure`.
 pub fn run(args: &MeasureArgs, given: &[String], show: bool) -> Result<(), CmdError> {
@@ -53,4 +57,70 @@ fn print_text(pixels: &[[f64; 2]], points: &[DVec3], length: f64) {
         points.len() - 1,
         if points.len() == 2 { "" } else { "s" }
     );
+}
+
+/// A measurement of `volux render --measure`: the pixels given, the surface points picked
+/// under them, and the polyline's length.
+pub struct Drawn {
+    /// The pixels, continuous coordinates.
+    pixels: Vec<[f64; 2]>,
+    /// The world points picked.
+    points: Vec<DVec3>,
+    /// The polyline's length, world units.
+    length: f64,
+}
+
+/// The line's width, the discs' radius (pixels) and their colour (linear RGB: a warm
+/// yellow that stands out from bone, skin and the usual colour maps).
+const LINE_WIDTH: f64 = 2.5;
+const DISC_RADIUS: f64 = 4.0;
+const MARK_RGB: [f32; 3] = [1.0, 0.78, 0.05];
+
+impl Drawn {
+    /// Measures `args.measure` in `scene` (clip planes and mask included) on `volume`, a
+    /// grid loaded as such (`loaded_grid`); `None` when no `--measure` was given.
+    pub fn pick(
+        args: &RenderArgs,
+        volume: &Volume,
+        scene: &Scene,
+        loaded_grid: bool,
+    ) -> Result<Option<Self>, CmdError> {
+        if args.measure.is_empty() {
+            return Ok(None);
+        }
+        let (Volume::Grid(grid), true) = (volume, loaded_grid) else {
+            return Err("--measure picks on grids; this render draws a tetrahedral mesh".into());
+        };
+        if args.measure.len() < 2 {
+            return Err("give at least two --measure X,Y to measure between".into());
+        }
+        let size = (scene.view.width, scene.view.height);
+        let mut pixels = Vec::with_capacity(args.measure.len());
+        let mut points = Vec::with_capacity(args.measure.len());
+        for typed in &args.measure {
+            let what = format!("--measure {typed}");
+            let pixel = workbench::pixel("measure", typed)?;
+            workbench::in_image(&what, pixel, size)?;
+            let hit = pick(grid, scene, (pixel[0], pixel[1]), DEFAULT_PICK_OPACITY)?
+                .ok_or_else(|| workbench::no_surface(&what, pixel))?;
+            pixels.push(pixel);
+            points.push(hit.world);
+        }
+        let length = polyline_length(&points);
+        Ok(Some(Self {
+            pixels,
+            points,
+            length,
+        }))
+    }
+
+    /// Draws the points and the polyline on `image`.
+    pub fn draw(&self, image: &mut Image) {
+        image.draw_marked_polyline(&self.pixels, LINE_WIDTH, DISC_RADIUS, MARK_RGB);
+    }
+
+    /// Prints the points and the length on stdout, as `volux measure` does.
+    pub fn print(&self) {
+        print_text(&self.pixels, &self.points, self.length);
+    }
 }

@@ -31,14 +31,18 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let loaded_grid = matches!(data, Dataset::Grid(_));
     let volume = crate::settings::volume(data, args)?;
     let mut scene = plan.scene(args, &volume, loaded_grid)?;
-    if let Some(mask) = &args.mask {
+    if let Some(mask) = &args.view_args.mask {
         super::workbench::add_mask(mask, &volume, file, &mut scene)?;
     }
+    let measured = super::measure::Drawn::pick(args, &volume, &scene, loaded_grid)?;
     let invisible = warn_invisible(&volume, &scene, format);
     if let Some(spec) = &args.orbit {
         return super::orbit::run(args, spec, &volume, &scene, &plan.png);
     }
-    let frame = render(&volume, &scene, show)?;
+    let mut frame = render(&volume, &scene, show)?;
+    if let Some(m) = &measured {
+        m.draw(&mut frame.image);
+    }
     if !invisible && frame.image.coverage(0.0) == 0.0 {
         warn("the image is empty: no ray met a visible sample (check the camera)");
     }
@@ -50,6 +54,9 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
         .map_err(|e| format!("{}: {e}", output.display()))?;
     if let Some(path) = &args.error_map {
         write_error_map(&frame, args.tol, plan.size, path)?;
+    }
+    if let Some(m) = &measured {
+        m.print();
     }
     report::frame(args, &frame, &scene, &volume);
     let note = if replaced {

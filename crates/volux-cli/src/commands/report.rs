@@ -182,7 +182,7 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
             "bytes_per_tet": s.bytes_per_tet,
             "color": colour,
             "integrator": mode,
-            "isosurfaces": args.isos.len(),
+            "isosurfaces": args.view_args.isos.len(),
             "mip": args.mip,
         });
         print_json(args, v);

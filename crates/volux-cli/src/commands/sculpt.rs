@@ -21,7 +21,7 @@ enum Tool {
 /// Runs `volux sculpt`.
 pub fn run(args: &SculptArgs, given: &[String], show: bool) -> Result<(), CmdError> {
     workbench::nrrd_path(&args.output, "--output")?;
-    if args.session_out.is_some() && args.view.mask.is_some() {
+    if args.session_out.is_some() && args.view.view_args.mask.is_some() {
         return Err(
             "--session-out saves the sculpt steps, not the starting --mask; \
                     give one or the other"

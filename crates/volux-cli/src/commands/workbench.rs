@@ -49,7 +49,7 @@ impl Workbench {
         for plane in std::mem::take(&mut scene.clip_planes) {
             sculpt.apply(SculptStep::AddPlane { plane })?;
         }
-        if let Some(path) = &view.mask {
+        if let Some(path) = &view.view_args.mask {
             sculpt = sculpt.with_mask(read_mask(path, &grid, &view.file)?)?;
         }
         Ok(Self {
