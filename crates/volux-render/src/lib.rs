@@ -63,12 +63,18 @@
 //!   the visible surface, label colouring, and the sculpt state (planes, eraser strokes, digs,
 //!   measurement and label picks) with undo, redo and replayable steps.
 //!
+//! ## Volumes larger than memory (seed `003`)
+//!
+//! - [`bricked`]: a chunked pyramid rendered level by level through a bounded brick cache,
+//!   sampled exactly across brick faces, equal to the in-core image.
+//!
 //! `docs/seeds.md` in the repository says which seed document each number names.
 #![deny(missing_docs)]
 // One `unsafe` block, proven by a benchmark: the lane sampler's unchecked corner loads
 // (`sampling::Trilinear::interpolate4`, with the argument for their soundness).
 #![deny(unsafe_code)]
 
+pub mod bricked;
 pub mod classify;
 #[cfg(test)]
 mod clip_tests;

@@ -1,0 +1,220 @@
+//! The brick cache: the chunks of one level resident in memory, within a byte budget, evicted
+//! least recently used first. Readers never wait for each other's decompression: a miss reads
+//! and decodes its chunk without the lock (two threads missing the same chunk may both read
+//! it; the first to finish is kept), and only the bookkeeping is locked.
+use std::collections::{BTreeMap, HashMap};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use volux_core::bricked::{ChunkLayout, ChunkSource};
+use volux_core::grid::{Samples, Scalar};
+
+/// One resident chunk: its samples as f32 (the renderer's sample type), and where it sits.
+#[derive(Debug)]
+pub struct Brick {
+    /// The chunk's first sample (grid coordinates).
+    pub lo: [usize; 3],
+    /// Samples per axis (the chunk's shape clipped to the grid).
+    pub size: [usize; 3],
+    /// The samples, x fastest.
+    pub values: Vec<f32>,
+    /// The smallest and largest sample (NaN ignored; infinite when none is finite).
+    pub range: [f32; 2],
+}
+
+impl Brick {
+    /// The brick of chunk `c` of `layout` from its samples `s`, checked against the chunk's
+    /// size.
+    fn new(layout: &ChunkLayout, c: [usize; 3], s: &Samples) -> Result<Self, String> {
+        let (lo, size) = layout.chunk_extent(c);
+        let expected: usize = size.iter().product();
+        if s.len() != expected {
+            return Err(format!(
+                "chunk {c:?} holds {} samples where its shape {size:?} needs {expected}",
+                s.len()
+            ));
+        }
+        let values: Vec<f32> =
+            volux_core::with_samples!(s, |v| v.iter().map(|x| x.to_f32()).collect());
+        let range = values
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold([f32::INFINITY, f32::NEG_INFINITY], |r, &v| {
+                [r[0].min(v), r[1].max(v)]
+            });
+        Ok(Self {
+            lo,
+            size,
+            values,
+            range,
+        })
+    }
+
+    /// Bytes the brick holds.
+    pub fn bytes(&self) -> u64 {
+        (self.values.len() * std::mem::size_of::<f32>()) as u64
+    }
+
+    /// The sample at grid coordinates (`i`, `j`, `k`), which must lie in the brick.
+    #[inline(always)]
+    pub fn at(&self, i: usize, j: usize, k: usize) -> f32 {
+        let (x, y, z) = (i - self.lo[0], j - self.lo[1], k - self.lo[2]);
+        self.values[x + self.size[0] * (y + self.size[1] * z)]
+    }
+}
+
+/// What a cache did: hits, misses (chunks read), bytes decoded and evictions.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CacheStats {
+    /// Lookups answered from memory.
+    pub hits: u64,
+    /// Chunks read from the source.
+    pub misses: u64,
+    /// Bytes of f32 samples decoded from those chunks.
+    pub bytes_read: u64,
+    /// Chunks evicted to stay within the budget.
+    pub evictions: u64,
+    /// The most bytes resident at once.
+    pub peak_bytes: u64,
+}
+
+impl CacheStats {
+    /// Hits over lookups (1 when there was none).
+    pub fn hit_rate(&self) -> f64 {
+        let lookups = self.hits + self.misses;
+        if lookups == 0 {
+            1.0
+        } else {
+            self.hits as f64 / lookups as f64
+        }
+    }
+}
+
+/// The bookkeeping under the lock: resident bricks with their last use, in use order.
+#[derive(Default)]
+struct Resident {
+    bricks: HashMap<usize, (Arc<Brick>, u64)>,
+    by_use: BTreeMap<u64, usize>,
+    bytes: u64,
+    clock: u64,
+}
+
+/// The resident chunks of one level within `budget` bytes (at least one brick is always
+/// kept, whatever the budget: a brick in use is held by its reader).
+pub struct BrickCache {
+    source: Arc<dyn ChunkSource>,
+    budget: u64,
+    resident: Mutex<Resident>,
+    hits: AtomicU64,
+    misses: AtomicU64,
+    bytes_read: AtomicU64,
+    evictions: AtomicU64,
+    peak: AtomicU64,
+}
+
+impl BrickCache {
+    /// A cache of `source`'s chunks within `budget` bytes.
+    pub fn new(source: Arc<dyn ChunkSource>, budget: u64) -> Self {
+        Self {
+            source,
+            budget,
+            resident: Mutex::new(Resident::default()),
+            hits: AtomicU64::new(0),
+            misses: AtomicU64::new(0),
+            bytes_read: AtomicU64::new(0),
+            evictions: AtomicU64::new(0),
+            peak: AtomicU64::new(0),
+        }
+    }
+
+    /// The level's geometry.
+    pub fn layout(&self) -> &ChunkLayout {
+        self.source.layout()
+    }
+
+    /// The level read chunk by chunk.
+    pub fn source(&self) -> &Arc<dyn ChunkSource> {
+        &self.source
+    }
+
+    /// The byte budget.
+    pub fn budget(&self) -> u64 {
+        self.budget
+    }
+
+    /// The figures so far.
+    pub fn stats(&self) -> CacheStats {
+        CacheStats {
+            hits: self.hits.load(Ordering::Relaxed),
+            misses: self.misses.load(Ordering::Relaxed),
+            bytes_read: self.bytes_read.load(Ordering::Relaxed),
+            evictions: self.evictions.load(Ordering::Relaxed),
+            peak_bytes: self.peak.load(Ordering::Relaxed),
+        }
+    }
+
+    /// Bytes resident now.
+    pub fn resident_bytes(&self) -> u64 {
+        self.lock().bytes
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Resident> {
+        // A panic while holding the lock leaves consistent maps (no update is half done).
+        self.resident.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The brick of chunk `c`, read from the source on a miss (the least recently used
+    /// bricks are evicted to make room). Errors name the chunk.
+    pub fn get(&self, c: [usize; 3]) -> Result<Arc<Brick>, String> {
+        let index = self.layout().chunk_index(c);
+        {
+            let mut r = self.lock();
+            r.clock += 1;
+            let now = r.clock;
+            if let Some((brick, used)) = r.bricks.get_mut(&index) {
+                let (brick, old) = (brick.clone(), std::mem::replace(used, now));
+                r.by_use.remove(&old);
+                r.by_use.insert(now, index);
+                self.hits.fetch_add(1, Ordering::Relaxed);
+                return Ok(brick);
+            }
+        }
+        let samples = self
+            .source
+            .read_chunk(c)
+            .map_err(|e| format!("chunk {c:?}: {e}"))?;
+        let brick = Arc::new(Brick::new(self.layout(), c, &samples)?);
+        drop(samples);
+        self.misses.fetch_add(1, Ordering::Relaxed);
+        self.bytes_read.fetch_add(brick.bytes(), Ordering::Relaxed);
+        Ok(self.insert(index, brick))
+    }
+
+    /// Makes `brick` resident as chunk `index` (or returns the one another reader made
+    /// resident meanwhile), evicting the least recently used others beyond the budget.
+    fn insert(&self, index: usize, brick: Arc<Brick>) -> Arc<Brick> {
+        let mut r = self.lock();
+        r.clock += 1;
+        let now = r.clock;
+        if let Some((kept, used)) = r.bricks.get_mut(&index) {
+            let (kept, old) = (kept.clone(), std::mem::replace(used, now));
+            r.by_use.remove(&old);
+            r.by_use.insert(now, index);
+            return kept;
+        }
+        r.bytes += brick.bytes();
+        r.bricks.insert(index, (brick.clone(), now));
+        r.by_use.insert(now, index);
+        while r.bytes > self.budget && r.bricks.len() > 1 {
+            let Some((_, victim)) = r.by_use.pop_first() else {
+                break;
+            };
+            if let Some((b, _)) = r.bricks.remove(&victim) {
+                r.bytes -= b.bytes();
+                self.evictions.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+        self.peak.fetch_max(r.bytes, Ordering::Relaxed);
+        brick
+    }
+}

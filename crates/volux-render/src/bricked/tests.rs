@@ -1,0 +1,288 @@
+//! Bricked rendering against in-core rendering of the same data: every integrator, odd sizes
+//! not divisible by the chunk, anisotropic spacing, budgets of a few bricks that force
+//! evictions within a frame, a brick face crossed at a grazing angle, and chunks that cannot
+//! be read.
+use std::sync::Arc;
+
+use volux_core::bricked::{ChunkLayout, ChunkSource, GridChunks, Multiscale};
+use volux_core::grid::{Buffer, Samples};
+use volux_core::{CameraSpec, Grid, TransferFunction};
+
+use super::*;
+use crate::integrate::{AdaptiveParams, Integrator, StepControl};
+use crate::isosurface::{Isosurfaces, Isovalue};
+use crate::raycast::{render_field, render_grid, Placement, RenderOptions};
+use crate::sampling::Trilinear;
+use crate::shading::BlinnPhong;
+
+const DIMS: [usize; 3] = [23, 17, 13];
+const CHUNK: [usize; 3] = [8, 5, 4];
+
+/// A smooth field with structure in every brick, anisotropic spacing, an offset origin.
+fn grid() -> Grid {
+    let [nx, ny, nz] = DIMS;
+    let mut v = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let (x, y, z) = (i as f32 / 22.0, j as f32 / 16.0, k as f32 / 12.0);
+                let r = ((x - 0.5).powi(2) + (y - 0.45).powi(2) + (z - 0.55).powi(2)).sqrt();
+                v.push(100.0 * (1.0 - r) + 20.0 * (7.0 * x).sin() * (5.0 * y).cos());
+            }
+        }
+    }
+    Grid::new(
+        DIMS,
+        [0.8, 1.1, 1.7],
+        [-3.0, 2.0, 5.0],
+        Samples::F32(Buffer::owned(v)),
+    )
+    .unwrap()
+}
+
+fn tf() -> TransferFunction {
+    TransferFunction::from_json(
+        r#"{"color": [[40,0.2,0.4,1],[70,1,0.8,0.3],[110,1,1,1]],
+            "extinction": [[40,0],[60,0.08],[75,0.3],[90,0.05],[110,0.4]]}"#,
+    )
+    .unwrap()
+}
+
+fn volume(g: &Grid, budget: u64) -> BrickedVolume {
+    let chunks = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
+    let ms = Multiscale::new("test", vec![Arc::new(chunks) as Arc<dyn ChunkSource>]).unwrap();
+    BrickedVolume::new(ms, budget)
+}
+
+fn options(g: &Grid, spec: &str) -> RenderOptions {
+    let cam = CameraSpec::from_json(spec)
+        .unwrap()
+        .resolve(&g.bounds())
+        .unwrap();
+    let mut o = RenderOptions::new(cam, tf());
+    (o.width, o.height) = (40, 36);
+    o
+}
+
+/// The largest difference of any channel of any pixel.
+fn max_diff(a: &volux_core::Image, b: &volux_core::Image) -> f32 {
+    let mut d = 0.0f32;
+    for y in 0..a.height() {
+        for x in 0..a.width() {
+            for c in 0..4 {
+                d = d.max((a.get(x, y)[c] - b.get(x, y)[c]).abs());
+            }
+        }
+    }
+    d
+}
+
+fn integrators() -> Vec<Integrator> {
+    let adaptive = AdaptiveParams {
+        tol: 1e-3,
+        h0: 0.3,
+        hmin: 0.02,
+        hmax: 1.0,
+        control: StepControl::Coupled,
+        early_termination: None,
+    };
+    vec![
+        Integrator::Riemann { step: 0.4 },
+        Integrator::Trapezoid { step: 0.4 },
+        Integrator::Simpson { step: 0.5 },
+        Integrator::Preintegrated { step: 0.4 },
+        Integrator::AdaptiveSimpson(adaptive),
+        Integrator::AdaptiveSimpson(AdaptiveParams {
+            control: StepControl::Decoupled,
+            ..adaptive
+        }),
+        Integrator::Reference,
+    ]
+}
+
+#[test]
+fn every_integrator_equals_the_in_core_render_with_evictions_within_the_frame() {
+    let g = grid();
+    let Samples::F32(values) = g.samples() else {
+        unreachable!()
+    };
+    let incore = Trilinear::new(values.as_slice(), DIMS);
+    // Three bricks of 8x5x4 f32: every frame evicts.
+    let small = volume(&g, 3 * 8 * 5 * 4 * 4);
+    let roomy = volume(&g, 1 << 30);
+    let mut cases: Vec<RenderOptions> = Vec::new();
+    for integrator in integrators() {
+        let mut o = options(&g, r#"{"azimuth": 33, "elevation": 21}"#);
+        o.integrator = integrator;
+        cases.push(o);
+    }
+    let mut mip = options(&g, r#"{"azimuth": -50, "elevation": 10}"#);
+    mip.mip = true;
+    cases.push(mip);
+    let mut iso = options(&g, r#"{"azimuth": 120, "elevation": -30}"#);
+    iso.isosurfaces = Isosurfaces::new(vec![Isovalue {
+        value: 80.0,
+        rgba: [1.0, 0.9, 0.7, 0.8],
+    }])
+    .unwrap();
+    iso.iso_lighting = Some(BlinnPhong::default());
+    cases.push(iso);
+    let mut shaded = options(&g, r#"{"azimuth": 200, "elevation": 40}"#);
+    shaded.shading = Some(BlinnPhong::default());
+    cases.push(shaded);
+    for o in &cases {
+        let want = render_field(&incore, Placement::of(&g), g.range(), o).unwrap();
+        for v in [&small, &roomy] {
+            let got = v.render(0, o).unwrap();
+            let d = max_diff(&got.image, &want.image);
+            assert!(
+                d <= 1e-6,
+                "{:?} mip {}: max difference {d}",
+                o.integrator,
+                o.mip
+            );
+        }
+    }
+    let stats = small.cache_stats(0).unwrap();
+    assert!(stats.evictions > 0, "the small budget evicts: {stats:?}");
+    assert!(stats.peak_bytes <= 3 * 8 * 5 * 4 * 4, "{stats:?}");
+    assert_eq!(roomy.cache_stats(0).unwrap().evictions, 0);
+    // The grid renderer (empty-space skipping, lanes) draws the same emission-only image.
+    let o = &cases[0];
+    let grid_image = render_grid(&g, o).unwrap().image;
+    assert!(max_diff(&roomy.render(0, o).unwrap().image, &grid_image) <= 1e-6);
+}
+
+#[test]
+fn a_ray_grazing_a_brick_face_samples_both_sides_exactly() {
+    let g = grid();
+    let Samples::F32(values) = g.samples() else {
+        unreachable!()
+    };
+    let incore = Trilinear::new(values.as_slice(), DIMS);
+    let v = volume(&g, 1 << 30);
+    // The eye on the chunk face x = 8 (world -3 + 8 * 0.8), or a hair beside it, looking
+    // along y: the middle column's rays run in (or along) the face, and every sample of
+    // theirs gathers corners from both sides of it.
+    for dx in [0.0, 1e-4, -1e-4] {
+        let x = -3.0 + 8.0 * 0.8 + dx;
+        let spec =
+            format!(r#"{{"eye": [{x}, -40, 12], "target": [{x}, 10, 12.3], "up": [0, 0, 1]}}"#);
+        let o = options(&g, &spec);
+        let want = render_field(&incore, Placement::of(&g), g.range(), &o).unwrap();
+        let got = v.render(0, &o).unwrap();
+        let d = max_diff(&got.image, &want.image);
+        assert!(d <= 1e-6, "dx {dx}: max difference {d}");
+        assert!(want.stats.samples > 1000);
+    }
+}
+
+/// A level whose chunk `bad` cannot be read (a corrupt or truncated chunk of a store).
+struct Broken {
+    inner: GridChunks,
+    bad: [usize; 3],
+}
+
+impl ChunkSource for Broken {
+    fn layout(&self) -> &ChunkLayout {
+        self.inner.layout()
+    }
+    fn read_chunk(&self, c: [usize; 3]) -> volux_core::Result<Samples> {
+        if c == self.bad {
+            return Err(volux_core::Error::Chunked(
+                "truncated chunk (12 of 640 bytes)".into(),
+            ));
+        }
+        self.inner.read_chunk(c)
+    }
+}
+
+#[test]
+fn a_chunk_that_cannot_be_read_is_one_error_naming_it_and_no_image() {
+    let g = grid();
+    let inner = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
+    let broken = Broken {
+        inner,
+        bad: [1, 1, 1],
+    };
+    let ms = Multiscale::new("broken", vec![Arc::new(broken) as Arc<dyn ChunkSource>]).unwrap();
+    let v = BrickedVolume::new(ms, 1 << 30);
+    let o = options(&g, r#"{"azimuth": 10}"#);
+    // The range scan reads every chunk: it fails first, naming the chunk.
+    let e = v.render(0, &o).unwrap_err().to_string();
+    assert!(e.contains("truncated chunk"), "{e}");
+    // With the range known, the render reaches the chunk and stops with its name.
+    let inner = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
+    let ranged = Ranged(
+        Broken {
+            inner,
+            bad: [1, 1, 1],
+        },
+        g.range(),
+    );
+    let ms = Multiscale::new("broken", vec![Arc::new(ranged) as Arc<dyn ChunkSource>]).unwrap();
+    let e = BrickedVolume::new(ms, 1 << 30)
+        .render(0, &o)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("chunk [1, 1, 1]") && e.contains("truncated"),
+        "{e}"
+    );
+    // Levels that do not exist and voxel layers are refused with the reason.
+    assert!(volume(&g, 1 << 20).render(3, &o).is_err());
+    let mut masked = o.clone();
+    masked.mask = Some(Arc::new(volux_core::sculpt::SculptMask::new(DIMS).unwrap()));
+    let e = volume(&g, 1 << 20)
+        .render(0, &masked)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sculpt mask"), "{e}");
+}
+
+/// A level that knows its range (as stores written by `volux convert` do).
+struct Ranged(Broken, [f64; 2]);
+
+impl ChunkSource for Ranged {
+    fn layout(&self) -> &ChunkLayout {
+        self.0.layout()
+    }
+    fn read_chunk(&self, c: [usize; 3]) -> volux_core::Result<Samples> {
+        self.0.read_chunk(c)
+    }
+    fn value_range(&self) -> Option<[f64; 2]> {
+        Some(self.1)
+    }
+}
+
+#[test]
+fn the_automatic_level_follows_the_pixel_size() {
+    let g = grid();
+    let full = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
+    // A coarser level: every other sample, twice the spacing (its values do not matter here).
+    let coarse_dims = DIMS.map(|d| d.div_ceil(2));
+    let n: usize = coarse_dims.iter().product();
+    let coarse = Grid::new(
+        coarse_dims,
+        [1.6, 2.2, 3.4],
+        [-3.0, 2.0, 5.0],
+        Samples::F32(Buffer::owned(vec![50.0; n])),
+    )
+    .unwrap();
+    let coarse = GridChunks::new(Arc::new(coarse), CHUNK).unwrap();
+    let levels: Vec<Arc<dyn ChunkSource>> = vec![Arc::new(full), Arc::new(coarse)];
+    let v = BrickedVolume::new(Multiscale::new("pyramid", levels).unwrap(), 1 << 30);
+    let cam = |zoom: f64| {
+        let spec = CameraSpec {
+            zoom: Some(zoom),
+            ..Default::default()
+        };
+        spec.resolve(&g.bounds()).unwrap()
+    };
+    // A small image of the whole volume: pixels are larger than the coarse voxels.
+    assert_eq!(v.level_for(Lod::Auto, &cam(1.0), 8), 1);
+    // A large, close view: pixels smaller than the full-resolution voxels.
+    assert_eq!(v.level_for(Lod::Auto, &cam(4.0), 2000), 0);
+    assert_eq!(v.level_for(Lod::Level(7), &cam(1.0), 8), 1);
+    assert_eq!(v.level_for(Lod::Level(0), &cam(1.0), 8), 0);
+}

@@ -1,0 +1,207 @@
+//! A bricked volume as the engine renders it: a [`Multiscale`] pyramid with one brick cache
+//! per level within a shared memory budget, the data range, and the choice of level
+//! ([`Lod`]).
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, OnceLock};
+
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+use volux_core::bricked::{ChunkSource, Multiscale};
+use volux_core::grid::Scalar;
+use volux_core::{Aabb, Camera};
+
+use super::cache::{BrickCache, CacheStats};
+use super::field::BrickedField;
+use crate::error::RenderError;
+use crate::raycast::{render_field, Placement, RenderOptions, Rendered};
+use crate::tiles::Control;
+
+/// Which pyramid level a render samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Lod {
+    /// The coarsest level whose voxels project to at most about a pixel at the volume's
+    /// centre (full resolution when the view is close).
+    #[default]
+    Auto,
+    /// This level (0: full resolution), or the coarsest there is.
+    Level(usize),
+}
+
+/// A volume stored in chunks, rendered without holding it whole: each level's chunks are
+/// read into a cache of bounded size as rays need them (seed `003`, done exactly: one pass,
+/// opacity carried across bricks).
+pub struct BrickedVolume {
+    multiscale: Multiscale,
+    caches: Vec<BrickCache>,
+    range: OnceLock<[f64; 2]>,
+}
+
+impl std::fmt::Debug for BrickedVolume {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BrickedVolume")
+            .field("multiscale", &self.multiscale)
+            .finish()
+    }
+}
+
+impl BrickedVolume {
+    /// `multiscale` with its bricks cached within `budget` bytes (each level's cache may
+    /// take the whole budget; only the levels rendered hold bricks).
+    pub fn new(multiscale: Multiscale, budget: u64) -> Self {
+        let caches = multiscale
+            .levels()
+            .iter()
+            .map(|l| BrickCache::new(l.clone(), budget))
+            .collect();
+        Self {
+            multiscale,
+            caches,
+            range: OnceLock::new(),
+        }
+    }
+
+    /// The pyramid.
+    pub fn multiscale(&self) -> &Multiscale {
+        &self.multiscale
+    }
+
+    /// The figures of level `level`'s cache.
+    pub fn cache_stats(&self, level: usize) -> Option<CacheStats> {
+        self.caches.get(level).map(BrickCache::stats)
+    }
+
+    /// The full-resolution level's world box.
+    pub fn bounds(&self) -> Aabb {
+        let l = self.multiscale.full().layout();
+        let origin = l.origin_vec();
+        let far = origin + l.spacing_vec() * DVec3::from(l.dims.map(|d| (d - 1) as f64));
+        Aabb {
+            min: origin.min(far),
+            max: origin.max(far),
+        }
+    }
+
+    /// The smallest and largest sample of the full-resolution level: recorded by the store,
+    /// or found once by reading every chunk (in parallel, one chunk per thread in memory).
+    pub fn range(&self) -> Result<[f64; 2], RenderError> {
+        if let Some(r) = self.range.get() {
+            return Ok(*r);
+        }
+        let full = self.multiscale.full();
+        let r = match full.value_range() {
+            Some(r) => r,
+            None => scan_range(full.as_ref())?,
+        };
+        Ok(*self.range.get_or_init(|| r))
+    }
+
+    /// The level `lod` picks for `camera` at `height` pixels.
+    pub fn level_for(&self, lod: Lod, camera: &Camera, height: usize) -> usize {
+        let last = self.caches.len() - 1;
+        match lod {
+            Lod::Level(n) => n.min(last),
+            Lod::Auto => {
+                let centre = self.bounds().center();
+                let forward = (camera.target - camera.eye).normalize_or_zero();
+                let depth = (centre - camera.eye).dot(forward);
+                let pixel = crate::sculpt::pixel_size_at(camera, height, depth);
+                (0..=last)
+                    .rev()
+                    .find(|&n| {
+                        let s = self.caches[n].layout().spacing;
+                        s.iter().cloned().fold(f64::INFINITY, f64::min) <= pixel
+                    })
+                    .unwrap_or(0)
+            }
+        }
+    }
+
+    /// Renders level `level` with `opts` (trilinear reconstruction; no sculpt mask or
+    /// labels: they are full-resolution voxel layers of in-core grids). A chunk that cannot
+    /// be read stops the render with an error naming it; no image is returned.
+    pub fn render(&self, level: usize, opts: &RenderOptions) -> Result<Rendered, RenderError> {
+        refuse_voxel_layers(opts)?;
+        let cache = self.caches.get(level).ok_or_else(|| {
+            RenderError::InvalidOptions(format!(
+                "level {level} does not exist: the volume has {} levels",
+                self.caches.len()
+            ))
+        })?;
+        let range = self.range()?;
+        let failed = Arc::new(AtomicBool::new(false));
+        let field = BrickedField::new(cache, failed.clone());
+        let mut opts = opts.clone();
+        if opts.control.cancel.is_none() {
+            // A chunk error stops the render early (a caller's own flag is left alone).
+            opts.control = Control {
+                cancel: Some(failed),
+                progress: opts.control.progress.clone(),
+            };
+        }
+        let out = render_field(&field, placement(cache.layout()), range, &opts);
+        match field.error() {
+            Some(e) => Err(RenderError::Data(volux_core::Error::Chunked(e.clone()))),
+            None => out,
+        }
+    }
+}
+
+/// The world placement of a chunked level (axis-aligned).
+fn placement(l: &volux_core::bricked::ChunkLayout) -> Placement {
+    Placement {
+        origin: l.origin_vec(),
+        spacing: l.spacing_vec(),
+        dims: l.dims,
+        direction: DMat3::IDENTITY,
+    }
+}
+
+/// Masks, labels and cubic filters are refused with the reason.
+fn refuse_voxel_layers(opts: &RenderOptions) -> Result<(), RenderError> {
+    use crate::sampling::Reconstruction;
+    let what = if opts.mask.is_some() {
+        "a sculpt mask"
+    } else if opts.labels.is_some() {
+        "region labels"
+    } else if opts.reconstruction != Reconstruction::Trilinear {
+        "cubic reconstruction"
+    } else {
+        return Ok(());
+    };
+    Err(RenderError::InvalidOptions(format!(
+        "bricked volumes are rendered with trilinear reconstruction and without voxel layers: {what} needs the volume in memory (load a level that fits the memory budget)"
+    )))
+}
+
+/// The range of every chunk's samples, read one chunk per thread at a time.
+fn scan_range(level: &dyn ChunkSource) -> Result<[f64; 2], RenderError> {
+    let layout = level.layout();
+    let ranges: Result<Vec<[f64; 2]>, volux_core::Error> = (0..layout.chunk_count())
+        .into_par_iter()
+        .map(|i| {
+            let s = level.read_chunk(layout.chunk_coords(i))?;
+            Ok(volux_core::with_samples!(&s, |v| v.iter().fold(
+                [f64::INFINITY, f64::NEG_INFINITY],
+                |r, x| {
+                    let x = f64::from(x.to_f32());
+                    if x.is_finite() {
+                        [r[0].min(x), r[1].max(x)]
+                    } else {
+                        r
+                    }
+                }
+            )))
+        })
+        .collect();
+    let r = ranges?
+        .into_iter()
+        .fold([f64::INFINITY, f64::NEG_INFINITY], |a, b| {
+            [a[0].min(b[0]), a[1].max(b[1])]
+        });
+    if r[0] > r[1] {
+        return Err(RenderError::Data(volux_core::Error::Chunked(
+            "the volume has no finite sample".into(),
+        )));
+    }
+    Ok(r)
+}
