@@ -51,7 +51,7 @@ fn tf() -> TransferFunction {
 fn volume(g: &Grid, budget: u64) -> BrickedVolume {
     let chunks = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
     let ms = Multiscale::new("test", vec![Arc::new(chunks) as Arc<dyn ChunkSource>]).unwrap();
-    BrickedVolume::new(ms, budget)
+    BrickedVolume::open(ms, budget).unwrap()
 }
 
 fn options(g: &Grid, spec: &str) -> RenderOptions {
@@ -206,10 +206,9 @@ fn a_chunk_that_cannot_be_read_is_one_error_naming_it_and_no_image() {
         bad: [1, 1, 1],
     };
     let ms = Multiscale::new("broken", vec![Arc::new(broken) as Arc<dyn ChunkSource>]).unwrap();
-    let v = BrickedVolume::new(ms, 1 << 30);
     let o = options(&g, r#"{"azimuth": 10}"#);
-    // The range scan reads every chunk: it fails first, naming the chunk.
-    let e = v.render(0, &o).unwrap_err().to_string();
+    // Opening reads every chunk for the range: it fails, naming the chunk.
+    let e = BrickedVolume::open(ms, 1 << 30).unwrap_err().to_string();
     assert!(e.contains("truncated chunk"), "{e}");
     // With the range known, the render reaches the chunk and stops with its name.
     let inner = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
@@ -220,8 +219,12 @@ fn a_chunk_that_cannot_be_read_is_one_error_naming_it_and_no_image() {
         },
         g.range(),
     );
-    let ms = Multiscale::new("broken", vec![Arc::new(ranged) as Arc<dyn ChunkSource>]).unwrap();
-    let e = BrickedVolume::new(ms, 1 << 30)
+    // The histogram reads the coarsest level whole: a second, readable level stands in.
+    let coarse = GridChunks::new(Arc::new(g.clone()), DIMS).unwrap();
+    let levels: Vec<Arc<dyn ChunkSource>> = vec![Arc::new(ranged), Arc::new(coarse)];
+    let ms = Multiscale::new("broken", levels).unwrap();
+    let e = BrickedVolume::open(ms, 1 << 30)
+        .unwrap()
         .render(0, &o)
         .unwrap_err()
         .to_string();
@@ -271,7 +274,7 @@ fn the_automatic_level_follows_the_pixel_size() {
     .unwrap();
     let coarse = GridChunks::new(Arc::new(coarse), CHUNK).unwrap();
     let levels: Vec<Arc<dyn ChunkSource>> = vec![Arc::new(full), Arc::new(coarse)];
-    let v = BrickedVolume::new(Multiscale::new("pyramid", levels).unwrap(), 1 << 30);
+    let v = BrickedVolume::open(Multiscale::new("pyramid", levels).unwrap(), 1 << 30).unwrap();
     let cam = |zoom: f64| {
         let spec = CameraSpec {
             zoom: Some(zoom),

@@ -2,12 +2,13 @@
 //! per level within a shared memory budget, the data range, and the choice of level
 //! ([`Lod`]).
 use std::sync::atomic::AtomicBool;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 use volux_core::bricked::{ChunkSource, Multiscale};
 use volux_core::grid::Scalar;
+use volux_core::histogram::Histogram;
 use volux_core::{Aabb, Camera};
 
 use super::cache::{BrickCache, CacheStats};
@@ -33,31 +34,46 @@ pub enum Lod {
 pub struct BrickedVolume {
     multiscale: Multiscale,
     caches: Vec<BrickCache>,
-    range: OnceLock<[f64; 2]>,
+    range: [f64; 2],
+    histogram: Histogram,
 }
 
 impl std::fmt::Debug for BrickedVolume {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("BrickedVolume")
             .field("multiscale", &self.multiscale)
+            .field("range", &self.range)
             .finish()
     }
 }
 
+/// The coarsest level is read whole for the histogram only up to this many samples.
+const HISTOGRAM_SAMPLES: usize = 1 << 26;
+
 impl BrickedVolume {
     /// `multiscale` with its bricks cached within `budget` bytes (each level's cache may
-    /// take the whole budget; only the levels rendered hold bricks).
-    pub fn new(multiscale: Multiscale, budget: u64) -> Self {
+    /// take the whole budget; only the levels rendered hold bricks). Finds the value range
+    /// (recorded by the store, else read chunk by chunk from the full level: the transfer
+    /// function is placed on it, as for the in-core grid) and a histogram of the coarsest
+    /// level (for the transfer-function presets). Errors name a chunk that cannot be read.
+    pub fn open(multiscale: Multiscale, budget: u64) -> Result<Self, RenderError> {
+        let full = multiscale.full();
+        let range = match full.value_range() {
+            Some(r) => r,
+            None => scan_range(full.as_ref())?,
+        };
+        let histogram = coarse_histogram(&multiscale, range)?;
         let caches = multiscale
             .levels()
             .iter()
             .map(|l| BrickCache::new(l.clone(), budget))
             .collect();
-        Self {
+        Ok(Self {
             multiscale,
             caches,
-            range: OnceLock::new(),
-        }
+            range,
+            histogram,
+        })
     }
 
     /// The pyramid.
@@ -81,18 +97,40 @@ impl BrickedVolume {
         }
     }
 
-    /// The smallest and largest sample of the full-resolution level: recorded by the store,
-    /// or found once by reading every chunk (in parallel, one chunk per thread in memory).
-    pub fn range(&self) -> Result<[f64; 2], RenderError> {
-        if let Some(r) = self.range.get() {
-            return Ok(*r);
+    /// The smallest and largest sample of the full-resolution level.
+    pub fn range(&self) -> [f64; 2] {
+        self.range
+    }
+
+    /// The histogram of the coarsest level over [`BrickedVolume::range`] with `bins` bins
+    /// (from the kept one of [`HISTOGRAM_BINS`](crate::scene::HISTOGRAM_BINS) bins, each
+    /// counted in the new bin holding its centre, when `bins` differs).
+    pub fn histogram(&self, bins: usize) -> Histogram {
+        let h = &self.histogram;
+        if h.counts.len() == bins {
+            return h.clone();
         }
-        let full = self.multiscale.full();
-        let r = match full.value_range() {
-            Some(r) => r,
-            None => scan_range(full.as_ref())?,
-        };
-        Ok(*self.range.get_or_init(|| r))
+        let bins = bins.max(1);
+        let mut counts = vec![0u64; bins];
+        for (b, &n) in h.counts.iter().enumerate() {
+            let centre = (b as f64 + 0.5) / h.counts.len() as f64;
+            counts[((centre * bins as f64) as usize).min(bins - 1)] += n;
+        }
+        Histogram {
+            counts,
+            ..h.clone()
+        }
+    }
+
+    /// The smallest spacing of the full-resolution level.
+    pub fn unit_length(&self) -> f64 {
+        self.multiscale
+            .full()
+            .layout()
+            .spacing
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// The level `lod` picks for `camera` at `height` pixels.
@@ -127,7 +165,7 @@ impl BrickedVolume {
                 self.caches.len()
             ))
         })?;
-        let range = self.range()?;
+        let range = self.range;
         let failed = Arc::new(AtomicBool::new(false));
         let field = BrickedField::new(cache, failed.clone());
         let mut opts = opts.clone();
@@ -204,4 +242,28 @@ fn scan_range(level: &dyn ChunkSource) -> Result<[f64; 2], RenderError> {
         )));
     }
     Ok(r)
+}
+
+/// The histogram of the coarsest level (read whole, chunk by chunk, when it has at most
+/// [`HISTOGRAM_SAMPLES`] samples) over `range`.
+fn coarse_histogram(ms: &Multiscale, range: [f64; 2]) -> Result<Histogram, RenderError> {
+    let bins = crate::scene::HISTOGRAM_BINS;
+    let Some(level) = ms
+        .levels()
+        .iter()
+        .rev()
+        .find(|l| l.layout().dims.iter().product::<usize>() <= HISTOGRAM_SAMPLES)
+    else {
+        return Err(RenderError::InvalidOptions(format!(
+            "{}: its coarsest level has more than {HISTOGRAM_SAMPLES} samples; write a pyramid (volux convert --levels auto)",
+            ms.name
+        )));
+    };
+    let layout = level.layout();
+    let mut values: Vec<f32> = Vec::with_capacity(layout.dims.iter().product());
+    for i in 0..layout.chunk_count() {
+        let s = level.read_chunk(layout.chunk_coords(i))?;
+        volux_core::with_samples!(&s, |v| values.extend(v.iter().map(|x| x.to_f32())));
+    }
+    Ok(Histogram::from_values(&values, range, bins))
 }
