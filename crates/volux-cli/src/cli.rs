@@ -223,9 +223,19 @@ pub struct LoadArgs {
     /// DICOM: SeriesInstanceUID to load from a folder holding several series.
     #[arg(long)]
     pub series: Option<String>,
-    /// VTK: name of the scalar array to use.
+    /// VTK: name of the scalar array to use; OME-Zarr: path of the image inside the store
+    /// (e.g. labels/cells).
     #[arg(long)]
     pub array: Option<String>,
+    /// OME-Zarr: the pyramid level to load (0 = full resolution) [default: 0].
+    #[arg(long)]
+    pub level: Option<usize>,
+    /// OME-Zarr: the channel index [default: 0].
+    #[arg(long)]
+    pub channel: Option<usize>,
+    /// OME-Zarr: the timepoint index [default: 0].
+    #[arg(long)]
+    pub timepoint: Option<usize>,
 }
 
 /// `volux render` options.
