@@ -64,7 +64,8 @@ fn ome_zarr_py_fixtures_read_with_the_formula_spacing_and_origin() {
         assert_eq!(levels[1].layout().dims, [5, 4, 3]);
         assert_eq!(levels[1].layout().spacing, [0.5, 1.0, 5.0]);
         let v1 = read_level(levels[1].as_ref());
-        assert_eq!(v1[1 + 5 * (2 + 4 * 1)], (2 + 40 + 200) as f64);
+        // (x, y, z) = (1, 2, 1) of level 1 is (2, 4, 2) of level 0.
+        assert_eq!(v1[1 + 5 * (2 + 4)], (2 + 40 + 200) as f64);
         // Foreign stores carry no ranges.
         assert_eq!(levels[0].chunk_range([0, 0, 0]), None);
         // Through the loader, as an in-core grid, at either level.
