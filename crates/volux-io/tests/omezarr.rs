@@ -421,3 +421,35 @@ fn a_level_over_the_budget_names_level_and_the_bricked_renderer() {
         .to_string();
     assert!(e.contains("--level") && e.contains("bricked"), "{e}");
 }
+
+#[test]
+fn time_and_channel_axes_are_fixed_and_int32_reads_as_f32() {
+    let path = data("tczyx_v05.ome.zarr");
+    let opts = ZarrOptions {
+        channel: 1,
+        timepoint: 1,
+        ..Default::default()
+    };
+    let store = open_store(&path, &opts).unwrap();
+    assert_eq!(store.axes, ["t", "c", "z", "y", "x"]);
+    assert!(store.notes[0].contains("int32"), "{:?}", store.notes);
+    let l = store.multiscale.full();
+    assert_eq!(l.layout().dims, [5, 4, 3]);
+    assert_eq!(l.layout().chunk, [4, 3, 2]);
+    assert_eq!(l.layout().spacing, [1.0, 2.0, 3.0]);
+    assert_eq!(l.layout().scalar, volux_core::grid::ScalarType::F32);
+    let v = read_level(l.as_ref());
+    for z in 0..3 {
+        for y in 0..4 {
+            for x in 0..5 {
+                assert_eq!(v[x + 5 * (y + 4 * z)], (x + 5 * y + 20 * z + 180) as f64);
+            }
+        }
+    }
+    let bad = ZarrOptions {
+        channel: 2,
+        ..Default::default()
+    };
+    let e = open_store(&path, &bad).unwrap_err().to_string();
+    assert!(e.contains("channel 2 is out of range"), "{e}");
+}

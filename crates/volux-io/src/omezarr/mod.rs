@@ -30,6 +30,7 @@ use volux_core::bricked::Multiscale;
 
 use crate::error::Result;
 
+pub mod level;
 pub mod meta;
 pub mod pyramid;
 pub mod read;
@@ -38,8 +39,9 @@ pub mod write;
 
 mod load;
 
+pub use level::ZarrLevel;
 pub use load::load_level;
-pub use read::{open_store, ZarrLevel};
+pub use read::open_store;
 pub use synthetic::SyntheticChunks;
 pub use write::{write_ome_zarr, Compression, Levels, WriteOptions};
 

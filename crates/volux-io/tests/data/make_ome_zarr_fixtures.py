@@ -1,4 +1,4 @@
-"""Writes the OME-Zarr test fixtures with ome-zarr-py (run once; the stores are committed).
+"""Writes the OME-Zarr test fixtures (tiny_v04, tiny_v05, and tczyx_v05 described at the end) with ome-zarr-py (run once; the stores are committed).
 
     pip install zarr ome-zarr numpy   # made with zarr 3.1.6, ome-zarr 0.18.0
     python make_ome_zarr_fixtures.py
@@ -48,3 +48,20 @@ for name, fmt, zarr_format, compression in stores:
         name="tiny",
     )
     print(name, dict(group.attrs))
+
+# tczyx_v05.ome.zarr: a 5-D (t, c, z, y, x) = (2, 2, 3, 4, 5) int32 image, one level, NGFF 0.5,
+# value = x + 5 y + 20 z + 60 c + 120 t, scale (t, c, z, y, x) = (1, 1, 3, 2, 1) micrometres.
+t, c, z, y, x = np.meshgrid(*[np.arange(n) for n in (2, 2, 3, 4, 5)], indexing="ij")
+tczyx = (x + 5 * y + 20 * z + 60 * c + 120 * t).astype(np.int32)
+shutil.rmtree("tczyx_v05.ome.zarr", ignore_errors=True)
+group = zarr.open_group("tczyx_v05.ome.zarr", mode="w", zarr_format=3)
+write_multiscale(
+    [tczyx],
+    group,
+    fmt=FormatV05(),
+    axes=[{"name": "t", "type": "time"}, {"name": "c", "type": "channel"}] + axes,
+    coordinate_transformations=[[{"type": "scale", "scale": [1.0, 1.0, 3.0, 2.0, 1.0]}]],
+    storage_options={"chunks": (1, 1, 2, 3, 4)},
+    name="tczyx",
+)
+print("tczyx_v05.ome.zarr", dict(group.attrs))
