@@ -177,6 +177,14 @@ pub(crate) fn read_plain(
     check_section_len(path, file_len, offset, need)?;
     if le {
         if let Some(samples) = try_map(path, offset, ty, count)? {
+            // Non-finite f32 values are replaced in a copy (`Grid::new`): that copy is
+            // charged to the budget.
+            if let Samples::F32(b) = &samples {
+                use rayon::prelude::*;
+                if b.as_slice().par_iter().any(|v| !v.is_finite()) {
+                    data_bytes(path, ty, count)?;
+                }
+            }
             return Ok(Decoded {
                 samples,
                 note: None,
