@@ -153,7 +153,7 @@ fn round_trip_of_odd_anisotropic_volumes_equals_the_source() {
             Samples::U8(Buffer::owned(
                 values.iter().map(|&v| (v as u32 % 256) as u8).collect(),
             )),
-            Compression::Zstd(1),
+            Compression::Gzip(6),
         ),
     ] {
         let tmp = tempfile::tempdir().unwrap();

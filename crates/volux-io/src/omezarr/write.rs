@@ -9,7 +9,7 @@ use volux_core::bricked::{ChunkLayout, ChunkSource};
 use volux_core::grid::ScalarType;
 use volux_core::Error;
 use zarrs::array::codec::{
-    BloscCodec, BloscCompressionLevel, BloscCompressor, BloscShuffleMode, ZstdCodec,
+    BloscCodec, BloscCompressionLevel, BloscCompressor, BloscShuffleMode, GzipCodec, ZstdCodec,
 };
 use zarrs::array::{Array, ArrayBuilder, DataType};
 use zarrs::array_subset::ArraySubset;
@@ -36,6 +36,8 @@ pub enum Compression {
     Zstd(i32),
     /// `blosc` with zstd inside, byte-shuffled, at this level (0-9).
     BloscZstd(u8),
+    /// `gzip` at this level (0-9), for readers without zstd.
+    Gzip(u32),
     /// No compression.
     None,
 }
@@ -230,6 +232,10 @@ fn write_typed<T: Elem>(
                     Some(l0.scalar.size()),
                 )
                 .map_err(|e| zarr_err("blosc")(&e))?;
+                builder.bytes_to_bytes_codecs(vec![Arc::new(codec)]);
+            }
+            Compression::Gzip(level) => {
+                let codec = GzipCodec::new(level.min(9)).map_err(|e| zarr_err("gzip")(&e))?;
                 builder.bytes_to_bytes_codecs(vec![Arc::new(codec)]);
             }
             Compression::None => {}
