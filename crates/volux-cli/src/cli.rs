@@ -46,12 +46,21 @@ pub enum Command {
     },
     /// Convert between formats, chosen by OUT's extension: `.raw` (raw + JSON sidecar) or
     /// `.nrrd` for grids, `.vtet` (Volux binary tet mesh) for meshes and for grids split into
-    /// tets.
+    /// tets, `.ome.zarr` (an OME-Zarr store, Zarr v3 + NGFF 0.5, zstd) for grids: written chunk
+    /// by chunk with a pyramid of 2x averages (a memory-mapped raw or NRRD input larger than
+    /// memory streams through).
     Convert {
         /// Input file.
         input: PathBuf,
-        /// Output file.
+        /// Output file (or `.ome.zarr` store folder).
         output: PathBuf,
+        /// OME-Zarr output: samples per chunk side [default: 128].
+        #[arg(long)]
+        chunk: Option<usize>,
+        /// OME-Zarr output: pyramid levels, a count or `auto` (halve until a level fits in
+        /// one chunk) [default: auto].
+        #[arg(long)]
+        levels: Option<String>,
         #[command(flatten)]
         load: LoadArgs,
     },
@@ -63,9 +72,19 @@ pub enum Command {
         /// Grid size per axis, tet count, or ring segments.
         #[arg(long, default_value_t = 128)]
         size: usize,
-        /// Output file (`.raw`, `.nrrd` or `.vtet`).
+        /// Output file (`.raw`, `.nrrd` or `.vtet`), or an `.ome.zarr` store for the grids,
+        /// written chunk by chunk at any size (never the whole volume in memory).
         #[arg(long, short)]
         output: PathBuf,
+        /// OME-Zarr output: samples per chunk side [default: 128].
+        #[arg(long)]
+        chunk: Option<usize>,
+        /// OME-Zarr output: pyramid levels, a count or `auto` [default: auto].
+        #[arg(long)]
+        levels: Option<String>,
+        /// OME-Zarr output: f32, or u16 (values in [0, 1] scaled to 0..65535) [default: f32].
+        #[arg(long)]
+        dtype: Option<String>,
     },
     /// Render a file to PNG.
     #[command(after_help = "JSON formats: `volux help tf`, `volux help camera`.")]
@@ -223,9 +242,19 @@ pub struct LoadArgs {
     /// DICOM: SeriesInstanceUID to load from a folder holding several series.
     #[arg(long)]
     pub series: Option<String>,
-    /// VTK: name of the scalar array to use.
+    /// VTK: name of the scalar array to use; OME-Zarr: path of the image inside the store
+    /// (e.g. labels/cells).
     #[arg(long)]
     pub array: Option<String>,
+    /// OME-Zarr: the pyramid level to load (0 = full resolution) [default: 0].
+    #[arg(long)]
+    pub level: Option<usize>,
+    /// OME-Zarr: the channel index [default: 0].
+    #[arg(long)]
+    pub channel: Option<usize>,
+    /// OME-Zarr: the timepoint index [default: 0].
+    #[arg(long)]
+    pub timepoint: Option<usize>,
 }
 
 /// `volux render` options.

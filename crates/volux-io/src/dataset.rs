@@ -26,5 +26,12 @@ pub struct LoadOptions {
     /// with the most slices).
     pub series_uid: Option<String>,
     /// VTK / VTU: the name of the point-data array to use (default: the first scalar array).
+    /// OME-Zarr: the path inside the store of the image to read (default: the root).
     pub array: Option<String>,
+    /// OME-Zarr: the pyramid level to load (default 0, full resolution).
+    pub level: Option<usize>,
+    /// OME-Zarr: the channel index (default 0).
+    pub channel: usize,
+    /// OME-Zarr: the timepoint index (default 0).
+    pub timepoint: usize,
 }

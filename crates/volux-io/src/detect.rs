@@ -37,6 +37,8 @@ pub enum Format {
     Off,
     /// Volux binary tet mesh.
     Vtet,
+    /// An OME-Zarr store (a directory; NGFF 0.4 on Zarr v2, 0.5 on Zarr v3).
+    OmeZarr,
 }
 
 impl Format {
@@ -55,6 +57,7 @@ impl Format {
             Format::Plot3d => "PLOT3D",
             Format::Off => "OFF tetrahedral mesh",
             Format::Vtet => "Volux binary tet mesh (.vtet)",
+            Format::OmeZarr => "OME-Zarr",
         }
     }
 }
@@ -71,12 +74,27 @@ fn stem_without_gz(path: &Path) -> (String, bool) {
     }
 }
 
+/// Whether the folder `path` is a Zarr store: named `*.zarr`, or holding `zarr.json`,
+/// `.zgroup`, `.zattrs` or `.zarray`.
+pub fn is_zarr_dir(path: &Path) -> bool {
+    path.is_dir()
+        && (path
+            .file_name()
+            .is_some_and(|n| n.to_string_lossy().to_lowercase().ends_with(".zarr"))
+            || ["zarr.json", ".zgroup", ".zattrs", ".zarray"]
+                .iter()
+                .any(|f| path.join(f).is_file()))
+}
+
 /// Detects the format of `path` (a file, or a folder of DICOM slices). Only regular files
 /// are opened to sniff their magic bytes: a FIFO, a device or a socket is refused by type
 /// ([`ErrorKind::NotRegular`]).
 pub fn detect(path: &Path) -> Result<Format> {
     let meta = crate::util::data_metadata(path)?;
     if meta.is_dir() {
+        if is_zarr_dir(path) {
+            return Ok(Format::OmeZarr);
+        }
         return Ok(Format::Dicom);
     }
     let mut head = [0u8; 512];

@@ -18,6 +18,7 @@
 //! | VolVis SLC `.slc` | [`slc`] | |
 //! | OFF tet meshes | [`off`] | `flate2` |
 //! | Volux binary tet mesh `.vtet` | [`vtet`] | |
+//! | OME-Zarr stores (`*.ome.zarr`, NGFF 0.4/0.5, read and written; feature `zarr`) | `omezarr` | `zarrs` |
 //!
 //! The other modules: [`load`](mod@load) (the entry point), [`detect`](mod@detect) (format
 //! detection), [`dataset`] (what readers return), [`error`] (typed errors), [`cells`] (the VTK
@@ -36,6 +37,8 @@ pub mod metaimage;
 pub mod nifti;
 pub mod nrrd;
 pub mod off;
+#[cfg(feature = "zarr")]
+pub mod omezarr;
 pub mod plot3d;
 pub mod progress;
 pub mod raw;

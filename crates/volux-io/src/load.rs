@@ -25,6 +25,32 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<(Dataset, Format)> {
         )?),
         Format::Off => Dataset::Mesh(off::read(path)?),
         Format::Vtet => Dataset::Mesh(vtet::read(path)?),
+        Format::OmeZarr => Dataset::Grid(load_zarr(path, opts)?),
     };
     Ok((dataset, format))
+}
+
+/// One level of an OME-Zarr store as an in-core grid.
+#[cfg(feature = "zarr")]
+fn load_zarr(path: &Path, opts: &LoadOptions) -> Result<volux_core::grid::Grid> {
+    crate::omezarr::load_level(
+        path,
+        &crate::omezarr::ZarrOptions {
+            array: opts.array.clone(),
+            level: opts.level.unwrap_or(0),
+            channel: opts.channel,
+            timepoint: opts.timepoint,
+        },
+    )
+}
+
+/// Without the `zarr` feature, stores are refused.
+#[cfg(not(feature = "zarr"))]
+fn load_zarr(path: &Path, _opts: &LoadOptions) -> Result<volux_core::grid::Grid> {
+    Err(crate::error::ReadError::new(
+        path,
+        crate::error::ErrorKind::Unsupported(
+            "OME-Zarr stores (this build lacks the `zarr` feature of volux-io)".into(),
+        ),
+    ))
 }

@@ -167,17 +167,31 @@ pub(crate) fn read_plain(
     le: bool,
     count: u64,
 ) -> Result<Decoded> {
-    let need = data_bytes(path, ty, count)?;
+    // Memory-mapped data takes no memory of the budget (pages come and go with the file):
+    // the budget is checked only before data is copied, so a file larger than the budget
+    // (or than memory) can be mapped and streamed (`volux convert IN OUT.ome.zarr`).
+    let need = count
+        .checked_mul(ty.size() as u64)
+        .ok_or_else(|| header_err(path, "value count too large"))?;
     let file_len = regular_metadata(path)?.len();
     check_section_len(path, file_len, offset, need)?;
     if le {
         if let Some(samples) = try_map(path, offset, ty, count)? {
+            // Non-finite f32 values are replaced in a copy (`Grid::new`): that copy is
+            // charged to the budget.
+            if let Samples::F32(b) = &samples {
+                use rayon::prelude::*;
+                if b.as_slice().par_iter().any(|v| !v.is_finite()) {
+                    data_bytes(path, ty, count)?;
+                }
+            }
             return Ok(Decoded {
                 samples,
                 note: None,
             });
         }
     }
+    data_bytes(path, ty, count)?;
     let mut f = open_regular(path)?;
     f.seek(SeekFrom::Start(offset))
         .map_err(|e| io_error(path, e))?;

@@ -80,6 +80,7 @@ pub fn load(source: &DatasetRef) -> Result<Loaded, String> {
         q_file: source.q_file.clone(),
         series_uid: source.series_uid.clone(),
         array: source.array.clone(),
+        ..LoadOptions::default()
     };
     let shown = source.path.display().to_string();
     let (data, format) =

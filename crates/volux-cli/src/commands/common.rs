@@ -17,6 +17,9 @@ pub fn load(path: &Path, args: &LoadArgs, show: bool) -> Result<(Dataset, Format
         q_file: args.q_file.clone(),
         series_uid: args.series.clone(),
         array: args.array.clone(),
+        level: args.level,
+        channel: args.channel.unwrap_or(0),
+        timepoint: args.timepoint.unwrap_or(0),
     };
     let out = volux_io::load(path, &opts);
     pb.finish_and_clear();
@@ -28,6 +31,7 @@ pub fn load(path: &Path, args: &LoadArgs, show: bool) -> Result<(Dataset, Format
 /// The reader options apply to one format each: given for another, they are refused.
 fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError> {
     let vtk = matches!(format, Format::VtkLegacy | Format::Vti | Format::Vtu);
+    let zarr = format == Format::OmeZarr;
     let misplaced = [
         (
             "q-variable",
@@ -47,7 +51,15 @@ fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError>
             format == Format::Dicom,
             "DICOM",
         ),
-        ("array", args.array.is_some(), vtk, "VTK"),
+        (
+            "array",
+            args.array.is_some(),
+            vtk || zarr,
+            "VTK and OME-Zarr",
+        ),
+        ("level", args.level.is_some(), zarr, "OME-Zarr"),
+        ("channel", args.channel.is_some(), zarr, "OME-Zarr"),
+        ("timepoint", args.timepoint.is_some(), zarr, "OME-Zarr"),
     ];
     match misplaced.iter().find(|(_, given, fits, _)| *given && !fits) {
         Some((flag, _, _, owner)) => Err(format!(

@@ -94,7 +94,7 @@ fn write_grid(g: &Grid, output: &Path, ext: &str, show: bool) -> Result<(), CmdE
         volux_io::nrrd::write(g, output)?;
     } else {
         return Err(format!(
-            "{}: unknown output format (use .raw, .raw.gz, .nrrd or .vtet)",
+            "{}: unknown output format (use .raw, .raw.gz, .nrrd, .vtet or .ome.zarr)",
             output.display()
         )
         .into());

@@ -14,6 +14,9 @@ use volux_core::units::format_bytes;
 
 /// Describes the file at `path`.
 pub fn run(path: &Path, as_json: bool, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
+    if args.level.is_none() && volux_io::detect(path).ok() == Some(Format::OmeZarr) {
+        return super::store::info(path, as_json, args);
+    }
     let (data, format) = super::common::load(path, args, show)?;
     let value = match &data {
         Dataset::Grid(g) => grid_json(g, format),
@@ -88,19 +91,24 @@ fn sparkline(h: &Histogram, width: usize) -> String {
 
 /// The order people read a description in: what the file is first, then its shape, values
 /// and memory (keys not listed follow alphabetically).
-const ORDER: [&str; 18] = [
+const ORDER: [&str; 23] = [
     "format",
     "kind",
     "dims",
+    "levels",
+    "chunk",
+    "codec",
     "vertices",
     "tets",
     "dtype",
     "spacing",
     "origin",
+    "units",
     "orientation",
     "direction",
     "bounds",
     "range",
+    "axes",
     "histogram",
     "boundary_faces",
     "validation",
@@ -109,7 +117,8 @@ const ORDER: [&str; 18] = [
     "bytes_per_tet",
 ];
 
-fn print_text(path: &Path, v: &serde_json::Value) {
+/// Prints a description for people, keys in [`ORDER`].
+pub(super) fn print_text(path: &Path, v: &serde_json::Value) {
     println!("{}", path.display());
     let Some(obj) = v.as_object() else { return };
     let rank = |k: &str| ORDER.iter().position(|o| *o == k).unwrap_or(ORDER.len());
@@ -118,6 +127,12 @@ fn print_text(path: &Path, v: &serde_json::Value) {
     for k in keys {
         let val = &obj[k.as_str()];
         match val {
+            serde_json::Value::Array(a) if k == "levels" => {
+                println!("  {k:<15} {}", a.len());
+                for l in a {
+                    println!("    {}", sanitize(l.as_str().unwrap_or_default()));
+                }
+            }
             serde_json::Value::Array(a) if k == "notes" => {
                 for n in a {
                     println!("  note: {}", sanitize(n.as_str().unwrap_or_default()));

@@ -15,6 +15,7 @@ mod render;
 mod report;
 mod sculpt;
 mod session;
+mod store;
 mod tf;
 mod view;
 mod workbench;
@@ -32,8 +33,41 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             input,
             output,
             load,
-        } => convert::run(&input, &output, &load, show),
-        Command::Generate { kind, size, output } => convert::generate(kind, size, &output),
+            chunk,
+            levels,
+        } => {
+            if store::is_zarr_output(&output) {
+                let args = store::StoreArgs::parse(chunk, levels.as_deref())?;
+                store::convert(&input, &output, &load, &args, show)
+            } else if chunk.is_some() || levels.is_some() {
+                Err("--chunk and --levels apply to OME-Zarr outputs (OUT.ome.zarr)".into())
+            } else {
+                convert::run(&input, &output, &load, show)
+            }
+        }
+        Command::Generate {
+            kind,
+            size,
+            output,
+            chunk,
+            levels,
+            dtype,
+        } => {
+            if store::is_zarr_output(&output) {
+                let args = store::StoreArgs::parse(chunk, levels.as_deref())?;
+                store::generate(
+                    &crate::cli::value_name(&kind),
+                    size,
+                    dtype.as_deref(),
+                    &output,
+                    &args,
+                )
+            } else if chunk.is_some() || levels.is_some() || dtype.is_some() {
+                Err("--chunk, --levels and --dtype apply to OME-Zarr outputs (OUT.ome.zarr)".into())
+            } else {
+                convert::generate(kind, size, &output)
+            }
+        }
         Command::Render(args) => render::run(&args, show),
         Command::Sculpt(args) => sculpt::run(&args, &cli.given, show),
         Command::Measure(args) => measure::run(&args, &cli.given, show),

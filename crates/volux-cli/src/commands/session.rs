@@ -37,6 +37,7 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
         q_file: d.q_file.clone(),
         series: d.series_uid.clone(),
         array: d.array.clone(),
+        ..LoadArgs::default()
     };
     let (data, _) = super::common::load(&d.path, &load, show)
         .map_err(|e| format!("session {}: its dataset: {e}", path.display()))?;

@@ -1,0 +1,142 @@
+//! OME-Zarr stores from the command line: `generate` and `convert` write stores chunk by
+//! chunk, `info` describes them, `--level` loads a level, and bad inputs write nothing.
+mod common;
+
+use common::volux;
+
+fn ok(args: &[&str], dir: &std::path::Path) -> String {
+    let out = volux(args, dir);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[test]
+fn stores_are_generated_converted_described_and_loaded_by_level() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    ok(
+        &[
+            "generate",
+            "marschner-lobb",
+            "--size",
+            "21",
+            "--chunk",
+            "8",
+            "--dtype",
+            "u16",
+            "-o",
+            "ml.ome.zarr",
+        ],
+        dir,
+    );
+    let info = ok(&["info", "--json", "ml.ome.zarr"], dir);
+    let v: serde_json::Value = serde_json::from_str(&info).unwrap();
+    assert_eq!(v["dims"], serde_json::json!([21, 21, 21]));
+    assert_eq!(v["chunk"], serde_json::json!([8, 8, 8]));
+    assert_eq!(v["dtype"], "uint16");
+    assert_eq!(v["codec"], "zstd");
+    assert_eq!(v["levels"].as_array().unwrap().len(), 3, "{info}");
+    assert!(v["range"].is_array(), "{info}");
+    // The same volume through convert (raw in, store out), level 1 loaded in-core.
+    ok(&["generate", "sphere", "--size", "17", "-o", "s.raw"], dir);
+    ok(
+        &[
+            "convert",
+            "s.raw",
+            "s.ome.zarr",
+            "--chunk",
+            "8",
+            "--levels",
+            "2",
+        ],
+        dir,
+    );
+    let text = ok(&["info", "s.ome.zarr"], dir);
+    assert!(
+        text.contains("OME-Zarr (Zarr v3, NGFF 0.5)") && text.contains("17x17x17"),
+        "{text}"
+    );
+    let l1 = ok(&["info", "--json", "--level", "1", "s.ome.zarr"], dir);
+    let v: serde_json::Value = serde_json::from_str(&l1).unwrap();
+    assert_eq!(v["dims"], serde_json::json!([9, 9, 9]));
+    assert_eq!(v["spacing"], serde_json::json!([2.0, 2.0, 2.0]));
+    // Stores render like any grid.
+    ok(
+        &[
+            "render",
+            "s.ome.zarr",
+            "--level",
+            "1",
+            "-o",
+            "s.png",
+            "--size",
+            "32x32",
+        ],
+        dir,
+    );
+    assert!(dir.join("s.png").is_file());
+}
+
+#[test]
+fn bad_store_inputs_are_one_line_and_write_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    ok(&["generate", "sphere", "--size", "9", "-o", "s.raw"], dir);
+    ok(&["convert", "s.raw", "done.ome.zarr"], dir);
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["convert", "s.raw", "a.ome.zarr", "--chunk", "0"],
+            "--chunk 0",
+        ),
+        (
+            &["convert", "s.raw", "a.ome.zarr", "--levels", "many"],
+            "--levels many",
+        ),
+        (
+            &["convert", "s.raw", "a.ome.zarr", "--levels", "9"],
+            "more than halving",
+        ),
+        (
+            &["convert", "s.raw", "a.nrrd", "--chunk", "8"],
+            "apply to OME-Zarr outputs",
+        ),
+        (&["convert", "s.raw", "done.ome.zarr"], "already exists"),
+        (
+            &["generate", "sphere", "--size", "1", "-o", "a.ome.zarr"],
+            "--size 1",
+        ),
+        (
+            &["generate", "sphere", "--dtype", "u8", "-o", "a.ome.zarr"],
+            "--dtype u8",
+        ),
+        (
+            &["generate", "torus", "--size", "9", "-o", "a.ome.zarr"],
+            "unknown chunked generator",
+        ),
+        (
+            &["info", "--level", "7", "done.ome.zarr"],
+            "level 7 does not exist",
+        ),
+        (
+            &["info", "--channel", "1", "s.raw"],
+            "--channel applies to OME-Zarr",
+        ),
+    ];
+    for (args, expected) in cases {
+        let out = volux(args, dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    }
+    let mut left: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["done.ome.zarr", "s.raw", "s.raw.json"]);
+}
