@@ -13,7 +13,6 @@ use std::path::Path;
 use crate::error::{Error, Result};
 
 mod draw;
-pub use draw::segment_distance;
 
 /// A framebuffer of premultiplied linear RGBA `f32` pixels, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]

@@ -21,6 +21,7 @@
 //! - [`voi::ConvexVoi`]: the convex volume of interest cut by planes (seed `004`, ch. 4);
 //! - [`sculpt`]: the full-resolution sculpt mask, the eraser's and digger's regions and
 //!   region labelling (seed `004`, ch. 4-6);
+//! - [`segment`]: distances in the plane (the eraser's swept disc, drawn segments);
 //! - [`heatmap`]: heat-map images of per-pixel values with a colour-scale legend;
 //! - [`histogram`]: value histograms (the automatic transfer function is fitted on them);
 //! - [`synth`]: synthetic datasets for tests, benchmarks and the demo;
@@ -43,6 +44,7 @@ pub mod limits;
 pub mod mesh;
 pub mod orientation;
 pub mod sculpt;
+pub mod segment;
 pub mod synth;
 pub mod tetrahedralize;
 pub mod transfer;

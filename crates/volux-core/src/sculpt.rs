@@ -15,6 +15,7 @@
 //! Picking the visible surface (the digger's centre, measurement, labelling seeds) needs the
 //! classification and lives in the renderer (`volux_render::sculpt`).
 
+mod cell_states;
 pub mod labels;
 mod mask;
 pub mod region;

@@ -32,6 +32,7 @@ pub mod dataset;
 pub mod file_dialog;
 pub mod files;
 pub mod jobs;
+pub mod label_colours;
 pub mod navigation;
 pub mod panels;
 pub mod plane_handle;

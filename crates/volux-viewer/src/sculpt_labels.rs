@@ -8,55 +8,12 @@
 //! goes without them and the panel says why ([`LabelColours::not_drawn`]).
 use std::sync::Arc;
 
-use volux_core::TransferFunction;
 use volux_render::scene::Scene;
 use volux_render::sculpt::{LabelVolume, SculptStep};
 
 use crate::app::ViewerApp;
 use crate::jobs::{Job, Poll};
-
-/// What a label volume is computed from.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LabelsKey {
-    /// The grid (its address: a new dataset is a new grid).
-    grid: usize,
-    /// The sculpt steps but measurements.
-    steps: Vec<SculptStep>,
-    /// The transfer function as drawn, which says which voxels are visible.
-    tf: TransferFunction,
-}
-
-/// The "Colour by labels" setting and its label volume.
-#[derive(Default)]
-pub struct LabelColours {
-    /// Colour the rendering by the labels (turned on when the first seed is placed).
-    pub on: bool,
-    /// Whether seeds existed at the last update (to turn `on` when the first comes).
-    had_seeds: bool,
-    /// The newest label volume and what it was computed from.
-    volume: Option<(LabelsKey, Arc<LabelVolume>)>,
-    /// The computation under way.
-    job: Option<(LabelsKey, Job<LabelVolume>)>,
-}
-
-impl LabelColours {
-    /// Whether a label volume is being computed.
-    pub fn computing(&self) -> bool {
-        self.job.is_some()
-    }
-
-    /// Why `scene` cannot draw labels, when it cannot: MIP shows the transfer function's
-    /// colours, and the mesh renderers draw no labels.
-    pub fn not_drawn(scene: &Scene) -> Option<&'static str> {
-        if scene.appearance.mip {
-            Some("labels colour the composited rendering; MIP shows the TF's colours")
-        } else if scene.method.draws_tets() {
-            Some("labels colour grid ray casting, not the tetrahedra")
-        } else {
-            None
-        }
-    }
-}
+use crate::label_colours::{LabelColours, LabelsKey};
 
 impl ViewerApp {
     /// Keeps the label volume in step with the sculpt (call once a frame): turns the

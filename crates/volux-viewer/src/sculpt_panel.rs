@@ -9,7 +9,7 @@ use volux_core::voi::ClipPlane;
 
 use crate::app::ViewerApp;
 use crate::file_dialog::Purpose;
-use crate::sculpt_labels::LabelColours;
+use crate::label_colours::LabelColours;
 use crate::sculpt_state::Tool;
 
 /// Draws the section.

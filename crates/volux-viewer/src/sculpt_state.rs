@@ -5,7 +5,7 @@
 use eframe::egui;
 
 use crate::jobs::Job;
-use crate::sculpt_labels::LabelColours;
+use crate::label_colours::LabelColours;
 
 /// What a left click or drag does in the 3D view.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

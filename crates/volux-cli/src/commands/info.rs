@@ -14,9 +14,6 @@ use volux_core::units::format_bytes;
 
 /// Describes the file at `path`.
 pub fn run(path: &Path, as_json: bool, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
-    if args.level.is_none() && volux_io::detect(path).ok() == Some(Format::OmeZarr) {
-        return super::store::info(path, as_json, args);
-    }
     let (data, format) = super::common::load(path, args, show)?;
     let value = match &data {
         Dataset::Grid(g) => grid_json(g, format),

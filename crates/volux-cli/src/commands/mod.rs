@@ -28,7 +28,15 @@ use common::CmdError;
 pub fn run(cli: Cli) -> Result<(), CmdError> {
     let show = progress::enabled(cli.quiet);
     match cli.command {
-        Command::Info { file, json, load } => info::run(&file, json, &load, show),
+        Command::Info { file, json, load } => {
+            // A store is described from its metadata (unless a level is to be loaded).
+            let store = volux_io::detect(&file).ok() == Some(volux_io::Format::OmeZarr);
+            if store && load.level.is_none() {
+                store::info(&file, json, &load)
+            } else {
+                info::run(&file, json, &load, show)
+            }
+        }
         Command::Convert {
             input,
             output,

@@ -4,6 +4,7 @@
 //! one-pixel box filter that falls inside the shape, estimated from the distance of its
 //! centre to the shape's edge.
 use super::Image;
+use crate::segment;
 
 /// Coverage of a pixel whose centre lies `distance` from a capsule's axis, `half` its
 /// half-width: 1 well inside, 0 well outside, linear across a one-pixel band.
@@ -11,17 +12,9 @@ fn coverage(distance: f64, half: f64) -> f32 {
     (half + 0.5 - distance).clamp(0.0, 1.0) as f32
 }
 
-/// Distance from `p` to the segment `a`-`b` (to `a` when they coincide).
-pub fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let (cx, cy) = (a[0] + t * dx - p[0], a[1] + t * dy - p[1]);
-    (cx * cx + cy * cy).sqrt()
+/// [`segment::segment_distance`] of pixel coordinates.
+fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    segment::segment_distance(p.into(), a.into(), b.into())
 }
 
 impl Image {

@@ -1,21 +1,12 @@
 //! The sculpt mask: one bit per voxel in sparse 8³ bricks, with a per-macrocell summary.
 use rayon::prelude::*;
 
+use super::cell_states::{summarize, CellStates, Corners, B, PARTIAL, REMOVED, VISIBLE};
 use super::region::{Coverage, Region};
-use cells::{CellStates, Corners};
-
-mod cells;
 use crate::error::{Error, Result};
 
-/// Voxels per brick side.
-const B: usize = 8;
 /// Bits of one brick (`B³`), in 64-bit words.
 const WORDS: usize = B * B * B / 64;
-
-/// A macrocell's state: every point in it visible, none, or some.
-const VISIBLE: u8 = 0;
-const REMOVED: u8 = 1;
-const PARTIAL: u8 = 2;
 
 /// One brick of the mask: wholly kept, wholly removed, or one bit per voxel (x fastest, then
 /// y, then z; bit set = kept). Bricks are kept normalized: `Bits` only when its in-range voxels
@@ -472,5 +463,114 @@ impl SculptMask {
             }
         }
         out
+    }
+}
+
+impl SculptMask {
+    /// Recomputes the summaries of the macrocells around the bricks `bricks` (a macrocell
+    /// reads the voxels of its own brick and the first layer of the next).
+    fn update_blocks_of(&mut self, bricks: &[usize]) {
+        let [bx, by, _] = self.bricks_per_axis;
+        let [mx, my, mz] = self.blocks_per_axis;
+        let mut blocks: Vec<usize> = Vec::new();
+        for &b in bricks {
+            let c = [b % bx, (b / bx) % by, b / (bx * by)];
+            for dk in 0..2 {
+                for dj in 0..2 {
+                    for di in 0..2 {
+                        let (i, j, k) = (
+                            c[0].checked_sub(di),
+                            c[1].checked_sub(dj),
+                            c[2].checked_sub(dk),
+                        );
+                        if let (Some(i), Some(j), Some(k)) = (i, j, k) {
+                            if i < mx && j < my && k < mz {
+                                blocks.push(i + mx * (j + my * k));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        blocks.sort_unstable();
+        blocks.dedup();
+        let summaries: Vec<_> = blocks.par_iter().map(|&m| self.block_summary(m)).collect();
+        for (m, (state, cells)) in blocks.into_iter().zip(summaries) {
+            self.blocks[m] = state;
+            self.cells[m] = cells;
+        }
+    }
+
+    /// Recomputes every macrocell's summary.
+    fn update_blocks_all(&mut self) {
+        let summaries: Vec<_> = (0..self.blocks.len())
+            .into_par_iter()
+            .map(|m| self.block_summary(m))
+            .collect();
+        (self.blocks, self.cells) = summaries.into_iter().unzip();
+    }
+
+    /// The state of macrocell `m` (its voxels `[8 I, 8 I + 8]` per axis, clamped to the
+    /// grid) and, when partly removed, its cells' corner states ([`summarize`]). The voxels
+    /// are read a row of nine at a time (a byte of one brick word and a bit of the next brick).
+    fn block_summary(&self, m: usize) -> (u8, Option<Box<CellStates>>) {
+        let [mx, my, _] = self.blocks_per_axis;
+        let c = [m % mx, (m / mx) % my, m / (mx * my)];
+        let lo = c.map(|c| c * Self::BLOCK);
+        let bricks = self.bricks_between(lo, self.summary_hi(lo));
+        if bricks.iter().all(|&b| self.bricks[b] == Brick::Kept) {
+            return (VISIBLE, None);
+        }
+        if bricks.iter().all(|&b| self.bricks[b] == Brick::Removed) {
+            return (REMOVED, None);
+        }
+        let mut rows = [[0u16; B + 1]; B + 1];
+        for (dk, plane) in rows.iter_mut().enumerate() {
+            for (dj, row) in plane.iter_mut().enumerate() {
+                let j = (lo[1] + dj).min(self.dims[1] - 1);
+                let k = (lo[2] + dk).min(self.dims[2] - 1);
+                *row = self.row_bits(lo[0], j, k);
+            }
+        }
+        summarize(&rows)
+    }
+
+    /// The last voxel per axis a macrocell starting at `lo` reads.
+    fn summary_hi(&self, lo: [usize; 3]) -> [usize; 3] {
+        std::array::from_fn(|a| (lo[a] + Self::BLOCK).min(self.dims[a] - 1))
+    }
+
+    /// The kept bits of the nine voxels `i0..=i0 + 8` of row (`j`, `k`), `i0` a multiple of
+    /// the brick side: bit `d` for voxel `min(i0 + d, last)`, clamped to the grid's last
+    /// voxel as the cells clamp their corners.
+    fn row_bits(&self, i0: usize, j: usize, k: usize) -> u16 {
+        let last = self.dims[0] - 1;
+        let mut bits = u16::from(self.brick_row(i0, j, k));
+        if i0 + B <= last {
+            bits |= u16::from(self.voxel(i0 + B, j, k)) << B;
+        } else {
+            // Past the grid's edge: every bit repeats the last voxel's.
+            let edge = (bits >> (last - i0)) & 1;
+            let keep = (1u16 << (last - i0 + 1)) - 1;
+            bits = (bits & keep)
+                | if edge == 1 {
+                    !keep & ((1 << (B + 1)) - 1)
+                } else {
+                    0
+                };
+        }
+        bits
+    }
+
+    /// The eight kept bits of row (`j`, `k`) in the brick holding voxel `i0` (a multiple of
+    /// the brick side): a byte of one word.
+    fn brick_row(&self, i0: usize, j: usize, k: usize) -> u8 {
+        let [bx, by, _] = self.bricks_per_axis;
+        let b = i0 / B + bx * (j / B + by * (k / B));
+        match &self.bricks[b] {
+            Brick::Kept => 0xFF,
+            Brick::Removed => 0,
+            Brick::Bits(w) => (w[k % B] >> (B * (j % B))) as u8,
+        }
     }
 }

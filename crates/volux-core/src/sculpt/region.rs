@@ -7,6 +7,7 @@ use glam::{DMat3, DVec2, DVec3};
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
+use crate::segment::segment_distance;
 
 /// How a region covers the voxel centres of a box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -267,18 +268,6 @@ impl Region for ScreenStroke {
             .pixel(self.frame.world(v))
             .is_some_and(|q| self.inside(q))
     }
-}
-
-/// The distance from `q` to the segment `[a, b]`.
-fn segment_distance(q: DVec2, a: DVec2, b: DVec2) -> f64 {
-    let ab = b - a;
-    let len2 = ab.length_squared();
-    let t = if len2 > 0.0 {
-        ((q - a).dot(ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (q - (a + ab * t)).length()
 }
 
 /// [`Camera::project`] with the camera's basis computed once.

@@ -6,7 +6,8 @@ use volux_core::bricked::ChunkSource;
 use volux_core::grid::{Grid, Samples};
 
 use super::pyramid::Elem;
-use super::{open_store, ZarrOptions};
+use super::read::open_store;
+use super::store::ZarrOptions;
 use crate::error::{ErrorKind, ReadError, Result};
 
 /// Copies the chunks of one layer of chunks (fixed z chunk index) into `out`.

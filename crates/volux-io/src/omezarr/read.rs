@@ -10,7 +10,7 @@ use zarrs::filesystem::FilesystemStore;
 
 use super::level::{Stored, ZarrLevel};
 use super::meta::{self, Axis, MultiscaleMeta};
-use super::{OmeZarr, ZarrOptions, VOLUX_KEY};
+use super::store::{OmeZarr, ZarrOptions, VOLUX_KEY};
 use crate::error::{ErrorKind, ReadError, Result};
 
 /// Chunks whose decoded bytes exceed this are refused (a 512^3 u16 chunk is 256 MiB).

@@ -16,7 +16,7 @@ use zarrs::array_subset::ArraySubset;
 use zarrs::filesystem::FilesystemStore;
 
 use super::pyramid::{halve, range_of, Elem};
-use super::VOLUX_KEY;
+use super::store::VOLUX_KEY;
 use crate::error::WriteError;
 
 /// How many levels to write.
