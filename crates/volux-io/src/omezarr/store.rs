@@ -11,7 +11,7 @@ pub struct ZarrOptions {
     /// A path inside the store to the image group (or plain array) to read, e.g.
     /// `labels/cells`; default: the store's root.
     pub array: Option<String>,
-    /// The level [`load_level`] reads (0 = full resolution).
+    /// The level [`load_level`](super::load_level) reads (0 = full resolution).
     pub level: usize,
     /// The index on a channel axis (`c`).
     pub channel: usize,
