@@ -10,9 +10,11 @@
 
 mod cache;
 mod field;
+mod render;
 #[cfg(test)]
 mod tests;
-mod volume;
+pub mod volume;
 
 pub use cache::{Brick, BrickCache, CacheStats};
+pub use render::{render_level, BrickedRenderer};
 pub use volume::{BrickedVolume, Lod};

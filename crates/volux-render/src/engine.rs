@@ -27,6 +27,7 @@
 //! assert_eq!((frame.image.width(), frame.stats.pixels), (64, 64 * 64));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+use crate::bricked::BrickedRenderer;
 use crate::error::RenderError;
 use crate::pt::reference::MeshReference;
 use crate::pt::render::PtRenderer;
@@ -46,6 +47,9 @@ pub fn create_renderer(volume: &Volume, method: &Method) -> Result<Box<dyn Rende
     let method = method.resolve(volume)?;
     Ok(match (method, volume) {
         (Method::GridRaycast(_), Volume::Grid(g)) => Box::new(GridRenderer::new(g.clone())),
+        (Method::GridRaycast(_), Volume::Bricked(b, lod)) => {
+            Box::new(BrickedRenderer::new(b.clone(), *lod))
+        }
         (Method::ProjectedTetrahedra(_), Volume::Mesh(m)) => Box::new(PtRenderer::new(m.clone())),
         (Method::TetRaycast(_), Volume::Mesh(m)) => Box::new(TetRayCaster::new(m.clone())?),
         (Method::Resample { .. }, Volume::Mesh(m)) => Box::new(ResampleRenderer::new(m.clone())),

@@ -90,6 +90,8 @@ pub fn visible_bounds(volume: &Volume, appearance: &Appearance) -> Result<Aabb, 
     let found = match volume {
         Volume::Grid(g) => grid_box(g, visible),
         Volume::Mesh(m) => mesh_box(m, visible),
+        // The chunks' ranges are not all known without reading them: the whole box.
+        Volume::Bricked(b, _) => Some(b.bounds()),
     };
     found.ok_or_else(|| Invisible::Transparent {
         range,

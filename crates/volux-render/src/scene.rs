@@ -31,6 +31,7 @@ use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::voi::ClipPlane;
 use volux_core::{Aabb, Camera, Grid, TetMesh, TransferFunction};
 
+use crate::bricked::volume::{BrickedVolume, Lod};
 use crate::error::RenderError;
 use crate::integrate::integrator::Integrator;
 use crate::integrate::segment::SegmentRule;
@@ -49,7 +50,7 @@ pub const DEFAULT_EARLY_TERMINATION: f32 = 0.99;
 pub const HISTOGRAM_BINS: usize = 256;
 
 /// The data a renderer draws, shared (`Arc`) so that a viewer can keep rendering it on
-/// another thread. Bricked and out-of-core grids will be further kinds.
+/// another thread.
 #[derive(Clone, Debug)]
 #[non_exhaustive]
 pub enum Volume {
@@ -57,6 +58,9 @@ pub enum Volume {
     Grid(Arc<Grid>),
     /// A tetrahedral mesh with one scalar per vertex.
     Mesh(Arc<TetMesh>),
+    /// A grid stored in chunks, rendered out of core ([`crate::bricked`]), with the way its
+    /// pyramid level is chosen.
+    Bricked(Arc<BrickedVolume>, Lod),
 }
 
 impl From<Grid> for Volume {
@@ -77,6 +81,7 @@ impl Volume {
         match self {
             Self::Grid(_) => "grid",
             Self::Mesh(_) => "tetrahedral mesh",
+            Self::Bricked(..) => "bricked grid",
         }
     }
 
@@ -85,6 +90,7 @@ impl Volume {
         match self {
             Self::Grid(g) => g.bounds(),
             Self::Mesh(m) => m.bounds(),
+            Self::Bricked(b, _) => b.bounds(),
         }
     }
 
@@ -93,6 +99,7 @@ impl Volume {
         match self {
             Self::Grid(g) => g.range(),
             Self::Mesh(m) => m.range(),
+            Self::Bricked(b, _) => b.range(),
         }
     }
 
@@ -102,6 +109,7 @@ impl Volume {
         match self {
             Self::Grid(g) => g.spacing().min_element(),
             Self::Mesh(m) => m.bounds().diagonal() / MESH_UNITS_PER_DIAGONAL,
+            Self::Bricked(b, _) => b.unit_length(),
         }
     }
 
@@ -110,6 +118,7 @@ impl Volume {
         match self {
             Self::Grid(g) => Histogram::of_grid(g, bins),
             Self::Mesh(m) => Histogram::from_values(m.scalars(), m.range(), bins),
+            Self::Bricked(b, _) => b.histogram(bins),
         }
     }
 
@@ -126,6 +135,9 @@ impl Volume {
         match self {
             Self::Grid(g) => Ok(grid_to_tets(g)?.into()),
             Self::Mesh(_) => Ok(self.clone()),
+            Self::Bricked(..) => Err(RenderError::InvalidOptions(
+                "a bricked grid is not split into tetrahedra: it is ray cast out of core".into(),
+            )),
         }
     }
 }
@@ -291,7 +303,7 @@ impl Method {
     /// with `mesh` for meshes.
     pub fn raycast(volume: &Volume, grid: GridRaycast, mesh: SegmentRule) -> Self {
         match volume {
-            Volume::Grid(_) => Self::GridRaycast(grid),
+            Volume::Grid(_) | Volume::Bricked(..) => Self::GridRaycast(grid),
             Volume::Mesh(_) => Self::TetRaycast(mesh),
         }
     }
@@ -309,9 +321,11 @@ impl Method {
         };
         let split = "split the grid into tetrahedra first (Volume::to_tets; volux: --as-tets)";
         match (self, volume) {
-            (Self::Auto, Volume::Grid(_)) => Ok(Self::GridRaycast(GridRaycast::default())),
+            (Self::Auto, Volume::Grid(_) | Volume::Bricked(..)) => {
+                Ok(Self::GridRaycast(GridRaycast::default()))
+            }
             (Self::Auto, Volume::Mesh(_)) => Ok(Self::ProjectedTetrahedra(PtSettings::default())),
-            (Self::GridRaycast(_), Volume::Grid(_)) => Ok(*self),
+            (Self::GridRaycast(_), Volume::Grid(_) | Volume::Bricked(..)) => Ok(*self),
             (Self::GridRaycast(_), _) => {
                 wrong("ray cast the mesh cell by cell (tet-raycast) or resample it")
             }

@@ -133,7 +133,7 @@ fn every_integrator_equals_the_in_core_render_with_evictions_within_the_frame() 
     for o in &cases {
         let want = render_field(&incore, Placement::of(&g), g.range(), o).unwrap();
         for v in [&small, &roomy] {
-            let got = v.render(0, o).unwrap();
+            let got = render_level(v, 0, o).unwrap();
             let d = max_diff(&got.image, &want.image);
             assert!(
                 d <= 1e-6,
@@ -150,7 +150,7 @@ fn every_integrator_equals_the_in_core_render_with_evictions_within_the_frame() 
     // The grid renderer (empty-space skipping, lanes) draws the same emission-only image.
     let o = &cases[0];
     let grid_image = render_grid(&g, o).unwrap().image;
-    assert!(max_diff(&roomy.render(0, o).unwrap().image, &grid_image) <= 1e-6);
+    assert!(max_diff(&render_level(&roomy, 0, o).unwrap().image, &grid_image) <= 1e-6);
 }
 
 #[test]
@@ -170,7 +170,7 @@ fn a_ray_grazing_a_brick_face_samples_both_sides_exactly() {
             format!(r#"{{"eye": [{x}, -40, 12], "target": [{x}, 10, 12.3], "up": [0, 0, 1]}}"#);
         let o = options(&g, &spec);
         let want = render_field(&incore, Placement::of(&g), g.range(), &o).unwrap();
-        let got = v.render(0, &o).unwrap();
+        let got = render_level(&v, 0, &o).unwrap();
         let d = max_diff(&got.image, &want.image);
         assert!(d <= 1e-6, "dx {dx}: max difference {d}");
         assert!(want.stats.samples > 1000);
@@ -223,21 +223,17 @@ fn a_chunk_that_cannot_be_read_is_one_error_naming_it_and_no_image() {
     let coarse = GridChunks::new(Arc::new(g.clone()), DIMS).unwrap();
     let levels: Vec<Arc<dyn ChunkSource>> = vec![Arc::new(ranged), Arc::new(coarse)];
     let ms = Multiscale::new("broken", levels).unwrap();
-    let e = BrickedVolume::open(ms, 1 << 30)
-        .unwrap()
-        .render(0, &o)
-        .unwrap_err()
-        .to_string();
+    let broken = BrickedVolume::open(ms, 1 << 30).unwrap();
+    let e = render_level(&broken, 0, &o).unwrap_err().to_string();
     assert!(
         e.contains("chunk [1, 1, 1]") && e.contains("truncated"),
         "{e}"
     );
     // Levels that do not exist and voxel layers are refused with the reason.
-    assert!(volume(&g, 1 << 20).render(3, &o).is_err());
+    assert!(render_level(&volume(&g, 1 << 20), 3, &o).is_err());
     let mut masked = o.clone();
     masked.mask = Some(Arc::new(volux_core::sculpt::SculptMask::new(DIMS).unwrap()));
-    let e = volume(&g, 1 << 20)
-        .render(0, &masked)
+    let e = render_level(&volume(&g, 1 << 20), 0, &masked)
         .unwrap_err()
         .to_string();
     assert!(e.contains("sculpt mask"), "{e}");
@@ -275,17 +271,53 @@ fn the_automatic_level_follows_the_pixel_size() {
     let coarse = GridChunks::new(Arc::new(coarse), CHUNK).unwrap();
     let levels: Vec<Arc<dyn ChunkSource>> = vec![Arc::new(full), Arc::new(coarse)];
     let v = BrickedVolume::open(Multiscale::new("pyramid", levels).unwrap(), 1 << 30).unwrap();
-    let cam = |zoom: f64| {
+    let v = Arc::new(v);
+    let scene = |zoom: f64, size: usize| {
         let spec = CameraSpec {
             zoom: Some(zoom),
             ..Default::default()
         };
-        spec.resolve(&g.bounds()).unwrap()
+        let cam = spec.resolve(&g.bounds()).unwrap();
+        crate::scene::Scene::new(cam, size, size, tf())
     };
+    let auto = BrickedRenderer::new(v.clone(), Lod::Auto);
     // A small image of the whole volume: pixels are larger than the coarse voxels.
-    assert_eq!(v.level_for(Lod::Auto, &cam(1.0), 8), 1);
+    assert_eq!(auto.level_for(&scene(1.0, 8)), 1);
     // A large, close view: pixels smaller than the full-resolution voxels.
-    assert_eq!(v.level_for(Lod::Auto, &cam(4.0), 2000), 0);
-    assert_eq!(v.level_for(Lod::Level(7), &cam(1.0), 8), 1);
-    assert_eq!(v.level_for(Lod::Level(0), &cam(1.0), 8), 0);
+    assert_eq!(auto.level_for(&scene(4.0, 2000)), 0);
+    assert_eq!(
+        BrickedRenderer::new(v.clone(), Lod::Level(7)).level_for(&scene(1.0, 8)),
+        1
+    );
+    assert_eq!(
+        BrickedRenderer::new(v, Lod::Level(0)).level_for(&scene(1.0, 8)),
+        0
+    );
+}
+
+#[test]
+fn the_engine_renders_a_bricked_volume_as_the_grid_it_holds() {
+    use crate::engine::render_once;
+    use crate::scene::{Scene, Volume};
+    let g = grid();
+    let bricked = Volume::Bricked(Arc::new(volume(&g, 4 * 8 * 5 * 4 * 4)), Lod::Level(0));
+    let incore = Volume::from(g.clone());
+    assert_eq!(bricked.range(), incore.range());
+    assert_eq!(bricked.bounds(), incore.bounds());
+    // One level: the histogram is the grid's, so are the presets fitted on it.
+    assert_eq!(
+        bricked.preset_tf("auto").unwrap(),
+        incore.preset_tf("auto").unwrap()
+    );
+    let cam = CameraSpec::from_json(r#"{"azimuth": 70, "elevation": 35}"#)
+        .unwrap()
+        .resolve(&g.bounds())
+        .unwrap();
+    let scene = Scene::new(cam, 48, 40, tf());
+    let control = crate::tiles::Control::default();
+    let a = render_once(&bricked, &scene, &control).unwrap();
+    let b = render_once(&incore, &scene, &control).unwrap();
+    let d = max_diff(&a.image, &b.image);
+    assert!(d <= 1e-6, "max difference {d}");
+    assert!(bricked.to_tets().is_err());
 }

@@ -1,21 +1,15 @@
 //! A bricked volume as the engine renders it: a [`Multiscale`] pyramid with one brick cache
 //! per level within a shared memory budget, the data range, and the choice of level
 //! ([`Lod`]).
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
-
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use rayon::prelude::*;
 use volux_core::bricked::{ChunkSource, Multiscale};
 use volux_core::grid::Scalar;
 use volux_core::histogram::Histogram;
-use volux_core::{Aabb, Camera};
+use volux_core::Aabb;
 
 use super::cache::{BrickCache, CacheStats};
-use super::field::BrickedField;
 use crate::error::RenderError;
-use crate::raycast::{render_field, Placement, RenderOptions, Rendered};
-use crate::tiles::Control;
 
 /// Which pyramid level a render samples.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -46,6 +40,10 @@ impl std::fmt::Debug for BrickedVolume {
             .finish()
     }
 }
+
+/// The bins of the kept histogram (as many as the presets are fitted on,
+/// `scene::HISTOGRAM_BINS`).
+const KEPT_BINS: usize = 256;
 
 /// The coarsest level is read whole for the histogram only up to this many samples.
 const HISTOGRAM_SAMPLES: usize = 1 << 26;
@@ -103,8 +101,8 @@ impl BrickedVolume {
     }
 
     /// The histogram of the coarsest level over [`BrickedVolume::range`] with `bins` bins
-    /// (from the kept one of [`HISTOGRAM_BINS`](crate::scene::HISTOGRAM_BINS) bins, each
-    /// counted in the new bin holding its centre, when `bins` differs).
+    /// (from the kept one of 256 bins, each counted in the new bin holding its centre, when
+    /// `bins` differs).
     pub fn histogram(&self, bins: usize) -> Histogram {
         let h = &self.histogram;
         if h.counts.len() == bins {
@@ -133,82 +131,31 @@ impl BrickedVolume {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// The level `lod` picks for `camera` at `height` pixels.
-    pub fn level_for(&self, lod: Lod, camera: &Camera, height: usize) -> usize {
+    /// The level `lod` picks when a pixel covers `pixel` world units at the volume's centre:
+    /// the coarsest whose smallest spacing is at most that (full resolution when none is).
+    pub fn level_for(&self, lod: Lod, pixel: f64) -> usize {
         let last = self.caches.len() - 1;
         match lod {
             Lod::Level(n) => n.min(last),
-            Lod::Auto => {
-                let centre = self.bounds().center();
-                let forward = (camera.target - camera.eye).normalize_or_zero();
-                let depth = (centre - camera.eye).dot(forward);
-                let pixel = crate::sculpt::pixel_size_at(camera, height, depth);
-                (0..=last)
-                    .rev()
-                    .find(|&n| {
-                        let s = self.caches[n].layout().spacing;
-                        s.iter().cloned().fold(f64::INFINITY, f64::min) <= pixel
-                    })
-                    .unwrap_or(0)
-            }
+            Lod::Auto => (0..=last)
+                .rev()
+                .find(|&n| {
+                    let s = self.caches[n].layout().spacing;
+                    s.iter().cloned().fold(f64::INFINITY, f64::min) <= pixel
+                })
+                .unwrap_or(0),
         }
     }
 
-    /// Renders level `level` with `opts` (trilinear reconstruction; no sculpt mask or
-    /// labels: they are full-resolution voxel layers of in-core grids). A chunk that cannot
-    /// be read stops the render with an error naming it; no image is returned.
-    pub fn render(&self, level: usize, opts: &RenderOptions) -> Result<Rendered, RenderError> {
-        refuse_voxel_layers(opts)?;
-        let cache = self.caches.get(level).ok_or_else(|| {
-            RenderError::InvalidOptions(format!(
-                "level {level} does not exist: the volume has {} levels",
-                self.caches.len()
-            ))
-        })?;
-        let range = self.range;
-        let failed = Arc::new(AtomicBool::new(false));
-        let field = BrickedField::new(cache, failed.clone());
-        let mut opts = opts.clone();
-        if opts.control.cancel.is_none() {
-            // A chunk error stops the render early (a caller's own flag is left alone).
-            opts.control = Control {
-                cancel: Some(failed),
-                progress: opts.control.progress.clone(),
-            };
-        }
-        let out = render_field(&field, placement(cache.layout()), range, &opts);
-        match field.error() {
-            Some(e) => Err(RenderError::Data(volux_core::Error::Chunked(e.clone()))),
-            None => out,
-        }
+    /// Level `level`'s cache.
+    pub(super) fn cache(&self, level: usize) -> Option<&BrickCache> {
+        self.caches.get(level)
     }
-}
 
-/// The world placement of a chunked level (axis-aligned).
-fn placement(l: &volux_core::bricked::ChunkLayout) -> Placement {
-    Placement {
-        origin: l.origin_vec(),
-        spacing: l.spacing_vec(),
-        dims: l.dims,
-        direction: DMat3::IDENTITY,
+    /// The number of levels.
+    pub fn levels(&self) -> usize {
+        self.caches.len()
     }
-}
-
-/// Masks, labels and cubic filters are refused with the reason.
-fn refuse_voxel_layers(opts: &RenderOptions) -> Result<(), RenderError> {
-    use crate::sampling::Reconstruction;
-    let what = if opts.mask.is_some() {
-        "a sculpt mask"
-    } else if opts.labels.is_some() {
-        "region labels"
-    } else if opts.reconstruction != Reconstruction::Trilinear {
-        "cubic reconstruction"
-    } else {
-        return Ok(());
-    };
-    Err(RenderError::InvalidOptions(format!(
-        "bricked volumes are rendered with trilinear reconstruction and without voxel layers: {what} needs the volume in memory (load a level that fits the memory budget)"
-    )))
 }
 
 /// The range of every chunk's samples, read one chunk per thread at a time.
@@ -247,7 +194,7 @@ fn scan_range(level: &dyn ChunkSource) -> Result<[f64; 2], RenderError> {
 /// The histogram of the coarsest level (read whole, chunk by chunk, when it has at most
 /// [`HISTOGRAM_SAMPLES`] samples) over `range`.
 fn coarse_histogram(ms: &Multiscale, range: [f64; 2]) -> Result<Histogram, RenderError> {
-    let bins = crate::scene::HISTOGRAM_BINS;
+    let bins = KEPT_BINS;
     let Some(level) = ms
         .levels()
         .iter()

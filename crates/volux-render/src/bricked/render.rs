@@ -1,0 +1,119 @@
+//! Rendering a bricked volume: one level through its brick cache, as a field of the grid ray
+//! caster ([`render_level`]), and the engine's [`Renderer`] for bricked volumes
+//! ([`BrickedRenderer`]: grid ray casting, the level chosen per frame by its [`Lod`]).
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::DMat3;
+
+use super::field::BrickedField;
+use super::volume::{BrickedVolume, Lod};
+use crate::error::RenderError;
+use crate::frame::Frame;
+use crate::raycast::{grid_frame, render_field, Placement, RenderOptions, Rendered};
+use crate::renderer::{wrong_method, Renderer};
+use crate::scene::{GridRaycast, Method, Scene};
+use crate::tiles::Control;
+
+/// Grid ray casting of a [`BrickedVolume`], at the level its [`Lod`] picks for each frame.
+pub struct BrickedRenderer {
+    volume: Arc<BrickedVolume>,
+    lod: Lod,
+}
+
+impl BrickedRenderer {
+    /// A renderer of `volume` choosing levels by `lod`.
+    pub fn new(volume: Arc<BrickedVolume>, lod: Lod) -> Self {
+        Self { volume, lod }
+    }
+
+    /// The level the next frame of `scene` samples.
+    pub fn level_for(&self, scene: &Scene) -> usize {
+        let cam = &scene.view.camera;
+        let centre = self.volume.bounds().center();
+        let forward = (cam.target - cam.eye).normalize_or_zero();
+        let depth = (centre - cam.eye).dot(forward);
+        let pixel = crate::sculpt::pixel_size_at(cam, scene.view.height, depth);
+        self.volume.level_for(self.lod, pixel)
+    }
+}
+
+impl Renderer for BrickedRenderer {
+    fn name(&self) -> &'static str {
+        "raycast"
+    }
+
+    fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
+        let started = Instant::now();
+        let settings = match scene.method {
+            Method::Auto => GridRaycast::default(),
+            Method::GridRaycast(s) => s,
+            other => return Err(wrong_method("raycast", &other)),
+        };
+        scene.validate()?;
+        let opts = RenderOptions::from_scene(scene, &settings, control);
+        let r = render_level(&self.volume, self.level_for(scene), &opts)?;
+        Ok(grid_frame(r, &settings, started))
+    }
+}
+
+/// Renders level `level` with `opts` (trilinear reconstruction; no sculpt mask or
+/// labels: they are full-resolution voxel layers of in-core grids). A chunk that cannot
+/// be read stops the render with an error naming it; no image is returned.
+pub fn render_level(
+    volume: &BrickedVolume,
+    level: usize,
+    opts: &RenderOptions,
+) -> Result<Rendered, RenderError> {
+    refuse_voxel_layers(opts)?;
+    let cache = volume.cache(level).ok_or_else(|| {
+        RenderError::InvalidOptions(format!(
+            "level {level} does not exist: the volume has {} levels",
+            volume.levels()
+        ))
+    })?;
+    let range = volume.range();
+    let failed = Arc::new(AtomicBool::new(false));
+    let field = BrickedField::new(cache, failed.clone());
+    let mut opts = opts.clone();
+    if opts.control.cancel.is_none() {
+        // A chunk error stops the render early (a caller's own flag is left alone).
+        opts.control = Control {
+            cancel: Some(failed),
+            progress: opts.control.progress.clone(),
+        };
+    }
+    let out = render_field(&field, placement(cache.layout()), range, &opts);
+    match field.error() {
+        Some(e) => Err(RenderError::Data(volux_core::Error::Chunked(e.clone()))),
+        None => out,
+    }
+}
+
+/// The world placement of a chunked level (axis-aligned).
+fn placement(l: &volux_core::bricked::ChunkLayout) -> Placement {
+    Placement {
+        origin: l.origin_vec(),
+        spacing: l.spacing_vec(),
+        dims: l.dims,
+        direction: DMat3::IDENTITY,
+    }
+}
+
+/// Masks, labels and cubic filters are refused with the reason.
+fn refuse_voxel_layers(opts: &RenderOptions) -> Result<(), RenderError> {
+    use crate::sampling::Reconstruction;
+    let what = if opts.mask.is_some() {
+        "a sculpt mask"
+    } else if opts.labels.is_some() {
+        "region labels"
+    } else if opts.reconstruction != Reconstruction::Trilinear {
+        "cubic reconstruction"
+    } else {
+        return Ok(());
+    };
+    Err(RenderError::InvalidOptions(format!(
+        "bricked volumes are rendered with trilinear reconstruction and without voxel layers: {what} needs the volume in memory (load a level that fits the memory budget)"
+    )))
+}
