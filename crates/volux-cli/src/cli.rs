@@ -378,6 +378,11 @@ pub struct RenderArgs {
     /// .png).
     #[arg(long, value_name = "N[:DEG]")]
     pub orbit: Option<String>,
+    /// OME-Zarr: render out of core, chunk by chunk within the memory budget, at this
+    /// pyramid level: `auto` (voxels about a pixel) or N (0 = full resolution). Without it a
+    /// store is rendered out of core only when its full level is over the budget (`auto`).
+    #[arg(long, value_name = "auto|N", conflicts_with = "level")]
+    pub lod: Option<String>,
     /// With --orbit: write no images (figures only, with --stats).
     #[arg(long)]
     pub no_write: bool,

@@ -140,3 +140,60 @@ fn bad_store_inputs_are_one_line_and_write_nothing() {
     left.sort();
     assert_eq!(left, ["done.ome.zarr", "s.raw", "s.raw.json"]);
 }
+
+#[test]
+fn a_store_renders_out_of_core_as_in_memory_and_a_bad_lod_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let gen = ["generate", "marschner-lobb", "--size", "33", "--chunk", "8"];
+    ok(&[&gen[..], &["-o", "ml.ome.zarr"]].concat(), dir);
+    let common = ["--size", "48x40", "--frame", "all", "--azimuth", "35"];
+    // Out of core at full resolution (chunks of 8: rays cross many chunk faces), and in
+    // memory: the same picture, bit for bit.
+    ok(
+        &[
+            &["render", "ml.ome.zarr", "--lod", "0"],
+            &common[..],
+            &["-o", "bricked.png"],
+        ]
+        .concat(),
+        dir,
+    );
+    ok(
+        &[
+            &["render", "ml.ome.zarr"],
+            &common[..],
+            &["-o", "incore.png"],
+        ]
+        .concat(),
+        dir,
+    );
+    let a = std::fs::read(dir.join("bricked.png")).unwrap();
+    let b = std::fs::read(dir.join("incore.png")).unwrap();
+    assert!(a == b, "the out-of-core PNG differs from the in-memory one");
+    // A coarse level renders too.
+    ok(
+        &[
+            "render",
+            "ml.ome.zarr",
+            "--lod",
+            "2",
+            "--size",
+            "16x16",
+            "-o",
+            "coarse.png",
+        ],
+        dir,
+    );
+    let out = volux(
+        &["render", "ml.ome.zarr", "--lod", "fine", "-o", "bad.png"],
+        dir,
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--lod fine") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!dir.join("bad.png").exists());
+}

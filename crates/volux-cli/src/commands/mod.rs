@@ -3,6 +3,7 @@
 //! ([`volux_render::engine`]).
 mod accuracy;
 mod bench;
+pub(crate) mod bricked;
 pub mod common;
 mod compare;
 mod convert;

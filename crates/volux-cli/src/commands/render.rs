@@ -27,9 +27,14 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
         .file
         .as_deref()
         .ok_or("give the file to render, or --session S.json")?;
-    let (data, format) = super::common::load(file, &args.load, show)?;
-    let loaded_grid = matches!(data, Dataset::Grid(_));
-    let volume = crate::settings::volume(data, args)?;
+    let (volume, format, loaded_grid) = match super::bricked::volume(file, args)? {
+        Some(v) => (v, volux_io::Format::OmeZarr, false),
+        None => {
+            let (data, format) = super::common::load(file, &args.load, show)?;
+            let loaded_grid = matches!(data, Dataset::Grid(_));
+            (crate::settings::volume(data, args)?, format, loaded_grid)
+        }
+    };
     let mut scene = plan.scene(args, &volume, loaded_grid)?;
     if let Some(mask) = &args.view_args.mask {
         super::workbench::add_mask(mask, &volume, file, &mut scene)?;

@@ -4,9 +4,9 @@
 //! ([`Trilinear`](crate::sampling::Trilinear)), so that a bricked render equals the in-core
 //! render of the same data.
 //!
-//! Each thread remembers the last brick it sampled (rays advance through a brick for many
+//! Each thread remembers the last bricks it sampled (rays advance through a brick for many
 //! samples, and the lanes of a block of pixels share bricks), so the cache's lock is taken
-//! once per brick crossing, not per sample.
+//! about once per brick crossing, not per sample.
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
@@ -20,9 +20,16 @@ use crate::sampling::Field;
 /// another's).
 static NEXT_FIELD: AtomicU64 = AtomicU64::new(1);
 
+/// Slots of the per-thread memo: the lanes of the lane stream hold rays at different depths,
+/// so a step's samples fall in a few bricks at once; one remembered brick thrashed.
+const MEMO_SLOTS: usize = 16;
+
+/// A remembered brick: (field identity, chunk index, brick).
+type Memo = Option<(u64, usize, Arc<Brick>)>;
+
 thread_local! {
-    /// The last brick this thread sampled: (field identity, chunk index, brick).
-    static LAST: RefCell<Option<(u64, usize, Arc<Brick>)>> = const { RefCell::new(None) };
+    /// The bricks this thread sampled last, direct-mapped by chunk index.
+    static LAST: RefCell<[Memo; MEMO_SLOTS]> = const { RefCell::new([const { None }; MEMO_SLOTS]) };
 }
 
 /// A bricked level as a [`Field`] for one render. A chunk that cannot be read makes its
@@ -61,29 +68,35 @@ impl<'a> BrickedField<'a> {
         self.error.get()
     }
 
-    /// The brick holding sample (`i`, `j`, `k`), from this thread's memo or the cache.
+    /// `f` of the brick holding sample (`i`, `j`, `k`), from this thread's memo or the cache
+    /// (no reference count is touched on a hit: two threads sharing a brick would bounce
+    /// its count between their caches at every sample). `f` must not sample this field.
     #[inline]
-    fn brick(&self, i: usize, j: usize, k: usize) -> Option<Arc<Brick>> {
+    fn with_brick<R>(
+        &self,
+        i: usize,
+        j: usize,
+        k: usize,
+        f: impl FnOnce(&Brick) -> R,
+    ) -> Option<R> {
         let c = [i / self.chunk[0], j / self.chunk[1], k / self.chunk[2]];
         let index = self.cache.layout().chunk_index(c);
-        let memo = LAST.with(|m| match &*m.borrow() {
-            Some((id, at, b)) if *id == self.id && *at == index => Some(b.clone()),
-            _ => None,
-        });
-        if memo.is_some() {
-            return memo;
-        }
-        match self.cache.get(c) {
-            Ok(b) => {
-                LAST.with(|m| *m.borrow_mut() = Some((self.id, index, b.clone())));
-                Some(b)
+        LAST.with(|memo| {
+            let mut memo = memo.borrow_mut();
+            let m = &mut memo[index % MEMO_SLOTS];
+            let hit = matches!(&*m, Some((id, at, _)) if *id == self.id && *at == index);
+            if !hit {
+                match self.cache.get(c) {
+                    Ok(b) => *m = Some((self.id, index, b)),
+                    Err(e) => {
+                        let _ = self.error.set(e);
+                        self.failed.store(true, Ordering::Relaxed);
+                        return None;
+                    }
+                }
             }
-            Err(e) => {
-                let _ = self.error.set(e);
-                self.failed.store(true, Ordering::Relaxed);
-                None
-            }
-        }
+            m.as_ref().map(|(_, _, b)| f(b))
+        })
     }
 
     /// The cell of `p` (clamped as [`Trilinear::sample_raw`](crate::sampling::Trilinear)
@@ -104,9 +117,6 @@ impl<'a> BrickedField<'a> {
             j + usize::from(self.dims[1] > 1),
             k + usize::from(self.dims[2] > 1),
         ];
-        let b = self.brick(i, j, k)?;
-        let inside = (0..3).all(|a| n[a] < b.lo[a] + b.size[a]);
-        let mut v = [0.0f32; 8];
         let at = |q: usize| {
             [
                 if q & 1 == 1 { n[0] } else { i },
@@ -114,17 +124,26 @@ impl<'a> BrickedField<'a> {
                 if q >> 2 & 1 == 1 { n[2] } else { k },
             ]
         };
-        if inside {
-            for (q, v) in v.iter_mut().enumerate() {
-                let [x, y, z] = at(q);
-                *v = b.at(x, y, z);
+        // The cell in one brick (most cells), else each corner from its own.
+        let one = self.with_brick(i, j, k, |b| {
+            (0..3).all(|a| n[a] < b.lo[a] + b.size[a]).then(|| {
+                std::array::from_fn(|q| {
+                    let [x, y, z] = at(q);
+                    b.at(x, y, z)
+                })
+            })
+        })?;
+        let v = match one {
+            Some(v) => v,
+            None => {
+                let mut v = [0.0f32; 8];
+                for (q, v) in v.iter_mut().enumerate() {
+                    let [x, y, z] = at(q);
+                    *v = self.with_brick(x, y, z, |b| b.at(x, y, z))?;
+                }
+                v
             }
-        } else {
-            for (q, v) in v.iter_mut().enumerate() {
-                let [x, y, z] = at(q);
-                *v = self.brick(x, y, z)?.at(x, y, z);
-            }
-        }
+        };
         Some((v, f))
     }
 }
@@ -170,7 +189,7 @@ impl Field for BrickedField<'_> {
             let x = if q & 1 == 1 { n[0] } else { i };
             let y = if q >> 1 & 1 == 1 { n[1] } else { j };
             let z = if q >> 2 & 1 == 1 { n[2] } else { k };
-            *v = f64::from(self.brick(x, y, z)?.at(x, y, z));
+            *v = f64::from(self.with_brick(x, y, z, |b| b.at(x, y, z))?);
         }
         let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
         let c0 = lerp(lerp(v[0], v[1], fx), lerp(v[2], v[3], fx), fy);

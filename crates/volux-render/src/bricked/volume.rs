@@ -45,15 +45,16 @@ impl std::fmt::Debug for BrickedVolume {
 /// `scene::HISTOGRAM_BINS`).
 const KEPT_BINS: usize = 256;
 
-/// The coarsest level is read whole for the histogram only up to this many samples.
-const HISTOGRAM_SAMPLES: usize = 1 << 26;
+/// The histogram is taken from the finest level with at most this many samples (read whole,
+/// chunk by chunk: 64 MiB of f32).
+const HISTOGRAM_SAMPLES: usize = 1 << 24;
 
 impl BrickedVolume {
     /// `multiscale` with its bricks cached within `budget` bytes (each level's cache may
     /// take the whole budget; only the levels rendered hold bricks). Finds the value range
     /// (recorded by the store, else read chunk by chunk from the full level: the transfer
-    /// function is placed on it, as for the in-core grid) and a histogram of the coarsest
-    /// level (for the transfer-function presets). Errors name a chunk that cannot be read.
+    /// function is placed on it, as for the in-core grid) and a histogram of the finest level
+    /// of at most [`HISTOGRAM_SAMPLES`] samples (for the transfer-function presets). Errors name a chunk that cannot be read.
     pub fn open(multiscale: Multiscale, budget: u64) -> Result<Self, RenderError> {
         let full = multiscale.full();
         let range = match full.value_range() {
@@ -100,7 +101,7 @@ impl BrickedVolume {
         self.range
     }
 
-    /// The histogram of the coarsest level over [`BrickedVolume::range`] with `bins` bins
+    /// The histogram (of the finest level of at most 2^24 samples) over [`BrickedVolume::range`] with `bins` bins
     /// (from the kept one of 256 bins, each counted in the new bin holding its centre, when
     /// `bins` differs).
     pub fn histogram(&self, bins: usize) -> Histogram {
@@ -191,14 +192,13 @@ fn scan_range(level: &dyn ChunkSource) -> Result<[f64; 2], RenderError> {
     Ok(r)
 }
 
-/// The histogram of the coarsest level (read whole, chunk by chunk, when it has at most
-/// [`HISTOGRAM_SAMPLES`] samples) over `range`.
+/// The histogram over `range` of the finest level with at most [`HISTOGRAM_SAMPLES`]
+/// samples (the full level when it is that small: the presets then match the in-core grid's).
 fn coarse_histogram(ms: &Multiscale, range: [f64; 2]) -> Result<Histogram, RenderError> {
     let bins = KEPT_BINS;
     let Some(level) = ms
         .levels()
         .iter()
-        .rev()
         .find(|l| l.layout().dims.iter().product::<usize>() <= HISTOGRAM_SAMPLES)
     else {
         return Err(RenderError::InvalidOptions(format!(

@@ -57,9 +57,15 @@ pub fn run(
         );
     }
     let plan = RenderPlan::new(&args)?;
-    let (data, _) = common::load(file, &args.load, false)?;
-    let loaded_grid = matches!(data, Dataset::Grid(_));
-    let volume = crate::settings::volume(data, &args)?;
+    // A store with --lod (or over the budget) is timed out of core, as `volux render` draws it.
+    let (volume, loaded_grid) = match crate::commands::bricked::volume(file, &args)? {
+        Some(v) => (v, false),
+        None => {
+            let (data, _) = common::load(file, &args.load, false)?;
+            let loaded_grid = matches!(data, Dataset::Grid(_));
+            (crate::settings::volume(data, &args)?, loaded_grid)
+        }
+    };
     let scene = plan.scene(&args, &volume, loaded_grid)?;
     let mut stats: Vec<FrameStats> = Vec::with_capacity(frames + 1);
     orbit::frames(

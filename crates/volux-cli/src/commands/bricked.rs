@@ -1,0 +1,46 @@
+//! The out-of-core path of `volux render`: an OME-Zarr store rendered chunk by chunk
+//! (`volux_render::bricked`) when `--lod` asks for it or its full level is over the memory
+//! budget.
+use std::path::Path;
+use std::sync::Arc;
+
+use volux_io::omezarr::{self, ZarrOptions};
+use volux_render::bricked::{BrickedVolume, Lod};
+use volux_render::scene::Volume;
+
+use super::common::CmdError;
+use crate::cli::RenderArgs;
+
+/// The bricked volume of `file` when it is a store to render out of core; `None` to load it
+/// in memory as any file.
+pub fn volume(file: &Path, args: &RenderArgs) -> Result<Option<Volume>, CmdError> {
+    if volux_io::detect(file).ok() != Some(volux_io::Format::OmeZarr) || args.load.level.is_some() {
+        return Ok(None);
+    }
+    let opts = ZarrOptions {
+        array: args.load.array.clone(),
+        level: 0,
+        channel: args.load.channel.unwrap_or(0),
+        timepoint: args.load.timepoint.unwrap_or(0),
+    };
+    let lod = args.lod.as_deref().map(parse_lod).transpose()?;
+    let budget = volux_core::limits::memory_budget();
+    let ms =
+        omezarr::open_multiscale(file, &opts).map_err(|e| format!("{}: {e}", file.display()))?;
+    let over = ms.full().layout().bytes() > u128::from(budget);
+    let Some(lod) = lod.or(over.then_some(Lod::Auto)) else {
+        return Ok(None);
+    };
+    let volume = BrickedVolume::open(ms, budget).map_err(|e| format!("{}: {e}", file.display()))?;
+    Ok(Some(Volume::Bricked(Arc::new(volume), lod)))
+}
+
+/// `auto` or a level number.
+fn parse_lod(s: &str) -> Result<Lod, CmdError> {
+    if s == "auto" {
+        return Ok(Lod::Auto);
+    }
+    s.parse::<usize>()
+        .map(Lod::Level)
+        .map_err(|_| format!("--lod {s}: give auto or a level number (0 = full resolution)").into())
+}
