@@ -54,7 +54,8 @@ impl BrickedVolume {
     /// take the whole budget; only the levels rendered hold bricks). Finds the value range
     /// (recorded by the store, else read chunk by chunk from the full level: the transfer
     /// function is placed on it, as for the in-core grid) and a histogram of the finest level
-    /// of at most [`HISTOGRAM_SAMPLES`] samples (for the transfer-function presets). Errors name a chunk that cannot be read.
+    /// of at most 2^24 samples (for the transfer-function presets). Errors name a chunk that
+    /// cannot be read.
     pub fn open(multiscale: Multiscale, budget: u64) -> Result<Self, RenderError> {
         let full = multiscale.full();
         let range = match full.value_range() {
