@@ -297,6 +297,17 @@ pub(crate) fn floor_small(v: f32) -> i32 {
     (m.to_bits() as i32 - MAGIC.to_bits() as i32) - i32::from(rounded > v)
 }
 
+/// Cell index and fraction along one axis of `n` samples, clamped to the grid, in f64 (the
+/// reference path's sampling, shared by every field with an f64 path).
+pub(crate) fn axis64(x: f64, n: usize) -> (usize, f64) {
+    if n < 2 {
+        return (0, 0.0);
+    }
+    let x = x.clamp(0.0, (n - 1) as f64);
+    let i = (x as usize).min(n - 2);
+    (i, x - i as f64)
+}
+
 /// Cell index and fraction along one axis, clamped to the grid.
 #[inline]
 fn axis(x: f32, n: usize) -> (usize, f32) {
@@ -331,14 +342,6 @@ impl<T: Scalar> Field for Trilinear<'_, T> {
 
     fn sample64(&self, p: DVec3) -> Option<f64> {
         let [nx, ny, nz] = self.dims;
-        let axis64 = |x: f64, n: usize| -> (usize, f64) {
-            if n < 2 {
-                return (0, 0.0);
-            }
-            let x = x.clamp(0.0, (n - 1) as f64);
-            let i = (x as usize).min(n - 2);
-            (i, x - i as f64)
-        };
         let (i, fx) = axis64(p.x, nx);
         let (j, fy) = axis64(p.y, ny);
         let (k, fz) = axis64(p.z, nz);

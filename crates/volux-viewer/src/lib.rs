@@ -20,7 +20,8 @@
 //!   [`slice_views`]: their views, crosshair and window/level;
 //! - [`sculpt_state`]: the sculpting tools' settings; [`sculpt_actions`]: what the tools do
 //!   (steps of the engine's sculpt, undo); [`sculpt_exports`]: label counts and NRRD exports;
-//!   [`sculpt_panel`]: their panel;
+//!   [`sculpt_panel`]: their panel; [`sculpt_labels`]: region labels colouring the
+//!   rendering, with the setting and label volume of [`label_colours`];
 //!   [`sculpt_tools`]: their gestures and overlay in the 3D view (seed `004` ch. 4-6);
 //!   [`plane_handle`]: the clipping planes' tilt handles;
 //! - [`tf_editor`]: the transfer-function editor over the histogram;

@@ -14,7 +14,7 @@ use std::sync::{Arc, OnceLock};
 use glam::{DVec3, Vec3};
 
 use super::cache::{Brick, BrickCache};
-use crate::sampling::Field;
+use crate::sampling::{axis64, Field};
 
 /// Identities of caches for the per-thread memo (a brick of one cache is never taken for
 /// another's).
@@ -168,14 +168,6 @@ impl Field for BrickedField<'_> {
 
     /// The in-core f64 path's arithmetic on the same corners.
     fn sample64(&self, p: DVec3) -> Option<f64> {
-        let axis64 = |x: f64, n: usize| -> (usize, f64) {
-            if n < 2 {
-                return (0, 0.0);
-            }
-            let x = x.clamp(0.0, (n - 1) as f64);
-            let i = (x as usize).min(n - 2);
-            (i, x - i as f64)
-        };
         let (i, fx) = axis64(p.x, self.dims[0]);
         let (j, fy) = axis64(p.y, self.dims[1]);
         let (k, fz) = axis64(p.z, self.dims[2]);
