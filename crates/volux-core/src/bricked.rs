@@ -75,6 +75,18 @@ impl ChunkLayout {
         (lo, size)
     }
 
+    /// [`ChunkLayout::chunk_extent`] of a chunk that must exist: an error names a chunk
+    /// outside the grid of chunks.
+    pub fn checked_extent(&self, c: [usize; 3]) -> Result<([usize; 3], [usize; 3])> {
+        let n = self.chunks_per_axis();
+        if (0..3).any(|a| c[a] >= n[a]) {
+            return Err(Error::Chunked(format!(
+                "chunk {c:?} is outside the {n:?} chunks of the volume"
+            )));
+        }
+        Ok(self.chunk_extent(c))
+    }
+
     /// The index of chunk `c`, x fastest.
     pub fn chunk_index(&self, c: [usize; 3]) -> usize {
         let n = self.chunks_per_axis();
@@ -207,13 +219,7 @@ impl ChunkSource for GridChunks {
     }
 
     fn read_chunk(&self, c: [usize; 3]) -> Result<Samples> {
-        let n = self.layout.chunks_per_axis();
-        if (0..3).any(|a| c[a] >= n[a]) {
-            return Err(Error::Chunked(format!(
-                "chunk {c:?} is outside the {n:?} chunks of the grid"
-            )));
-        }
-        let (lo, size) = self.layout.chunk_extent(c);
+        let (lo, size) = self.layout.checked_extent(c)?;
         let dims = self.layout.dims;
         fn copy<T: crate::grid::Scalar>(
             v: &[T],

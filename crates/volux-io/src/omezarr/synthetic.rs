@@ -62,13 +62,7 @@ impl ChunkSource for SyntheticChunks {
     }
 
     fn read_chunk(&self, c: [usize; 3]) -> Result<Samples> {
-        let n = self.layout.chunks_per_axis();
-        if (0..3).any(|a| c[a] >= n[a]) {
-            return Err(Error::Chunked(format!(
-                "chunk {c:?} is outside the {n:?} chunks"
-            )));
-        }
-        let (lo, size) = self.layout.chunk_extent(c);
+        let (lo, size) = self.layout.checked_extent(c)?;
         let d = self.layout.dims;
         let step: [f64; 3] = std::array::from_fn(|a| 2.0 / (d[a] - 1) as f64);
         let mut v = Vec::with_capacity(size.iter().product());

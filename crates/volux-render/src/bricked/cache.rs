@@ -99,6 +99,19 @@ struct Resident {
     clock: u64,
 }
 
+impl Resident {
+    /// The resident brick of chunk `index`, marked as used now.
+    fn touch(&mut self, index: usize) -> Option<Arc<Brick>> {
+        self.clock += 1;
+        let now = self.clock;
+        let (brick, used) = self.bricks.get_mut(&index)?;
+        let (brick, old) = (brick.clone(), std::mem::replace(used, now));
+        self.by_use.remove(&old);
+        self.by_use.insert(now, index);
+        Some(brick)
+    }
+}
+
 /// The resident chunks of one level within `budget` bytes (at least one brick is always
 /// kept, whatever the budget: a brick in use is held by its reader).
 pub struct BrickCache {
@@ -167,17 +180,9 @@ impl BrickCache {
     /// bricks are evicted to make room). Errors name the chunk.
     pub fn get(&self, c: [usize; 3]) -> Result<Arc<Brick>, String> {
         let index = self.layout().chunk_index(c);
-        {
-            let mut r = self.lock();
-            r.clock += 1;
-            let now = r.clock;
-            if let Some((brick, used)) = r.bricks.get_mut(&index) {
-                let (brick, old) = (brick.clone(), std::mem::replace(used, now));
-                r.by_use.remove(&old);
-                r.by_use.insert(now, index);
-                self.hits.fetch_add(1, Ordering::Relaxed);
-                return Ok(brick);
-            }
+        if let Some(brick) = self.lock().touch(index) {
+            self.hits.fetch_add(1, Ordering::Relaxed);
+            return Ok(brick);
         }
         let samples = self
             .source
@@ -194,14 +199,11 @@ impl BrickCache {
     /// resident meanwhile), evicting the least recently used others beyond the budget.
     fn insert(&self, index: usize, brick: Arc<Brick>) -> Arc<Brick> {
         let mut r = self.lock();
-        r.clock += 1;
-        let now = r.clock;
-        if let Some((kept, used)) = r.bricks.get_mut(&index) {
-            let (kept, old) = (kept.clone(), std::mem::replace(used, now));
-            r.by_use.remove(&old);
-            r.by_use.insert(now, index);
+        if let Some(kept) = r.touch(index) {
             return kept;
         }
+        r.clock += 1;
+        let now = r.clock;
         r.bytes += brick.bytes();
         r.bricks.insert(index, (brick.clone(), now));
         r.by_use.insert(now, index);

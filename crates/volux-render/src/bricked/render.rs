@@ -11,9 +11,9 @@ use super::field::BrickedField;
 use super::volume::{BrickedVolume, Lod};
 use crate::error::RenderError;
 use crate::frame::Frame;
-use crate::raycast::{grid_frame, render_field, Placement, RenderOptions, Rendered};
-use crate::renderer::{wrong_method, Renderer};
-use crate::scene::{GridRaycast, Method, Scene};
+use crate::raycast::{grid_frame, grid_settings, render_field, Placement, RenderOptions, Rendered};
+use crate::renderer::Renderer;
+use crate::scene::Scene;
 use crate::tiles::Control;
 
 /// Grid ray casting of a [`BrickedVolume`], at the level its [`Lod`] picks for each frame.
@@ -46,12 +46,7 @@ impl Renderer for BrickedRenderer {
 
     fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
         let started = Instant::now();
-        let settings = match scene.method {
-            Method::Auto => GridRaycast::default(),
-            Method::GridRaycast(s) => s,
-            other => return Err(wrong_method("raycast", &other)),
-        };
-        scene.validate()?;
+        let settings = grid_settings(scene)?;
         let opts = RenderOptions::from_scene(scene, &settings, control);
         let r = render_level(&self.volume, self.level_for(scene), &opts)?;
         Ok(grid_frame(r, &settings, started))

@@ -35,6 +35,6 @@ pub use crate::frame::RenderStats;
 pub use clip::{ray_box, to_voxel, voxel_crossings};
 pub(crate) use context::local_clip_planes;
 pub use options::{Placement, RenderOptions, Rendered};
-pub(crate) use renderer::grid_frame;
+pub(crate) use renderer::{grid_frame, grid_settings};
 pub use renderer::{render_grid, GridRenderer};
 pub use traverse::{render_field, render_field_in};

@@ -248,15 +248,22 @@ impl<G: Deref<Target = Grid> + Send> Renderer for GridRenderer<G> {
 
     fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
         let started = Instant::now();
-        let settings = match scene.method {
-            Method::Auto => GridRaycast::default(),
-            Method::GridRaycast(s) => s,
-            other => return Err(wrong_method("raycast", &other)),
-        };
-        scene.validate()?;
+        let settings = grid_settings(scene)?;
         let r = GridRenderer::render(self, &RenderOptions::from_scene(scene, &settings, control))?;
         Ok(grid_frame(r, &settings, started))
     }
+}
+
+/// The grid ray casting settings of `scene` (its method resolved for a grid), the scene
+/// checked: what every grid renderer (in core and bricked) starts a frame with.
+pub(crate) fn grid_settings(scene: &Scene) -> Result<GridRaycast, RenderError> {
+    let settings = match scene.method {
+        Method::Auto => GridRaycast::default(),
+        Method::GridRaycast(s) => s,
+        other => return Err(wrong_method("raycast", &other)),
+    };
+    scene.validate()?;
+    Ok(settings)
 }
 
 /// The frame of a grid render: the error map where the integrator estimates it.
