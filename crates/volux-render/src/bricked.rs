@@ -10,6 +10,7 @@
 
 mod cache;
 mod field;
+mod memo;
 mod render;
 #[cfg(test)]
 mod tests;

@@ -9,14 +9,53 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use volux_core::bricked::{ChunkLayout, ChunkSource};
 use volux_core::grid::{Samples, Scalar};
 
+/// Cells per side of the micro-bricks a brick's samples are laid out in.
+pub const CELLS: usize = 8;
+/// Samples per side of a micro-brick: its cells and their far faces.
+pub const SIDE: usize = CELLS + 1;
+/// Samples per micro-brick.
+const MICRO: usize = SIDE * SIDE * SIDE;
+/// Offsets of a cell's eight corners from its first sample in a micro-brick, x fastest.
+pub const CORNERS: [usize; 8] = [
+    0,
+    1,
+    SIDE,
+    SIDE + 1,
+    SIDE * SIDE,
+    SIDE * SIDE + 1,
+    SIDE * SIDE + SIDE,
+    SIDE * SIDE + SIDE + 1,
+];
+/// Samples from a cell's first corner to its last, inclusive.
+pub const REACH: usize = CORNERS[7] + 1;
+
+/// What local coordinate `l` along axis `a` adds to the offset of the first sample of cell
+/// `l` in a brick of a level whose chunks have `shape` samples. Bricks hold their samples in
+/// micro-bricks of [`CELLS`]³ cells with their far faces ([`SIDE`]³ samples, x fastest;
+/// micro-bricks x fastest), the layout of the in-core renderer's bricked copy: a cell's eight
+/// corners lie at the fixed displacements [`CORNERS`] from its first sample, within a few
+/// kilobytes. The far faces of the chunk's last micro-bricks belong to the next chunk and are
+/// not filled: the cells there are sampled corner by corner.
+#[inline]
+pub fn axis_offset(shape: [usize; 3], a: usize, l: usize) -> usize {
+    let m = shape.map(|c| c.div_ceil(CELLS).max(1));
+    let stride = [MICRO, m[0] * MICRO, m[0] * m[1] * MICRO][a];
+    let step = [1, SIDE, SIDE * SIDE][a];
+    (l / CELLS) * stride + (l % CELLS) * step
+}
+
 /// One resident chunk: its samples as f32 (the renderer's sample type), and where it sits.
+/// Every brick of a level has the same layout ([`axis_offset`]), so a sample's place in its
+/// brick depends only on its coordinates: the field finds it from per-axis tables.
 #[derive(Debug)]
 pub struct Brick {
     /// The chunk's first sample (grid coordinates).
     pub lo: [usize; 3],
     /// Samples per axis (the chunk's shape clipped to the grid).
     pub size: [usize; 3],
-    /// The samples, x fastest.
+    /// The level's chunk shape, which the layout follows.
+    pub shape: [usize; 3],
+    /// The samples in micro-bricks ([`axis_offset`]).
     pub values: Vec<f32>,
     /// The smallest and largest sample (NaN ignored; infinite when none is finite).
     pub range: [f32; 2],
@@ -28,23 +67,41 @@ impl Brick {
     fn new(layout: &ChunkLayout, c: [usize; 3], s: &Samples) -> Result<Self, String> {
         let (lo, size) = layout.chunk_extent(c);
         let expected: usize = size.iter().product();
-        if s.len() != expected {
+        if s.len() != expected || expected == 0 {
             return Err(format!(
                 "chunk {c:?} holds {} samples where its shape {size:?} needs {expected}",
                 s.len()
             ));
         }
-        let values: Vec<f32> =
-            volux_core::with_samples!(s, |v| v.iter().map(|x| x.to_f32()).collect());
-        let range = values
-            .iter()
-            .filter(|v| v.is_finite())
-            .fold([f32::INFINITY, f32::NEG_INFINITY], |r, &v| {
-                [r[0].min(v), r[1].max(v)]
-            });
+        let shape = layout.chunk;
+        let m = shape.map(|c| c.div_ceil(CELLS).max(1));
+        let mut values = vec![0.0f32; m.iter().product::<usize>() * MICRO];
+        let mut range = [f32::INFINITY, f32::NEG_INFINITY];
+        volux_core::with_samples!(s, |v| {
+            for x in v.iter() {
+                let x = x.to_f32();
+                if x.is_finite() {
+                    range = [range[0].min(x), range[1].max(x)];
+                }
+            }
+            // Each micro-brick's samples; beyond the chunk's last sample the last is
+            // repeated (read only along an axis with one sample, as the in-core sampler does).
+            for (b, micro) in values.chunks_exact_mut(MICRO).enumerate() {
+                let o = [b % m[0], b / m[0] % m[1], b / m[0] / m[1]].map(|i| i * CELLS);
+                for (r, row) in micro.chunks_exact_mut(SIDE).enumerate() {
+                    let y = (o[1] + r % SIDE).min(size[1] - 1);
+                    let z = (o[2] + r / SIDE).min(size[2] - 1);
+                    let at = size[0] * (y + size[1] * z);
+                    for (u, d) in row.iter_mut().enumerate() {
+                        *d = v[at + (o[0] + u).min(size[0] - 1)].to_f32();
+                    }
+                }
+            }
+        });
         Ok(Self {
             lo,
             size,
+            shape,
             values,
             range,
         })
@@ -56,10 +113,10 @@ impl Brick {
     }
 
     /// The sample at grid coordinates (`i`, `j`, `k`), which must lie in the brick.
-    #[inline(always)]
     pub fn at(&self, i: usize, j: usize, k: usize) -> f32 {
-        let (x, y, z) = (i - self.lo[0], j - self.lo[1], k - self.lo[2]);
-        self.values[x + self.size[0] * (y + self.size[1] * z)]
+        let l = [i - self.lo[0], j - self.lo[1], k - self.lo[2]];
+        let o: usize = (0..3).map(|a| axis_offset(self.shape, a, l[a])).sum();
+        self.values[o]
     }
 }
 

@@ -107,8 +107,9 @@ fn every_integrator_equals_the_in_core_render_with_evictions_within_the_frame() 
         unreachable!()
     };
     let incore = Trilinear::new(values.as_slice(), DIMS);
-    // Three bricks of 8x5x4 f32: every frame evicts.
-    let small = volume(&g, 3 * 8 * 5 * 4 * 4);
+    // Three bricks of 8x5x4 f32 (each one micro-brick of 9³): every frame evicts.
+    let brick = 9 * 9 * 9 * 4;
+    let small = volume(&g, 3 * brick);
     let roomy = volume(&g, 1 << 30);
     let mut cases: Vec<RenderOptions> = Vec::new();
     for integrator in integrators() {
@@ -145,7 +146,7 @@ fn every_integrator_equals_the_in_core_render_with_evictions_within_the_frame() 
     }
     let stats = small.cache_stats(0).unwrap();
     assert!(stats.evictions > 0, "the small budget evicts: {stats:?}");
-    assert!(stats.peak_bytes <= 3 * 8 * 5 * 4 * 4, "{stats:?}");
+    assert!(stats.peak_bytes <= 3 * brick, "{stats:?}");
     assert_eq!(roomy.cache_stats(0).unwrap().evictions, 0);
     // The grid renderer (empty-space skipping, lanes) draws the same emission-only image.
     let o = &cases[0];
