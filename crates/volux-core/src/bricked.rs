@@ -244,6 +244,23 @@ impl ChunkSource for GridChunks {
         })
     }
 
+    /// Scanned from the grid in memory (what a store records in its attributes); infinite
+    /// when the chunk has no finite sample.
+    fn chunk_range(&self, c: [usize; 3]) -> Option<[f64; 2]> {
+        use crate::grid::Scalar;
+        let samples = self.read_chunk(c).ok()?;
+        let mut r = [f64::INFINITY, f64::NEG_INFINITY];
+        crate::with_samples!(&samples, |v| {
+            for x in v.iter() {
+                let x = f64::from(x.to_f32());
+                if x.is_finite() {
+                    r = [r[0].min(x), r[1].max(x)];
+                }
+            }
+        });
+        Some(r)
+    }
+
     fn value_range(&self) -> Option<[f64; 2]> {
         Some(self.grid.range())
     }

@@ -133,8 +133,9 @@ fn grid_box(g: &Grid, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
             m / (counts[0] * counts[1]),
         ];
         for a in 0..3 {
-            lo[a] = lo[a].min(c[a] * MacrocellGrid::BLOCK);
-            hi[a] = hi[a].max(((c[a] + 1) * MacrocellGrid::BLOCK).min(dims[a] - 1));
+            let b = cells.block()[a];
+            lo[a] = lo[a].min(c[a] * b);
+            hi[a] = hi[a].max(((c[a] + 1) * b).min(dims[a] - 1));
         }
     }
     if lo[0] == usize::MAX {

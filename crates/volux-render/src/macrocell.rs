@@ -19,6 +19,9 @@ use crate::intervals::{Interval, IntervalSource};
 #[derive(Clone, Debug)]
 pub struct MacrocellGrid {
     counts: [usize; 3],
+    /// Voxel cells per macrocell along each axis ([`MacrocellGrid::BLOCK`] for a grid's own;
+    /// a bricked volume's chunks for its chunk macrocells).
+    block: [usize; 3],
     ranges: Vec<[f32; 2]>,
 }
 
@@ -66,7 +69,32 @@ impl MacrocellGrid {
                 r
             })
             .collect();
-        Self { counts, ranges }
+        Self {
+            counts,
+            block: [Self::BLOCK; 3],
+            ranges,
+        }
+    }
+
+    /// Macrocells of `block` cells per axis with `counts` per axis and the given `ranges`
+    /// (x fastest; each must hold every sample of its macrocell, boundary included); `None`
+    /// when the numbers disagree or a block is empty.
+    pub fn from_ranges(
+        counts: [usize; 3],
+        block: [usize; 3],
+        ranges: Vec<[f32; 2]>,
+    ) -> Option<Self> {
+        let n = counts.iter().try_fold(1usize, |n, &c| n.checked_mul(c))?;
+        (n == ranges.len() && n > 0 && block.iter().all(|&b| b > 0)).then_some(Self {
+            counts,
+            block,
+            ranges,
+        })
+    }
+
+    /// Voxel cells per macrocell along each axis.
+    pub fn block(&self) -> [usize; 3] {
+        self.block
     }
 
     /// The `[min, max]` of each macrocell, x fastest (infinite for a macrocell without
@@ -153,9 +181,8 @@ impl<'a> Occupancy<'a> {
 
     /// The class of the macrocell holding the voxel-space point `p` (clamped to the grid).
     pub fn class_at(&self, p: DVec3) -> CellClass {
-        let b = MacrocellGrid::BLOCK as f64;
         let c: [usize; 3] = std::array::from_fn(|a| {
-            let i = (p[a] / b).floor().max(0.0) as usize;
+            let i = (p[a] / self.grid.block[a] as f64).floor().max(0.0) as usize;
             i.min(self.grid.counts[a] - 1)
         });
         let [nx, ny, _] = self.grid.counts;
@@ -212,7 +239,7 @@ impl<'a> Occupancy<'a> {
         limit: f64,
         mut emit: impl FnMut([f64; 2], [f32; 2]),
     ) -> f64 {
-        let b = MacrocellGrid::BLOCK as f64;
+        let b = DVec3::from(self.grid.block.map(|b| b as f64));
         let counts = self.grid.counts;
         let ranges = &self.grid.ranges;
         let classes: &[CellClass] = &self.classes;
@@ -226,14 +253,14 @@ impl<'a> Occupancy<'a> {
             if d[a] == 0.0 {
                 f64::INFINITY
             } else {
-                b / d[a].abs()
+                b[a] / d[a].abs()
             }
         });
         let t_next: [f64; 3] = std::array::from_fn(|a| {
             if d[a] == 0.0 {
                 return f64::INFINITY;
             }
-            let boundary = if d[a] > 0.0 { cell[a] + 1 } else { cell[a] } as f64 * b;
+            let boundary = if d[a] > 0.0 { cell[a] + 1 } else { cell[a] } as f64 * b[a];
             (boundary - o[a]) / d[a]
         });
         let mut idx = cell[0] + stride[1] * cell[1] + stride[2] * cell[2];

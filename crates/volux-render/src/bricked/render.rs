@@ -9,9 +9,15 @@ use glam::DMat3;
 
 use super::field::BrickedField;
 use super::volume::{BrickedVolume, Lod};
+use crate::classify::ClassifyTable;
 use crate::error::RenderError;
 use crate::frame::Frame;
-use crate::raycast::{grid_frame, grid_settings, render_field, Placement, RenderOptions, Rendered};
+use crate::integrate::Integrator;
+use crate::intervals::IntervalSource;
+use crate::macrocell::Occupancy;
+use crate::raycast::{
+    grid_frame, grid_settings, render_field_in, Placement, RenderOptions, Rendered,
+};
 use crate::renderer::Renderer;
 use crate::scene::Scene;
 use crate::tiles::Control;
@@ -84,7 +90,27 @@ pub fn render_level(
             progress: opts.control.progress.clone(),
         };
     }
-    let out = render_field(&field, placement(cache.layout()), range, &opts);
+    let table = ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE);
+    let isovalues: Vec<f32> = opts
+        .isosurfaces
+        .as_slice()
+        .iter()
+        .map(|i| i.value)
+        .collect();
+    // Chunks whose range the TF makes transparent are skipped (intervals cost a walk of
+    // the chunks a ray crosses, a few per ray: only when some are empty). Not under MIP,
+    // and not for adaptive Simpson, whose subdivision would start afresh in every interval
+    // (measured: within its tolerance of the in-core image, 4.6e-4, not within 1e-6).
+    let adaptive = matches!(opts.integrator, Integrator::AdaptiveSimpson(_));
+    let occupancy = volume
+        .chunk_cells(level)
+        .filter(|_| !opts.mip && !adaptive)
+        .map(|cells| Occupancy::new(cells, &table, &isovalues));
+    let intervals = occupancy
+        .as_ref()
+        .filter(|o| o.empty_fraction() > 0.0)
+        .map(|o| o as &dyn IntervalSource);
+    let out = render_field_in(&field, placement(cache.layout()), range, intervals, &opts);
     field.forget();
     match field.error() {
         Some(e) => Err(RenderError::Data(volux_core::Error::Chunked(e.clone()))),

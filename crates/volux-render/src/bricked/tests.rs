@@ -326,3 +326,95 @@ fn the_engine_renders_a_bricked_volume_as_the_grid_it_holds() {
     assert!(d <= 1e-6, "max difference {d}");
     assert!(bricked.to_tets().is_err());
 }
+
+#[test]
+fn chunks_the_tf_makes_transparent_are_skipped_without_changing_a_pixel() {
+    let g = grid();
+    let Samples::F32(values) = g.samples() else {
+        unreachable!()
+    };
+    let incore = Trilinear::new(values.as_slice(), DIMS);
+    let v = volume(&g, 1 << 30);
+    // Opaque only above 95: the chunks away from the sphere's centre are empty.
+    let mut o = options(&g, r#"{"azimuth": 40, "elevation": 25}"#);
+    o.tf = TransferFunction::from_json(
+        r#"{"color": [[95,1,0.5,0.2],[120,1,1,1]], "extinction": [[95,0],[100,0.3],[120,0.6]]}"#,
+    )
+    .unwrap();
+    let cells = v.chunk_cells(0).expect("the chunks' ranges are known");
+    assert_eq!(cells.counts(), [3, 4, 4]);
+    let table = crate::classify::ClassifyTable::new(&o.tf, v.range(), 4096);
+    let empty = cells.empty_flags(&table, &[]);
+    assert!(
+        empty.iter().any(|e| *e) && !empty.iter().all(|e| *e),
+        "{empty:?}"
+    );
+    for integrator in integrators() {
+        o.integrator = integrator;
+        let want = render_field(&incore, Placement::of(&g), g.range(), &o).unwrap();
+        let got = render_level(&v, 0, &o).unwrap();
+        let d = max_diff(&got.image, &want.image);
+        assert!(d <= 1e-6, "{integrator:?}: max difference {d}");
+        if matches!(
+            integrator,
+            Integrator::AdaptiveSimpson(_) | Integrator::Reference
+        ) {
+            continue; // not skipped (`render_level`), or no intervals taken
+        }
+        assert!(
+            got.stats.samples < want.stats.samples,
+            "{integrator:?}: {} samples skipping, {} without",
+            got.stats.samples,
+            want.stats.samples
+        );
+    }
+}
+
+#[test]
+fn bricked_samples_equal_the_in_core_samples_bit_for_bit() {
+    use crate::sampling::{Field, LANES};
+    let g = grid();
+    let Samples::F32(values) = g.samples() else {
+        unreachable!()
+    };
+    let incore = Trilinear::new(values.as_slice(), DIMS);
+    let v = volume(&g, 3 * 9 * 9 * 9 * 4);
+    let failed = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let field = super::field::BrickedField::new(v.cache(0).unwrap(), 1 << 20, 1, failed);
+    // Points over and a little beyond the grid, on and off the chunk faces.
+    let mut state = 12345u64;
+    let mut next = |hi: f32| {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let u = (state >> 40) as f32 / (1u64 << 24) as f32;
+        let x = -0.5 + u * (hi + 1.0);
+        if state & 7 == 0 {
+            x.round()
+        } else {
+            x
+        }
+    };
+    for _ in 0..2000 {
+        let p: [[f32; LANES]; 3] =
+            std::array::from_fn(|a| std::array::from_fn(|_| next(DIMS[a] as f32 - 1.0)));
+        let got = field.sample_lanes(&p);
+        let want = incore.sample_lanes(&p);
+        for l in 0..LANES {
+            let q = glam::Vec3::new(p[0][l], p[1][l], p[2][l]);
+            assert_eq!(got[l].to_bits(), want[l].to_bits(), "lanes at {q}");
+            assert_eq!(field.sample(q), incore.sample(q), "at {q}");
+            assert_eq!(
+                field.sample64(q.as_dvec3()),
+                incore.sample64(q.as_dvec3()),
+                "f64 at {q}"
+            );
+        }
+        let p4: [[f32; 4]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| p[a][l]));
+        assert_eq!(
+            field.sample4(&p4).map(f32::to_bits),
+            incore.sample4(&p4).map(f32::to_bits)
+        );
+    }
+    field.forget();
+}

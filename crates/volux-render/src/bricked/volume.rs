@@ -1,6 +1,8 @@
 //! A bricked volume as the engine renders it: a [`Multiscale`] pyramid with one brick cache
 //! per level within a shared memory budget, the data range, and the choice of level
 //! ([`Lod`]).
+use std::sync::OnceLock;
+
 use glam::DVec3;
 use rayon::prelude::*;
 use volux_core::bricked::{ChunkSource, Multiscale};
@@ -10,6 +12,7 @@ use volux_core::Aabb;
 
 use super::cache::{BrickCache, CacheStats};
 use crate::error::RenderError;
+use crate::macrocell::MacrocellGrid;
 
 /// Which pyramid level a render samples.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -28,6 +31,9 @@ pub enum Lod {
 pub struct BrickedVolume {
     multiscale: Multiscale,
     caches: Vec<BrickCache>,
+    /// Per level, the chunks as macrocells for empty-space skipping (built on first use;
+    /// `None` when the store does not record every chunk's range).
+    chunk_cells: Vec<OnceLock<Option<MacrocellGrid>>>,
     range: [f64; 2],
     histogram: Histogram,
 }
@@ -63,14 +69,16 @@ impl BrickedVolume {
             None => scan_range(full.as_ref())?,
         };
         let histogram = coarse_histogram(&multiscale, range)?;
-        let caches = multiscale
+        let caches: Vec<BrickCache> = multiscale
             .levels()
             .iter()
             .map(|l| BrickCache::new(l.clone(), budget))
             .collect();
+        let chunk_cells = caches.iter().map(|_| OnceLock::new()).collect();
         Ok(Self {
             multiscale,
             caches,
+            chunk_cells,
             range,
             histogram,
         })
@@ -84,6 +92,18 @@ impl BrickedVolume {
     /// The figures of level `level`'s cache.
     pub fn cache_stats(&self, level: usize) -> Option<CacheStats> {
         self.caches.get(level).map(BrickCache::stats)
+    }
+
+    /// Level `level`'s chunks as macrocells of one chunk each, for empty-space skipping
+    /// under the current TF from the ranges the store records (no chunk is read): each
+    /// macrocell's range is the union of its chunk's and of the next chunks' along each axis,
+    /// whose first samples its cells reach. `None` when a chunk's range is unknown.
+    pub fn chunk_cells(&self, level: usize) -> Option<&MacrocellGrid> {
+        let source = self.multiscale.levels().get(level)?;
+        self.chunk_cells
+            .get(level)?
+            .get_or_init(|| chunk_cells(source.as_ref()))
+            .as_ref()
     }
 
     /// The full-resolution level's world box.
@@ -214,4 +234,42 @@ fn coarse_histogram(ms: &Multiscale, range: [f64; 2]) -> Result<Histogram, Rende
         volux_core::with_samples!(&s, |v| values.extend(v.iter().map(|x| x.to_f32())));
     }
     Ok(Histogram::from_values(&values, range, bins))
+}
+
+/// The macrocells of [`BrickedVolume::chunk_cells`].
+fn chunk_cells(source: &dyn ChunkSource) -> Option<MacrocellGrid> {
+    let layout = source.layout();
+    let n = layout.chunks_per_axis();
+    let ranges: Vec<[f64; 2]> = (0..layout.chunk_count())
+        .map(|i| source.chunk_range(layout.chunk_coords(i)))
+        .collect::<Option<_>>()?;
+    let cells = (0..ranges.len())
+        .map(|i| {
+            let c = layout.chunk_coords(i);
+            let mut r = [f64::INFINITY, f64::NEG_INFINITY];
+            for q in 0..8 {
+                let d = [q & 1, q >> 1 & 1, q >> 2 & 1];
+                let at: [usize; 3] = std::array::from_fn(|a| c[a] + d[a]);
+                if (0..3).all(|a| at[a] < n[a]) {
+                    let s = ranges[layout.chunk_index(at)];
+                    r = [r[0].min(s[0]), r[1].max(s[1])];
+                }
+            }
+            // Widened to f32 outward, so that every sample stays inside.
+            let lo = r[0] as f32;
+            let hi = r[1] as f32;
+            let lo = if f64::from(lo) > r[0] {
+                lo.next_down()
+            } else {
+                lo
+            };
+            let hi = if f64::from(hi) < r[1] {
+                hi.next_up()
+            } else {
+                hi
+            };
+            [lo, hi]
+        })
+        .collect();
+    MacrocellGrid::from_ranges(n, layout.chunk, cells)
 }
