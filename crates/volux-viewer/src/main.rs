@@ -30,6 +30,10 @@ struct Args {
     /// level number (0 = full resolution).
     #[arg(long, value_name = "auto|N", default_value = "auto")]
     lod: String,
+    /// The memory budget of an OME-Zarr store's brick cache (4G, 512M, 50%); default: a
+    /// quarter of the available memory, as the CLI's.
+    #[arg(long, value_name = "SIZE")]
+    memory_budget: Option<String>,
     /// Seconds of scripted orbit in --bench.
     #[arg(long, default_value_t = 3.0)]
     bench_seconds: f64,
@@ -63,6 +67,10 @@ fn main() -> ExitCode {
 fn run(args: Args) -> Result<(), String> {
     let size = args.size.as_deref().map(parse_size).transpose()?;
     let lod = volux_viewer::store::parse_lod(&args.lod)?;
+    if let Some(b) = &args.memory_budget {
+        let bytes = volux_viewer::store::parse_budget(b)?;
+        volux_core::limits::set_memory_budget(bytes).map_err(|e| e.to_string())?;
+    }
     if let Some(p) = &args.screenshot {
         volux_viewer::png_path(p)?;
     }

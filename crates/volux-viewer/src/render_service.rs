@@ -319,7 +319,8 @@ impl Worker {
     }
 
     /// Renders one level of a bricked volume and sends the frame (full when it is the
-    /// target level at full size with the scene's own method).
+    /// target level at full size with the scene's own method; the levels on the way use the
+    /// preview's fixed-step integrator).
     fn render_bricked_level(
         &mut self,
         request: &Request,
@@ -329,7 +330,7 @@ impl Worker {
     ) -> Result<(), RenderError> {
         let full = divisor == 1 && shown.is_final();
         let mut scene = request.scene.clone();
-        if divisor > 1 {
+        if !full {
             scene.method = preview_method(&scene.method);
         }
         let control = Control {

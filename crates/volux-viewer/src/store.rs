@@ -130,9 +130,49 @@ pub fn parse_lod(s: &str) -> Result<Lod, String> {
         .map_err(|_| format!("--lod {s}: give auto or a level number (0 = full resolution)"))
 }
 
+/// `--memory-budget SIZE`: bytes with an optional binary unit (`4G`, `512MiB`, `1.5g`), or
+/// a percentage of the memory available now (`50%`), as the CLI's option.
+pub fn parse_budget(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let bad = || format!("--memory-budget {text}: expected a size such as 4G, 512M or 50%");
+    let (number, scale) = if let Some(p) = t.strip_suffix('%') {
+        let available = volux_core::limits::available_memory() as f64;
+        (p, available / 100.0)
+    } else {
+        let split = t
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(t.len());
+        let (number, unit) = t.split_at(split);
+        let unit = unit.trim().to_ascii_lowercase();
+        let unit = unit.trim_end_matches("ib").trim_end_matches('b');
+        let power = ["", "k", "m", "g", "t"]
+            .iter()
+            .position(|u| *u == unit)
+            .ok_or_else(bad)?;
+        (number, 1024f64.powi(power as i32))
+    };
+    let bytes = number.trim().parse::<f64>().map_err(|_| bad())? * scale;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(bad());
+    }
+    Ok(bytes as u64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn budget_words() {
+        assert_eq!(parse_budget("4G"), Ok(4 << 30));
+        assert_eq!(parse_budget("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_budget("1000"), Ok(1000));
+        assert_eq!(parse_budget("1.5kb"), Ok(1536));
+        assert!(parse_budget("50%").is_ok_and(|b| b > 0));
+        for bad in ["", "0", "-1G", "4X", "abc", "%"] {
+            assert!(parse_budget(bad).is_err(), "{bad}");
+        }
+    }
 
     #[test]
     fn lod_words() {
