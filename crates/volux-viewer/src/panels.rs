@@ -171,7 +171,9 @@ fn method_settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
         app.set_full_resolution(full);
     }
     match &mut app.scene.method {
-        Method::GridRaycast(g) | Method::Resample { raycast: g, .. } => grid_settings(ui, g, bricked),
+        Method::GridRaycast(g) | Method::Resample { raycast: g, .. } => {
+            grid_settings(ui, g, bricked)
+        }
         Method::ProjectedTetrahedra(p) => pt_settings(ui, p),
         Method::TetRaycast(rule) => rule_settings(ui, rule, true),
         _ => {}

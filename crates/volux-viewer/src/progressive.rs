@@ -165,7 +165,11 @@ mod tests {
         );
         l.level = 0;
         l.dims = [64, 64, 64];
-        assert!(l.describe().ends_with("full resolution"), "{}", l.describe());
+        assert!(
+            l.describe().ends_with("full resolution"),
+            "{}",
+            l.describe()
+        );
         l.level = 1;
         l.target = 1;
         assert!(l.describe().contains("as fine as the view needs"));

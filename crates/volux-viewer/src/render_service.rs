@@ -23,10 +23,10 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use volux_core::Image;
+use volux_render::bricked::{BrickedVolume, Lod};
 use volux_render::engine::{create_renderer, FrameStats, Renderer};
 use volux_render::integrate::integrator::Integrator;
 use volux_render::integrate::segment::SegmentRule;
-use volux_render::bricked::{BrickedVolume, Lod};
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::tiles::Control;
 use volux_render::RenderError;

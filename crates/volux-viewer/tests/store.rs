@@ -38,11 +38,15 @@ fn harness(open: Option<PathBuf>) -> Harness<'static, App> {
 }
 
 fn app<'a>(h: &'a Harness<'static, App>) -> &'a ViewerApp {
-    h.state().as_ref().expect("the app starts on the first step")
+    h.state()
+        .as_ref()
+        .expect("the app starts on the first step")
 }
 
 fn app_mut<'a>(h: &'a mut Harness<'static, App>) -> &'a mut ViewerApp {
-    h.state_mut().as_mut().expect("the app starts on the first step")
+    h.state_mut()
+        .as_mut()
+        .expect("the app starts on the first step")
 }
 
 fn step_until(h: &mut Harness<'static, App>, what: &str, done: impl Fn(&ViewerApp) -> bool) {
@@ -106,7 +110,10 @@ fn a_store_shows_its_coarsest_level_first_and_refines_to_level_0() {
     let shown = a.shown_level().unwrap();
     assert_eq!((shown.level, shown.target), (0, 0), "{shown:?}");
     let status = a.lod_status().unwrap();
-    assert!(status.contains("level 0") && status.contains("full resolution"), "{status}");
+    assert!(
+        status.contains("level 0") && status.contains("full resolution"),
+        "{status}"
+    );
     let levels = levels_of(a, newest_generation(a));
     assert_eq!(levels.first(), Some(&2), "{levels:?}");
     assert_eq!(levels.last(), Some(&0), "{levels:?}");
@@ -120,9 +127,19 @@ fn a_store_shows_its_coarsest_level_first_and_refines_to_level_0() {
     };
     let level0 = Volume::Bricked(b.clone(), Lod::Level(0));
     let engine = render_once(&level0, &scene, &Control::default()).unwrap();
-    assert_images_close("viewer-store-level0", &image, &engine.image, Tolerance::max(1e-6));
+    assert_images_close(
+        "viewer-store-level0",
+        &image,
+        &engine.image,
+        Tolerance::max(1e-6),
+    );
     let in_core = render_once(&Volume::from(grid), &scene, &Control::default()).unwrap();
-    assert_images_close("viewer-store-in-core", &image, &in_core.image, Tolerance::max(1e-5));
+    assert_images_close(
+        "viewer-store-in-core",
+        &image,
+        &in_core.image,
+        Tolerance::max(1e-5),
+    );
 }
 
 #[test]
@@ -141,7 +158,9 @@ fn a_view_change_during_refinement_restarts_from_the_coarsest_level() {
     });
     let after = newest_generation(app(&h));
     assert_eq!(levels_of(app(&h), after).first(), Some(&3));
-    step_until(&mut h, "the refined frame of the new view", |a| a.shown_full());
+    step_until(&mut h, "the refined frame of the new view", |a| {
+        a.shown_full()
+    });
     let a = app(&h);
     let levels = levels_of(a, after);
     assert_eq!(levels.first(), Some(&3), "{levels:?}");
@@ -169,7 +188,10 @@ fn full_resolution_refines_to_level_0_when_auto_stops_coarser() {
     let far = app(&h).shown_level().unwrap();
     assert!(far.level > 0 && far.is_final(), "{far:?}");
     assert!(
-        app(&h).lod_status().unwrap().contains("as fine as the view needs"),
+        app(&h)
+            .lod_status()
+            .unwrap()
+            .contains("as fine as the view needs"),
         "{:?}",
         app(&h).lod_status()
     );
@@ -196,7 +218,9 @@ fn a_damaged_store_shows_its_error_and_the_viewer_lives_on() {
     let (other, _) = store(&dir.path().join("b"), 32);
     std::fs::remove_file(other.join("zarr.json")).unwrap();
     app_mut(&mut h).open(&other);
-    step_until(&mut h, "the second error", |a| a.error.is_some() && !a.busy());
+    step_until(&mut h, "the second error", |a| {
+        a.error.is_some() && !a.busy()
+    });
     assert!(app(&h).data.is_none());
     // A good store still opens and renders.
     let (good, _) = store(&dir.path().join("c"), 32);
