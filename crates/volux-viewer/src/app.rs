@@ -11,6 +11,7 @@ use eframe::egui;
 use glam::DVec3;
 use volux_core::{Camera, TransferFunction};
 use volux_io::progress::{with_progress, LoadProgress};
+use volux_render::bricked::Lod;
 use volux_render::framing::visible_bounds;
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::sculpt::Sculpt;
@@ -20,6 +21,7 @@ use crate::dataset::{self, Loaded};
 use crate::file_dialog::FileDialog;
 use crate::jobs::{Job, Poll};
 use crate::navigation;
+use crate::progressive::LevelShown;
 use crate::render_service::{Event, RenderService, Rendered};
 use crate::sculpt_state::SculptTools;
 use crate::tf_editor::{in_value_space, TfEditor};
@@ -35,6 +37,8 @@ pub struct Options {
     pub size: Option<(usize, usize)>,
     /// With `screenshot`: also save the session here.
     pub save_session: Option<PathBuf>,
+    /// The level an OME-Zarr store refines to (`--lod`): automatic, or a fixed level.
+    pub lod: Lod,
 }
 
 /// The default background (dark blue-grey, as the CLI's demo).
@@ -106,7 +110,15 @@ pub struct ViewerApp {
     pub(crate) export_size: (usize, usize),
     /// Set once `--screenshot` wrote its file.
     pub finished: bool,
+    /// A bricked volume refines to level 0 whatever the view ("Full resolution").
+    pub full_resolution: bool,
+    /// The levels of a bricked volume's frames shown, with their request, newest last
+    /// (the last [`LEVEL_LOG`]).
+    pub(crate) level_log: VecDeque<(u64, LevelShown)>,
 }
+
+/// How many shown levels [`ViewerApp::level_log`] keeps.
+pub const LEVEL_LOG: usize = 64;
 
 impl ViewerApp {
     /// A viewer on `ctx`, opening what `options` name.
@@ -153,6 +165,8 @@ impl ViewerApp {
             pending_session: None,
             export_size: (1920, 1080),
             finished: false,
+            full_resolution: false,
+            level_log: VecDeque::new(),
         };
         if let Some(path) = &options.open {
             app.open(path);
@@ -272,7 +286,9 @@ impl ViewerApp {
 
     /// Shows a newly loaded dataset: the session's view when one was opened, otherwise the
     /// home camera, the automatic TF, the crosshair at the centre.
-    pub(crate) fn set_data(&mut self, loaded: Loaded) {
+    pub(crate) fn set_data(&mut self, mut loaded: Loaded) {
+        loaded.volume.volume = crate::store::with_lod(&loaded.volume.volume, self.lod());
+        self.level_log.clear();
         let volume = loaded.volume.volume.clone();
         let range = volume.range();
         let tf = volume
@@ -454,6 +470,9 @@ impl ViewerApp {
                     if f.generation == self.service.generation() && self.render_error {
                         self.error = None;
                         self.render_error = false;
+                    }
+                    if let Some(level) = f.level {
+                        self.log_level(f.generation, level);
                     }
                     self.shown = Some(Shown { texture, frame: *f });
                 }

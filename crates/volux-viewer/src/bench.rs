@@ -3,11 +3,14 @@
 //! display refresh). A scripted orbit (input at 60 Hz for a few seconds), then the last
 //! input and the wait for the full-resolution frame, then a scripted TF drag (a control
 //! point moved at 60 Hz). Reports input-to-preview latency (p50, p95), preview frames per
-//! second, the time from the last input to the full frame, and the TF-edit latency.
+//! second, the time from the last input to the full frame, and the TF-edit latency. Before
+//! that, the opening: the time to open the dataset, to its first picture (for an OME-Zarr
+//! store, the coarsest level: [`crate::progressive`]) and to the fully refined frame.
 use std::path::Path;
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
+use volux_render::bricked::Lod;
 use volux_render::scene::{Method, Scene};
 use volux_render::session::DatasetRef;
 
@@ -28,6 +31,17 @@ pub struct ViewerBench {
     pub method: String,
     /// View size.
     pub size: [usize; 2],
+    /// From the start to the dataset opened (read in full, or a store's metadata and
+    /// histogram), ms.
+    pub open_ms: f64,
+    /// From the start to the first picture (a store's coarsest level), ms.
+    pub first_picture_ms: f64,
+    /// The level of that picture (stores only).
+    pub first_level: Option<usize>,
+    /// From the start to the fully refined frame, ms.
+    pub refined_ms: f64,
+    /// The level refinement ended at (stores only).
+    pub refined_level: Option<usize>,
     /// Input-to-preview latency during the orbit, median (ms).
     pub orbit_latency_p50_ms: f64,
     /// ... 95th percentile (ms).
@@ -44,14 +58,23 @@ pub struct ViewerBench {
     pub tf_latency_p95_ms: f64,
 }
 
-/// Runs the benchmark on `path` at `size` with a `seconds`-long orbit (and TF drag).
-pub fn run(path: &Path, size: (usize, usize), seconds: f64) -> Result<ViewerBench, String> {
+/// Runs the benchmark on `path` at `size` with a `seconds`-long orbit (and TF drag); a
+/// store refines to the level `lod` picks.
+pub fn run(
+    path: &Path,
+    size: (usize, usize),
+    seconds: f64,
+    lod: Lod,
+) -> Result<ViewerBench, String> {
     let source = DatasetRef {
         path: path.to_path_buf(),
         ..Default::default()
     };
+    let start = Instant::now();
     let loaded = dataset::load(&source)?;
-    let volume = loaded.volume.clone();
+    let open_ms = start.elapsed().as_secs_f64() * 1e3;
+    let mut volume = loaded.volume.clone();
+    volume.volume = crate::store::with_lod(&volume.volume, lod);
     let range = volume.volume.range();
     let tf = in_value_space(
         &volume.volume.preset_tf("auto").map_err(|e| e.to_string())?,
@@ -70,7 +93,14 @@ pub fn run(path: &Path, size: (usize, usize), seconds: f64) -> Result<ViewerBenc
     let mut service = RenderService::start(|| {});
     // Warm up: the first frame builds the caches (as opening a file does).
     service.submit(&volume, &scene, false);
-    wait_full(&service, Duration::from_secs(600))?;
+    let first = wait_frame(&service, Duration::from_secs(600))?;
+    let first_picture_ms = start.elapsed().as_secs_f64() * 1e3;
+    let refined = if first.full {
+        first.clone()
+    } else {
+        wait_full(&service, Duration::from_secs(600))?
+    };
+    let refined_ms = start.elapsed().as_secs_f64() * 1e3;
     let degrees_per_input =
         360.0 / (seconds / INPUT_INTERVAL.as_secs_f64()) / navigation::ORBIT_DEG_PER_PIXEL;
     let orbit = drive(&mut service, &volume, &mut scene, seconds, |s, _| {
@@ -110,6 +140,11 @@ pub fn run(path: &Path, size: (usize, usize), seconds: f64) -> Result<ViewerBenc
         dataset: path.display().to_string(),
         method: scene.method.name().into(),
         size: [size.0, size.1],
+        open_ms,
+        first_picture_ms,
+        first_level: first.level.map(|l| l.level),
+        refined_ms,
+        refined_level: refined.level.map(|l| l.level),
         orbit_latency_p50_ms: o50,
         orbit_latency_p95_ms: o95,
         preview_fps: orbit.len() as f64 / seconds,
@@ -147,6 +182,14 @@ fn drive(
         }
     }
     Ok(frames)
+}
+
+fn wait_frame(service: &RenderService, timeout: Duration) -> Result<Rendered, String> {
+    match service.wait(timeout) {
+        Some(Event::Frame(f)) => Ok(*f),
+        Some(Event::Failed { message, .. }) => Err(message),
+        None => Err("no frame in time".into()),
+    }
 }
 
 fn wait_full(service: &RenderService, timeout: Duration) -> Result<Rendered, String> {

@@ -1,5 +1,6 @@
 //! A dataset as the viewer holds it: the volume the renderers draw, its histogram, the grid
-//! its slices are cut from, and where it came from (for the title and sessions).
+//! its slices are cut from, and where it came from (for the title and sessions). An OME-Zarr
+//! store is opened out of core ([`crate::store`]).
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -62,6 +63,15 @@ impl Loaded {
                 format!("{}x{}x{} {}", d[0], d[1], d[2], g.scalar_type().name())
             }
             Volume::Mesh(m) => format!("{} tets", m.tets().len()),
+            Volume::Bricked(b, _) => {
+                let l = b.multiscale().full().layout();
+                let [x, y, z] = l.dims;
+                format!(
+                    "{x}x{y}x{z} {} in {} levels (bricked)",
+                    l.scalar.name(),
+                    b.levels()
+                )
+            }
             _ => "volume".into(),
         };
         format!(
@@ -83,6 +93,9 @@ pub fn load(source: &DatasetRef) -> Result<Loaded, String> {
         ..LoadOptions::default()
     };
     let shown = source.path.display().to_string();
+    if volux_io::detect(&source.path).ok() == Some(Format::OmeZarr) {
+        return load_store(source);
+    }
     let (data, format) =
         volux_io::load(&source.path, &opts).map_err(|e| format!("{shown}: {e}"))?;
     let (volume, slices, notes) = match data {
@@ -114,6 +127,23 @@ pub fn load(source: &DatasetRef) -> Result<Loaded, String> {
         loaded.split_into_tets()?;
     }
     Ok(loaded)
+}
+
+/// Opens an OME-Zarr store out of core, within the memory budget.
+fn load_store(source: &DatasetRef) -> Result<Loaded, String> {
+    let store = crate::store::open(source, volux_core::limits::memory_budget())?;
+    Ok(Loaded {
+        source: source.clone(),
+        format: Format::OmeZarr,
+        histogram: store.volume.histogram(HISTOGRAM_BINS),
+        volume: VolumeRef {
+            id: next_volume_id(),
+            volume: store.volume,
+        },
+        tets: None,
+        slices: Arc::new(store.slices),
+        notes: store.notes,
+    })
 }
 
 impl Loaded {

@@ -1,6 +1,6 @@
 //! A file dialog drawn with egui (no system dialog dependency): the folder's entries,
 //! folders first, a path field, and the action's button. Opening a DICOM folder is opening
-//! the folder itself.
+//! the folder itself, and so is opening an OME-Zarr store (a `.zarr` folder).
 use std::path::{Path, PathBuf};
 
 use eframe::egui;
@@ -133,7 +133,10 @@ impl FileDialog {
             .max_height(280.0)
             .show(ui, |ui| {
                 for (name, dir) in &self.entries {
-                    let label = if *dir {
+                    let store = *dir && is_store_name(name);
+                    let label = if store {
+                        format!("🗄 {name} (OME-Zarr store)")
+                    } else if *dir {
                         format!("📁 {name}")
                     } else {
                         name.clone()
@@ -148,7 +151,8 @@ impl FileDialog {
                 }
             });
         if let Some((path, dir)) = go {
-            if dir && !(purpose == Purpose::Open && is_dicom_folder(&path)) {
+            let opens = is_dicom_folder(&path) || volux_io::omezarr::is_store(&path);
+            if dir && !(purpose == Purpose::Open && opens) {
                 self.enter(path.clone());
                 self.path_text = path.display().to_string();
             } else {
@@ -164,6 +168,12 @@ impl FileDialog {
         });
         chosen
     }
+}
+
+/// A folder named as a Zarr store (`.zarr`, `.ome.zarr`), shown as one in the list (its
+/// contents are checked when it is opened).
+fn is_store_name(name: &str) -> bool {
+    name.to_ascii_lowercase().ends_with(".zarr")
 }
 
 /// A folder holding `.dcm` files (or files without extension, as DICOM exports often are).

@@ -14,6 +14,10 @@
 //!   frame of the window (poll, draw the panels, submit);
 //! - [`render_service`]: the render thread (mailbox, previews, full frames, cancellation);
 //!   [`jobs`]: loading and other background work;
+//! - [`store`]: OME-Zarr stores opened out of core as bricked volumes;
+//!   [`progressive`]: progressive level of detail (coarsest level at once, then each finer
+//!   level in the background); [`lod_status`]: the level choice, the level on screen and the
+//!   status line's level and cache figures;
 //! - [`view3d`]: the 3D view, its gestures and overlay; [`navigation`]: the camera gestures
 //!   as pure functions (orbit, pan, zoom, standard views);
 //! - [`slices`]: the axial, coronal and sagittal planes cut from the data;
@@ -34,9 +38,11 @@ pub mod file_dialog;
 pub mod files;
 pub mod jobs;
 pub mod label_colours;
+pub mod lod_status;
 pub mod navigation;
 pub mod panels;
 pub mod plane_handle;
+pub mod progressive;
 pub mod render_service;
 pub mod sculpt_actions;
 pub mod sculpt_exports;
@@ -46,6 +52,7 @@ pub mod sculpt_state;
 pub mod sculpt_tools;
 pub mod slice_views;
 pub mod slices;
+pub mod store;
 pub mod tf_editor;
 pub mod view3d;
 pub mod window;

@@ -26,6 +26,14 @@ struct Args {
     /// Run the viewer benchmark on the given dataset(s) without a window; JSON lines out.
     #[arg(long)]
     bench: bool,
+    /// For an OME-Zarr store: the level it refines to, auto (voxels about a pixel) or a
+    /// level number (0 = full resolution).
+    #[arg(long, value_name = "auto|N", default_value = "auto")]
+    lod: String,
+    /// The memory budget of an OME-Zarr store's brick cache (4G, 512M, 50%); default: a
+    /// quarter of the available memory, as the CLI's.
+    #[arg(long, value_name = "SIZE")]
+    memory_budget: Option<String>,
     /// Seconds of scripted orbit in --bench.
     #[arg(long, default_value_t = 3.0)]
     bench_seconds: f64,
@@ -58,13 +66,18 @@ fn main() -> ExitCode {
 
 fn run(args: Args) -> Result<(), String> {
     let size = args.size.as_deref().map(parse_size).transpose()?;
+    let lod = volux_viewer::store::parse_lod(&args.lod)?;
+    if let Some(b) = &args.memory_budget {
+        let bytes = volux_viewer::store::parse_budget(b)?;
+        volux_core::limits::set_memory_budget(bytes).map_err(|e| e.to_string())?;
+    }
     if let Some(p) = &args.screenshot {
         volux_viewer::png_path(p)?;
     }
     if args.bench {
         let path = args.path.ok_or("--bench needs a dataset")?;
         let size = size.unwrap_or((800, 600));
-        let report = volux_viewer::bench::run(&path, size, args.bench_seconds)?;
+        let report = volux_viewer::bench::run(&path, size, args.bench_seconds, lod)?;
         println!(
             "{}",
             serde_json::to_string(&report).map_err(|e| e.to_string())?
@@ -76,6 +89,7 @@ fn run(args: Args) -> Result<(), String> {
         screenshot: args.screenshot,
         size,
         save_session: args.save_session,
+        lod,
     };
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()

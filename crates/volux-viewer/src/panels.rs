@@ -10,6 +10,7 @@ use volux_render::scene::{GridRaycast, Method, PtSettings, SortMode, Volume};
 
 use crate::app::ViewerApp;
 use crate::file_dialog::Purpose;
+use crate::lod_status::NEEDS_MEMORY;
 use crate::tf_editor::in_value_space;
 
 use volux_core::transfer::PRESETS;
@@ -86,6 +87,9 @@ fn menu(app: &mut ViewerApp, ui: &mut egui::Ui) {
     } else if let Some(s) = &app.status {
         ui.label(s.as_str());
     }
+    if let Some(s) = app.lod_status() {
+        ui.label(s);
+    }
 }
 
 fn settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
@@ -111,6 +115,7 @@ fn settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
 fn method_choices(volume: &Volume) -> Vec<(&'static str, Method)> {
     let grid = GridRaycast::default();
     match volume {
+        Volume::Bricked(..) => vec![("Ray casting (out of core)", Method::GridRaycast(grid))],
         Volume::Grid(_) => vec![
             ("Ray casting", Method::GridRaycast(grid)),
             (
@@ -158,8 +163,17 @@ fn method_settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
     if let Some(m) = picked {
         pick_method(app, m);
     }
+    let bricked = app.is_bricked();
+    if bricked {
+        let mut full = app.full_resolution;
+        ui.checkbox(&mut full, "Full resolution")
+            .on_hover_text("refine to level 0 whatever the view (otherwise: the level whose voxels are about a pixel)");
+        app.set_full_resolution(full);
+    }
     match &mut app.scene.method {
-        Method::GridRaycast(g) | Method::Resample { raycast: g, .. } => grid_settings(ui, g),
+        Method::GridRaycast(g) | Method::Resample { raycast: g, .. } => {
+            grid_settings(ui, g, bricked)
+        }
         Method::ProjectedTetrahedra(p) => pt_settings(ui, p),
         Method::TetRaycast(rule) => rule_settings(ui, rule, true),
         _ => {}
@@ -172,7 +186,7 @@ fn pick_method(app: &mut ViewerApp, method: Method) {
     app.set_method(method);
 }
 
-fn grid_settings(ui: &mut egui::Ui, g: &mut GridRaycast) {
+fn grid_settings(ui: &mut egui::Ui, g: &mut GridRaycast, bricked: bool) {
     let names = [
         "riemann",
         "trapezoid",
@@ -225,9 +239,18 @@ fn grid_settings(ui: &mut egui::Ui, g: &mut GridRaycast) {
     ];
     ui.horizontal(|ui| {
         for (label, r) in recon {
-            ui.radio_value(&mut g.reconstruction, r, label);
+            let cubic = r != Reconstruction::Trilinear;
+            ui.add_enabled_ui(!(bricked && cubic), |ui| {
+                ui.radio_value(&mut g.reconstruction, r, label)
+                    .on_disabled_hover_text(format!("cubic reconstruction {NEEDS_MEMORY}"));
+            });
         }
     });
+    if bricked {
+        // A session may carry a cubic filter: back to trilinear rather than an error per frame.
+        g.reconstruction = Reconstruction::Trilinear;
+        ui.small(format!("cubic filters: off; {NEEDS_MEMORY}"));
+    }
     ui.checkbox(&mut g.jitter, "jitter");
 }
 

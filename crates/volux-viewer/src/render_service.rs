@@ -10,6 +10,11 @@
 //! scene's own integrator (for adaptive integration, the error-controlled one). Renderers are
 //! kept per method between requests, so their caches (macrocells, gradients, PT's kept set
 //! and projection, the tet ray caster's hierarchy) survive camera and TF changes.
+//!
+//! A bricked volume (an OME-Zarr store rendered out of core) is refined by level instead
+//! ([`crate::progressive`]): the coarsest level at once (a preview of it while the user
+//! drags), then each finer level down to the one its [`Lod`] picks, one frame each; a newer
+//! request cancels the level in flight, as it cancels a full frame.
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, Receiver, Sender};
@@ -18,12 +23,15 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use volux_core::Image;
+use volux_render::bricked::{BrickedVolume, Lod};
 use volux_render::engine::{create_renderer, FrameStats, Renderer};
 use volux_render::integrate::integrator::Integrator;
 use volux_render::integrate::segment::SegmentRule;
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::tiles::Control;
 use volux_render::RenderError;
+
+use crate::progressive::{self, LevelShown};
 
 /// Time a preview frame aims at (ms): the divisor of the resolution adapts to meet it.
 pub const PREVIEW_BUDGET_MS: f64 = 25.0;
@@ -72,6 +80,8 @@ pub struct Rendered {
     pub latency: Duration,
     /// The scene it shows (at full size).
     pub scene: Scene,
+    /// For a bricked volume: the pyramid level drawn and where refinement stops.
+    pub level: Option<LevelShown>,
 }
 
 /// What comes back from the thread.
@@ -238,6 +248,10 @@ impl Worker {
     }
 
     fn serve(&mut self, request: Request) {
+        if let Volume::Bricked(b, lod) = &request.volume.volume {
+            let (b, lod) = (b.clone(), *lod);
+            return self.serve_bricked(&request, &b, lod);
+        }
         let divisor = self.preview_divisor(&request.scene);
         let seen = self.previewed.as_ref() == Some(&(request.volume.id, request.scene.clone()));
         if !seen || request.interacting || divisor == 1 {
@@ -261,6 +275,75 @@ impl Worker {
             Ok(()) | Err(RenderError::Cancelled) => {}
             Err(e) => self.fail(&request, e),
         }
+    }
+
+    /// Progressive LOD: the coarsest level (a preview of it while interacting), then each
+    /// finer level down to the target, each a frame; a newer request stops the walk (and
+    /// cancels the level in flight, except the first, which shows something at once).
+    fn serve_bricked(&mut self, request: &Request, volume: &Arc<BrickedVolume>, lod: Lod) {
+        let ladder = progressive::ladder(volume, lod, &request.scene);
+        let target = ladder.last().copied().unwrap_or(0);
+        let seen = self.previewed.as_ref() == Some(&(request.volume.id, request.scene.clone()));
+        for (i, &level) in ladder.iter().enumerate() {
+            let last = i + 1 == ladder.len();
+            if i == 0 && seen && !last && !request.interacting {
+                // The drag's last preview already showed the coarsest level.
+                continue;
+            }
+            if i > 0 {
+                self.mailbox.full_in_flight.store(true, Ordering::SeqCst);
+                if self.newer_waiting() {
+                    break;
+                }
+            }
+            let divisor = if request.interacting {
+                self.preview_divisor(&request.scene)
+            } else {
+                1
+            };
+            let shown = progressive::level_shown(volume, level, target);
+            let result = self.render_bricked_level(request, volume, shown, divisor);
+            self.mailbox.full_in_flight.store(false, Ordering::SeqCst);
+            match result {
+                Ok(()) => {}
+                Err(RenderError::Cancelled) => return,
+                Err(e) => return self.fail(request, e),
+            }
+            if i == 0 {
+                self.previewed = Some((request.volume.id, request.scene.clone()));
+            }
+            if request.interacting {
+                return;
+            }
+        }
+    }
+
+    /// Renders one level of a bricked volume and sends the frame (full when it is the
+    /// target level at full size with the scene's own method; the levels on the way use the
+    /// preview's fixed-step integrator).
+    fn render_bricked_level(
+        &mut self,
+        request: &Request,
+        volume: &Arc<BrickedVolume>,
+        shown: LevelShown,
+        divisor: usize,
+    ) -> Result<(), RenderError> {
+        let full = divisor == 1 && shown.is_final();
+        let mut scene = request.scene.clone();
+        if !full {
+            scene.method = preview_method(&scene.method);
+        }
+        let control = Control {
+            cancel: Some(request.cancel.clone()),
+            progress: None,
+        };
+        let frame = progressive::render_level(volume, shown.level, &scene, &control, divisor)?;
+        if divisor > 1 {
+            let px = (frame.stats.pixels.max(1)) as f64;
+            self.ns_per_pixel = Some(frame.stats.ms * 1e6 / px);
+        }
+        self.send(request, frame, full, divisor, Some(shown));
+        Ok(())
     }
 
     fn fail(&self, request: &Request, e: RenderError) {
@@ -300,6 +383,19 @@ impl Worker {
             let px = (frame.stats.pixels.max(1)) as f64;
             self.ns_per_pixel = Some(frame.stats.ms * 1e6 / px);
         }
+        self.send(request, frame, full, divisor, None);
+        Ok(())
+    }
+
+    /// Sends a finished frame to the window.
+    fn send(
+        &self,
+        request: &Request,
+        frame: volux_render::engine::Frame,
+        full: bool,
+        divisor: usize,
+        level: Option<LevelShown>,
+    ) {
         let background = *lock(&self.mailbox.background);
         let rendered = Rendered {
             display: frame.image.to_srgba8(background),
@@ -311,10 +407,10 @@ impl Worker {
             divisor,
             latency: request.submitted.elapsed(),
             scene: request.scene.clone(),
+            level,
         };
         let _ = self.tx.send(Event::Frame(Box::new(rendered)));
         (self.wake)();
-        Ok(())
     }
 
     /// The divisor whose preview meets [`PREVIEW_BUDGET_MS`] at the last measured cost.

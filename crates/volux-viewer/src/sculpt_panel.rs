@@ -24,6 +24,11 @@ pub fn show(app: &mut ViewerApp, ui: &mut egui::Ui) {
     });
     if grid {
         tools(app, ui);
+    } else if app.is_bricked() {
+        ui.small(format!(
+            "erase, dig, measure and labels: off; sculpting {}; clipping planes work",
+            crate::lod_status::NEEDS_MEMORY
+        ));
     }
     planes(app, ui);
     if grid {

@@ -178,6 +178,17 @@ impl BrickedVolume {
     pub fn levels(&self) -> usize {
         self.caches.len()
     }
+
+    /// The bytes of bricks resident now, over every level's cache (what a viewer's status
+    /// line shows against [`BrickedVolume::budget`]).
+    pub fn resident_bytes(&self) -> u64 {
+        self.caches.iter().map(BrickCache::resident_bytes).sum()
+    }
+
+    /// The memory budget the volume was opened with (bytes).
+    pub fn budget(&self) -> u64 {
+        self.caches.first().map_or(0, BrickCache::budget)
+    }
 }
 
 /// The range of every chunk's samples, read one chunk per thread at a time.

@@ -1,0 +1,184 @@
+//! Progressive level of detail for bricked volumes (issue 19: "the viewer shows coarse
+//! levels at once and refines to full resolution"). After every new scene the render thread
+//! ([`crate::render_service`]) walks a [`ladder`] of pyramid levels, coarsest first, down to
+//! the level the volume's [`Lod`] picks for the view (full resolution when the user asks for
+//! it): each level is one frame, rendered in the background and superseded as soon as the
+//! scene changes again. This module holds what that needs and what the status line says:
+//! the ladder, the rendering of one level ([`render_level`]), the level a frame shows
+//! ([`LevelShown`]) and the cache's figures ([`CacheFigures`]).
+use std::sync::Arc;
+
+use volux_render::bricked::{BrickedRenderer, BrickedVolume, Lod};
+use volux_render::engine::{Frame, Renderer};
+use volux_render::scene::Scene;
+use volux_render::tiles::Control;
+use volux_render::RenderError;
+
+/// The level a frame of a bricked volume shows, and where refinement stops.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LevelShown {
+    /// The level drawn (0: full resolution).
+    pub level: usize,
+    /// The pyramid's number of levels.
+    pub levels: usize,
+    /// The level refinement ends at for this scene.
+    pub target: usize,
+    /// Samples per axis of the level drawn.
+    pub dims: [usize; 3],
+}
+
+impl LevelShown {
+    /// Whether refinement is done (this is the target level).
+    pub fn is_final(&self) -> bool {
+        self.level == self.target
+    }
+
+    /// The status line's words: "level 2 of 0–3, 64x64x64 — refining to level 0…", then
+    /// "level 0, 256x256x256 — full resolution" (or "— as fine as the view needs" when the
+    /// automatic level stops above 0).
+    pub fn describe(&self) -> String {
+        let [x, y, z] = self.dims;
+        let head = format!(
+            "level {} of 0–{}, {x}x{y}x{z}",
+            self.level,
+            self.levels.saturating_sub(1)
+        );
+        if !self.is_final() {
+            format!("{head} — refining to level {}…", self.target)
+        } else if self.level == 0 {
+            format!("{head} — full resolution")
+        } else {
+            format!("{head} — as fine as the view needs (tick Full resolution for level 0)")
+        }
+    }
+}
+
+/// The brick caches' figures, over all levels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CacheFigures {
+    /// Bytes of bricks resident now.
+    pub resident_bytes: u64,
+    /// The memory budget.
+    pub budget: u64,
+    /// Lookups answered from memory.
+    pub hits: u64,
+    /// Chunks read from the store.
+    pub misses: u64,
+}
+
+impl CacheFigures {
+    /// The figures of `volume` now.
+    pub fn of(volume: &BrickedVolume) -> Self {
+        let (hits, misses) = (0..volume.levels())
+            .filter_map(|l| volume.cache_stats(l))
+            .fold((0, 0), |(h, m), s| (h + s.hits, m + s.misses));
+        Self {
+            resident_bytes: volume.resident_bytes(),
+            budget: volume.budget(),
+            hits,
+            misses,
+        }
+    }
+
+    /// Hits over lookups (1 when there was none).
+    pub fn hit_rate(&self) -> f64 {
+        let n = self.hits + self.misses;
+        if n == 0 {
+            1.0
+        } else {
+            self.hits as f64 / n as f64
+        }
+    }
+
+    /// "cache 12.0 of 4096.0 MiB, 97.5 % hits".
+    pub fn describe(&self) -> String {
+        let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+        format!(
+            "cache {:.1} of {:.1} MiB, {:.1} % hits",
+            mib(self.resident_bytes),
+            mib(self.budget),
+            self.hit_rate() * 100.0
+        )
+    }
+}
+
+/// The level `lod` picks for `scene` (the end of refinement).
+pub fn target_level(volume: &Arc<BrickedVolume>, lod: Lod, scene: &Scene) -> usize {
+    BrickedRenderer::new(volume.clone(), lod).level_for(scene)
+}
+
+/// The levels to draw for `scene`, one frame each: the coarsest level first (a few
+/// chunks, on screen at once), then every finer level down to [`target_level`].
+pub fn ladder(volume: &Arc<BrickedVolume>, lod: Lod, scene: &Scene) -> Vec<usize> {
+    let coarsest = volume.levels().saturating_sub(1);
+    let target = target_level(volume, lod, scene).min(coarsest);
+    (target..=coarsest).rev().collect()
+}
+
+/// What a frame of `level` shows, refining towards `target`.
+pub fn level_shown(volume: &BrickedVolume, level: usize, target: usize) -> LevelShown {
+    let dims = volume
+        .multiscale()
+        .levels()
+        .get(level)
+        .map_or([0; 3], |l| l.layout().dims);
+    LevelShown {
+        level,
+        levels: volume.levels(),
+        target,
+        dims,
+    }
+}
+
+/// Renders `scene` at `level` of `volume` (at `1 / divisor` of the resolution when
+/// `divisor > 1`); `control` cancels it.
+pub fn render_level(
+    volume: &Arc<BrickedVolume>,
+    level: usize,
+    scene: &Scene,
+    control: &Control,
+    divisor: usize,
+) -> Result<Frame, RenderError> {
+    let mut renderer = BrickedRenderer::new(volume.clone(), Lod::Level(level));
+    if divisor > 1 {
+        renderer.render_preview(scene, control, divisor)
+    } else {
+        renderer.render(scene, control)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_status_words_name_the_level_and_the_goal() {
+        let mut l = LevelShown {
+            level: 2,
+            levels: 4,
+            target: 0,
+            dims: [16, 16, 16],
+        };
+        assert_eq!(
+            l.describe(),
+            "level 2 of 0–3, 16x16x16 — refining to level 0…"
+        );
+        l.level = 0;
+        l.dims = [64, 64, 64];
+        assert!(
+            l.describe().ends_with("full resolution"),
+            "{}",
+            l.describe()
+        );
+        l.level = 1;
+        l.target = 1;
+        assert!(l.describe().contains("as fine as the view needs"));
+        let c = CacheFigures {
+            resident_bytes: 3 << 20,
+            budget: 1 << 30,
+            hits: 3,
+            misses: 1,
+        };
+        assert_eq!(c.describe(), "cache 3.0 of 1024.0 MiB, 75.0 % hits");
+    }
+}

@@ -1,0 +1,183 @@
+//! OME-Zarr stores in the viewer (issue 19): a store is opened as a bricked volume
+//! ([`Volume::Bricked`]) read chunk by chunk within the memory budget (a quarter of RAM, as
+//! the CLI's, [`volux_core::limits::memory_budget`]), never its full level at once; the
+//! render thread refines it level by level ([`crate::progressive`]). The slice views cut a
+//! coarse level read whole (at most [`SLICE_SAMPLES`] samples), which the panel notes.
+use std::sync::Arc;
+
+use volux_core::bricked::ChunkSource;
+use volux_core::grid::{Buffer, Grid, Samples, Scalar};
+use volux_core::units::format_bytes;
+use volux_io::omezarr::{self, ZarrOptions};
+use volux_render::bricked::{BrickedVolume, Lod};
+use volux_render::scene::Volume;
+use volux_render::session::DatasetRef;
+
+use crate::slices::SliceVolume;
+
+/// The most samples of the level the slice views cut (128^3: 8 MiB of f32).
+pub const SLICE_SAMPLES: usize = 1 << 21;
+
+/// A store opened for the viewer.
+pub struct OpenedStore {
+    /// The bricked volume (automatic level).
+    pub volume: Volume,
+    /// What the slice views cut.
+    pub slices: SliceVolume,
+    /// The store's notes, the budget and the slices' level, for the panel.
+    pub notes: Vec<String>,
+}
+
+/// Opens the store of `source` as a bricked volume within `budget` bytes. Errors (missing
+/// metadata, a chunk that cannot be read) are one line naming the store.
+pub fn open(source: &DatasetRef, budget: u64) -> Result<OpenedStore, String> {
+    let shown = source.path.display().to_string();
+    let opts = ZarrOptions {
+        array: source.array.clone(),
+        ..ZarrOptions::default()
+    };
+    let store = omezarr::open_store(&source.path, &opts).map_err(|e| format!("{shown}: {e}"))?;
+    let bricked =
+        BrickedVolume::open(store.multiscale, budget).map_err(|e| format!("{shown}: {e}"))?;
+    let (slices, slice_level) = coarse_slices(&bricked).map_err(|e| format!("{shown}: {e}"))?;
+    let full = bricked.multiscale().full().layout().clone();
+    let [x, y, z] = full.dims;
+    let mut notes = store.notes;
+    notes.push(format!(
+        "out of core: {} levels, full level {x}x{y}x{z} ({}), memory budget {}",
+        bricked.levels(),
+        format_bytes(u64::try_from(full.bytes()).unwrap_or(u64::MAX)),
+        format_bytes(budget)
+    ));
+    let [sx, sy, sz] = slices.dims();
+    notes.push(format!(
+        "slices: level {slice_level} ({sx}x{sy}x{sz}) read whole; the 3D view refines to full resolution"
+    ));
+    Ok(OpenedStore {
+        volume: Volume::Bricked(Arc::new(bricked), Lod::Auto),
+        slices,
+        notes,
+    })
+}
+
+/// The slice volume of the finest level with at most [`SLICE_SAMPLES`] samples (the
+/// coarsest when none is that small), read chunk by chunk, and its level.
+pub fn coarse_slices(volume: &BrickedVolume) -> Result<(SliceVolume, usize), String> {
+    let levels = volume.multiscale().levels();
+    let small = |l: &Arc<dyn ChunkSource>| l.layout().dims.iter().product::<usize>();
+    let index = levels
+        .iter()
+        .position(|l| small(l) <= SLICE_SAMPLES)
+        .unwrap_or(levels.len().saturating_sub(1));
+    let level = levels.get(index).ok_or("the store has no level")?;
+    let grid = read_level(level.as_ref())?;
+    Ok((SliceVolume::of_grid(Arc::new(grid)), index))
+}
+
+/// A whole level as an f32 grid (small levels only: the caller bounds the size).
+fn read_level(level: &dyn ChunkSource) -> Result<Grid, String> {
+    let layout = level.layout();
+    let [nx, ny, _] = layout.dims;
+    let count = layout.dims.iter().product::<usize>();
+    volux_core::limits::check_alloc("the slices' level", count as u64, 4)
+        .map_err(|e| e.to_string())?;
+    let mut values = vec![0f32; count];
+    for i in 0..layout.chunk_count() {
+        let c = layout.chunk_coords(i);
+        let (lo, size) = layout.checked_extent(c).map_err(|e| e.to_string())?;
+        let samples = level.read_chunk(c).map_err(|e| e.to_string())?;
+        let chunk: Vec<f32> =
+            volux_core::with_samples!(&samples, |v| v.iter().map(|x| x.to_f32()).collect());
+        if chunk.len() != size.iter().product::<usize>() {
+            return Err(format!(
+                "chunk {c:?} holds {} samples, not the {} of its extent",
+                chunk.len(),
+                size.iter().product::<usize>()
+            ));
+        }
+        for k in 0..size[2] {
+            for j in 0..size[1] {
+                let src = (k * size[1] + j) * size[0];
+                let dst = ((lo[2] + k) * ny + lo[1] + j) * nx + lo[0];
+                values[dst..dst + size[0]].copy_from_slice(&chunk[src..src + size[0]]);
+            }
+        }
+    }
+    Grid::new(
+        layout.dims,
+        layout.spacing,
+        layout.origin,
+        Samples::F32(Buffer::owned(values)),
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// The volume with `lod` (a bricked volume; other volumes are returned as they are).
+pub fn with_lod(volume: &Volume, lod: Lod) -> Volume {
+    match volume {
+        Volume::Bricked(b, _) => Volume::Bricked(b.clone(), lod),
+        v => v.clone(),
+    }
+}
+
+/// `auto` or a level number (0: full resolution), as `volux render --lod`.
+pub fn parse_lod(s: &str) -> Result<Lod, String> {
+    if s == "auto" {
+        return Ok(Lod::Auto);
+    }
+    s.parse::<usize>()
+        .map(Lod::Level)
+        .map_err(|_| format!("--lod {s}: give auto or a level number (0 = full resolution)"))
+}
+
+/// `--memory-budget SIZE`: bytes with an optional binary unit (`4G`, `512MiB`, `1.5g`), or
+/// a percentage of the memory available now (`50%`), as the CLI's option.
+pub fn parse_budget(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let bad = || format!("--memory-budget {text}: expected a size such as 4G, 512M or 50%");
+    let (number, scale) = if let Some(p) = t.strip_suffix('%') {
+        let available = volux_core::limits::available_memory() as f64;
+        (p, available / 100.0)
+    } else {
+        let split = t
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(t.len());
+        let (number, unit) = t.split_at(split);
+        let unit = unit.trim().to_ascii_lowercase();
+        let unit = unit.trim_end_matches("ib").trim_end_matches('b');
+        let power = ["", "k", "m", "g", "t"]
+            .iter()
+            .position(|u| *u == unit)
+            .ok_or_else(bad)?;
+        (number, 1024f64.powi(power as i32))
+    };
+    let bytes = number.trim().parse::<f64>().map_err(|_| bad())? * scale;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(bad());
+    }
+    Ok(bytes as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budget_words() {
+        assert_eq!(parse_budget("4G"), Ok(4 << 30));
+        assert_eq!(parse_budget("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_budget("1000"), Ok(1000));
+        assert_eq!(parse_budget("1.5kb"), Ok(1536));
+        assert!(parse_budget("50%").is_ok_and(|b| b > 0));
+        for bad in ["", "0", "-1G", "4X", "abc", "%"] {
+            assert!(parse_budget(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn lod_words() {
+        assert_eq!(parse_lod("auto"), Ok(Lod::Auto));
+        assert_eq!(parse_lod("2"), Ok(Lod::Level(2)));
+        assert!(parse_lod("fine").is_err());
+    }
+}
