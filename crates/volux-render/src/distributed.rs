@@ -15,11 +15,12 @@
 //! tested for 1 to 5 ranks). Early ray termination is off: a rank behind another cannot
 //! know that the rays it samples are already opaque in front.
 //!
-//! Read counts per rank: [`reads`]; a bricked level rendered by region:
+//! The job every rank renders: [`job`]. Read counts per rank: [`reads`]; a bricked level rendered by region:
 //! [`render_cache_region`](crate::bricked::render_cache_region). Errors: [`error`].
 
 pub mod error;
 pub mod exchange;
+pub mod job;
 pub mod kdtree;
 pub mod reads;
 pub mod region;

@@ -83,6 +83,7 @@ pub struct KdSplit {
     regions: Vec<ChunkBox>,
     root: Node,
     chunks: [usize; 3],
+    chunk: [usize; 3],
 }
 
 impl KdSplit {
@@ -110,6 +111,7 @@ impl KdSplit {
             regions,
             root,
             chunks,
+            chunk: layout.chunk,
         })
     }
 
@@ -131,6 +133,11 @@ impl KdSplit {
     /// Chunks per axis of the split grid.
     pub fn chunks_per_axis(&self) -> [usize; 3] {
         self.chunks
+    }
+
+    /// Samples per chunk along each axis.
+    pub fn chunk_shape(&self) -> [usize; 3] {
+        self.chunk
     }
 
     /// The region holding chunk `c`.

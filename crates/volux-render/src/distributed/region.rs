@@ -1,7 +1,7 @@
 //! One rank's part of a distributed render: rays sampled only inside the rank's region
 //! ([`RegionRays`], an [`IntervalSource`] on the global sample lattice), rendered into a
 //! partial image of premultiplied RGBA before any background ([`render_region`]).
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
 use super::error::DistributedError;
 use super::kdtree::KdSplit;
@@ -133,10 +133,103 @@ pub fn render_region<F: Field>(
             split.len()
         )));
     }
+    let rule = SpanRule::of(&opts, &place)?;
     let rays = RegionRays {
         split,
         region,
-        rule: SpanRule::of(&opts, &place)?,
+        rule,
     };
-    Ok(render_field_in(field, place, range, Some(&rays), &opts)?)
+    Ok(
+        match Near::new(field, split, region, reach(&opts, &place)) {
+            Some(near) => render_field_in(&near, place, range, Some(&rays), &opts)?,
+            None => render_field_in(field, place, range, Some(&rays), &opts)?,
+        },
+    )
+}
+
+/// How far past a region face (voxels, per axis) a sample the region needs can lie: a step
+/// (or the largest adaptive step) straddling the face, and a voxel for gradients.
+fn reach(opts: &RenderOptions, place: &Placement) -> [f64; 3] {
+    let unit = place.spacing.min_element();
+    let h = match opts.integrator {
+        Integrator::Riemann { step }
+        | Integrator::Trapezoid { step }
+        | Integrator::Simpson { step }
+        | Integrator::Preintegrated { step } => step,
+        Integrator::AdaptiveSimpson(p) => p.hmax,
+        Integrator::Reference => f64::INFINITY,
+    } * unit;
+    std::array::from_fn(|a| h / place.spacing[a] + 1.0)
+}
+
+/// The field as a region sees it: undefined farther than the chunks next to the region's
+/// faces, so that a rank never reads another chunk. No sample a region's rays need lies
+/// there ([`reach`] is within a chunk); what does is what the lane streams' idle lanes
+/// sample while they wait (their results unused), which would otherwise read chunks on the
+/// volume's surface anywhere along their last ray.
+struct Near<'a, F> {
+    inner: &'a F,
+    /// Per axis, the allowed coordinates `[lo, hi)` (clamped as the samplers clamp).
+    lo: [f32; 3],
+    hi: [f32; 3],
+    top: [f32; 3],
+}
+
+impl<'a, F: Field> Near<'a, F> {
+    /// `None` (no filter) when a sample could reach beyond the neighbouring chunks.
+    fn new(inner: &'a F, split: &KdSplit, region: usize, reach: [f64; 3]) -> Option<Self> {
+        let b = split.regions().get(region)?;
+        let (chunk, n) = (split.chunk_shape(), split.chunks_per_axis());
+        if (0..3).any(|a| reach[a] + 1.0 >= chunk[a] as f64) {
+            return None;
+        }
+        let dims = inner.dims();
+        Some(Self {
+            inner,
+            lo: std::array::from_fn(|a| match b.lo[a] {
+                0 => f32::NEG_INFINITY,
+                c => ((c - 1) * chunk[a]) as f32,
+            }),
+            // The cell at `x` reads `floor(x) + 1`: below the chunk after the next.
+            hi: std::array::from_fn(|a| {
+                if b.hi[a] >= n[a] {
+                    f32::INFINITY
+                } else {
+                    ((b.hi[a] + 1) * chunk[a] - 1) as f32
+                }
+            }),
+            top: dims.map(|d| d.saturating_sub(1) as f32),
+        })
+    }
+
+    #[inline]
+    fn near(&self, p: Vec3) -> bool {
+        (0..3).all(|a| {
+            let x = p[a].max(0.0).min(self.top[a]);
+            self.lo[a] <= x && x < self.hi[a]
+        })
+    }
+}
+
+impl<F: Field> Field for Near<'_, F> {
+    fn dims(&self) -> [usize; 3] {
+        self.inner.dims()
+    }
+
+    #[inline]
+    fn sample(&self, p: Vec3) -> Option<f32> {
+        if self.near(p) {
+            self.inner.sample(p)
+        } else {
+            None
+        }
+    }
+
+    fn sample64(&self, p: DVec3) -> Option<f64> {
+        if self.near(p.as_vec3()) {
+            self.inner.sample64(p)
+        } else {
+            None
+        }
+    }
 }

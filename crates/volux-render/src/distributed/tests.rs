@@ -171,13 +171,8 @@ fn one_to_five_ranks_equal_the_single_process_render_for_the_exact_integrators()
             assert!(d <= 1e-6, "{name}, {n} ranks: max difference {d}");
             for (r, s) in reads.iter().enumerate() {
                 assert!(s.own > 0, "{name}, {n} ranks: rank {r} read {s:?}");
-                // Ray by ray (shaded), a rank reads its chunks and its face neighbours only.
-                // The lane stream's idle lanes step in place at their last ray's first
-                // sample (its results unused), which may lie in a chunk on the volume's
-                // surface outside the region: a few such reads, counted apart.
-                if name.ends_with("shaded") {
-                    assert_eq!(s.other, 0, "{name}, {n} ranks: rank {r} read {s:?}");
-                }
+                // A rank reads its chunks and its face neighbours only.
+                assert_eq!(s.other, 0, "{name}, {n} ranks: rank {r} read {s:?}");
             }
         }
     }
