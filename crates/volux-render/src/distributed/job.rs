@@ -53,6 +53,12 @@ impl RegionJob {
         if o.reconstruction != Reconstruction::Trilinear {
             return Err(DistributedError::Unsupported("cubic reconstruction".into()));
         }
+        if o.integrator == Integrator::Reference {
+            return Err(DistributedError::Unsupported(
+                "the reference integrator (it integrates each ray whole); use adaptive-simpson"
+                    .into(),
+            ));
+        }
         let o = region_options(&o)?;
         Ok(Self {
             level,
