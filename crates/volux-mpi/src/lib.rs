@@ -14,7 +14,7 @@
 //! Modules:
 //! - [`error`]: the errors of the MPI layer;
 //! - [`stats`]: what each rank did (always built);
-//! - `world` (with the `mpi` feature): [`World`], MPI's world communicator as an
+//! - `world` (with the `mpi` feature): `World`, MPI's world communicator as an
 //!   `Exchange`, with byte broadcast and gather and agreement.
 //!
 //! Without the `mpi` feature the crate has no MPI dependency (and no `World`).
