@@ -386,6 +386,16 @@ pub struct RenderArgs {
     /// With --orbit: write no images (figures only, with --stats).
     #[arg(long)]
     pub no_write: bool,
+    /// OME-Zarr: render on the ranks of `mpirun -np N volux render STORE --distributed`
+    /// (sort-last: each rank renders its k-d region of chunks, binary-swap compositing, rank 0
+    /// writes the PNG) at --lod (default 0, full resolution); no early ray termination.
+    /// Needs a volux built with `--features mpi`.
+    #[arg(long, conflicts_with_all = ["orbit", "session"])]
+    pub distributed: bool,
+    /// Also write the image as raw linear premultiplied RGBA, little-endian f32, row by row
+    /// (no background): for exact comparisons (`volux compare` reads quantized PNGs).
+    #[arg(long, value_name = "F.f32")]
+    pub raw_out: Option<PathBuf>,
     /// The frame of an --orbit being reported (set by the command, not typed).
     #[arg(skip)]
     pub frame_index: Option<usize>,

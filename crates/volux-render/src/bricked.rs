@@ -6,16 +6,20 @@
 //! opacity and early termination carry across bricks (the seed's merge reset opacity at
 //! every block boundary). At full resolution the image equals the in-core image of the same
 //! data (tested for every integrator, with budgets that force evictions within a frame).
-//! [`BrickedVolume`] holds the pyramid and chooses the level ([`Lod`]).
+//! [`BrickedVolume`] holds the pyramid and chooses the level ([`Lod`]);
+//! [`render_cache_region`] renders one rank's region of a distributed render
+//! ([`crate::distributed`]).
 
 mod cache;
 mod field;
 mod memo;
+mod region;
 mod render;
 #[cfg(test)]
 mod tests;
 pub mod volume;
 
 pub use cache::{Brick, BrickCache, CacheStats};
+pub use region::{level_placement, render_cache_region};
 pub use render::{render_level, BrickedRenderer};
 pub use volume::{BrickedVolume, Lod};

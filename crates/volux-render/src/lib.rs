@@ -67,6 +67,10 @@
 //!
 //! - [`bricked`]: a chunked pyramid rendered level by level through a bounded brick cache,
 //!   sampled exactly across brick faces, equal to the in-core image.
+//! - [`distributed`]: sort-last rendering on several ranks: a k-d split of the chunks into
+//!   one convex region per rank, each rank's rays sampled only in its region on the global
+//!   sample lattice, binary-swap compositing in visibility order over a message-passing
+//!   trait (threads in tests, MPI in `volux-mpi`); equal to the single-process render.
 //!
 //! `docs/seeds.md` in the repository says which seed document each number names.
 #![deny(missing_docs)]
@@ -79,6 +83,7 @@ pub mod classify;
 #[cfg(test)]
 mod clip_tests;
 pub mod composite;
+pub mod distributed;
 pub mod engine;
 pub mod error;
 pub mod frame;

@@ -36,7 +36,7 @@ pub fn volume(file: &Path, args: &RenderArgs) -> Result<Option<Volume>, CmdError
 }
 
 /// `auto` or a level number.
-fn parse_lod(s: &str) -> Result<Lod, CmdError> {
+pub(crate) fn parse_lod(s: &str) -> Result<Lod, CmdError> {
     if s == "auto" {
         return Ok(Lod::Auto);
     }

@@ -22,6 +22,9 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     if let Some(session) = &args.session {
         return super::session::run(args, session, show);
     }
+    if args.distributed {
+        return super::distributed::run(args);
+    }
     let plan = RenderPlan::new(args)?;
     let file = args
         .file
@@ -59,6 +62,9 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
         .map_err(|e| format!("{}: {e}", output.display()))?;
     if let Some(path) = &args.error_map {
         write_error_map(&frame, args.tol, plan.size, path)?;
+    }
+    if let Some(path) = &args.raw_out {
+        super::raw::write_raw(&frame.image, path)?;
     }
     if let Some(m) = &measured {
         m.print();

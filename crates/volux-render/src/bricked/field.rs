@@ -82,6 +82,13 @@ impl<'a> BrickedField<'a> {
         }
     }
 
+    /// The field of `cache`'s level for a render on the current rayon pool, whose threads'
+    /// memos hold at most a quarter of the cache's budget (at least four bricks per thread).
+    pub(crate) fn for_render(cache: &'a BrickCache, failed: Arc<AtomicBool>) -> Self {
+        let threads = rayon::current_num_threads();
+        Self::new(cache, cache.budget() / 4, threads, failed)
+    }
+
     /// The first chunk error of the render, if any.
     pub(crate) fn error(&self) -> Option<&String> {
         self.error.get()

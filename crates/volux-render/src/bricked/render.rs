@@ -59,10 +59,6 @@ impl Renderer for BrickedRenderer {
     }
 }
 
-/// The threads' brick memos hold at most this fraction of the budget (at least four bricks
-/// per thread).
-const MEMO_SHARE: u64 = 4;
-
 /// Renders level `level` with `opts` (trilinear reconstruction; no sculpt mask or
 /// labels: they are full-resolution voxel layers of in-core grids). A chunk that cannot
 /// be read stops the render with an error naming it; no image is returned.
@@ -80,8 +76,7 @@ pub fn render_level(
     })?;
     let range = volume.range();
     let failed = Arc::new(AtomicBool::new(false));
-    let threads = rayon::current_num_threads();
-    let field = BrickedField::new(cache, cache.budget() / MEMO_SHARE, threads, failed.clone());
+    let field = BrickedField::for_render(cache, failed.clone());
     let mut opts = opts.clone();
     if opts.control.cancel.is_none() {
         // A chunk error stops the render early (a caller's own flag is left alone).

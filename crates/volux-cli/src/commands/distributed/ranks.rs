@@ -1,0 +1,250 @@
+//! One rank of a distributed render: rank 0 plans the frame (the scene of `volux render`,
+//! as the single-process render would draw it) and broadcasts it; every rank opens the
+//! store, renders its k-d region reading only its chunks and their face neighbours, the
+//! ranks agree that every region rendered, composite by binary swap, and rank 0 writes the
+//! PNG (a temporary name renamed into place) and the per-rank figures. An error on any rank
+//! is reported once, by rank 0, as one line; nothing is written then.
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+use volux_core::Image;
+use volux_io::omezarr::{self, ZarrOptions};
+use volux_mpi::stats::RankStats;
+use volux_mpi::Mpi;
+use volux_render::bricked::{
+    level_placement, render_cache_region, BrickCache, BrickedRenderer, BrickedVolume, Lod,
+};
+use volux_render::distributed::exchange::Exchange;
+use volux_render::distributed::job::RegionJob;
+use volux_render::distributed::kdtree::{KdSplit, ViewPoint};
+use volux_render::distributed::reads::CountedChunks;
+use volux_render::distributed::swap::composite;
+use volux_render::scene::Volume;
+
+use crate::cli::RenderArgs;
+use crate::commands::common::CmdError;
+use crate::settings::RenderPlan;
+
+/// What rank 0 sends every rank.
+#[derive(Serialize, Deserialize)]
+struct Plan {
+    store: PathBuf,
+    array: Option<String>,
+    channel: usize,
+    timepoint: usize,
+    budget: u64,
+    job: RegionJob,
+}
+
+impl Plan {
+    fn zarr(&self) -> ZarrOptions {
+        ZarrOptions {
+            array: self.array.clone(),
+            level: 0,
+            channel: self.channel,
+            timepoint: self.timepoint,
+        }
+    }
+}
+
+/// Runs this rank's part.
+pub fn run(args: &RenderArgs) -> Result<(), CmdError> {
+    let mpi = Mpi::init()?;
+    let mut world = mpi.world();
+    let rank = world.rank();
+    let started = Instant::now();
+    let planned = (rank == 0).then(|| {
+        let p: Result<Plan, String> = plan(args).map_err(|e| e.to_string());
+        serde_json::to_vec(&p).unwrap_or_default()
+    });
+    let bytes = world.broadcast_bytes(0, planned);
+    let plan = match serde_json::from_slice::<Result<Plan, String>>(&bytes) {
+        Ok(Ok(p)) => p,
+        Ok(Err(e)) => return failed(rank, e),
+        Err(e) => return failed(rank, format!("the plan of the render: {e}")),
+    };
+    let rendered = render(&plan, rank, world.size());
+    if !world.all(rendered.is_ok()) {
+        let mine = rendered
+            .as_ref()
+            .err()
+            .map(|e| format!("rank {rank}: {e}"))
+            .unwrap_or_default();
+        let first = world.gather_bytes(0, mine.as_bytes()).and_then(|all| {
+            all.into_iter()
+                .map(|b| String::from_utf8_lossy(&b).into_owned())
+                .find(|m| !m.is_empty())
+        });
+        return failed(rank, first.unwrap_or_default());
+    }
+    let Ok((part, order, mut stats)) = rendered else {
+        return failed(rank, "unreachable".into());
+    };
+    let t = Instant::now();
+    let composited = composite(&mut world, &order, &part);
+    let (image, cstats) = match composited {
+        Ok(c) => c,
+        Err(e) => return failed(rank, format!("rank {rank}: compositing: {e}")),
+    };
+    stats.composite_ms = t.elapsed().as_secs_f64() * 1e3;
+    stats.composite = cstats;
+    let json = serde_json::to_vec(&stats).unwrap_or_default();
+    let gathered = world.gather_bytes(0, &json);
+    let (Some(image), Some(gathered)) = (image, gathered) else {
+        return Ok(());
+    };
+    let all: Vec<RankStats> = gathered
+        .iter()
+        .map(|b| serde_json::from_slice(b))
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("the figures of a rank: {e}"))?;
+    write(args, &image)?;
+    if args.stats {
+        report(args, &plan, &all, started.elapsed().as_secs_f64() * 1e3);
+    }
+    Ok(())
+}
+
+/// Rank 0 returns the error (printed as one line); the others end quietly (rank 0's exit
+/// status fails the run).
+fn failed(rank: usize, message: String) -> Result<(), CmdError> {
+    if rank == 0 {
+        return Err(message.into());
+    }
+    Ok(())
+}
+
+/// Rank 0: the frame of `args`, as `volux render STORE --lod N --no-early-termination`
+/// draws it (level 0 unless --lod says otherwise).
+fn plan(args: &RenderArgs) -> Result<Plan, CmdError> {
+    RenderPlan::new(args)?;
+    let file = args
+        .file
+        .as_deref()
+        .ok_or("--distributed renders a store: give STORE.ome.zarr")?;
+    if volux_io::detect(file).ok() != Some(volux_io::Format::OmeZarr) {
+        return Err(format!(
+            "{}: --distributed renders OME-Zarr stores (write one with `volux convert IN OUT.ome.zarr`)",
+            file.display()
+        )
+        .into());
+    }
+    let zarr = ZarrOptions {
+        array: args.load.array.clone(),
+        level: 0,
+        channel: args.load.channel.unwrap_or(0),
+        timepoint: args.load.timepoint.unwrap_or(0),
+    };
+    let budget = volux_core::limits::memory_budget();
+    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", file.display());
+    let ms = omezarr::open_multiscale(file, &zarr).map_err(|e| at(&e))?;
+    let volume = Arc::new(BrickedVolume::open(ms, budget).map_err(|e| at(&e))?);
+    let lod = match args.lod.as_deref() {
+        Some(s) => crate::commands::bricked::parse_lod(s)?,
+        None => Lod::Level(0),
+    };
+    let scene = RenderPlan::new(args)?.scene(args, &Volume::Bricked(volume.clone(), lod), false)?;
+    let level = BrickedRenderer::new(volume.clone(), lod).level_for(&scene);
+    let job = RegionJob::from_scene(&scene, level, volume.range())?;
+    Ok(Plan {
+        store: file.to_path_buf(),
+        array: zarr.array,
+        channel: zarr.channel,
+        timepoint: zarr.timepoint,
+        budget,
+        job,
+    })
+}
+
+/// This rank's partial image, the visibility order, and its figures so far.
+fn render(
+    plan: &Plan,
+    rank: usize,
+    size: usize,
+) -> Result<(Image, Vec<usize>, RankStats), CmdError> {
+    let ms = omezarr::open_multiscale(&plan.store, &plan.zarr())
+        .map_err(|e| format!("{}: {e}", plan.store.display()))?;
+    let level = ms.levels().get(plan.job.level).cloned().ok_or_else(|| {
+        format!(
+            "{}: level {} does not exist",
+            plan.store.display(),
+            plan.job.level
+        )
+    })?;
+    let split = KdSplit::new(level.layout(), size)?;
+    let region = split.regions()[rank];
+    let counted = Arc::new(CountedChunks::new(level, region));
+    let cache = BrickCache::new(counted.clone(), plan.budget);
+    let opts = plan.job.options();
+    let t = Instant::now();
+    let part = render_cache_region(&cache, plan.job.range, &split, rank, &opts)?;
+    let render_ms = t.elapsed().as_secs_f64() * 1e3;
+    let order = split.visibility_order(ViewPoint::of(&opts.camera, &level_placement(&cache)));
+    let stats = RankStats {
+        rank,
+        region_chunks: region.count(),
+        region: [region.lo, region.hi],
+        reads: counted.stats(),
+        render_ms,
+        ..Default::default()
+    };
+    Ok((part.image, order, stats))
+}
+
+/// Rank 0 writes the PNG (and the raw image), each through a temporary name.
+fn write(args: &RenderArgs, image: &Image) -> Result<(), CmdError> {
+    let png = RenderPlan::new(args)?.png;
+    let output = args.output();
+    image
+        .write_png(&output, &png)
+        .map_err(|e| format!("{}: {e}", output.display()))?;
+    if let Some(path) = &args.raw_out {
+        crate::commands::raw::write_raw(image, path)?;
+    }
+    eprintln!("wrote {}", output.display());
+    Ok(())
+}
+
+/// The figures of every rank: JSON on stdout with --json, else a line per rank.
+fn report(args: &RenderArgs, plan: &Plan, all: &[RankStats], total_ms: f64) {
+    let max = |f: fn(&RankStats) -> f64| all.iter().map(f).fold(0.0, f64::max);
+    if args.json {
+        let v = serde_json::json!({
+            "ranks": all.len(),
+            "level": plan.job.level,
+            "width": plan.job.width,
+            "height": plan.job.height,
+            "integrator": plan.job.integrator.name(),
+            "total_ms": total_ms,
+            "render_ms_max": max(|s| s.render_ms),
+            "composite_ms_max": max(|s| s.composite_ms),
+            "per_rank": all,
+        });
+        println!("{v}");
+        return;
+    }
+    println!(
+        "{} ranks, level {}, {}x{}: {total_ms:.1} ms in all",
+        all.len(),
+        plan.job.level,
+        plan.job.width,
+        plan.job.height
+    );
+    for s in all {
+        println!(
+            "rank {}: {} chunks in its region; read {} own, {} neighbour, {} other ({} bytes); render {:.1} ms, compositing {:.1} ms ({} messages, {} bytes sent)",
+            s.rank,
+            s.region_chunks,
+            s.reads.own,
+            s.reads.neighbours,
+            s.reads.other,
+            s.reads.bytes,
+            s.render_ms,
+            s.composite_ms,
+            s.composite.messages,
+            s.composite.bytes_sent
+        );
+    }
+}

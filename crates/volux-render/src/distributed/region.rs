@@ -1,0 +1,235 @@
+//! One rank's part of a distributed render: rays sampled only inside the rank's region
+//! ([`RegionRays`], an [`IntervalSource`] on the global sample lattice), rendered into a
+//! partial image of premultiplied RGBA before any background ([`render_region`]).
+use glam::{DVec3, Vec3};
+
+use super::error::DistributedError;
+use super::kdtree::KdSplit;
+use crate::integrate::integrator::Integrator;
+use crate::intervals::IntervalSource;
+use crate::raycast::{first_at_or_after, render_field_in, Placement, RenderOptions, Rendered};
+use crate::sampling::Field;
+
+/// How the integrator takes the ray apart, which says where a region's span must start so
+/// that neighbouring regions share nothing and lose nothing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SpanRule {
+    /// Point samples `t_i = t0 + i h` taken where `a <= t_i < b` (Riemann, adaptive Simpson):
+    /// the region's interval as it is.
+    Samples,
+    /// Steps `[t_i, t_i + h]` of length `h` (world units) owned by the region holding their
+    /// start `t_i` (trapezoid, Simpson, pre-integration): a region entered at `a > t0` starts
+    /// its span a quarter step after the first lattice point at or after `a`, where every
+    /// path (floor of the step index, or the first segment ending after the start) begins
+    /// with that point's step; the step straddling the region's far face is its own (its end
+    /// sample is read from the neighbour's chunks).
+    Steps {
+        /// The step, world units.
+        h: f64,
+    },
+}
+
+impl SpanRule {
+    /// The rule of `opts`' integrator on `place`; an error for those a split render cannot
+    /// honour (the reference path integrates the whole ray whatever the intervals).
+    pub fn of(opts: &RenderOptions, place: &Placement) -> Result<Self, DistributedError> {
+        let unit = place.spacing.min_element();
+        Ok(match opts.integrator {
+            Integrator::Riemann { .. } | Integrator::AdaptiveSimpson(_) => SpanRule::Samples,
+            Integrator::Trapezoid { step }
+            | Integrator::Simpson { step }
+            | Integrator::Preintegrated { step } => SpanRule::Steps { h: step * unit },
+            Integrator::Reference => {
+                return Err(DistributedError::Unsupported(
+                    "the reference integrator (it integrates each ray whole); use adaptive-simpson"
+                        .into(),
+                ))
+            }
+        })
+    }
+}
+
+/// The part of every ray inside one region of a [`KdSplit`], as the ray caster's interval
+/// seam: one span per ray (regions are convex), adjusted by the [`SpanRule`].
+pub struct RegionRays<'a> {
+    /// The split.
+    pub split: &'a KdSplit,
+    /// The region rendered.
+    pub region: usize,
+    /// How the integrator consumes spans.
+    pub rule: SpanRule,
+}
+
+impl IntervalSource for RegionRays<'_> {
+    fn occupied(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, out: &mut Vec<(f64, f64)>) {
+        out.clear();
+        let Some((a, b)) = self.split.clip_ray(self.region, o, d, t0, t1) else {
+            return;
+        };
+        match self.rule {
+            SpanRule::Steps { h } if a > t0 => {
+                let k = first_at_or_after(t0, h, a);
+                let tk = t0 + h * f64::from(k);
+                if tk < b {
+                    // May lie past `b`: the span then holds just the step starting at `t_k`.
+                    out.push((tk + 0.25 * h, b));
+                }
+            }
+            _ => out.push((a, b)),
+        }
+    }
+
+    /// Reported as all empty, so that the ray caster always walks these intervals.
+    fn empty_fraction(&self) -> f64 {
+        1.0
+    }
+}
+
+/// Checks that `opts` can be rendered split, and returns them with early termination off.
+pub fn region_options(opts: &RenderOptions) -> Result<RenderOptions, DistributedError> {
+    let refuse = |what: &str| Err(DistributedError::Unsupported(what.into()));
+    if opts.mip {
+        return refuse(
+            "maximum intensity projection (it composites by maximum, not front to back)",
+        );
+    }
+    if !opts.isosurfaces.is_empty() {
+        return refuse("isosurfaces (a crossing between two regions' samples would be lost)");
+    }
+    if opts.jitter {
+        return refuse("jitter (the lattice of a ray would differ per region)");
+    }
+    if opts.mask.is_some() || opts.labels.is_some() {
+        return refuse("sculpt masks or labels (voxel layers of in-core grids)");
+    }
+    let mut o = opts.clone();
+    o.early_termination = None;
+    if let Integrator::AdaptiveSimpson(p) = &mut o.integrator {
+        p.early_termination = None;
+    }
+    Ok(o)
+}
+
+/// Renders region `region` of `split` of `field` (placed by `place`, classified over
+/// `range`): every ray sampled only inside the region on the global lattice, early
+/// termination off ([`region_options`]). The image is premultiplied RGBA with no background
+/// (the ray caster applies none: front ends add it when writing), ready for
+/// [`composite`](super::swap::composite). Riemann, trapezoid, Simpson and pre-integration
+/// give exactly the single-process render's samples; adaptive Simpson subdivides each
+/// region's piece of a ray on its own, so its image differs from the single-process one by
+/// up to about its tolerance; the reference integrator is refused.
+pub fn render_region<F: Field>(
+    field: &F,
+    place: Placement,
+    range: [f64; 2],
+    split: &KdSplit,
+    region: usize,
+    opts: &RenderOptions,
+) -> Result<Rendered, DistributedError> {
+    let opts = region_options(opts)?;
+    if region >= split.len() {
+        return Err(DistributedError::Unsupported(format!(
+            "region {region} of a split into {}",
+            split.len()
+        )));
+    }
+    let rule = SpanRule::of(&opts, &place)?;
+    let rays = RegionRays {
+        split,
+        region,
+        rule,
+    };
+    Ok(
+        match Near::new(field, split, region, reach(&opts, &place)) {
+            Some(near) => render_field_in(&near, place, range, Some(&rays), &opts)?,
+            None => render_field_in(field, place, range, Some(&rays), &opts)?,
+        },
+    )
+}
+
+/// How far past a region face (voxels, per axis) a sample the region needs can lie: a step
+/// (or the largest adaptive step) straddling the face, and a voxel for gradients.
+fn reach(opts: &RenderOptions, place: &Placement) -> [f64; 3] {
+    let unit = place.spacing.min_element();
+    let h = match opts.integrator {
+        Integrator::Riemann { step }
+        | Integrator::Trapezoid { step }
+        | Integrator::Simpson { step }
+        | Integrator::Preintegrated { step } => step,
+        Integrator::AdaptiveSimpson(p) => p.hmax,
+        Integrator::Reference => f64::INFINITY,
+    } * unit;
+    std::array::from_fn(|a| h / place.spacing[a] + 1.0)
+}
+
+/// The field as a region sees it: undefined farther than the chunks next to the region's
+/// faces, so that a rank never reads another chunk. No sample a region's rays need lies
+/// there ([`reach`] is within a chunk); what does is what the lane streams' idle lanes
+/// sample while they wait (their results unused), which would otherwise read chunks on the
+/// volume's surface anywhere along their last ray.
+struct Near<'a, F> {
+    inner: &'a F,
+    /// Per axis, the allowed coordinates `[lo, hi)` (clamped as the samplers clamp).
+    lo: [f32; 3],
+    hi: [f32; 3],
+    top: [f32; 3],
+}
+
+impl<'a, F: Field> Near<'a, F> {
+    /// `None` (no filter) when a sample could reach beyond the neighbouring chunks.
+    fn new(inner: &'a F, split: &KdSplit, region: usize, reach: [f64; 3]) -> Option<Self> {
+        let b = split.regions().get(region)?;
+        let (chunk, n) = (split.chunk_shape(), split.chunks_per_axis());
+        if (0..3).any(|a| reach[a] + 1.0 >= chunk[a] as f64) {
+            return None;
+        }
+        let dims = inner.dims();
+        Some(Self {
+            inner,
+            lo: std::array::from_fn(|a| match b.lo[a] {
+                0 => f32::NEG_INFINITY,
+                c => ((c - 1) * chunk[a]) as f32,
+            }),
+            // The cell at `x` reads `floor(x) + 1`: below the chunk after the next.
+            hi: std::array::from_fn(|a| {
+                if b.hi[a] >= n[a] {
+                    f32::INFINITY
+                } else {
+                    ((b.hi[a] + 1) * chunk[a] - 1) as f32
+                }
+            }),
+            top: dims.map(|d| d.saturating_sub(1) as f32),
+        })
+    }
+
+    #[inline]
+    fn near(&self, p: Vec3) -> bool {
+        (0..3).all(|a| {
+            let x = p[a].max(0.0).min(self.top[a]);
+            self.lo[a] <= x && x < self.hi[a]
+        })
+    }
+}
+
+impl<F: Field> Field for Near<'_, F> {
+    fn dims(&self) -> [usize; 3] {
+        self.inner.dims()
+    }
+
+    #[inline]
+    fn sample(&self, p: Vec3) -> Option<f32> {
+        if self.near(p) {
+            self.inner.sample(p)
+        } else {
+            None
+        }
+    }
+
+    fn sample64(&self, p: DVec3) -> Option<f64> {
+        if self.near(p.as_vec3()) {
+            self.inner.sample64(p)
+        } else {
+            None
+        }
+    }
+}

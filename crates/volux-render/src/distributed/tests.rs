@@ -1,0 +1,375 @@
+//! Distributed renders (1 to 5 ranks on threads) against the single-process bricked render
+//! with early termination off: every integrator the bricked path supports, shading, an
+//! oblique camera grazing a region face; the k-d split, the visibility order from many
+//! viewpoints, and the chunks each rank reads.
+use std::sync::Arc;
+
+use glam::DVec3;
+use volux_core::bricked::{ChunkSource, GridChunks, Multiscale};
+use volux_core::camera::{Camera, Projection};
+use volux_core::grid::{Buffer, Samples};
+use volux_core::{CameraSpec, Grid, Image, TransferFunction};
+
+use super::error::DistributedError;
+use super::exchange::{Exchange, ThreadExchange};
+use super::kdtree::{KdSplit, ViewPoint};
+use super::reads::{CountedChunks, ReadStats};
+use super::swap::composite;
+use crate::bricked::{
+    level_placement, render_cache_region, render_level, BrickCache, BrickedVolume,
+};
+use crate::integrate::{AdaptiveParams, Integrator, StepControl};
+use crate::raycast::RenderOptions;
+use crate::shading::BlinnPhong;
+
+const DIMS: [usize; 3] = [23, 17, 13];
+const CHUNK: [usize; 3] = [8, 5, 4];
+
+fn grid() -> Grid {
+    let [nx, ny, nz] = DIMS;
+    let mut v = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let (x, y, z) = (i as f32 / 22.0, j as f32 / 16.0, k as f32 / 12.0);
+                let r = ((x - 0.5).powi(2) + (y - 0.45).powi(2) + (z - 0.55).powi(2)).sqrt();
+                v.push(100.0 * (1.0 - r) + 20.0 * (7.0 * x).sin() * (5.0 * y).cos());
+            }
+        }
+    }
+    Grid::new(
+        DIMS,
+        [0.8, 1.1, 1.7],
+        [-3.0, 2.0, 5.0],
+        Samples::F32(Buffer::owned(v)),
+    )
+    .unwrap()
+}
+
+fn tf() -> TransferFunction {
+    TransferFunction::from_json(
+        r#"{"color": [[40,0.2,0.4,1],[70,1,0.8,0.3],[110,1,1,1]],
+            "extinction": [[40,0],[60,0.08],[75,0.3],[90,0.05],[110,0.4]]}"#,
+    )
+    .unwrap()
+}
+
+fn chunks(g: &Grid) -> Arc<dyn ChunkSource> {
+    Arc::new(GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap())
+}
+
+fn options(g: &Grid, spec: &str) -> RenderOptions {
+    let cam = CameraSpec::from_json(spec)
+        .unwrap()
+        .resolve(&g.bounds())
+        .unwrap();
+    let mut o = RenderOptions::new(cam, tf());
+    (o.width, o.height) = (40, 36);
+    o
+}
+
+/// The single-process bricked render, early termination off.
+fn single(g: &Grid, opts: &RenderOptions) -> Image {
+    let ms = Multiscale::new("test", vec![chunks(g)]).unwrap();
+    let v = BrickedVolume::open(ms, 1 << 30).unwrap();
+    let mut o = opts.clone();
+    o.early_termination = None;
+    if let Integrator::AdaptiveSimpson(p) = &mut o.integrator {
+        p.early_termination = None;
+    }
+    render_level(&v, 0, &o).unwrap().image
+}
+
+/// `n` ranks on threads, each with its own cache of a small budget: rank 0's image, and
+/// what each rank read.
+fn distributed(
+    g: &Grid,
+    n: usize,
+    opts: &RenderOptions,
+) -> Result<(Image, Vec<ReadStats>), DistributedError> {
+    let source = chunks(g);
+    let split = KdSplit::new(source.layout(), n)?;
+    let range = g.range();
+    let results: Vec<Result<(Option<Image>, ReadStats), DistributedError>> =
+        std::thread::scope(|s| {
+            let handles: Vec<_> = ThreadExchange::group(n)
+                .into_iter()
+                .map(|mut ex| {
+                    let (split, source) = (&split, source.clone());
+                    s.spawn(move || {
+                        let r = ex.rank();
+                        let counted = Arc::new(CountedChunks::new(source, split.regions()[r]));
+                        let cache = BrickCache::new(counted.clone(), 4 * 8 * 5 * 4 * 4);
+                        let part = render_cache_region(&cache, range, split, r, opts)?;
+                        let view = ViewPoint::of(&opts.camera, &level_placement(&cache));
+                        let order = split.visibility_order(view);
+                        let (image, _) = composite(&mut ex, &order, &part.image)?;
+                        Ok((image, counted.stats()))
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+    let mut reads = Vec::new();
+    let mut image = None;
+    for r in results {
+        let (i, s) = r?;
+        reads.push(s);
+        image = image.or(i);
+    }
+    Ok((image.expect("rank 0 has the image"), reads))
+}
+
+fn max_diff(a: &Image, b: &Image) -> f32 {
+    a.pixels()
+        .iter()
+        .zip(b.pixels())
+        .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs()))
+        .fold(0.0, f32::max)
+}
+
+fn exact_cases(g: &Grid) -> Vec<(String, RenderOptions)> {
+    let mut cases = Vec::new();
+    for integrator in [
+        Integrator::Riemann { step: 0.4 },
+        Integrator::Trapezoid { step: 0.4 },
+        Integrator::Simpson { step: 0.5 },
+        Integrator::Preintegrated { step: 0.4 },
+    ] {
+        let mut o = options(g, r#"{"azimuth": 33, "elevation": 21}"#);
+        o.integrator = integrator;
+        cases.push((integrator.name().to_string(), o.clone()));
+        // Shaded: the ray-by-ray paths (gradients read across faces).
+        o.shading = Some(BlinnPhong::default());
+        o.camera = CameraSpec::from_json(r#"{"azimuth": 200, "elevation": -40}"#)
+            .unwrap()
+            .resolve(&g.bounds())
+            .unwrap();
+        cases.push((format!("{} shaded", integrator.name()), o));
+    }
+    let mut ortho = options(
+        g,
+        r#"{"azimuth": -70, "elevation": 35, "projection": "orthographic"}"#,
+    );
+    ortho.integrator = Integrator::Preintegrated { step: 0.3 };
+    cases.push(("preintegrated orthographic".into(), ortho));
+    cases
+}
+
+#[test]
+fn one_to_five_ranks_equal_the_single_process_render_for_the_exact_integrators() {
+    let g = grid();
+    for (name, o) in exact_cases(&g) {
+        let want = single(&g, &o);
+        assert!(
+            want.coverage(0.01) > 0.2,
+            "{name}: the picture shows something"
+        );
+        for n in 1..=5 {
+            let (got, reads) = distributed(&g, n, &o).unwrap();
+            let d = max_diff(&got, &want);
+            assert!(d <= 1e-6, "{name}, {n} ranks: max difference {d}");
+            for (r, s) in reads.iter().enumerate() {
+                assert!(s.own > 0, "{name}, {n} ranks: rank {r} read {s:?}");
+                // A rank reads its chunks and its face neighbours only.
+                assert_eq!(s.other, 0, "{name}, {n} ranks: rank {r} read {s:?}");
+            }
+        }
+    }
+}
+
+/// Adaptive Simpson subdivides each region's piece of a ray on its own (the pieces start
+/// and end at the region faces, and the error control sees only its piece), so the split
+/// render is not the single-process one sample for sample; it stays within the tolerance.
+#[test]
+fn adaptive_simpson_split_stays_within_its_tolerance() {
+    let g = grid();
+    let adaptive = AdaptiveParams {
+        tol: 1e-3,
+        h0: 0.3,
+        hmin: 0.02,
+        hmax: 1.0,
+        control: StepControl::Coupled,
+        early_termination: None,
+    };
+    for control in [StepControl::Coupled, StepControl::Decoupled] {
+        let mut o = options(&g, r#"{"azimuth": 33, "elevation": 21}"#);
+        o.integrator = Integrator::AdaptiveSimpson(AdaptiveParams {
+            control,
+            ..adaptive
+        });
+        let want = single(&g, &o);
+        for n in [1, 2, 3, 5] {
+            let (got, _) = distributed(&g, n, &o).unwrap();
+            let d = max_diff(&got, &want);
+            let bound = if n == 1 { 1e-6 } else { 2e-3 };
+            assert!(d <= bound, "{control:?}, {n} ranks: max difference {d}");
+        }
+    }
+}
+
+#[test]
+fn an_oblique_camera_grazing_a_region_face_changes_nothing() {
+    let g = grid();
+    let place = crate::raycast::Placement::of(&g);
+    for n in [2, 3, 4, 5] {
+        let split = KdSplit::new(chunks(&g).layout(), n).unwrap();
+        // The first plane: the boundary between the first region's box and the rest.
+        let first = split.regions()[0];
+        let axis = (0..3)
+            .find(|&a| first.hi[a] < split.chunks_per_axis()[a])
+            .unwrap();
+        let plane =
+            place.origin[axis] + (first.hi[axis] * CHUNK[axis]) as f64 * place.spacing[axis];
+        let centre = g.bounds().center();
+        // Eye a hair off the plane, looking along it with a tilt of a tenth of a degree.
+        let mut eye = centre;
+        eye[axis] = plane + 1e-3;
+        let along = (axis + 1) % 3;
+        eye[along] -= 60.0;
+        let mut target = centre;
+        target[axis] = plane + 1e-3 - 60.0 * 0.1f64.to_radians().tan();
+        let up = DVec3::from(std::array::from_fn::<f64, 3, _>(|a| {
+            f64::from(a == (axis + 2) % 3)
+        }));
+        let camera = Camera {
+            eye,
+            target,
+            up,
+            projection: Projection::Perspective { fov_y_deg: 20.0 },
+        };
+        for integrator in [
+            Integrator::Riemann { step: 0.5 },
+            Integrator::Preintegrated { step: 0.5 },
+            Integrator::Trapezoid { step: 0.5 },
+        ] {
+            let mut o = RenderOptions::new(camera, tf());
+            (o.width, o.height) = (48, 40);
+            o.integrator = integrator;
+            let want = single(&g, &o);
+            assert!(
+                want.coverage(0.01) > 0.1,
+                "the grazing view shows something"
+            );
+            let (got, _) = distributed(&g, n, &o).unwrap();
+            let d = max_diff(&got, &want);
+            assert!(
+                d <= 1e-6,
+                "{n} ranks, {}: max difference {d}",
+                integrator.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn the_reference_integrator_mip_and_isosurfaces_are_refused() {
+    let g = grid();
+    let mut o = options(&g, "{}");
+    o.integrator = Integrator::Reference;
+    assert!(matches!(
+        distributed(&g, 2, &o),
+        Err(DistributedError::Unsupported(_))
+    ));
+    let mut o = options(&g, "{}");
+    o.mip = true;
+    assert!(matches!(
+        distributed(&g, 2, &o),
+        Err(DistributedError::Unsupported(_))
+    ));
+}
+
+#[test]
+fn the_split_partitions_the_chunks_in_balanced_boxes() {
+    let layout = chunks(&grid()).layout().clone();
+    let total = layout.chunk_count();
+    for n in 1..=12 {
+        let split = KdSplit::new(&layout, n).unwrap();
+        assert_eq!(split.len(), n);
+        let counts: Vec<usize> = split.regions().iter().map(|b| b.count()).collect();
+        assert_eq!(counts.iter().sum::<usize>(), total, "{n}: {counts:?}");
+        for i in 0..layout.chunk_count() {
+            let c = layout.chunk_coords(i);
+            let owners = split.regions().iter().filter(|b| b.contains(c)).count();
+            assert_eq!(owners, 1, "{n}: chunk {c:?}");
+        }
+        let (lo, hi) = (counts.iter().min().unwrap(), counts.iter().max().unwrap());
+        assert!(*lo >= 1 && *hi <= 2 * lo + 4, "{n} ranks: {counts:?}");
+    }
+    assert!(matches!(
+        KdSplit::new(&layout, total + 1),
+        Err(DistributedError::Split { .. })
+    ));
+    assert!(matches!(
+        KdSplit::new(&layout, 0),
+        Err(DistributedError::Split { .. })
+    ));
+}
+
+/// Brute force: along many rays from each viewpoint, the regions a ray crosses (by where
+/// the ray's part in each begins) come in the visibility order, and the parts partition the
+/// ray.
+#[test]
+fn the_visibility_order_is_the_order_rays_meet_the_regions() {
+    let layout = chunks(&grid()).layout().clone();
+    let size = DVec3::from(layout.dims.map(|d| (d - 1) as f64));
+    let eyes = [
+        DVec3::new(-30.0, 8.0, 6.0),
+        DVec3::new(50.0, -20.0, 30.0),
+        DVec3::new(11.0, 8.0, -40.0),
+        DVec3::new(5.0, 40.0, 7.0),
+        DVec3::new(11.5, 8.2, 6.1), // inside the volume
+        DVec3::new(-7.0, -9.0, -11.0),
+    ];
+    for n in [2, 3, 5, 7, 8] {
+        let split = KdSplit::new(&layout, n).unwrap();
+        for eye in eyes {
+            let order = split.visibility_order(ViewPoint::Eye(eye));
+            check_rays(&split, &order, n, |i| {
+                let target = size * DVec3::new(hash(i, 1), hash(i, 2), hash(i, 3));
+                (eye, (target - eye).normalize())
+            });
+        }
+        for d in [
+            DVec3::new(1.0, 0.3, -0.2),
+            DVec3::new(-0.2, -1.0, 0.5),
+            DVec3::new(0.1, 0.2, -1.0),
+        ] {
+            let order = split.visibility_order(ViewPoint::Direction(d));
+            check_rays(&split, &order, n, |i| {
+                let p = size * DVec3::new(hash(i, 1), hash(i, 2), hash(i, 3));
+                (p - d * 100.0, d)
+            });
+        }
+    }
+}
+
+fn check_rays(split: &KdSplit, order: &[usize], n: usize, ray: impl Fn(usize) -> (DVec3, DVec3)) {
+    let rank_in_order = |r: usize| order.iter().position(|&x| x == r).unwrap();
+    for i in 0..500 {
+        let (o, d) = ray(i);
+        let (t0, t1) = (0.0, 1e3);
+        let mut parts: Vec<(f64, f64, usize)> = (0..n)
+            .filter_map(|r| split.clip_ray(r, o, d, t0, t1).map(|(a, b)| (a, b, r)))
+            .collect();
+        parts.sort_by(|x, y| x.0.total_cmp(&y.0));
+        for w in parts.windows(2) {
+            assert!(
+                rank_in_order(w[0].2) < rank_in_order(w[1].2),
+                "order {order:?}, parts {parts:?}"
+            );
+            assert_eq!(w[0].1, w[1].0, "the parts touch exactly: {parts:?}");
+        }
+        assert_eq!(parts.first().map(|p| p.0), Some(t0));
+        assert_eq!(parts.last().map(|p| p.1), Some(t1));
+    }
+}
+
+/// A deterministic number in [0, 1).
+fn hash(i: usize, salt: u32) -> f64 {
+    let mut v = (i as u32).wrapping_mul(0x9E37_79B9) ^ salt.wrapping_mul(0x85EB_CA6B);
+    v ^= v >> 16;
+    v = v.wrapping_mul(0x7FEB_352D);
+    v ^= v >> 15;
+    v as f64 / 4_294_967_296.0
+}
