@@ -147,53 +147,108 @@ impl CacheStats {
     }
 }
 
-/// The bookkeeping under the lock: resident bricks with their last use, in use order.
+/// A brick's key in the pool: (level, chunk index).
+type Key = (usize, usize);
+
+/// The bookkeeping under the lock: resident bricks of every level sharing the pool, with
+/// their last use, in use order.
 #[derive(Default)]
 struct Resident {
-    bricks: HashMap<usize, (Arc<Brick>, u64)>,
-    by_use: BTreeMap<u64, usize>,
+    bricks: HashMap<Key, (Arc<Brick>, u64)>,
+    by_use: BTreeMap<u64, Key>,
     bytes: u64,
+    /// Bytes resident per level.
+    level_bytes: HashMap<usize, u64>,
     clock: u64,
 }
 
 impl Resident {
-    /// The resident brick of chunk `index`, marked as used now.
-    fn touch(&mut self, index: usize) -> Option<Arc<Brick>> {
+    /// The resident brick `key`, marked as used now.
+    fn touch(&mut self, key: Key) -> Option<Arc<Brick>> {
         self.clock += 1;
         let now = self.clock;
-        let (brick, used) = self.bricks.get_mut(&index)?;
+        let (brick, used) = self.bricks.get_mut(&key)?;
         let (brick, old) = (brick.clone(), std::mem::replace(used, now));
         self.by_use.remove(&old);
-        self.by_use.insert(now, index);
+        self.by_use.insert(now, key);
         Some(brick)
+    }
+
+    /// Adds or takes away `bytes` of level `level`.
+    fn account(&mut self, level: usize, bytes: u64, add: bool) {
+        let l = self.level_bytes.entry(level).or_default();
+        if add {
+            self.bytes += bytes;
+            *l += bytes;
+        } else {
+            self.bytes -= bytes;
+            *l -= bytes;
+        }
     }
 }
 
-/// The resident chunks of one level within `budget` bytes (at least one brick is always
-/// kept, whatever the budget: a brick in use is held by its reader).
-pub struct BrickCache {
-    source: Arc<dyn ChunkSource>,
+/// The memory the caches of a pyramid's levels share: one budget and one least-recently-used
+/// order over all their bricks (the viewer renders coarse levels, then finer ones: the
+/// coarse bricks are evicted first once the finer ones need the room).
+struct Pool {
     budget: u64,
     resident: Mutex<Resident>,
+    peak: AtomicU64,
+}
+
+impl Pool {
+    fn new(budget: u64) -> Arc<Self> {
+        Arc::new(Self {
+            budget,
+            resident: Mutex::new(Resident::default()),
+            peak: AtomicU64::new(0),
+        })
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Resident> {
+        // A panic while holding the lock leaves consistent maps (no update is half done).
+        self.resident.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// The resident chunks of one level, within a byte budget that it may share with the other
+/// levels of its pyramid ([`BrickCache::shared`]); at least one brick is always kept,
+/// whatever the budget (a brick in use is held by its reader).
+pub struct BrickCache {
+    source: Arc<dyn ChunkSource>,
+    level: usize,
+    pool: Arc<Pool>,
     hits: AtomicU64,
     misses: AtomicU64,
     bytes_read: AtomicU64,
     evictions: AtomicU64,
-    peak: AtomicU64,
 }
 
 impl BrickCache {
     /// A cache of `source`'s chunks within `budget` bytes.
     pub fn new(source: Arc<dyn ChunkSource>, budget: u64) -> Self {
+        Self::in_pool(source, 0, Pool::new(budget))
+    }
+
+    /// Caches of each of `levels` sharing `budget` bytes and one eviction order.
+    pub fn shared(levels: &[Arc<dyn ChunkSource>], budget: u64) -> Vec<Self> {
+        let pool = Pool::new(budget);
+        levels
+            .iter()
+            .enumerate()
+            .map(|(l, s)| Self::in_pool(s.clone(), l, pool.clone()))
+            .collect()
+    }
+
+    fn in_pool(source: Arc<dyn ChunkSource>, level: usize, pool: Arc<Pool>) -> Self {
         Self {
             source,
-            budget,
-            resident: Mutex::new(Resident::default()),
+            level,
+            pool,
             hits: AtomicU64::new(0),
             misses: AtomicU64::new(0),
             bytes_read: AtomicU64::new(0),
             evictions: AtomicU64::new(0),
-            peak: AtomicU64::new(0),
         }
     }
 
@@ -207,37 +262,40 @@ impl BrickCache {
         &self.source
     }
 
-    /// The byte budget.
+    /// The byte budget (shared with the pyramid's other levels when made by
+    /// [`BrickCache::shared`]).
     pub fn budget(&self) -> u64 {
-        self.budget
+        self.pool.budget
     }
 
-    /// The figures so far.
+    /// The figures so far: this level's hits, misses, bytes read and the evictions its reads
+    /// caused; the most bytes resident at once in the whole pool.
     pub fn stats(&self) -> CacheStats {
         CacheStats {
             hits: self.hits.load(Ordering::Relaxed),
             misses: self.misses.load(Ordering::Relaxed),
             bytes_read: self.bytes_read.load(Ordering::Relaxed),
             evictions: self.evictions.load(Ordering::Relaxed),
-            peak_bytes: self.peak.load(Ordering::Relaxed),
+            peak_bytes: self.pool.peak.load(Ordering::Relaxed),
         }
     }
 
-    /// Bytes resident now.
+    /// Bytes of this level resident now.
     pub fn resident_bytes(&self) -> u64 {
-        self.lock().bytes
+        let r = self.pool.lock();
+        r.level_bytes.get(&self.level).copied().unwrap_or(0)
     }
 
-    fn lock(&self) -> MutexGuard<'_, Resident> {
-        // A panic while holding the lock leaves consistent maps (no update is half done).
-        self.resident.lock().unwrap_or_else(|e| e.into_inner())
+    /// Bytes resident now in the whole pool.
+    pub fn pool_bytes(&self) -> u64 {
+        self.pool.lock().bytes
     }
 
     /// The brick of chunk `c`, read from the source on a miss (the least recently used
-    /// bricks are evicted to make room). Errors name the chunk.
+    /// bricks of the pool are evicted to make room). Errors name the chunk.
     pub fn get(&self, c: [usize; 3]) -> Result<Arc<Brick>, String> {
-        let index = self.layout().chunk_index(c);
-        if let Some(brick) = self.lock().touch(index) {
+        let key = (self.level, self.layout().chunk_index(c));
+        if let Some(brick) = self.pool.lock().touch(key) {
             self.hits.fetch_add(1, Ordering::Relaxed);
             return Ok(brick);
         }
@@ -249,31 +307,31 @@ impl BrickCache {
         drop(samples);
         self.misses.fetch_add(1, Ordering::Relaxed);
         self.bytes_read.fetch_add(brick.bytes(), Ordering::Relaxed);
-        Ok(self.insert(index, brick))
+        Ok(self.insert(key, brick))
     }
 
-    /// Makes `brick` resident as chunk `index` (or returns the one another reader made
-    /// resident meanwhile), evicting the least recently used others beyond the budget.
-    fn insert(&self, index: usize, brick: Arc<Brick>) -> Arc<Brick> {
-        let mut r = self.lock();
-        if let Some(kept) = r.touch(index) {
+    /// Makes `brick` resident as `key` (or returns the one another reader made resident
+    /// meanwhile), evicting the pool's least recently used others beyond the budget.
+    fn insert(&self, key: Key, brick: Arc<Brick>) -> Arc<Brick> {
+        let mut r = self.pool.lock();
+        if let Some(kept) = r.touch(key) {
             return kept;
         }
         r.clock += 1;
         let now = r.clock;
-        r.bytes += brick.bytes();
-        r.bricks.insert(index, (brick.clone(), now));
-        r.by_use.insert(now, index);
-        while r.bytes > self.budget && r.bricks.len() > 1 {
+        r.account(key.0, brick.bytes(), true);
+        r.bricks.insert(key, (brick.clone(), now));
+        r.by_use.insert(now, key);
+        while r.bytes > self.pool.budget && r.bricks.len() > 1 {
             let Some((_, victim)) = r.by_use.pop_first() else {
                 break;
             };
             if let Some((b, _)) = r.bricks.remove(&victim) {
-                r.bytes -= b.bytes();
+                r.account(victim.0, b.bytes(), false);
                 self.evictions.fetch_add(1, Ordering::Relaxed);
             }
         }
-        self.peak.fetch_max(r.bytes, Ordering::Relaxed);
+        self.pool.peak.fetch_max(r.bytes, Ordering::Relaxed);
         brick
     }
 }

@@ -418,3 +418,37 @@ fn bricked_samples_equal_the_in_core_samples_bit_for_bit() {
     }
     field.forget();
 }
+
+#[test]
+fn the_levels_share_one_budget_and_the_coarse_bricks_go_first() {
+    let g = grid();
+    let full = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
+    let coarse_dims = DIMS.map(|d| d.div_ceil(2));
+    let n: usize = coarse_dims.iter().product();
+    let coarse = Grid::new(
+        coarse_dims,
+        [1.6, 2.2, 3.4],
+        [-3.0, 2.0, 5.0],
+        Samples::F32(Buffer::owned((0..n).map(|i| (i % 97) as f32).collect())),
+    )
+    .unwrap();
+    let coarse = GridChunks::new(Arc::new(coarse), CHUNK).unwrap();
+    let levels: Vec<Arc<dyn ChunkSource>> = vec![Arc::new(full), Arc::new(coarse)];
+    // Room for the full level's 3 x 4 x 4 bricks of one micro-brick each, not for both.
+    let brick = 9 * 9 * 9 * 4;
+    let budget = 48 * brick;
+    let v = BrickedVolume::open(Multiscale::new("pyramid", levels).unwrap(), budget).unwrap();
+    let o = options(&g, r#"{"azimuth": 33, "elevation": 21}"#);
+    render_level(&v, 1, &o).unwrap();
+    let coarse_bytes = v.cache(1).unwrap().resident_bytes();
+    assert!(coarse_bytes > 0);
+    render_level(&v, 0, &o).unwrap();
+    // The full level's bricks displaced the coarse ones: the pool stayed within the budget.
+    assert!(
+        v.resident_bytes() <= budget,
+        "{} > {budget}",
+        v.resident_bytes()
+    );
+    assert!(v.cache(1).unwrap().resident_bytes() < coarse_bytes);
+    assert!(v.cache_stats(0).unwrap().peak_bytes <= budget);
+}

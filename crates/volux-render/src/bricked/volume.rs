@@ -56,8 +56,8 @@ const KEPT_BINS: usize = 256;
 const HISTOGRAM_SAMPLES: usize = 1 << 24;
 
 impl BrickedVolume {
-    /// `multiscale` with its bricks cached within `budget` bytes (each level's cache may
-    /// take the whole budget; only the levels rendered hold bricks). Finds the value range
+    /// `multiscale` with its bricks cached within `budget` bytes, shared by all levels (one
+    /// least-recently-used order over them). Finds the value range
     /// (recorded by the store, else read chunk by chunk from the full level: the transfer
     /// function is placed on it, as for the in-core grid) and a histogram of the finest level
     /// of at most 2^24 samples (for the transfer-function presets). Errors name a chunk that
@@ -69,11 +69,7 @@ impl BrickedVolume {
             None => scan_range(full.as_ref())?,
         };
         let histogram = coarse_histogram(&multiscale, range)?;
-        let caches: Vec<BrickCache> = multiscale
-            .levels()
-            .iter()
-            .map(|l| BrickCache::new(l.clone(), budget))
-            .collect();
+        let caches = BrickCache::shared(multiscale.levels(), budget);
         let chunk_cells = caches.iter().map(|_| OnceLock::new()).collect();
         Ok(Self {
             multiscale,
