@@ -13,6 +13,7 @@
 mod cache;
 mod field;
 mod memo;
+mod prefetch;
 mod region;
 mod render;
 #[cfg(test)]

@@ -44,6 +44,12 @@ pub fn axis_offset(shape: [usize; 3], a: usize, l: usize) -> usize {
     (l / CELLS) * stride + (l % CELLS) * step
 }
 
+/// Bytes of a brick of a level whose chunks have `shape` samples.
+pub fn brick_bytes(shape: [usize; 3]) -> u64 {
+    let m = shape.map(|c| c.div_ceil(CELLS).max(1) as u64);
+    m.iter().product::<u64>() * (MICRO * std::mem::size_of::<f32>()) as u64
+}
+
 /// One resident chunk: its samples as f32 (the renderer's sample type), and where it sits.
 /// Every brick of a level has the same layout ([`axis_offset`]), so a sample's place in its
 /// brick depends only on its coordinates: the field finds it from per-axis tables.
@@ -284,6 +290,12 @@ impl BrickCache {
     pub fn resident_bytes(&self) -> u64 {
         let r = self.pool.lock();
         r.level_bytes.get(&self.level).copied().unwrap_or(0)
+    }
+
+    /// Whether chunk `c` is resident (its last use left as it was).
+    pub fn is_resident(&self, c: [usize; 3]) -> bool {
+        let key = (self.level, self.layout().chunk_index(c));
+        self.pool.lock().bricks.contains_key(&key)
     }
 
     /// Bytes resident now in the whole pool.

@@ -1,13 +1,15 @@
 //! Rendering a bricked volume: one level through its brick cache, as a field of the grid ray
 //! caster ([`render_level`]), and the engine's [`Renderer`] for bricked volumes
 //! ([`BrickedRenderer`]: grid ray casting, the level chosen per frame by its [`Lod`]).
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
 use glam::DMat3;
 
+use super::cache::brick_bytes;
 use super::field::BrickedField;
+use super::prefetch;
 use super::volume::{BrickedVolume, Lod};
 use crate::classify::ClassifyTable;
 use crate::error::RenderError;
@@ -105,7 +107,30 @@ pub fn render_level(
         .as_ref()
         .filter(|o| o.empty_fraction() > 0.0)
         .map(|o| o as &dyn IntervalSource);
-    let out = render_field_in(&field, placement(cache.layout()), range, intervals, &opts);
+    // The frame's chunks read ahead of its rays, nearest first, on a worker thread.
+    let layout = cache.layout();
+    let ahead = prefetch::plan(
+        layout,
+        occupancy.as_ref(),
+        opts.camera.eye,
+        brick_bytes(layout.chunk),
+        cache.budget(),
+    );
+    let ahead: Vec<[usize; 3]> = ahead
+        .into_iter()
+        .filter(|&c| !cache.is_resident(c))
+        .collect();
+    let stop = AtomicBool::new(false);
+    let out = std::thread::scope(|s| {
+        // A warm frame (all its chunks resident) starts no worker.
+        let worker = (!ahead.is_empty()).then(|| s.spawn(|| prefetch::run(cache, &ahead, &stop)));
+        let out = render_field_in(&field, placement(layout), range, intervals, &opts);
+        stop.store(true, Ordering::Relaxed);
+        if let Some(w) = worker {
+            let _ = w.join();
+        }
+        out
+    });
     field.forget();
     match field.error() {
         Some(e) => Err(RenderError::Data(volux_core::Error::Chunked(e.clone()))),
