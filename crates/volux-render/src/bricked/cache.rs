@@ -51,7 +51,7 @@ pub fn brick_bytes(shape: [usize; 3]) -> u64 {
 }
 
 /// One resident chunk: its samples as f32 (the renderer's sample type), and where it sits.
-/// Every brick of a level has the same layout ([`axis_offset`]), so a sample's place in its
+/// Every brick of a level has the same layout (micro-bricks: `axis_offset`), so a sample's place in its
 /// brick depends only on its coordinates: the field finds it from per-axis tables.
 #[derive(Debug)]
 pub struct Brick {
@@ -61,7 +61,7 @@ pub struct Brick {
     pub size: [usize; 3],
     /// The level's chunk shape, which the layout follows.
     pub shape: [usize; 3],
-    /// The samples in micro-bricks ([`axis_offset`]).
+    /// The samples in micro-bricks (`axis_offset` gives the layout).
     pub values: Vec<f32>,
     /// The smallest and largest sample (NaN ignored; infinite when none is finite).
     pub range: [f32; 2],
