@@ -9,31 +9,15 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use volux_core::bricked::{ChunkLayout, ChunkSource};
 use volux_core::grid::{Samples, Scalar};
 
-/// Cells per side of the micro-bricks a brick's samples are laid out in.
-pub const CELLS: usize = 8;
-/// Samples per side of a micro-brick: its cells and their far faces.
-pub const SIDE: usize = CELLS + 1;
-/// Samples per micro-brick.
-const MICRO: usize = SIDE * SIDE * SIDE;
-/// Offsets of a cell's eight corners from its first sample in a micro-brick, x fastest.
-pub const CORNERS: [usize; 8] = [
-    0,
-    1,
-    SIDE,
-    SIDE + 1,
-    SIDE * SIDE,
-    SIDE * SIDE + 1,
-    SIDE * SIDE + SIDE,
-    SIDE * SIDE + SIDE + 1,
-];
-/// Samples from a cell's first corner to its last, inclusive.
-pub const REACH: usize = CORNERS[7] + 1;
+/// The micro-bricks of the in-core renderer's bricked copy: cells per side, samples per
+/// side, samples per micro-brick, a cell's corners' offsets and reach.
+pub(crate) use crate::raycast::bricks::{BRICK as MICRO, CELLS, CORNERS, REACH, SIDE};
 
 /// What local coordinate `l` along axis `a` adds to the offset of the first sample of cell
 /// `l` in a brick of a level whose chunks have `shape` samples. Bricks hold their samples in
-/// micro-bricks of [`CELLS`]³ cells with their far faces ([`SIDE`]³ samples, x fastest;
+/// micro-bricks of `CELLS`³ cells with their far faces (`SIDE`³ samples, x fastest;
 /// micro-bricks x fastest), the layout of the in-core renderer's bricked copy: a cell's eight
-/// corners lie at the fixed displacements [`CORNERS`] from its first sample, within a few
+/// corners lie at the fixed displacements `CORNERS` from its first sample, within a few
 /// kilobytes. The far faces of the chunk's last micro-bricks belong to the next chunk and are
 /// not filled: the cells there are sampled corner by corner.
 #[inline]

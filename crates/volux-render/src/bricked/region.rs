@@ -8,13 +8,13 @@ use glam::DMat3;
 
 use super::cache::BrickCache;
 use super::field::BrickedField;
+use super::render::stopped_by;
 use crate::distributed::error::DistributedError;
 use crate::distributed::kdtree::KdSplit;
 use crate::distributed::region::render_region;
 use crate::error::RenderError;
 use crate::raycast::{Placement, RenderOptions, Rendered};
 use crate::sampling::Reconstruction;
-use crate::tiles::Control;
 
 /// The world placement of `cache`'s level (axis-aligned, as for [`super::render_level`]).
 pub fn level_placement(cache: &BrickCache) -> Placement {
@@ -54,13 +54,7 @@ pub fn render_cache_region(
     }
     let failed = Arc::new(AtomicBool::new(false));
     let field = BrickedField::for_render(cache, failed.clone());
-    let mut opts = opts.clone();
-    if opts.control.cancel.is_none() {
-        opts.control = Control {
-            cancel: Some(failed),
-            progress: opts.control.progress.clone(),
-        };
-    }
+    let opts = stopped_by(opts, failed);
     let out = render_region(&field, level_placement(cache), range, split, region, &opts);
     field.forget();
     match field.error() {

@@ -79,14 +79,7 @@ pub fn render_level(
     let range = volume.range();
     let failed = Arc::new(AtomicBool::new(false));
     let field = BrickedField::for_render(cache, failed.clone());
-    let mut opts = opts.clone();
-    if opts.control.cancel.is_none() {
-        // A chunk error stops the render early (a caller's own flag is left alone).
-        opts.control = Control {
-            cancel: Some(failed),
-            progress: opts.control.progress.clone(),
-        };
-    }
+    let opts = stopped_by(opts, failed);
     let table = ClassifyTable::new(&opts.tf, range, ClassifyTable::DEFAULT_SIZE);
     let isovalues: Vec<f32> = opts
         .isosurfaces
@@ -163,4 +156,17 @@ fn refuse_voxel_layers(opts: &RenderOptions) -> Result<(), RenderError> {
     Err(RenderError::InvalidOptions(format!(
         "bricked volumes are rendered with trilinear reconstruction and without voxel layers: {what} needs the volume in memory (load a level that fits the memory budget)"
     )))
+}
+
+/// `opts` with `failed` as its cancel flag, so that a chunk error stops the render early (a
+/// caller's own flag is left alone).
+pub(super) fn stopped_by(opts: &RenderOptions, failed: Arc<AtomicBool>) -> RenderOptions {
+    let mut opts = opts.clone();
+    if opts.control.cancel.is_none() {
+        opts.control = Control {
+            cancel: Some(failed),
+            progress: opts.control.progress.clone(),
+        };
+    }
+    opts
 }

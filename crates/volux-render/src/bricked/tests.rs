@@ -54,6 +54,23 @@ fn volume(g: &Grid, budget: u64) -> BrickedVolume {
     BrickedVolume::open(ms, budget).unwrap()
 }
 
+/// `g` as level 0 and, as level 1, a grid of every other sample's place at twice the spacing
+/// holding `value(i)` at sample `i`.
+fn pyramid(g: &Grid, value: impl Fn(usize) -> f32) -> Vec<Arc<dyn ChunkSource>> {
+    let full = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
+    let coarse_dims = DIMS.map(|d| d.div_ceil(2));
+    let n: usize = coarse_dims.iter().product();
+    let coarse = Grid::new(
+        coarse_dims,
+        [1.6, 2.2, 3.4],
+        [-3.0, 2.0, 5.0],
+        Samples::F32(Buffer::owned((0..n).map(value).collect())),
+    )
+    .unwrap();
+    let coarse = GridChunks::new(Arc::new(coarse), CHUNK).unwrap();
+    vec![Arc::new(full), Arc::new(coarse)]
+}
+
 fn options(g: &Grid, spec: &str) -> RenderOptions {
     let cam = CameraSpec::from_json(spec)
         .unwrap()
@@ -262,19 +279,8 @@ impl ChunkSource for Ranged {
 #[test]
 fn the_automatic_level_follows_the_pixel_size() {
     let g = grid();
-    let full = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
     // A coarser level: every other sample, twice the spacing (its values do not matter here).
-    let coarse_dims = DIMS.map(|d| d.div_ceil(2));
-    let n: usize = coarse_dims.iter().product();
-    let coarse = Grid::new(
-        coarse_dims,
-        [1.6, 2.2, 3.4],
-        [-3.0, 2.0, 5.0],
-        Samples::F32(Buffer::owned(vec![50.0; n])),
-    )
-    .unwrap();
-    let coarse = GridChunks::new(Arc::new(coarse), CHUNK).unwrap();
-    let levels: Vec<Arc<dyn ChunkSource>> = vec![Arc::new(full), Arc::new(coarse)];
+    let levels = pyramid(&g, |_| 50.0);
     let v = BrickedVolume::open(Multiscale::new("pyramid", levels).unwrap(), 1 << 30).unwrap();
     let v = Arc::new(v);
     let scene = |zoom: f64, size: usize| {
@@ -422,18 +428,7 @@ fn bricked_samples_equal_the_in_core_samples_bit_for_bit() {
 #[test]
 fn the_levels_share_one_budget_and_the_coarse_bricks_go_first() {
     let g = grid();
-    let full = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
-    let coarse_dims = DIMS.map(|d| d.div_ceil(2));
-    let n: usize = coarse_dims.iter().product();
-    let coarse = Grid::new(
-        coarse_dims,
-        [1.6, 2.2, 3.4],
-        [-3.0, 2.0, 5.0],
-        Samples::F32(Buffer::owned((0..n).map(|i| (i % 97) as f32).collect())),
-    )
-    .unwrap();
-    let coarse = GridChunks::new(Arc::new(coarse), CHUNK).unwrap();
-    let levels: Vec<Arc<dyn ChunkSource>> = vec![Arc::new(full), Arc::new(coarse)];
+    let levels = pyramid(&g, |i| (i % 97) as f32);
     // Room for the full level's 3 x 4 x 4 bricks of one micro-brick each, not for both.
     let brick = 9 * 9 * 9 * 4;
     let budget = 48 * brick;

@@ -21,17 +21,17 @@ use volux_core::grid::Scalar;
 use crate::sampling::{clamped_cell, Field, Trilinear, LANES};
 
 /// Cells per brick along each axis (a power of two).
-const CELLS: usize = 8;
+pub(crate) const CELLS: usize = 8;
 /// Samples per brick along each axis: the cells and their far faces.
-const SIDE: usize = CELLS + 1;
+pub(crate) const SIDE: usize = CELLS + 1;
 
 /// Samples per axis of the grids that are bricked (a power of two): the length of the
 /// offset tables.
 const AXIS_MAX: usize = 4096;
 /// Samples per brick.
-const BRICK: usize = SIDE * SIDE * SIDE;
+pub(crate) const BRICK: usize = SIDE * SIDE * SIDE;
 /// Offsets of a cell's eight corners from its first sample in a brick, x fastest.
-const CORNERS: [usize; 8] = [
+pub(crate) const CORNERS: [usize; 8] = [
     0,
     1,
     SIDE,
@@ -42,7 +42,7 @@ const CORNERS: [usize; 8] = [
     SIDE * SIDE + SIDE + 1,
 ];
 /// Samples from a cell's first corner to its last, inclusive.
-const REACH: usize = CORNERS[7] + 1;
+pub(crate) const REACH: usize = CORNERS[7] + 1;
 
 /// The bricked samples of a grid (see the module docs).
 pub(crate) struct Bricks {

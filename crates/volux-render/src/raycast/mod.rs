@@ -19,7 +19,7 @@
 //! every pixel is computed independently.
 
 mod adaptive_stream;
-mod bricks;
+pub(crate) mod bricks;
 pub mod clip;
 mod context;
 mod mip_stream;
