@@ -8,7 +8,7 @@ use super::kdtree::KdSplit;
 use crate::integrate::integrator::Integrator;
 use crate::intervals::IntervalSource;
 use crate::raycast::{first_at_or_after, render_field_in, Placement, RenderOptions, Rendered};
-use crate::sampling::Field;
+use crate::sampling::{Field, LANES};
 
 /// How the integrator takes the ray apart, which says where a region's span must start so
 /// that neighbouring regions share nothing and lose nothing.
@@ -202,6 +202,30 @@ impl<'a, F: Field> Near<'a, F> {
         })
     }
 
+    /// `sample` of `p` with the lanes that are not near moved onto a near one, then NaN.
+    #[inline]
+    fn lanes<const N: usize>(
+        &self,
+        p: &[[f32; N]; 3],
+        sample: impl FnOnce(&[[f32; N]; 3]) -> [f32; N],
+    ) -> [f32; N] {
+        let near: [bool; N] =
+            std::array::from_fn(|l| self.near(Vec3::new(p[0][l], p[1][l], p[2][l])));
+        let Some(at) = near.iter().position(|&n| n) else {
+            return [f32::NAN; N];
+        };
+        let q: [[f32; N]; 3] = std::array::from_fn(|a| {
+            std::array::from_fn(|l| if near[l] { p[a][l] } else { p[a][at] })
+        });
+        let mut v = sample(&q);
+        for (v, near) in v.iter_mut().zip(near) {
+            if !near {
+                *v = f32::NAN;
+            }
+        }
+        v
+    }
+
     #[inline]
     fn near(&self, p: Vec3) -> bool {
         (0..3).all(|a| {
@@ -223,6 +247,18 @@ impl<F: Field> Field for Near<'_, F> {
         } else {
             None
         }
+    }
+
+    /// The inner field's lanes, those too far moved onto a near lane first (so that they
+    /// read nothing more) and then made undefined.
+    #[inline]
+    fn sample_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
+        self.lanes(p, |q| self.inner.sample_lanes(q))
+    }
+
+    #[inline]
+    fn sample4(&self, p: &[[f32; 4]; 3]) -> [f32; 4] {
+        self.lanes(p, |q| self.inner.sample4(q))
     }
 
     fn sample64(&self, p: DVec3) -> Option<f64> {
