@@ -12,6 +12,8 @@
 
 mod cache;
 mod field;
+#[cfg(test)]
+pub(crate) mod fixtures;
 mod memo;
 mod prefetch;
 mod region;

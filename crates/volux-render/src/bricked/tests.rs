@@ -8,45 +8,13 @@ use volux_core::bricked::{ChunkLayout, ChunkSource, GridChunks, Multiscale};
 use volux_core::grid::{Buffer, Samples};
 use volux_core::{CameraSpec, Grid, TransferFunction};
 
+use super::fixtures::{grid, tf, CHUNK, DIMS};
 use super::*;
 use crate::integrate::{AdaptiveParams, Integrator, StepControl};
 use crate::isosurface::{Isosurfaces, Isovalue};
 use crate::raycast::{render_field, render_grid, Placement, RenderOptions};
 use crate::sampling::Trilinear;
 use crate::shading::BlinnPhong;
-
-const DIMS: [usize; 3] = [23, 17, 13];
-const CHUNK: [usize; 3] = [8, 5, 4];
-
-/// A smooth field with structure in every brick, anisotropic spacing, an offset origin.
-fn grid() -> Grid {
-    let [nx, ny, nz] = DIMS;
-    let mut v = Vec::with_capacity(nx * ny * nz);
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                let (x, y, z) = (i as f32 / 22.0, j as f32 / 16.0, k as f32 / 12.0);
-                let r = ((x - 0.5).powi(2) + (y - 0.45).powi(2) + (z - 0.55).powi(2)).sqrt();
-                v.push(100.0 * (1.0 - r) + 20.0 * (7.0 * x).sin() * (5.0 * y).cos());
-            }
-        }
-    }
-    Grid::new(
-        DIMS,
-        [0.8, 1.1, 1.7],
-        [-3.0, 2.0, 5.0],
-        Samples::F32(Buffer::owned(v)),
-    )
-    .unwrap()
-}
-
-fn tf() -> TransferFunction {
-    TransferFunction::from_json(
-        r#"{"color": [[40,0.2,0.4,1],[70,1,0.8,0.3],[110,1,1,1]],
-            "extinction": [[40,0],[60,0.08],[75,0.3],[90,0.05],[110,0.4]]}"#,
-    )
-    .unwrap()
-}
 
 fn volume(g: &Grid, budget: u64) -> BrickedVolume {
     let chunks = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
