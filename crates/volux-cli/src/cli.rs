@@ -64,14 +64,15 @@ pub enum Command {
         #[command(flatten)]
         load: LoadArgs,
     },
-    /// Generate a synthetic dataset: marschner-lobb, shepp-logan, sphere (grids, SIZE^3),
-    /// tets-smooth (about SIZE tets), torus (SIZE segments around the ring).
+    /// Generate a synthetic dataset: marschner-lobb, shepp-logan, sphere (grids, SIZE^3, or
+    /// XxYxZ for a store), tets-smooth (about SIZE tets), torus (SIZE segments around the ring).
     Generate {
         /// What to generate.
         kind: Generator,
-        /// Grid size per axis, tet count, or ring segments.
-        #[arg(long, default_value_t = 128)]
-        size: usize,
+        /// Grid size per axis (or XxYxZ for an `.ome.zarr` store), tet count, or ring
+        /// segments.
+        #[arg(long, default_value = "128")]
+        size: String,
         /// Output file (`.raw`, `.nrrd` or `.vtet`), or an `.ome.zarr` store for the grids,
         /// written chunk by chunk at any size (never the whole volume in memory).
         #[arg(long, short)]

@@ -23,7 +23,7 @@ fn stores_are_generated_converted_described_and_loaded_by_level() {
             "generate",
             "marschner-lobb",
             "--size",
-            "21",
+            "21x19x17",
             "--chunk",
             "8",
             "--dtype",
@@ -35,7 +35,7 @@ fn stores_are_generated_converted_described_and_loaded_by_level() {
     );
     let info = ok(&["info", "--json", "ml.ome.zarr"], dir);
     let v: serde_json::Value = serde_json::from_str(&info).unwrap();
-    assert_eq!(v["dims"], serde_json::json!([21, 21, 21]));
+    assert_eq!(v["dims"], serde_json::json!([21, 19, 17]));
     assert_eq!(v["chunk"], serde_json::json!([8, 8, 8]));
     assert_eq!(v["dtype"], "uint16");
     assert_eq!(v["codec"], "zstd");
@@ -107,7 +107,15 @@ fn bad_store_inputs_are_one_line_and_write_nothing() {
         (&["convert", "s.raw", "done.ome.zarr"], "already exists"),
         (
             &["generate", "sphere", "--size", "1", "-o", "a.ome.zarr"],
-            "--size 1",
+            "--size '1'",
+        ),
+        (
+            &["generate", "sphere", "--size", "9x9", "-o", "a.ome.zarr"],
+            "expected N or XxYxZ",
+        ),
+        (
+            &["generate", "sphere", "--size", "9x9x9", "-o", "a.raw"],
+            "only for .ome.zarr",
         ),
         (
             &["generate", "sphere", "--dtype", "u8", "-o", "a.ome.zarr"],

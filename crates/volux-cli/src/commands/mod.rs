@@ -68,7 +68,7 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
                 let args = store::StoreArgs::parse(chunk, levels.as_deref())?;
                 store::generate(
                     &crate::cli::value_name(&kind),
-                    size,
+                    store::parse_dims(&size)?,
                     dtype.as_deref(),
                     &output,
                     &args,
@@ -76,7 +76,10 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
             } else if chunk.is_some() || levels.is_some() || dtype.is_some() {
                 Err("--chunk, --levels and --dtype apply to OME-Zarr outputs (OUT.ome.zarr)".into())
             } else {
-                convert::generate(kind, size, &output)
+                let n = size.parse::<usize>().map_err(|_| {
+                    format!("--size '{size}': expected a count (XxYxZ only for .ome.zarr stores)")
+                })?;
+                convert::generate(kind, n, &output)
             }
         }
         Command::Render(args) => render::run(&args, show),

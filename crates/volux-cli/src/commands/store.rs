@@ -131,25 +131,41 @@ pub fn convert(
     write(&source, output, args, unit)
 }
 
-/// `volux generate KIND --size N -o OUT.ome.zarr`: computed chunk by chunk.
+/// The samples per axis of a generated store: `N` (a cube) or `XxYxZ`, each 2 to 2^20.
+pub fn parse_dims(text: &str) -> Result<[usize; 3], CmdError> {
+    let bad = || format!("--size '{text}': expected N or XxYxZ, each 2 to 1048576");
+    let parts: Vec<&str> = text.split('x').collect();
+    let numbers = parts
+        .iter()
+        .map(|p| {
+            p.trim()
+                .parse::<usize>()
+                .ok()
+                .filter(|n| (2..=1 << 20).contains(n))
+        })
+        .collect::<Option<Vec<usize>>>()
+        .ok_or_else(bad)?;
+    match numbers[..] {
+        [n] => Ok([n; 3]),
+        [x, y, z] => Ok([x, y, z]),
+        _ => Err(bad().into()),
+    }
+}
+
+/// `volux generate KIND --size N|XxYxZ -o OUT.ome.zarr`: computed chunk by chunk.
 pub fn generate(
     kind: &str,
-    size: usize,
+    dims: [usize; 3],
     dtype: Option<&str>,
     output: &Path,
     args: &StoreArgs,
 ) -> Result<(), CmdError> {
-    if !(2..=1 << 20).contains(&size) {
-        return Err(
-            format!("--size {size} is out of range for a store (2 to 1048576 per axis)").into(),
-        );
-    }
     let scalar = match dtype.unwrap_or("f32") {
         "f32" => ScalarType::F32,
         "u16" => ScalarType::U16,
         other => return Err(format!("--dtype {other}: expected f32 or u16").into()),
     };
-    let source = SyntheticChunks::new(kind, [size; 3], [args.chunk; 3], scalar)?;
+    let source = SyntheticChunks::new(kind, dims, [args.chunk; 3], scalar)?;
     check_output(output)?;
     write(&source, output, args, None)
 }

@@ -4,11 +4,12 @@
 //! it; the first to finish is kept), and only the bookkeeping is locked.
 use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 use volux_core::bricked::{ChunkLayout, ChunkSource};
 use volux_core::grid::{Samples, Scalar};
 
+use crate::raycast::bricks::Bricks;
 /// The micro-bricks of the in-core renderer's bricked copy: cells per side, samples per
 /// side, samples per micro-brick, a cell's corners' offsets and reach.
 pub(crate) use crate::raycast::bricks::{BRICK as MICRO, CELLS, CORNERS, REACH, SIDE};
@@ -137,14 +138,29 @@ impl CacheStats {
     }
 }
 
-/// A brick's key in the pool: (level, chunk index).
+/// A brick's key in the pool: (level, chunk index), or (level, [`WHOLE`]) for a level's
+/// whole copy.
 type Key = (usize, usize);
+
+/// The chunk index in the key of a level's whole copy.
+const WHOLE: usize = usize::MAX;
+
+/// Where a render finds the bricks of a level ([`BrickCache::frame_bricks`]).
+pub(crate) enum FrameBricks {
+    /// The level's whole bricked copy, the in-core renderer's layout.
+    Whole(Arc<Bricks>),
+    /// A table of the level's bricks by chunk index, the missing ones left for the render's
+    /// first reader.
+    Table(Vec<OnceLock<Arc<Brick>>>),
+}
 
 /// The bookkeeping under the lock: resident bricks of every level sharing the pool, with
 /// their last use, in use order.
 #[derive(Default)]
 struct Resident {
     bricks: HashMap<Key, (Arc<Brick>, u64)>,
+    /// Whole copies of levels, by level, with their last use.
+    wholes: HashMap<usize, (Arc<Bricks>, u64)>,
     by_use: BTreeMap<u64, Key>,
     bytes: u64,
     /// Bytes resident per level.
@@ -162,6 +178,54 @@ impl Resident {
         self.by_use.remove(&old);
         self.by_use.insert(now, key);
         Some(brick)
+    }
+
+    /// The whole copy of level `level`, marked as used now.
+    fn touch_whole(&mut self, level: usize) -> Option<Arc<Bricks>> {
+        self.clock += 1;
+        let now = self.clock;
+        let (whole, used) = self.wholes.get_mut(&level)?;
+        let (whole, old) = (whole.clone(), std::mem::replace(used, now));
+        self.by_use.remove(&old);
+        self.by_use.insert(now, (level, WHOLE));
+        Some(whole)
+    }
+
+    /// Makes `whole` level `level`'s copy in place of its bricks.
+    fn replace_bricks(&mut self, level: usize, whole: Arc<Bricks>) {
+        let keys: Vec<Key> = self
+            .bricks
+            .keys()
+            .filter(|k| k.0 == level)
+            .copied()
+            .collect();
+        for key in keys {
+            if let Some((b, used)) = self.bricks.remove(&key) {
+                self.by_use.remove(&used);
+                self.account(level, b.bytes(), false);
+            }
+        }
+        self.clock += 1;
+        let now = self.clock;
+        self.account(level, whole.bytes(), true);
+        self.wholes.insert(level, (whole, now));
+        self.by_use.insert(now, (level, WHOLE));
+    }
+
+    /// Evicts the least recently used brick or copy; its bytes, or `None` when nothing
+    /// but the last one is left.
+    fn evict_one(&mut self) -> Option<u64> {
+        if self.bricks.len() + self.wholes.len() <= 1 {
+            return None;
+        }
+        let (_, victim) = self.by_use.pop_first()?;
+        let bytes = if victim.1 == WHOLE {
+            self.wholes.remove(&victim.0).map(|(w, _)| w.bytes())
+        } else {
+            self.bricks.remove(&victim).map(|(b, _)| b.bytes())
+        }?;
+        self.account(victim.0, bytes, false);
+        Some(bytes)
     }
 
     /// Adds or takes away `bytes` of level `level`.
@@ -276,15 +340,101 @@ impl BrickCache {
         r.level_bytes.get(&self.level).copied().unwrap_or(0)
     }
 
-    /// Whether chunk `c` is resident (its last use left as it was).
+    /// Whether chunk `c` is resident, as a brick or in the level's whole copy (its last use
+    /// left as it was).
     pub fn is_resident(&self, c: [usize; 3]) -> bool {
         let key = (self.level, self.layout().chunk_index(c));
-        self.pool.lock().bricks.contains_key(&key)
+        let r = self.pool.lock();
+        r.bricks.contains_key(&key) || r.wholes.contains_key(&self.level)
     }
 
     /// Bytes resident now in the whole pool.
     pub fn pool_bytes(&self) -> u64 {
         self.pool.lock().bytes
+    }
+
+    /// Where a render finds the level's bricks, when the whole level fits beside what the
+    /// pool holds (so that reading the missing ones during the render evicts nothing and
+    /// the table's references keep no evicted brick alive); `None` when it does not fit
+    /// (the render then goes through per-thread memos).
+    ///
+    /// - The level's whole copy when it is resident.
+    /// - Else, when every brick of the level is resident and the copy fits beside them, the
+    ///   copy is made from them (the in-core renderer's layout: one offset per sample, no
+    ///   brick to find, no far faces to patch; a frame of a warm level then costs what an
+    ///   in-core frame does) and replaces them in the pool.
+    /// - Else a table of the level's bricks by chunk index: the resident ones filled in
+    ///   (and marked as used), the others left for the render's first reader.
+    ///
+    /// Each chunk found resident counts as one hit.
+    pub(crate) fn frame_bricks(&self) -> Option<FrameBricks> {
+        let layout = self.layout();
+        let count = layout.chunk_count();
+        let whole_bytes = Bricks::bytes_for(layout.dims);
+        let budget = self.pool.budget;
+        if (count as u64).saturating_mul(brick_bytes(layout.chunk)) > budget {
+            return None;
+        }
+        let mut r = self.pool.lock();
+        if let Some(whole) = r.touch_whole(self.level) {
+            self.hits.fetch_add(count as u64, Ordering::Relaxed);
+            return Some(FrameBricks::Whole(whole));
+        }
+        let held = (0..count)
+            .filter(|&i| r.bricks.contains_key(&(self.level, i)))
+            .count();
+        let need = ((count - held) as u64).saturating_mul(brick_bytes(layout.chunk));
+        if r.bytes.saturating_add(need) > budget {
+            return None;
+        }
+        let table: Vec<OnceLock<Arc<Brick>>> = (0..count)
+            .map(|i| {
+                let slot = OnceLock::new();
+                if let Some(b) = r.touch((self.level, i)) {
+                    let _ = slot.set(b);
+                }
+                slot
+            })
+            .collect();
+        self.hits.fetch_add(held as u64, Ordering::Relaxed);
+        let room = budget.saturating_sub(r.bytes);
+        drop(r);
+        if held < count || whole_bytes > room {
+            return Some(FrameBricks::Table(table));
+        }
+        match self.whole_copy(&table, room) {
+            Some(whole) => {
+                let whole = Arc::new(whole);
+                self.pool.lock().replace_bricks(self.level, whole.clone());
+                Some(FrameBricks::Whole(whole))
+            }
+            None => Some(FrameBricks::Table(table)),
+        }
+    }
+
+    /// The level's whole copy from `table`, which holds every brick (`None` if it would
+    /// take more than `room` bytes or the in-core layout cannot address it).
+    fn whole_copy(&self, table: &[OnceLock<Arc<Brick>>], room: u64) -> Option<Bricks> {
+        let layout = self.layout();
+        let (chunk, counts) = (layout.chunk, layout.chunks_per_axis());
+        let stride = [1, counts[0], counts[0] * counts[1]];
+        // Per axis and sample: what it adds to its chunk's index and to its brick offset.
+        let axes: [Vec<(usize, usize)>; 3] = std::array::from_fn(|a| {
+            (0..layout.dims[a])
+                .map(|i| {
+                    let (c, l) = (i / chunk[a], i % chunk[a]);
+                    (c * stride[a], axis_offset(chunk, a, l))
+                })
+                .collect()
+        });
+        let bricks: Vec<&Brick> = table
+            .iter()
+            .map(|slot| slot.get().map(|b| &**b))
+            .collect::<Option<_>>()?;
+        Bricks::build_from(layout.dims, room, |x, y, z| {
+            let (a, b, c) = (axes[0][x], axes[1][y], axes[2][z]);
+            bricks[a.0 + b.0 + c.0].values[a.1 + b.1 + c.1]
+        })
     }
 
     /// The brick of chunk `c`, read from the source on a miss (the least recently used
@@ -318,14 +468,8 @@ impl BrickCache {
         r.account(key.0, brick.bytes(), true);
         r.bricks.insert(key, (brick.clone(), now));
         r.by_use.insert(now, key);
-        while r.bytes > self.pool.budget && r.bricks.len() > 1 {
-            let Some((_, victim)) = r.by_use.pop_first() else {
-                break;
-            };
-            if let Some((b, _)) = r.bricks.remove(&victim) {
-                r.account(victim.0, b.bytes(), false);
-                self.evictions.fetch_add(1, Ordering::Relaxed);
-            }
+        while r.bytes > self.pool.budget && r.evict_one().is_some() {
+            self.evictions.fetch_add(1, Ordering::Relaxed);
         }
         self.pool.peak.fetch_max(r.bytes, Ordering::Relaxed);
         brick

@@ -5,7 +5,8 @@
 //! same lerps), so that a bricked render equals the in-core render of the same data.
 //!
 //! A lane finds its chunk and its place in it through two per-axis tables (no division),
-//! its brick through this thread's [memo](super::memo), and, when its cell lies within
+//! its brick through a table of the level's bricks for the render when the whole level fits
+//! the budget (else through this thread's [memo](super::memo)), and, when its cell lies within
 //! the brick (all but the cells on a chunk's far faces: 4.6 % of cells for 64³ chunks), its
 //! eight corners at fixed displacements from one address.
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -13,12 +14,35 @@ use std::sync::{Arc, OnceLock};
 
 use glam::{DVec3, Vec3};
 
-use super::cache::{axis_offset, Brick, BrickCache, CORNERS, REACH};
+use super::cache::{axis_offset, Brick, BrickCache, FrameBricks, CORNERS, REACH};
 use super::memo::{self, Entry, MAX_SLOTS};
+use crate::raycast::bricks::Bricks;
 use crate::sampling::{axis64, clamped_cell, Field, LANES};
 
-/// The flag of [`BrickedField`]'s axis tables marking a chunk's far face.
-const EDGE: usize = 1 << (usize::BITS - 1);
+/// The flags of a lane's offset (as [`BrickedField::locate`] gives it) marking a cell on a
+/// chunk's far faces, one per axis.
+const EDGE: usize = 7 << 61;
+
+/// The layout of the axis tables' entries: the offset in the brick in the low 32 bits, one
+/// far-face flag per axis in bits 32 to 34, and what the sample adds to its chunk's index
+/// from bit 35 on; the sum of three axes' entries is then the sample's offset, flags and
+/// chunk index at once (no field carries into the next).
+const EDGE_SHIFT: u32 = 32;
+const CHUNK_SHIFT: u32 = 35;
+/// The most chunks and the most samples per brick the tables' fields hold.
+pub(crate) const MAX_CHUNKS: u64 = 1 << (64 - CHUNK_SHIFT);
+pub(crate) const MAX_BRICK_SAMPLES: u64 = 1 << EDGE_SHIFT;
+
+/// Where a field finds a chunk's brick during its render.
+enum Lookup {
+    /// The level's whole copy ([`FrameBricks::Whole`]): the in-core bricked sampler.
+    Whole(Arc<Bricks>),
+    /// The level's bricks by chunk index ([`BrickCache::frame_table`], when the whole level
+    /// fits the budget): one load per lane, no lock once a brick is in.
+    Table(Vec<OnceLock<Arc<Brick>>>),
+    /// Each thread's memo of the bricks it sampled last, with this many slots.
+    Memo(usize),
+}
 
 /// A bricked level as a [`Field`] for one render. A chunk that cannot be read makes its
 /// samples undefined, keeps the first error and raises `failed` (the render is stopped and
@@ -31,20 +55,21 @@ pub(crate) struct BrickedField<'a> {
     hi: [f32; 3],
     cell_max: [i32; 3],
     /// Per axis and sample index: what the sample's chunk coordinate adds to the chunk's
-    /// index, and what its place in the chunk adds to its offset in the brick, with [`EDGE`]
-    /// set where a cell starting there has its far corner in the next chunk.
-    axes: [Vec<[usize; 2]>; 3],
+    /// index, and what its place in the chunk adds to its offset in the brick, with the
+    /// axis's far-face flag set where a cell starting there has its far corner in the next
+    /// chunk (packed: [`CHUNK_SHIFT`]).
+    axes: [Vec<u64>; 3],
     /// 1 along the axes with more than one sample.
     next: [usize; 3],
-    /// Memo slots this field uses.
-    slots: usize,
+    lookup: Lookup,
     error: OnceLock<String>,
     failed: Arc<AtomicBool>,
 }
 
 impl<'a> BrickedField<'a> {
-    /// The field of `cache`'s level, whose per-thread memos hold at most `memo_bytes` bytes
-    /// of bricks over `threads` threads; `failed` is raised on the first chunk error.
+    /// The field of `cache`'s level through per-thread memos that hold at most
+    /// `memo_bytes` bytes of bricks over `threads` threads; `failed` is raised on the first
+    /// chunk error.
     pub(crate) fn new(
         cache: &'a BrickCache,
         memo_bytes: u64,
@@ -62,8 +87,9 @@ impl<'a> BrickedField<'a> {
                 .map(|i| {
                     let (lo, local) = (i / c * c, i % c);
                     let size = c.min(dims[a] - lo);
-                    let edge = if local + next[a] < size { 0 } else { EDGE };
-                    [i / c * chunk_stride[a], axis_offset(chunk, a, local) | edge]
+                    let edge = u64::from(local + next[a] >= size) << (EDGE_SHIFT + a as u32);
+                    let offset = axis_offset(chunk, a, local) as u64;
+                    ((i / c * chunk_stride[a]) as u64) << CHUNK_SHIFT | edge | offset
                 })
                 .collect()
         });
@@ -76,17 +102,34 @@ impl<'a> BrickedField<'a> {
             cell_max: dims.map(|n| n.saturating_sub(2) as i32),
             axes,
             next,
-            slots: memo::slots_for(memo_bytes, brick_bytes, threads),
+            lookup: Lookup::Memo(memo::slots_for(memo_bytes, brick_bytes, threads)),
             error: OnceLock::new(),
             failed,
         }
     }
 
-    /// The field of `cache`'s level for a render on the current rayon pool, whose threads'
-    /// memos hold at most a quarter of the cache's budget (at least four bricks per thread).
+    /// The field of `cache`'s level for a render on the current rayon pool: through a table
+    /// of the level's bricks when they all fit the budget, else through the threads' memos,
+    /// which hold at most a quarter of the cache's budget (at least four bricks per thread).
     pub(crate) fn for_render(cache: &'a BrickCache, failed: Arc<AtomicBool>) -> Self {
         let threads = rayon::current_num_threads();
-        Self::new(cache, cache.budget() / 4, threads, failed)
+        let mut field = Self::new(cache, cache.budget() / 4, threads, failed);
+        field.lookup = match cache.frame_bricks() {
+            Some(FrameBricks::Whole(whole)) => Lookup::Whole(whole),
+            Some(FrameBricks::Table(table)) => Lookup::Table(table),
+            None => field.lookup,
+        };
+        field
+    }
+
+    /// How the field finds its bricks: "whole", "table" or "memo".
+    #[cfg(test)]
+    pub(crate) fn lookup_name(&self) -> &'static str {
+        match self.lookup {
+            Lookup::Whole(_) => "whole",
+            Lookup::Table(_) => "table",
+            Lookup::Memo(_) => "memo",
+        }
     }
 
     /// The first chunk error of the render, if any.
@@ -96,21 +139,34 @@ impl<'a> BrickedField<'a> {
 
     /// Drops this field's bricks from the threads' memos (at the end of a render).
     pub(crate) fn forget(&self) {
-        memo::forget(self.id);
+        if let Lookup::Memo(_) = self.lookup {
+            memo::forget(self.id);
+        }
     }
 
-    /// The brick of chunk `index`, from `memo` or the cache; `None` (the error kept) when
-    /// the chunk cannot be read.
+    /// Keeps the first chunk error and stops the render.
+    #[cold]
+    fn fail(&self, e: String) {
+        let _ = self.error.set(e);
+        self.failed.store(true, Ordering::Relaxed);
+    }
+
+    /// The brick of chunk `index`, from `memo` (with `slots` slots) or the cache; `None`
+    /// (the error kept) when the chunk cannot be read.
     #[inline(always)]
-    fn brick<'m>(&self, memo: &'m mut [Entry; MAX_SLOTS], index: usize) -> Option<&'m Brick> {
-        let entry = &mut memo[memo::slot_of(index, self.slots)];
+    fn brick<'m>(
+        &self,
+        memo: &'m mut [Entry; MAX_SLOTS],
+        slots: usize,
+        index: usize,
+    ) -> Option<&'m Brick> {
+        let entry = &mut memo[memo::slot_of(index, slots)];
         let hit = matches!(&*entry, Some((id, at, _)) if *id == self.id && *at == index);
         if !hit {
             match self.cache.get(self.cache.layout().chunk_coords(index)) {
                 Ok(b) => *entry = Some((self.id, index, b)),
                 Err(e) => {
-                    let _ = self.error.set(e);
-                    self.failed.store(true, Ordering::Relaxed);
+                    self.fail(e);
                     return None;
                 }
             }
@@ -118,60 +174,108 @@ impl<'a> BrickedField<'a> {
         entry.as_ref().map(|(_, _, b)| &**b)
     }
 
+    /// The brick of chunk `index` from `table`, read into it by the first lane that needs it.
+    #[inline(always)]
+    fn table_brick<'t>(
+        &self,
+        table: &'t [OnceLock<Arc<Brick>>],
+        index: usize,
+    ) -> Option<&'t Brick> {
+        let slot = table.get(index)?;
+        match slot.get() {
+            Some(b) => Some(b),
+            None => self.load(slot, index),
+        }
+    }
+
+    /// Reads chunk `index` into its `slot` of the table.
+    #[cold]
+    #[inline(never)]
+    fn load<'t>(&self, slot: &'t OnceLock<Arc<Brick>>, index: usize) -> Option<&'t Brick> {
+        match self.cache.get(self.cache.layout().chunk_coords(index)) {
+            Ok(b) => Some(slot.get_or_init(|| b)),
+            Err(e) => {
+                self.fail(e);
+                None
+            }
+        }
+    }
+
     /// The chunk index of sample `s` and its offset in that chunk's brick, with [`EDGE`] set
     /// when a cell starting there has corners in the next chunks (`None` outside the grid).
     #[inline(always)]
     fn locate(&self, s: [usize; 3]) -> Option<(usize, usize)> {
-        let [x, y, z] = [
-            self.axes[0].get(s[0])?,
-            self.axes[1].get(s[1])?,
-            self.axes[2].get(s[2])?,
-        ];
-        let edge = (x[1] | y[1] | z[1]) & EDGE;
-        let at = (x[1] & !EDGE) + (y[1] & !EDGE) + (z[1] & !EDGE);
-        Some((x[0] + y[0] + z[0], at | edge))
+        let v = self.axes[0].get(s[0])? + self.axes[1].get(s[1])? + self.axes[2].get(s[2])?;
+        let edge = (v >> EDGE_SHIFT & 7) << 61;
+        Some((
+            (v >> CHUNK_SHIFT) as usize,
+            (u64::from(v as u32) | edge) as usize,
+        ))
     }
 
-    /// The eight corners of `cell` (x fastest), NaN where a chunk cannot be read.
+    /// The samples of the eight corners of the cell starting at `cell`, x fastest.
     #[inline(always)]
-    fn corners(&self, memo: &mut [Entry; MAX_SLOTS], cell: [usize; 3]) -> [f32; 8] {
+    fn corner_samples(&self, cell: [usize; 3]) -> [[usize; 3]; 8] {
+        let n = self.next;
+        std::array::from_fn(|q| {
+            [
+                cell[0] + n[0] * (q & 1),
+                cell[1] + n[1] * (q >> 1 & 1),
+                cell[2] + n[2] * (q >> 2 & 1),
+            ]
+        })
+    }
+
+    /// The eight corners of `cell` (x fastest) through the memo, NaN where a chunk cannot be
+    /// read.
+    #[inline(always)]
+    fn corners(&self, memo: &mut [Entry; MAX_SLOTS], slots: usize, cell: [usize; 3]) -> [f32; 8] {
         let Some((index, at)) = self.locate(cell) else {
             return [f32::NAN; 8];
         };
         if at & EDGE == 0 {
-            return match self.brick(memo, index) {
+            return match self.brick(memo, slots, index) {
                 Some(b) => gather(&b.values, at),
                 None => [f32::NAN; 8],
             };
         }
         // On a chunk's far face: each corner from its own chunk.
-        let n = self.next;
-        std::array::from_fn(|q| {
-            let s = [
-                cell[0] + n[0] * (q & 1),
-                cell[1] + n[1] * (q >> 1 & 1),
-                cell[2] + n[2] * (q >> 2 & 1),
-            ];
-            self.value(memo, s).unwrap_or(f32::NAN)
-        })
+        self.corner_samples(cell)
+            .map(|s| self.value(memo, slots, s).unwrap_or(f32::NAN))
     }
 
-    /// Sample (`i`, `j`, `k`) of the grid.
+    /// Sample (`i`, `j`, `k`) of the grid through the memo.
     #[inline(always)]
-    fn value(&self, memo: &mut [Entry; MAX_SLOTS], s: [usize; 3]) -> Option<f32> {
+    fn value(&self, memo: &mut [Entry; MAX_SLOTS], slots: usize, s: [usize; 3]) -> Option<f32> {
         let (index, at) = self.locate(s)?;
-        self.brick(memo, index)?.values.get(at & !EDGE).copied()
+        self.brick(memo, slots, index)?
+            .values
+            .get(at & !EDGE)
+            .copied()
     }
 
-    /// `N` samples, NaN where undefined. Cells and fractions lane-wise; then each lane's
-    /// brick is made resident in the memo (once per run of lanes in one chunk), the corners
-    /// gathered through read-only lookups that reuse the previous lane's brick, and the lanes
-    /// on a chunk's far faces (or whose brick another lane's displaced) sampled corner by
-    /// corner; the lerps lane-wise.
+    /// Sample (`i`, `j`, `k`) of the grid through `table`.
+    #[inline(always)]
+    fn table_value(&self, table: &[OnceLock<Arc<Brick>>], s: [usize; 3]) -> Option<f32> {
+        let (index, at) = self.locate(s)?;
+        self.table_brick(table, index)?
+            .values
+            .get(at & !EDGE)
+            .copied()
+    }
+
+    /// `N` samples, NaN where undefined: cells and fractions lane-wise, each lane's chunk and
+    /// offset from the axis tables, its corners from its brick (through the table or the
+    /// memo), the lerps lane-wise.
     // Lane loops index several per-lane arrays at once: that is what vectorizes.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn sample_points<const N: usize>(&self, p: &[[f32; N]; 3]) -> [f32; N] {
+        match (&self.lookup, N.is_multiple_of(4)) {
+            (Lookup::Whole(whole), true) => return finite_or_nan(whole.sample_raw_lanes(p)),
+            (Lookup::Table(table), true) => return self.table_lanes(table, p),
+            _ => {}
+        }
         let (mut cell, mut frac) = ([[0i32; N]; 3], [[0.0f32; N]; 3]);
         for a in 0..3 {
             for l in 0..N {
@@ -192,6 +296,132 @@ impl<'a> BrickedField<'a> {
                 (index[l], at[l]) = (i, o);
             }
         }
+        let c = match &self.lookup {
+            Lookup::Whole(whole) => {
+                let mut c = [[f32::NAN; N]; 8];
+                for (l, &cell) in cells.iter().enumerate() {
+                    let corners = whole.cell_corners(cell);
+                    for q in 0..8 {
+                        c[q][l] = corners[q];
+                    }
+                }
+                c
+            }
+            Lookup::Table(table) => self.table_corners(table, &cells, &index, &at),
+            Lookup::Memo(slots) => self.memo_corners(*slots, &cells, &index, &at),
+        };
+        let mut out = lerp_corners(&c, &frac);
+        for v in out.iter_mut() {
+            if !v.is_finite() {
+                *v = f32::NAN;
+            }
+        }
+        out
+    }
+
+    /// `N` samples (`N` a multiple of 4) through `table`, NaN where undefined, in the in-core
+    /// bricked sampler's order (`Bricks::sample_raw_lanes`): four lanes at a time from the
+    /// positions to the lerps, so that their cells, fractions and corners stay in registers;
+    /// the brick of the previous lane reused when the next one is in the same chunk.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn table_lanes<const N: usize>(
+        &self,
+        table: &[OnceLock<Arc<Brick>>],
+        p: &[[f32; N]; 3],
+    ) -> [f32; N] {
+        let mut out = [0.0f32; N];
+        let mut last: (usize, &[f32]) = (usize::MAX, &[]);
+        for g in (0..N).step_by(4) {
+            let (mut cell, mut frac) = ([[0i32; 4]; 3], [[0.0f32; 4]; 3]);
+            for a in 0..3 {
+                for k in 0..4 {
+                    (cell[a][k], frac[a][k]) =
+                        clamped_cell(p[a][g + k], self.hi[a], self.cell_max[a]);
+                }
+            }
+            let mut c = [[0.0f32; 4]; 8];
+            for k in 0..4 {
+                // Written out: array `map`s went through an outlined `try_map`.
+                let s = [
+                    cell[0][k].max(0) as usize,
+                    cell[1][k].max(0) as usize,
+                    cell[2][k].max(0) as usize,
+                ];
+                let corners = match self.locate(s) {
+                    Some((index, at)) if at & EDGE == 0 => {
+                        if index != last.0 {
+                            let values = self.table_brick(table, index).map(|b| &b.values[..]);
+                            last = (index, values.unwrap_or(&[]));
+                        }
+                        gather(last.1, at)
+                    }
+                    _ => self.table_corners_one(table, s),
+                };
+                for q in 0..8 {
+                    c[q][k] = corners[q];
+                }
+            }
+            out[g..g + 4].copy_from_slice(&lerp_corners(&c, &frac));
+        }
+        for v in out.iter_mut() {
+            if !v.is_finite() {
+                *v = f32::NAN;
+            }
+        }
+        out
+    }
+
+    /// The eight corners of `cell` through `table`, each from its own chunk (a cell on a
+    /// chunk's far faces), NaN where undefined.
+    #[inline(never)]
+    fn table_corners_one(&self, table: &[OnceLock<Arc<Brick>>], cell: [usize; 3]) -> [f32; 8] {
+        self.corner_samples(cell)
+            .map(|s| self.table_value(table, s).unwrap_or(f32::NAN))
+    }
+
+    /// The corners of `N` lanes through `table` (`index`, `at`: each lane's chunk and offset).
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn table_corners<const N: usize>(
+        &self,
+        table: &[OnceLock<Arc<Brick>>],
+        cells: &[[usize; 3]; N],
+        index: &[usize; N],
+        at: &[usize; N],
+    ) -> [[f32; N]; 8] {
+        let mut c = [[f32::NAN; N]; 8];
+        for l in 0..N {
+            let corners = if at[l] & EDGE == 0 {
+                match self.table_brick(table, index[l]) {
+                    Some(b) => gather(&b.values, at[l]),
+                    None => [f32::NAN; 8],
+                }
+            } else {
+                // On a chunk's far face: each corner from its own chunk.
+                self.corner_samples(cells[l])
+                    .map(|s| self.table_value(table, s).unwrap_or(f32::NAN))
+            };
+            for q in 0..8 {
+                c[q][l] = corners[q];
+            }
+        }
+        c
+    }
+
+    /// The corners of `N` lanes through this thread's memo: each lane's brick made resident
+    /// in the memo (once per run of lanes in one chunk), the corners gathered through
+    /// read-only lookups that reuse the previous lane's brick, and the lanes on a chunk's far
+    /// faces (or whose brick another lane's displaced) sampled corner by corner.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn memo_corners<const N: usize>(
+        &self,
+        slots: usize,
+        cells: &[[usize; 3]; N],
+        index: &[usize; N],
+        at: &[usize; N],
+    ) -> [[f32; N]; 8] {
         let mut c = [[f32::NAN; N]; 8];
         memo::with_memo(|memo| {
             let mut last = usize::MAX;
@@ -199,7 +429,7 @@ impl<'a> BrickedField<'a> {
                 if at[l] & EDGE == 0 && index[l] != last {
                     last = index[l];
                     // Errors are kept by `brick`; the lane then reads NaN below.
-                    let _ = self.brick(memo, last);
+                    let _ = self.brick(memo, slots, last);
                 }
             }
             let mut missed = 0u64;
@@ -211,7 +441,7 @@ impl<'a> BrickedField<'a> {
                 }
                 let values = match last {
                     Some((i, v)) if i == index[l] => Some(v),
-                    _ => self.resident(memo, index[l]),
+                    _ => self.resident(memo, slots, index[l]),
                 };
                 match values {
                     Some(v) => {
@@ -227,29 +457,39 @@ impl<'a> BrickedField<'a> {
             while missed != 0 {
                 let l = missed.trailing_zeros() as usize;
                 missed &= missed - 1;
-                let corners = self.corners(memo, cells[l]);
+                let corners = self.corners(memo, slots, cells[l]);
                 for q in 0..8 {
                     c[q][l] = corners[q];
                 }
             }
         });
-        let mut out = lerp_corners(&c, &frac);
-        for v in out.iter_mut() {
-            if !v.is_finite() {
-                *v = f32::NAN;
-            }
-        }
-        out
+        c
     }
 
     /// The samples of chunk `index`'s brick if this thread's memo holds it.
     #[inline(always)]
-    fn resident<'m>(&self, memo: &'m [Entry; MAX_SLOTS], index: usize) -> Option<&'m [f32]> {
-        match &memo[memo::slot_of(index, self.slots)] {
+    fn resident<'m>(
+        &self,
+        memo: &'m [Entry; MAX_SLOTS],
+        slots: usize,
+        index: usize,
+    ) -> Option<&'m [f32]> {
+        match &memo[memo::slot_of(index, slots)] {
             Some((id, at, b)) if *id == self.id && *at == index => Some(&b.values),
             _ => None,
         }
     }
+}
+
+/// `v` with NaN for every non-finite value (undefined samples).
+#[inline(always)]
+fn finite_or_nan<const N: usize>(mut v: [f32; N]) -> [f32; N] {
+    for x in v.iter_mut() {
+        if !x.is_finite() {
+            *x = f32::NAN;
+        }
+    }
+    v
 }
 
 /// The trilinear values of `N` cells from their corners `c` (`c[q][l]`: corner `q` of lane
@@ -315,19 +555,25 @@ impl Field for BrickedField<'_> {
         let (i, fx) = axis64(p.x, self.dims[0]);
         let (j, fy) = axis64(p.y, self.dims[1]);
         let (k, fz) = axis64(p.z, self.dims[2]);
-        let n = self.next;
-        let v: [f64; 8] = memo::with_memo(|memo| {
-            let mut v = [0.0f64; 8];
-            for (q, v) in v.iter_mut().enumerate() {
-                let s = [
-                    i + n[0] * (q & 1),
-                    j + n[1] * (q >> 1 & 1),
-                    k + n[2] * (q >> 2 & 1),
-                ];
-                *v = f64::from(self.value(memo, s)?);
+        let corners = self.corner_samples([i, j, k]);
+        let value = |v: Option<f32>| v.map(f64::from);
+        let v: [f64; 8] = match &self.lookup {
+            Lookup::Whole(whole) => whole.cell_corners([i, j, k]).map(f64::from),
+            Lookup::Table(table) => {
+                let mut v = [0.0f64; 8];
+                for (v, s) in v.iter_mut().zip(corners) {
+                    *v = value(self.table_value(table, s))?;
+                }
+                v
             }
-            Some(v)
-        })?;
+            Lookup::Memo(slots) => memo::with_memo(|memo| {
+                let mut v = [0.0f64; 8];
+                for (v, s) in v.iter_mut().zip(corners) {
+                    *v = value(self.value(memo, *slots, s))?;
+                }
+                Some(v)
+            })?,
+        };
         let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
         let c0 = lerp(lerp(v[0], v[1], fx), lerp(v[2], v[3], fx), fy);
         let c1 = lerp(lerp(v[4], v[5], fx), lerp(v[6], v[7], fx), fy);

@@ -12,6 +12,7 @@ use super::fixtures::{grid, tf, CHUNK, DIMS};
 use super::*;
 use crate::integrate::{AdaptiveParams, Integrator, StepControl};
 use crate::isosurface::{Isosurfaces, Isovalue};
+use crate::raycast::bricks::Bricks;
 use crate::raycast::{render_field, render_grid, Placement, RenderOptions};
 use crate::sampling::Trilinear;
 use crate::shading::BlinnPhong;
@@ -346,15 +347,41 @@ fn chunks_the_tf_makes_transparent_are_skipped_without_changing_a_pixel() {
 
 #[test]
 fn bricked_samples_equal_the_in_core_samples_bit_for_bit() {
-    use crate::sampling::{Field, LANES};
     let g = grid();
     let Samples::F32(values) = g.samples() else {
         unreachable!()
     };
     let incore = Trilinear::new(values.as_slice(), DIMS);
-    let v = volume(&g, 3 * 9 * 9 * 9 * 4);
     let failed = Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let field = super::field::BrickedField::new(v.cache(0).unwrap(), 1 << 20, 1, failed);
+    // Through the memo (a budget of three bricks), a table of the level (nothing resident
+    // yet) and the level's whole copy (every brick resident).
+    let small = volume(&g, 3 * 9 * 9 * 9 * 4);
+    let memo = super::field::BrickedField::new(small.cache(0).unwrap(), 1 << 20, 1, failed.clone());
+    let roomy = volume(&g, 1 << 30);
+    let cache = roomy.cache(0).unwrap();
+    let table = super::field::BrickedField::for_render(cache, failed.clone());
+    let n = cache.layout().chunk_count();
+    for i in 0..n {
+        cache.get(cache.layout().chunk_coords(i)).unwrap();
+    }
+    let whole = super::field::BrickedField::for_render(cache, failed);
+    assert_eq!(cache.stats().misses, n as u64, "each chunk read once");
+    let fields = [(memo, "memo"), (table, "table"), (whole, "whole")];
+    for (field, name) in &fields {
+        assert_eq!(field.lookup_name(), *name);
+        same_samples_as_in_core(field, &incore, name);
+        field.forget();
+    }
+}
+
+/// `field` samples as `incore` does, bit for bit, at 32,000 points over and a little beyond
+/// the grid, on and off the chunk faces.
+fn same_samples_as_in_core(
+    field: &super::field::BrickedField,
+    incore: &Trilinear<f32>,
+    name: &str,
+) {
+    use crate::sampling::{Field, LANES};
     // Points over and a little beyond the grid, on and off the chunk faces.
     let mut state = 12345u64;
     let mut next = |hi: f32| {
@@ -376,21 +403,21 @@ fn bricked_samples_equal_the_in_core_samples_bit_for_bit() {
         let want = incore.sample_lanes(&p);
         for l in 0..LANES {
             let q = glam::Vec3::new(p[0][l], p[1][l], p[2][l]);
-            assert_eq!(got[l].to_bits(), want[l].to_bits(), "lanes at {q}");
-            assert_eq!(field.sample(q), incore.sample(q), "at {q}");
+            assert_eq!(got[l].to_bits(), want[l].to_bits(), "{name}: lanes at {q}");
+            assert_eq!(field.sample(q), incore.sample(q), "{name}: at {q}");
             assert_eq!(
                 field.sample64(q.as_dvec3()),
                 incore.sample64(q.as_dvec3()),
-                "f64 at {q}"
+                "{name}: f64 at {q}"
             );
         }
         let p4: [[f32; 4]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| p[a][l]));
         assert_eq!(
             field.sample4(&p4).map(f32::to_bits),
-            incore.sample4(&p4).map(f32::to_bits)
+            incore.sample4(&p4).map(f32::to_bits),
+            "{name}"
         );
     }
-    field.forget();
 }
 
 #[test]
@@ -402,9 +429,12 @@ fn the_levels_share_one_budget_and_the_coarse_bricks_go_first() {
     let budget = 48 * brick;
     let v = BrickedVolume::open(Multiscale::new("pyramid", levels).unwrap(), budget).unwrap();
     let o = options(&g, r#"{"azimuth": 33, "elevation": 21}"#);
+    // Twice: the warm coarse level becomes one copy (the pool's eviction handles both).
     render_level(&v, 1, &o).unwrap();
-    let coarse_bytes = v.cache(1).unwrap().resident_bytes();
-    assert!(coarse_bytes > 0);
+    render_level(&v, 1, &o).unwrap();
+    let coarse = v.cache(1).unwrap();
+    let coarse_bytes = coarse.resident_bytes();
+    assert_eq!(coarse_bytes, Bricks::bytes_for(coarse.layout().dims));
     render_level(&v, 0, &o).unwrap();
     // The full level's bricks displaced the coarse ones: the pool stayed within the budget.
     assert!(
@@ -414,4 +444,25 @@ fn the_levels_share_one_budget_and_the_coarse_bricks_go_first() {
     );
     assert!(v.cache(1).unwrap().resident_bytes() < coarse_bytes);
     assert!(v.cache_stats(0).unwrap().peak_bytes <= budget);
+}
+
+#[test]
+fn a_warm_level_becomes_one_copy_in_place_of_its_bricks() {
+    let g = grid();
+    let v = volume(&g, 1 << 30);
+    let o = options(&g, r#"{"azimuth": 33, "elevation": 21}"#);
+    let chunks = v.cache(0).unwrap().layout().chunk_count() as u64;
+    // Cold: every chunk read into a brick of its own.
+    let cold = render_level(&v, 0, &o).unwrap();
+    assert_eq!(v.cache_stats(0).unwrap().misses, chunks);
+    assert!(v.resident_bytes() >= chunks * 9 * 9 * 9 * 4);
+    // Warm: the bricks give way to one copy of the level, read from them (no chunk read
+    // again), and the frames are the same.
+    for _ in 0..2 {
+        let warm = render_level(&v, 0, &o).unwrap();
+        assert_eq!(max_diff(&warm.image, &cold.image), 0.0);
+        assert_eq!(v.resident_bytes(), Bricks::bytes_for(DIMS));
+        assert_eq!(v.cache_stats(0).unwrap().misses, chunks);
+        assert!(v.cache(0).unwrap().is_resident([0, 0, 0]));
+    }
 }

@@ -5,12 +5,13 @@ use std::sync::OnceLock;
 
 use glam::DVec3;
 use rayon::prelude::*;
-use volux_core::bricked::{ChunkSource, Multiscale};
+use volux_core::bricked::{ChunkLayout, ChunkSource, Multiscale};
 use volux_core::grid::Scalar;
 use volux_core::histogram::Histogram;
 use volux_core::Aabb;
 
-use super::cache::{BrickCache, CacheStats};
+use super::cache::{brick_bytes, BrickCache, CacheStats};
+use super::field::{MAX_BRICK_SAMPLES, MAX_CHUNKS};
 use crate::error::RenderError;
 use crate::macrocell::MacrocellGrid;
 
@@ -63,6 +64,9 @@ impl BrickedVolume {
     /// of at most 2^24 samples (for the transfer-function presets). Errors name a chunk that
     /// cannot be read.
     pub fn open(multiscale: Multiscale, budget: u64) -> Result<Self, RenderError> {
+        for level in multiscale.levels() {
+            check_addressable(level.layout())?;
+        }
         let full = multiscale.full();
         let range = match full.value_range() {
             Some(r) => r,
@@ -279,4 +283,20 @@ fn chunk_cells(source: &dyn ChunkSource) -> Option<MacrocellGrid> {
         })
         .collect();
     MacrocellGrid::from_ranges(n, layout.chunk, cells)
+}
+
+/// Refuses a level whose chunks the field's tables cannot address: more than
+/// [`MAX_CHUNKS`] chunks, or bricks of more than [`MAX_BRICK_SAMPLES`] samples.
+fn check_addressable(layout: &ChunkLayout) -> Result<(), RenderError> {
+    let chunks = layout.chunk_count() as u64;
+    let samples = brick_bytes(layout.chunk) / 4;
+    if chunks <= MAX_CHUNKS && samples <= MAX_BRICK_SAMPLES {
+        return Ok(());
+    }
+    Err(RenderError::Data(volux_core::Error::Chunked(format!(
+        "a level of {:?} samples in chunks of {:?} cannot be rendered out of core (at most \
+         {MAX_CHUNKS} chunks and {MAX_BRICK_SAMPLES} samples per chunk): rechunk it with \
+         `volux convert --chunk`",
+        layout.dims, layout.chunk
+    ))))
 }

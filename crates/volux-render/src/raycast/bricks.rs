@@ -76,11 +76,28 @@ impl Bricks {
     /// [`AXIS_MAX`], the copy's offsets fit in `i32` and it takes at most `budget` bytes.
     pub(crate) fn build<T: Scalar>(values: &[T], dims: [usize; 3], budget: u64) -> Option<Self> {
         let count = dims[0].checked_mul(dims[1])?.checked_mul(dims[2])?;
+        if count != values.len() {
+            return None;
+        }
+        let [nx, ny, _] = dims;
+        Self::build_from(dims, budget, |x, y, z| {
+            values[x + nx * (y + ny * z)].to_f32()
+        })
+    }
+
+    /// The bricked copy of the grid of `dims` samples whose sample (`x`, `y`, `z`) is
+    /// `value(x, y, z)` (called from several threads); `None` under the conditions of
+    /// [`Bricks::build`].
+    pub(crate) fn build_from(
+        dims: [usize; 3],
+        budget: u64,
+        value: impl Fn(usize, usize, usize) -> f32 + Sync,
+    ) -> Option<Self> {
+        let count = dims[0].checked_mul(dims[1])?.checked_mul(dims[2])?;
         let small = dims.iter().all(|&n| n <= AXIS_MAX);
         let bytes = Self::bytes_for(dims);
         let len = bytes / std::mem::size_of::<f32>() as u64;
-        if count != values.len() || count == 0 || !small || bytes > budget || len > i32::MAX as u64
-        {
+        if count == 0 || !small || bytes > budget || len > i32::MAX as u64 {
             return None;
         }
         let counts = Self::counts_for(dims);
@@ -101,7 +118,7 @@ impl Bricks {
                     let y = (CELLS * bj + v).min(ny - 1);
                     for (u, s) in row.iter_mut().enumerate() {
                         let x = (CELLS * bi + u).min(nx - 1);
-                        *s = values[x + nx * (y + ny * z)].to_f32();
+                        *s = value(x, y, z);
                     }
                 }
             });
@@ -129,6 +146,17 @@ impl Bricks {
         at(0) + at(1) + at(2)
     }
 
+    /// Bytes the copy takes.
+    pub(crate) fn bytes(&self) -> u64 {
+        (self.samples.len() * std::mem::size_of::<f32>()) as u64
+    }
+
+    /// The eight corners of cell (`i`, `j`, `k`) (each within `[0, cell_max]`, or 0 along
+    /// an axis of one sample), x fastest.
+    pub(crate) fn cell_corners(&self, cell: [usize; 3]) -> [f32; 8] {
+        self.corners(self.offset(cell.map(|c| c.min(i32::MAX as usize) as i32)))
+    }
+
     /// The eight corners of the cell whose first sample is at `offset`, x fastest.
     #[inline(always)]
     fn corners(&self, offset: i32) -> [f32; 8] {
@@ -139,7 +167,18 @@ impl Bricks {
             .get(at..at + REACH)
             .and_then(|s| s.first_chunk::<REACH>())
             .unwrap_or(&self.spare);
-        CORNERS.map(|o| c[o])
+        // Written out: where this is not inlined into the lane stream, `CORNERS.map` went
+        // through an outlined `try_map` per cell (a third of a bricked level's frame).
+        [
+            c[CORNERS[0]],
+            c[CORNERS[1]],
+            c[CORNERS[2]],
+            c[CORNERS[3]],
+            c[CORNERS[4]],
+            c[CORNERS[5]],
+            c[CORNERS[6]],
+            c[CORNERS[7]],
+        ]
     }
 
     /// The trilinear values at `N` points (`N` a multiple of 4), each bit-identical to
@@ -149,7 +188,7 @@ impl Bricks {
     // Lane loops index several per-lane arrays at once: that is what vectorizes.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn sample_raw_lanes<const N: usize>(&self, p: &[[f32; N]; 3]) -> [f32; N] {
+    pub(crate) fn sample_raw_lanes<const N: usize>(&self, p: &[[f32; N]; 3]) -> [f32; N] {
         let mut out = [0.0f32; N];
         // Four lanes at a time from the positions on, so that their cells and fractions stay
         // in registers (16-lane arrays of them went through the stack, zeroed first).
