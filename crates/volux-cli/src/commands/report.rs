@@ -18,7 +18,7 @@ pub fn frame(args: &RenderArgs, frame: &Frame, scene: &Scene, volume: &Volume) {
     };
     let size = (scene.view.width, scene.view.height);
     match &frame.stats.method {
-        MethodStats::GridRaycast(s) => grid(args, s, size),
+        MethodStats::GridRaycast(s) => grid(args, s, size, volume),
         MethodStats::ProjectedTetrahedra(s) => pt(args, s, zero_volume, size),
         MethodStats::TetRaycast(s) => tet_ray(args, s, frame, size),
         _ => {}
@@ -26,10 +26,14 @@ pub fn frame(args: &RenderArgs, frame: &Frame, scene: &Scene, volume: &Volume) {
 }
 
 /// Grid ray casting.
-fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize)) {
+fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize), volume: &Volume) {
     let rate = s.samples as f64 / s.seconds.max(1e-9);
+    let cache = match volume {
+        Volume::Bricked(b, _) => Some(b.cache_totals()),
+        _ => None,
+    };
     if args.stats && args.json {
-        let v = json!({
+        let mut v = json!({
             "ms": s.seconds * 1e3,
             "width": w,
             "height": h,
@@ -39,6 +43,16 @@ fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize)) {
             "rays_over_tolerance": s.rays_over_tolerance,
             "integrator": args.integrator.name(),
         });
+        if let Some(c) = cache {
+            v["cache"] = json!({
+                "hits": c.hits,
+                "chunks_read": c.misses,
+                "bytes_decoded": c.bytes_read,
+                "evictions": c.evictions,
+                "hit_rate": c.hit_rate(),
+                "peak_resident_bytes": c.peak_bytes,
+            });
+        }
         print_json(args, v);
         return;
     }
@@ -51,6 +65,17 @@ fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize)) {
             s.samples,
             rate / 1e6
         );
+        if let Some(c) = cache {
+            let bytes = volux_core::units::format_bytes;
+            eprintln!(
+                "brick cache: {} chunks read ({} decoded), {:.1} % hits, {} evictions, peak {} resident",
+                c.misses,
+                bytes(c.bytes_read),
+                c.hit_rate() * 100.0,
+                c.evictions,
+                bytes(c.peak_bytes)
+            );
+        }
     }
 }
 

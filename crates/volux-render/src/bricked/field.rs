@@ -14,7 +14,7 @@ use std::sync::{Arc, OnceLock};
 
 use glam::{DVec3, Vec3};
 
-use super::cache::{axis_offset, Brick, BrickCache, FrameBricks, CORNERS, REACH};
+use super::cache::{axis_offset, brick_bytes, Brick, BrickCache, FrameBricks, CORNERS, REACH};
 use super::memo::{self, Entry, MAX_SLOTS};
 use crate::raycast::bricks::Bricks;
 use crate::sampling::{axis64, clamped_cell, Field, LANES};
@@ -32,6 +32,9 @@ const CHUNK_SHIFT: u32 = 35;
 /// The most chunks and the most samples per brick the tables' fields hold.
 pub(crate) const MAX_CHUNKS: u64 = 1 << (64 - CHUNK_SHIFT);
 pub(crate) const MAX_BRICK_SAMPLES: u64 = 1 << EDGE_SHIFT;
+
+/// The most bytes of bricks the memos of one render hold.
+pub(crate) const MEMO_SHARE_MAX: u64 = 256 << 20;
 
 /// Where a field finds a chunk's brick during its render.
 enum Lookup {
@@ -93,7 +96,6 @@ impl<'a> BrickedField<'a> {
                 })
                 .collect()
         });
-        let brick_bytes = chunk.iter().product::<usize>() as u64 * 4;
         Self {
             cache,
             id: memo::new_id(),
@@ -102,7 +104,7 @@ impl<'a> BrickedField<'a> {
             cell_max: dims.map(|n| n.saturating_sub(2) as i32),
             axes,
             next,
-            lookup: Lookup::Memo(memo::slots_for(memo_bytes, brick_bytes, threads)),
+            lookup: Lookup::Memo(memo::slots_for(memo_bytes, brick_bytes(chunk), threads)),
             error: OnceLock::new(),
             failed,
         }
@@ -110,10 +112,13 @@ impl<'a> BrickedField<'a> {
 
     /// The field of `cache`'s level for a render on the current rayon pool: through a table
     /// of the level's bricks when they all fit the budget, else through the threads' memos,
-    /// which hold at most a quarter of the cache's budget (at least four bricks per thread).
+    /// which hold at most a quarter of the cache's budget and at most [`MEMO_SHARE_MAX`]
+    /// (at least four bricks per thread): bricks a memo holds after the cache evicted them
+    /// are memory beyond the budget.
     pub(crate) fn for_render(cache: &'a BrickCache, failed: Arc<AtomicBool>) -> Self {
         let threads = rayon::current_num_threads();
-        let mut field = Self::new(cache, cache.budget() / 4, threads, failed);
+        let share = (cache.budget() / 4).min(MEMO_SHARE_MAX);
+        let mut field = Self::new(cache, share, threads, failed);
         field.lookup = match cache.frame_bricks() {
             Some(FrameBricks::Whole(whole)) => Lookup::Whole(whole),
             Some(FrameBricks::Table(table)) => Lookup::Table(table),

@@ -466,3 +466,35 @@ fn a_warm_level_becomes_one_copy_in_place_of_its_bricks() {
         assert!(v.cache(0).unwrap().is_resident([0, 0, 0]));
     }
 }
+
+#[test]
+fn an_evicted_brick_no_reader_holds_is_filled_again_by_the_next_read() {
+    let g = grid();
+    let chunks = GridChunks::new(Arc::new(g.clone()), CHUNK).unwrap();
+    let layout = chunks.layout().clone();
+    // Room for one brick: each read evicts the previous one.
+    let cache = super::cache::BrickCache::new(Arc::new(chunks), 9 * 9 * 9 * 4);
+    let first = cache.get([0, 0, 0]).unwrap();
+    let buffer = first.values.as_ptr();
+    drop(first);
+    // The second read evicts the first brick (no reader holds it: its buffer is kept), the
+    // third takes that buffer and fills every sample of it.
+    drop(cache.get([1, 0, 0]).unwrap());
+    let third = cache.get([2, 1, 1]).unwrap();
+    assert_eq!(third.values.as_ptr(), buffer, "the buffer was reused");
+    let (lo, size) = layout.chunk_extent([2, 1, 1]);
+    for k in lo[2]..lo[2] + size[2] {
+        for j in lo[1]..lo[1] + size[1] {
+            for i in lo[0]..lo[0] + size[0] {
+                assert_eq!(third.at(i, j, k), g.value(i, j, k), "({i}, {j}, {k})");
+            }
+        }
+    }
+    // Beyond the chunk's samples (read by no cell of this chunk) the layout repeats the
+    // last one, as a fresh brick does.
+    let fresh = super::cache::BrickCache::new(
+        Arc::new(GridChunks::new(Arc::new(g), CHUNK).unwrap()),
+        1 << 20,
+    );
+    assert_eq!(fresh.get([2, 1, 1]).unwrap().values, third.values);
+}

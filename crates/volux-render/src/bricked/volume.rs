@@ -84,6 +84,21 @@ impl BrickedVolume {
         })
     }
 
+    /// The cache figures of all levels together (hits, chunks read, bytes decoded,
+    /// evictions; the pool's peak).
+    pub fn cache_totals(&self) -> CacheStats {
+        (0..self.levels()).filter_map(|l| self.cache_stats(l)).fold(
+            CacheStats::default(),
+            |t, s| CacheStats {
+                hits: t.hits + s.hits,
+                misses: t.misses + s.misses,
+                bytes_read: t.bytes_read + s.bytes_read,
+                evictions: t.evictions + s.evictions,
+                peak_bytes: t.peak_bytes.max(s.peak_bytes),
+            },
+        )
+    }
+
     /// The pyramid.
     pub fn multiscale(&self) -> &Multiscale {
         &self.multiscale
