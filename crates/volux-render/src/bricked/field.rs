@@ -336,7 +336,6 @@ impl<'a> BrickedField<'a> {
         p: &[[f32; N]; 3],
     ) -> [f32; N] {
         let mut out = [0.0f32; N];
-        let mut last: (usize, &[f32]) = (usize::MAX, &[]);
         for g in (0..N).step_by(4) {
             let (mut cell, mut frac) = ([[0i32; 4]; 3], [[0.0f32; 4]; 3]);
             for a in 0..3 {
@@ -345,24 +344,34 @@ impl<'a> BrickedField<'a> {
                         clamped_cell(p[a][g + k], self.hi[a], self.cell_max[a]);
                 }
             }
+            // Every lane gathers from its own brick without a branch on its data (the far
+            // faces of a brick's last micro-bricks hold copies, read and then replaced);
+            // lanes on a chunk's far faces or in a brick not read yet are redone after.
             let mut c = [[0.0f32; 4]; 8];
+            let mut redo = 0u32;
+            let mut cells = [[0usize; 3]; 4];
             for k in 0..4 {
                 // Written out: array `map`s went through an outlined `try_map`.
-                let s = [
+                cells[k] = [
                     cell[0][k].max(0) as usize,
                     cell[1][k].max(0) as usize,
                     cell[2][k].max(0) as usize,
                 ];
-                let corners = match self.locate(s) {
-                    Some((index, at)) if at & EDGE == 0 => {
-                        if index != last.0 {
-                            let values = self.table_brick(table, index).map(|b| &b.values[..]);
-                            last = (index, values.unwrap_or(&[]));
-                        }
-                        gather(last.1, at)
-                    }
-                    _ => self.table_corners_one(table, s),
+                let (index, at) = self.locate(cells[k]).unwrap_or((usize::MAX, EDGE));
+                let values = match table.get(index).and_then(OnceLock::get) {
+                    Some(b) => &b.values[..],
+                    None => &[],
                 };
+                redo |= u32::from(at & EDGE != 0 || values.is_empty()) << k;
+                let corners = gather(values, at & !EDGE);
+                for q in 0..8 {
+                    c[q][k] = corners[q];
+                }
+            }
+            while redo != 0 {
+                let k = redo.trailing_zeros() as usize;
+                redo &= redo - 1;
+                let corners = self.table_corners_one(table, cells[k]);
                 for q in 0..8 {
                     c[q][k] = corners[q];
                 }
@@ -378,11 +387,13 @@ impl<'a> BrickedField<'a> {
     }
 
     /// The eight corners of `cell` through `table`, each from its own chunk (a cell on a
-    /// chunk's far faces), NaN where undefined.
+    /// chunk's far faces), NaN where undefined; reads the chunks not read yet.
     #[inline(never)]
     fn table_corners_one(&self, table: &[OnceLock<Arc<Brick>>], cell: [usize; 3]) -> [f32; 8] {
-        self.corner_samples(cell)
-            .map(|s| self.table_value(table, s).unwrap_or(f32::NAN))
+        let s = self.corner_samples(cell);
+        let v = |q: usize| self.table_value(table, s[q]).unwrap_or(f32::NAN);
+        // Written out: `map` went through an outlined `try_map`.
+        [v(0), v(1), v(2), v(3), v(4), v(5), v(6), v(7)]
     }
 
     /// The corners of `N` lanes through `table` (`index`, `at`: each lane's chunk and offset).
