@@ -12,7 +12,7 @@ use volux_core::grid::{Samples, Scalar};
 use crate::raycast::bricks::Bricks;
 /// The micro-bricks of the in-core renderer's bricked copy: cells per side, samples per
 /// side, samples per micro-brick, a cell's corners' offsets and reach.
-pub(crate) use crate::raycast::bricks::{BRICK as MICRO, CELLS, CORNERS, REACH, SIDE};
+pub(crate) use crate::raycast::bricks::{BRICK as MICRO, CELLS, REACH, SIDE};
 
 /// What local coordinate `l` along axis `a` adds to the offset of the first sample of cell
 /// `l` in a brick of a level whose chunks have `shape` samples. Bricks hold their samples in

@@ -4,19 +4,20 @@
 //! ([`Trilinear`](crate::sampling::Trilinear): the same cells, by [`clamped_cell`], and the
 //! same lerps), so that a bricked render equals the in-core render of the same data.
 //!
-//! A lane finds its chunk and its place in it through two per-axis tables (no division),
-//! its brick through a table of the level's bricks for the render when the whole level fits
-//! the budget (else through this thread's [memo](super::memo)), and, when its cell lies within
-//! the brick (all but the cells on a chunk's far faces: 4.6 % of cells for 64³ chunks), its
-//! eight corners at fixed displacements from one address.
+//! A warm level whose bricks fit twice in the budget is sampled through its whole copy in the
+//! in-core layout ([`BrickCache::frame_bricks`]). Otherwise a lane finds its chunk and its
+//! place in it through per-axis tables (no division), its brick through a table of the level's
+//! bricks when they fit the budget (else through this thread's [memo](super::memo)), and,
+//! when its cell lies within the brick (all but the cells on a chunk's far faces: 4.6 % of
+//! cells for 64³ chunks), its eight corners at fixed displacements from one address.
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
 use glam::{DVec3, Vec3};
 
-use super::cache::{axis_offset, brick_bytes, Brick, BrickCache, FrameBricks, CORNERS, REACH};
+use super::cache::{axis_offset, brick_bytes, Brick, BrickCache, FrameBricks, REACH};
 use super::memo::{self, Entry, MAX_SLOTS};
-use crate::raycast::bricks::Bricks;
+use crate::raycast::bricks::{corners_in, lerp_corners, Bricks};
 use crate::sampling::{axis64, clamped_cell, Field, LANES};
 
 /// The flags of a lane's offset (as [`BrickedField::locate`] gives it) marking a cell on a
@@ -508,39 +509,12 @@ fn finite_or_nan<const N: usize>(mut v: [f32; N]) -> [f32; N] {
     v
 }
 
-/// The trilinear values of `N` cells from their corners `c` (`c[q][l]`: corner `q` of lane
-/// `l`, x fastest) and fractions `f`, with the lerps of
-/// [`Trilinear`](crate::sampling::Trilinear), lane-wise.
-#[inline(always)]
-fn lerp_corners<const N: usize>(c: &[[f32; N]; 8], f: &[[f32; N]; 3]) -> [f32; N] {
-    let lerp = |a: [f32; N], b: [f32; N], t: [f32; N]| -> [f32; N] {
-        std::array::from_fn(|l| a[l] + (b[l] - a[l]) * t[l])
-    };
-    let c00 = lerp(c[0], c[1], f[0]);
-    let c10 = lerp(c[2], c[3], f[0]);
-    let c01 = lerp(c[4], c[5], f[0]);
-    let c11 = lerp(c[6], c[7], f[0]);
-    let c0 = lerp(c00, c10, f[1]);
-    let c1 = lerp(c01, c11, f[1]);
-    lerp(c0, c1, f[2])
-}
-
 /// The eight corners of the cell whose first sample is at `at` in a brick's `values`, x
 /// fastest (NaN if they would not fit: never for a cell within the brick).
 #[inline(always)]
 fn gather(values: &[f32], at: usize) -> [f32; 8] {
     match values.get(at..).and_then(|v| v.first_chunk::<REACH>()) {
-        // Written out: `CORNERS.map` went through an outlined `try_map` per cell.
-        Some(c) => [
-            c[CORNERS[0]],
-            c[CORNERS[1]],
-            c[CORNERS[2]],
-            c[CORNERS[3]],
-            c[CORNERS[4]],
-            c[CORNERS[5]],
-            c[CORNERS[6]],
-            c[CORNERS[7]],
-        ],
+        Some(c) => corners_in(c),
         None => [f32::NAN; 8],
     }
 }

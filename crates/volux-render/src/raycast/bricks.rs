@@ -167,18 +167,7 @@ impl Bricks {
             .get(at..at + REACH)
             .and_then(|s| s.first_chunk::<REACH>())
             .unwrap_or(&self.spare);
-        // Written out: where this is not inlined into the lane stream, `CORNERS.map` went
-        // through an outlined `try_map` per cell (a third of a bricked level's frame).
-        [
-            c[CORNERS[0]],
-            c[CORNERS[1]],
-            c[CORNERS[2]],
-            c[CORNERS[3]],
-            c[CORNERS[4]],
-            c[CORNERS[5]],
-            c[CORNERS[6]],
-            c[CORNERS[7]],
-        ]
+        corners_in(c)
     }
 
     /// The trilinear values at `N` points (`N` a multiple of 4), each bit-identical to
@@ -207,20 +196,44 @@ impl Bricks {
                     c[q][k] = corners[q];
                 }
             }
-            let [fx, fy, fz] = frac;
-            let lerp = |a: [f32; 4], b: [f32; 4], t: [f32; 4]| -> [f32; 4] {
-                std::array::from_fn(|k| a[k] + (b[k] - a[k]) * t[k])
-            };
-            let c00 = lerp(c[0], c[1], fx);
-            let c10 = lerp(c[2], c[3], fx);
-            let c01 = lerp(c[4], c[5], fx);
-            let c11 = lerp(c[6], c[7], fx);
-            let c0 = lerp(c00, c10, fy);
-            let c1 = lerp(c01, c11, fy);
-            out[g..g + 4].copy_from_slice(&lerp(c0, c1, fz));
+            out[g..g + 4].copy_from_slice(&lerp_corners(&c, &frac));
         }
         out
     }
+}
+
+/// The eight corners, x fastest, of the cell whose samples start `window` (a brick's samples
+/// from the cell's first corner on).
+#[inline(always)]
+pub(crate) fn corners_in(window: &[f32; REACH]) -> [f32; 8] {
+    // Written out: where this is not inlined into the lane stream, `CORNERS.map` went through
+    // an outlined `try_map` per cell (a third of a bricked level's frame).
+    [
+        window[CORNERS[0]],
+        window[CORNERS[1]],
+        window[CORNERS[2]],
+        window[CORNERS[3]],
+        window[CORNERS[4]],
+        window[CORNERS[5]],
+        window[CORNERS[6]],
+        window[CORNERS[7]],
+    ]
+}
+
+/// The trilinear values of `N` cells from their corners `c` (`c[q][l]`: corner `q` of lane
+/// `l`, x fastest) and fractions `f`, with the lerps of [`Trilinear`], lane-wise.
+#[inline(always)]
+pub(crate) fn lerp_corners<const N: usize>(c: &[[f32; N]; 8], f: &[[f32; N]; 3]) -> [f32; N] {
+    let lerp = |a: [f32; N], b: [f32; N], t: [f32; N]| -> [f32; N] {
+        std::array::from_fn(|l| a[l] + (b[l] - a[l]) * t[l])
+    };
+    let c00 = lerp(c[0], c[1], f[0]);
+    let c10 = lerp(c[2], c[3], f[0]);
+    let c01 = lerp(c[4], c[5], f[0]);
+    let c11 = lerp(c[6], c[7], f[0]);
+    let c0 = lerp(c00, c10, f[1]);
+    let c1 = lerp(c01, c11, f[1]);
+    lerp(c0, c1, f[2])
 }
 
 /// Trilinear sampling through the bricked copy, with the row-major sampler for the f64
