@@ -452,9 +452,11 @@ fn a_warm_level_becomes_one_copy_in_place_of_its_bricks() {
     let v = volume(&g, 1 << 30);
     let o = options(&g, r#"{"azimuth": 33, "elevation": 21}"#);
     let chunks = v.cache(0).unwrap().layout().chunk_count() as u64;
-    // Cold: every chunk read into a brick of its own.
+    // Cold: every chunk read into a brick of its own (two threads missing one chunk at once
+    // may both read it: only the first brick is kept).
     let cold = render_level(&v, 0, &o).unwrap();
-    assert_eq!(v.cache_stats(0).unwrap().misses, chunks);
+    let reads = v.cache_stats(0).unwrap().misses;
+    assert!(reads >= chunks, "{reads} reads");
     assert!(v.resident_bytes() >= chunks * 9 * 9 * 9 * 4);
     // Warm: the bricks give way to one copy of the level, read from them (no chunk read
     // again), and the frames are the same.
@@ -462,7 +464,7 @@ fn a_warm_level_becomes_one_copy_in_place_of_its_bricks() {
         let warm = render_level(&v, 0, &o).unwrap();
         assert_eq!(max_diff(&warm.image, &cold.image), 0.0);
         assert_eq!(v.resident_bytes(), Bricks::bytes_for(DIMS));
-        assert_eq!(v.cache_stats(0).unwrap().misses, chunks);
+        assert_eq!(v.cache_stats(0).unwrap().misses, reads);
         assert!(v.cache(0).unwrap().is_resident([0, 0, 0]));
     }
 }
