@@ -69,14 +69,12 @@ pub struct CacheFigures {
 impl CacheFigures {
     /// The figures of `volume` now.
     pub fn of(volume: &BrickedVolume) -> Self {
-        let (hits, misses) = (0..volume.levels())
-            .filter_map(|l| volume.cache_stats(l))
-            .fold((0, 0), |(h, m), s| (h + s.hits, m + s.misses));
+        let totals = volume.cache_totals();
         Self {
             resident_bytes: volume.resident_bytes(),
             budget: volume.budget(),
-            hits,
-            misses,
+            hits: totals.hits,
+            misses: totals.misses,
         }
     }
 
