@@ -1,10 +1,11 @@
 //! The brick cache: the chunks of one level resident in memory, within a byte budget, evicted
-//! least recently used first. Readers never wait for each other's decompression: a miss reads
-//! and decodes its chunk without the lock (two threads missing the same chunk may both read
-//! it; the first to finish is kept), and only the bookkeeping is locked.
-use std::collections::{BTreeMap, HashMap};
+//! least recently used first. A miss reads and decodes its chunk without the lock (only the
+//! bookkeeping is locked); a chunk is read by one reader at a time: another reader that misses
+//! it meanwhile waits for that read instead of decoding it again (the prefetcher and the render
+//! threads reach the same chunks), and the prefetcher skips it.
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
 
 use volux_core::bricked::{ChunkLayout, ChunkSource};
 use volux_core::grid::{Samples, Scalar};
@@ -180,6 +181,8 @@ struct Resident {
     bricks: HashMap<Key, (Arc<Brick>, u64)>,
     /// Sample buffers of evicted bricks, reused by the next reads.
     spares: Vec<Vec<f32>>,
+    /// Chunks being read.
+    reading: HashSet<Key>,
     /// Whole copies of levels, by level, with their last use.
     wholes: HashMap<usize, (Arc<Bricks>, u64)>,
     by_use: BTreeMap<u64, Key>,
@@ -280,6 +283,8 @@ impl Resident {
 struct Pool {
     budget: u64,
     resident: Mutex<Resident>,
+    /// Signalled when a read ends (its chunk made resident, or failed).
+    read_done: Condvar,
     peak: AtomicU64,
 }
 
@@ -288,6 +293,7 @@ impl Pool {
         Arc::new(Self {
             budget,
             resident: Mutex::new(Resident::default()),
+            read_done: Condvar::new(),
             peak: AtomicU64::new(0),
         })
     }
@@ -296,6 +302,26 @@ impl Pool {
         // A panic while holding the lock leaves consistent maps (no update is half done).
         self.resident.lock().unwrap_or_else(|e| e.into_inner())
     }
+}
+
+/// A chunk being read: marked in the pool while it lives, unmarked (and the waiting readers
+/// woken) when it is dropped, whether the read succeeded, failed or panicked.
+struct Reading<'a> {
+    pool: &'a Pool,
+    key: Key,
+}
+
+impl Drop for Reading<'_> {
+    fn drop(&mut self) {
+        self.pool.lock().reading.remove(&self.key);
+        self.pool.read_done.notify_all();
+    }
+}
+
+/// What a lookup found: the resident brick, or the right to read the chunk.
+enum Lookup<'a> {
+    Resident(Arc<Brick>),
+    Read(Reading<'a>),
 }
 
 /// The resident chunks of one level, within a byte budget that it may share with the other
@@ -473,11 +499,54 @@ impl BrickCache {
     /// The brick of chunk `c`, read from the source on a miss (the least recently used
     /// bricks of the pool are evicted to make room). Errors name the chunk.
     pub fn get(&self, c: [usize; 3]) -> Result<Arc<Brick>, String> {
-        let key = (self.level, self.layout().chunk_index(c));
-        if let Some(brick) = self.pool.lock().touch(key) {
-            self.hits.fetch_add(1, Ordering::Relaxed);
-            return Ok(brick);
+        match self.lookup(c, true) {
+            Some(Lookup::Resident(brick)) => Ok(brick),
+            Some(Lookup::Read(reading)) => self.read(c, reading),
+            // `lookup` waits for other readers when asked to: never here.
+            None => Err(format!("chunk {c:?}: not read")),
         }
+    }
+
+    /// Reads chunk `c` ahead of the readers that will need it, unless it is resident or
+    /// being read (then `Ok(false)`).
+    pub(crate) fn prefetch(&self, c: [usize; 3]) -> Result<bool, String> {
+        match self.lookup(c, false) {
+            Some(Lookup::Read(reading)) => self.read(c, reading).map(|_| true),
+            _ => Ok(false),
+        }
+    }
+
+    /// The resident brick of chunk `c` (a hit), or the right to read it; while another
+    /// reader reads it, waits for that read when `wait` (else `None`).
+    fn lookup(&self, c: [usize; 3], wait: bool) -> Option<Lookup<'_>> {
+        let key = (self.level, self.layout().chunk_index(c));
+        let mut r = self.pool.lock();
+        loop {
+            if let Some(brick) = r.touch(key) {
+                self.hits.fetch_add(1, Ordering::Relaxed);
+                return Some(Lookup::Resident(brick));
+            }
+            if !r.reading.contains(&key) {
+                r.reading.insert(key);
+                return Some(Lookup::Read(Reading {
+                    pool: &self.pool,
+                    key,
+                }));
+            }
+            if !wait {
+                return None;
+            }
+            r = self
+                .pool
+                .read_done
+                .wait(r)
+                .unwrap_or_else(|e| e.into_inner());
+        }
+    }
+
+    /// Reads chunk `c`, which `reading` marks as being read, and makes it resident.
+    fn read(&self, c: [usize; 3], reading: Reading<'_>) -> Result<Arc<Brick>, String> {
+        let key = reading.key;
         let samples = self
             .source
             .read_chunk(c)
@@ -487,7 +556,9 @@ impl BrickCache {
         drop(samples);
         self.misses.fetch_add(1, Ordering::Relaxed);
         self.bytes_read.fetch_add(brick.bytes(), Ordering::Relaxed);
-        Ok(self.insert(key, brick))
+        let brick = self.insert(key, brick);
+        drop(reading);
+        Ok(brick)
     }
 
     /// Makes `brick` resident as `key` (or returns the one another reader made resident

@@ -42,15 +42,19 @@ pub(crate) fn plan(
     chunks.into_iter().take(room).map(|(_, c)| c).collect()
 }
 
-/// Reads `chunks` into `cache` in order until `stop` is raised or a chunk fails; returns how
-/// many it read.
+/// Reads `chunks` into `cache` in order, skipping those resident or being read, until `stop`
+/// is raised or a chunk fails; returns how many it read.
 pub(crate) fn run(cache: &BrickCache, chunks: &[[usize; 3]], stop: &AtomicBool) -> usize {
     let mut read = 0;
     for &c in chunks {
-        if stop.load(Ordering::Relaxed) || cache.get(c).is_err() {
+        if stop.load(Ordering::Relaxed) {
             break;
         }
-        read += 1;
+        match cache.prefetch(c) {
+            Ok(true) => read += 1,
+            Ok(false) => {}
+            Err(_) => break,
+        }
     }
     read
 }

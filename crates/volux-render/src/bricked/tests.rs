@@ -452,11 +452,10 @@ fn a_warm_level_becomes_one_copy_in_place_of_its_bricks() {
     let v = volume(&g, 1 << 30);
     let o = options(&g, r#"{"azimuth": 33, "elevation": 21}"#);
     let chunks = v.cache(0).unwrap().layout().chunk_count() as u64;
-    // Cold: every chunk read into a brick of its own (two threads missing one chunk at once
-    // may both read it: only the first brick is kept).
+    // Cold: every chunk read once into a brick of its own.
     let cold = render_level(&v, 0, &o).unwrap();
     let reads = v.cache_stats(0).unwrap().misses;
-    assert!(reads >= chunks, "{reads} reads");
+    assert_eq!(reads, chunks);
     assert!(v.resident_bytes() >= chunks * 9 * 9 * 9 * 4);
     // Warm: the bricks give way to one copy of the level, read from them (no chunk read
     // again), and the frames are the same.
@@ -499,4 +498,28 @@ fn an_evicted_brick_no_reader_holds_is_filled_again_by_the_next_read() {
         1 << 20,
     );
     assert_eq!(fresh.get([2, 1, 1]).unwrap().values, third.values);
+}
+
+#[test]
+fn a_chunk_is_read_once_however_many_readers_miss_it_at_once() {
+    let g = grid();
+    let source = Arc::new(GridChunks::new(Arc::new(g), CHUNK).unwrap());
+    let cache = super::cache::BrickCache::new(source, 1 << 20);
+    // Eight threads miss the same chunk together: one reads it, the others wait for it.
+    let barrier = std::sync::Barrier::new(8);
+    std::thread::scope(|s| {
+        for _ in 0..8 {
+            s.spawn(|| {
+                barrier.wait();
+                cache.get([1, 2, 1]).unwrap()
+            });
+        }
+    });
+    let stats = cache.stats();
+    assert_eq!((stats.misses, stats.hits), (1, 7), "{stats:?}");
+    // The prefetcher skips what is resident and reads the rest once.
+    assert_eq!(cache.prefetch([1, 2, 1]), Ok(false));
+    assert_eq!(cache.prefetch([0, 0, 0]), Ok(true));
+    assert_eq!(cache.prefetch([0, 0, 0]), Ok(false));
+    assert_eq!(cache.stats().misses, 2);
 }
