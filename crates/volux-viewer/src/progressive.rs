@@ -8,7 +8,7 @@
 //! ([`LevelShown`]) and the cache's figures ([`CacheFigures`]).
 use std::sync::Arc;
 
-use volux_render::bricked::{BrickedRenderer, BrickedVolume, Lod};
+use volux_render::bricked::{BrickedRenderer, BrickedVolume, CacheStats, Lod};
 use volux_render::engine::{Frame, Renderer};
 use volux_render::scene::Scene;
 use volux_render::tiles::Control;
@@ -80,12 +80,13 @@ impl CacheFigures {
 
     /// Hits over lookups (1 when there was none).
     pub fn hit_rate(&self) -> f64 {
-        let n = self.hits + self.misses;
-        if n == 0 {
-            1.0
-        } else {
-            self.hits as f64 / n as f64
+        let (hits, misses) = (self.hits, self.misses);
+        CacheStats {
+            hits,
+            misses,
+            ..CacheStats::default()
         }
+        .hit_rate()
     }
 
     /// "cache 12.0 of 4096.0 MiB, 97.5 % hits".

@@ -17,7 +17,7 @@ use glam::{DVec3, Vec3};
 
 use super::cache::{axis_offset, brick_bytes, Brick, BrickCache, FrameBricks, REACH};
 use super::memo::{self, Entry, MAX_SLOTS};
-use crate::raycast::bricks::{corners_in, lerp_corners, Bricks};
+use crate::raycast::bricks::{cells_of_four, corners_in, lerp_corners, undefined_to_nan, Bricks};
 use crate::sampling::{axis64, clamped_cell, Field, LANES};
 
 /// The flags of a lane's offset (as [`BrickedField::locate`] gives it) marking a cell on a
@@ -278,7 +278,7 @@ impl<'a> BrickedField<'a> {
     #[inline(always)]
     fn sample_points<const N: usize>(&self, p: &[[f32; N]; 3]) -> [f32; N] {
         match (&self.lookup, N.is_multiple_of(4)) {
-            (Lookup::Whole(whole), true) => return finite_or_nan(whole.sample_raw_lanes(p)),
+            (Lookup::Whole(whole), true) => return undefined_to_nan(whole.sample_raw_lanes(p)),
             (Lookup::Table(table), true) => return self.table_lanes(table, p),
             _ => {}
         }
@@ -316,19 +316,12 @@ impl<'a> BrickedField<'a> {
             Lookup::Table(table) => self.table_corners(table, &cells, &index, &at),
             Lookup::Memo(slots) => self.memo_corners(*slots, &cells, &index, &at),
         };
-        let mut out = lerp_corners(&c, &frac);
-        for v in out.iter_mut() {
-            if !v.is_finite() {
-                *v = f32::NAN;
-            }
-        }
-        out
+        undefined_to_nan(lerp_corners(&c, &frac))
     }
 
     /// `N` samples (`N` a multiple of 4) through `table`, NaN where undefined, in the in-core
     /// bricked sampler's order (`Bricks::sample_raw_lanes`): four lanes at a time from the
-    /// positions to the lerps, so that their cells, fractions and corners stay in registers;
-    /// the brick of the previous lane reused when the next one is in the same chunk.
+    /// positions to the lerps, so that their cells, fractions and corners stay in registers.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn table_lanes<const N: usize>(
@@ -338,13 +331,7 @@ impl<'a> BrickedField<'a> {
     ) -> [f32; N] {
         let mut out = [0.0f32; N];
         for g in (0..N).step_by(4) {
-            let (mut cell, mut frac) = ([[0i32; 4]; 3], [[0.0f32; 4]; 3]);
-            for a in 0..3 {
-                for k in 0..4 {
-                    (cell[a][k], frac[a][k]) =
-                        clamped_cell(p[a][g + k], self.hi[a], self.cell_max[a]);
-                }
-            }
+            let (cell, frac) = cells_of_four(p, g, self.hi, self.cell_max);
             // Every lane gathers from its own brick without a branch on its data (the far
             // faces of a brick's last micro-bricks hold copies, read and then replaced);
             // lanes on a chunk's far faces or in a brick not read yet are redone after.
@@ -379,12 +366,7 @@ impl<'a> BrickedField<'a> {
             }
             out[g..g + 4].copy_from_slice(&lerp_corners(&c, &frac));
         }
-        for v in out.iter_mut() {
-            if !v.is_finite() {
-                *v = f32::NAN;
-            }
-        }
-        out
+        undefined_to_nan(out)
     }
 
     /// The eight corners of `cell` through `table`, each from its own chunk (a cell on a
@@ -496,17 +478,6 @@ impl<'a> BrickedField<'a> {
             _ => None,
         }
     }
-}
-
-/// `v` with NaN for every non-finite value (undefined samples).
-#[inline(always)]
-fn finite_or_nan<const N: usize>(mut v: [f32; N]) -> [f32; N] {
-    for x in v.iter_mut() {
-        if !x.is_finite() {
-            *x = f32::NAN;
-        }
-    }
-    v
 }
 
 /// The eight corners of the cell whose first sample is at `at` in a brick's `values`, x

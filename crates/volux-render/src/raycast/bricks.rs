@@ -182,13 +182,7 @@ impl Bricks {
         // Four lanes at a time from the positions on, so that their cells and fractions stay
         // in registers (16-lane arrays of them went through the stack, zeroed first).
         for g in (0..N).step_by(4) {
-            let (mut cell, mut frac) = ([[0i32; 4]; 3], [[0.0f32; 4]; 3]);
-            for a in 0..3 {
-                for k in 0..4 {
-                    (cell[a][k], frac[a][k]) =
-                        clamped_cell(p[a][g + k], self.hi[a], self.cell_max[a]);
-                }
-            }
+            let (cell, frac) = cells_of_four(p, g, self.hi, self.cell_max);
             let mut c = [[0.0f32; 4]; 8];
             for k in 0..4 {
                 let corners = self.corners(self.offset([cell[0][k], cell[1][k], cell[2][k]]));
@@ -200,6 +194,24 @@ impl Bricks {
         }
         out
     }
+}
+
+/// The cells and fractions ([`clamped_cell`]) of lanes `g` to `g + 3` of `p`, per axis, for
+/// a grid whose largest coordinates are `hi` and largest cell indices `cell_max`.
+#[inline(always)]
+pub(crate) fn cells_of_four<const N: usize>(
+    p: &[[f32; N]; 3],
+    g: usize,
+    hi: [f32; 3],
+    cell_max: [i32; 3],
+) -> ([[i32; 4]; 3], [[f32; 4]; 3]) {
+    let (mut cell, mut frac) = ([[0i32; 4]; 3], [[0.0f32; 4]; 3]);
+    for a in 0..3 {
+        for k in 0..4 {
+            (cell[a][k], frac[a][k]) = clamped_cell(p[a][g + k], hi[a], cell_max[a]);
+        }
+    }
+    (cell, frac)
 }
 
 /// The eight corners, x fastest, of the cell whose samples start `window` (a brick's samples
@@ -245,7 +257,7 @@ pub(crate) struct BrickedTrilinear<'a, T> {
 
 /// NaN for every non-finite value (undefined samples).
 #[inline(always)]
-fn undefined_to_nan<const N: usize>(mut r: [f32; N]) -> [f32; N] {
+pub(crate) fn undefined_to_nan<const N: usize>(mut r: [f32; N]) -> [f32; N] {
     for v in r.iter_mut() {
         if !v.is_finite() {
             *v = f32::NAN;
