@@ -15,6 +15,11 @@
 //! tested for 1 to 5 ranks). Early ray termination is off: a rank behind another cannot
 //! know that the rays it samples are already opaque in front.
 //!
+//! Maximum intensity projection is exact too, by another reduction: each rank keeps per
+//! pixel the largest sample of its part of the ray's lattice, its index and its refined
+//! peak, and the ranks keep the largest (the earlier on ties) by the same binary swap
+//! ([`mip`], [`part`]).
+//!
 //! The job every rank renders: [`job`]. Read counts per rank: [`reads`]; a bricked level rendered by region:
 //! [`render_cache_region`](crate::bricked::render_cache_region). Errors: [`error`].
 
@@ -22,6 +27,8 @@ pub mod error;
 pub mod exchange;
 pub mod job;
 pub mod kdtree;
+pub mod mip;
+pub mod part;
 pub mod reads;
 pub mod region;
 pub mod swap;

@@ -11,9 +11,10 @@ use super::field::BrickedField;
 use super::render::stopped_by;
 use crate::distributed::error::DistributedError;
 use crate::distributed::kdtree::KdSplit;
+use crate::distributed::part::Part;
 use crate::distributed::region::render_region;
 use crate::error::RenderError;
-use crate::raycast::{Placement, RenderOptions, Rendered};
+use crate::raycast::{Placement, RenderOptions};
 use crate::sampling::Reconstruction;
 
 /// The world placement of `cache`'s level (axis-aligned, as for [`super::render_level`]).
@@ -28,8 +29,9 @@ pub fn level_placement(cache: &BrickCache) -> Placement {
 }
 
 /// Renders region `region` of `split` of the level `cache` reads, classified over `range`
-/// (the full level's data range, as the single-process render uses), into a partial image
-/// (premultiplied, no background; see
+/// (the full level's data range, as the single-process render uses), into the rank's part
+/// of the frame (a partial image, premultiplied, no background, or the region's MIP maxima;
+/// see
 /// [`render_region`](crate::distributed::region::render_region) for what is exact). Only
 /// the region's chunks and their neighbours across its faces are read. A chunk that cannot
 /// be read stops the render with an error naming it.
@@ -39,7 +41,7 @@ pub fn render_cache_region(
     split: &KdSplit,
     region: usize,
     opts: &RenderOptions,
-) -> Result<Rendered, DistributedError> {
+) -> Result<Part, DistributedError> {
     if opts.reconstruction != Reconstruction::Trilinear {
         return Err(DistributedError::Unsupported(
             "cubic reconstruction on bricked volumes".into(),

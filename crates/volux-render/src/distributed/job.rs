@@ -9,6 +9,7 @@ use volux_core::TransferFunction;
 use super::error::DistributedError;
 use super::region::region_options;
 use crate::integrate::integrator::Integrator;
+use crate::isosurface::Isosurfaces;
 use crate::raycast::RenderOptions;
 use crate::sampling::Reconstruction;
 use crate::scene::Scene;
@@ -37,6 +38,15 @@ pub struct RegionJob {
     pub shading: Option<BlinnPhong>,
     /// World clipping planes.
     pub clip_planes: Vec<ClipPlane>,
+    /// Maximum intensity projection instead of compositing.
+    #[serde(default)]
+    pub mip: bool,
+    /// Isosurfaces composited with the volume.
+    #[serde(default)]
+    pub isosurfaces: Isosurfaces,
+    /// Lighting of the isosurfaces when `shading` is `None`.
+    #[serde(default)]
+    pub iso_lighting: Option<BlinnPhong>,
 }
 
 impl RegionJob {
@@ -70,6 +80,9 @@ impl RegionJob {
             integrator: o.integrator,
             shading: o.shading,
             clip_planes: o.clip_planes,
+            mip: o.mip,
+            isosurfaces: o.isosurfaces,
+            iso_lighting: o.iso_lighting,
         })
     }
 
@@ -80,6 +93,9 @@ impl RegionJob {
         o.integrator = self.integrator;
         o.shading = self.shading;
         o.clip_planes = self.clip_planes.clone();
+        o.mip = self.mip;
+        o.isosurfaces = self.isosurfaces.clone();
+        o.iso_lighting = self.iso_lighting;
         o.early_termination = None;
         o
     }

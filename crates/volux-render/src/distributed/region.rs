@@ -1,13 +1,16 @@
 //! One rank's part of a distributed render: rays sampled only inside the rank's region
 //! ([`RegionRays`], an [`IntervalSource`] on the global sample lattice), rendered into a
-//! partial image of premultiplied RGBA before any background ([`render_region`]).
+//! partial image of premultiplied RGBA before any background, or under MIP into the
+//! region's maxima ([`render_region`]).
 use glam::{DVec3, Vec3};
 
 use super::error::DistributedError;
 use super::kdtree::KdSplit;
+use super::mip::{mip_region, mip_step};
+use super::part::Part;
 use crate::integrate::integrator::Integrator;
 use crate::intervals::IntervalSource;
-use crate::raycast::{first_at_or_after, render_field_in, Placement, RenderOptions, Rendered};
+use crate::raycast::{first_at_or_after, render_field_in, Placement, RenderOptions};
 use crate::sampling::{Field, LANES};
 
 /// How the integrator takes the ray apart, which says where a region's span must start so
@@ -86,13 +89,10 @@ impl IntervalSource for RegionRays<'_> {
 }
 
 /// Checks that `opts` can be rendered split, and returns them with early termination off.
+/// Refused: isosurfaces, jitter, sculpt masks and labels (and, by [`SpanRule::of`], the
+/// reference integrator).
 pub fn region_options(opts: &RenderOptions) -> Result<RenderOptions, DistributedError> {
     let refuse = |what: &str| Err(DistributedError::Unsupported(what.into()));
-    if opts.mip {
-        return refuse(
-            "maximum intensity projection (it composites by maximum, not front to back)",
-        );
-    }
     if !opts.isosurfaces.is_empty() {
         return refuse("isosurfaces (a crossing between two regions' samples would be lost)");
     }
@@ -112,12 +112,14 @@ pub fn region_options(opts: &RenderOptions) -> Result<RenderOptions, Distributed
 
 /// Renders region `region` of `split` of `field` (placed by `place`, classified over
 /// `range`): every ray sampled only inside the region on the global lattice, early
-/// termination off ([`region_options`]). The image is premultiplied RGBA with no background
-/// (the ray caster applies none: front ends add it when writing), ready for
-/// [`composite`](super::swap::composite). Riemann, trapezoid, Simpson and pre-integration
-/// give exactly the single-process render's samples; adaptive Simpson subdivides each
-/// region's piece of a ray on its own, so its image differs from the single-process one by
-/// up to about its tolerance; the reference integrator is refused.
+/// termination off ([`region_options`]). The part is a partial image of premultiplied RGBA
+/// with no background (the ray caster applies none: front ends add it when writing), ready
+/// for [`composite`](super::swap::composite), or under MIP the region's maxima
+/// ([`mip_region`]); [`Part::combine`] combines either. Riemann, trapezoid, Simpson,
+/// pre-integration and MIP give exactly the single-process render's samples; adaptive
+/// Simpson subdivides each region's piece of a ray on its own, so its image differs from
+/// the single-process one by up to about its tolerance; the reference integrator is
+/// refused.
 pub fn render_region<F: Field>(
     field: &F,
     place: Placement,
@@ -125,7 +127,7 @@ pub fn render_region<F: Field>(
     split: &KdSplit,
     region: usize,
     opts: &RenderOptions,
-) -> Result<Rendered, DistributedError> {
+) -> Result<Part, DistributedError> {
     let opts = region_options(opts)?;
     if region >= split.len() {
         return Err(DistributedError::Unsupported(format!(
@@ -133,25 +135,33 @@ pub fn render_region<F: Field>(
             split.len()
         )));
     }
+    if opts.mip {
+        let part = match Near::new(field, split, region, reach(&opts, &place)) {
+            Some(near) => mip_region(&near, place, split, region, &opts),
+            None => mip_region(field, place, split, region, &opts),
+        };
+        return Ok(Part::Mip(part, opts.tf.resolved(range)));
+    }
     let rule = SpanRule::of(&opts, &place)?;
     let rays = RegionRays {
         split,
         region,
         rule,
     };
-    Ok(
-        match Near::new(field, split, region, reach(&opts, &place)) {
-            Some(near) => render_field_in(&near, place, range, Some(&rays), &opts)?,
-            None => render_field_in(field, place, range, Some(&rays), &opts)?,
-        },
-    )
+    let rendered = match Near::new(field, split, region, reach(&opts, &place)) {
+        Some(near) => render_field_in(&near, place, range, Some(&rays), &opts)?,
+        None => render_field_in(field, place, range, Some(&rays), &opts)?,
+    };
+    Ok(Part::Over(rendered.image))
 }
 
 /// How far past a region face (voxels, per axis) a sample the region needs can lie: a step
-/// (or the largest adaptive step) straddling the face, and a voxel for gradients.
+/// (or the largest adaptive step, or the MIP step to the maximum's neighbour) straddling
+/// the face, and a voxel for gradients.
 fn reach(opts: &RenderOptions, place: &Placement) -> [f64; 3] {
     let unit = place.spacing.min_element();
     let h = match opts.integrator {
+        _ if opts.mip => mip_step(&opts.integrator),
         Integrator::Riemann { step }
         | Integrator::Trapezoid { step }
         | Integrator::Simpson { step }

@@ -6,7 +6,8 @@
 //! Every step composites a front piece *under*-style with the piece behind it (premultiplied
 //! RGBA: `C = C_front + (1 - A_front) C_back`), the exact composition of two parts of a ray
 //! integral, so the result is the single-process ray's colour (seed `003` reset opacity at
-//! every block boundary instead).
+//! every block boundary instead). The same swap reduces other per-pixel records with
+//! another merge ([`reduce`]: the split MIP's maxima).
 use std::time::Instant;
 
 use volux_core::Image;
@@ -86,6 +87,38 @@ pub fn composite<E: Exchange + ?Sized>(
     partial: &Image,
 ) -> Result<(Option<Image>, CompositeStats), DistributedError> {
     let started = Instant::now();
+    let (w, h) = (partial.width(), partial.height());
+    let buf: Vec<f32> = partial.pixels().iter().flatten().copied().collect();
+    let (image, mut stats) = reduce(ex, order, buf, 4, over_back)?;
+    let image = match image {
+        Some(image) => {
+            let pixels = image
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect();
+            let image = Image::from_pixels(w, h, pixels)
+                .map_err(|e| DistributedError::Exchange(format!("the gathered image: {e}")))?;
+            Some(image)
+        }
+        None => None,
+    };
+    stats.seconds = started.elapsed().as_secs_f64();
+    Ok((image, stats))
+}
+
+/// Binary swap of per-pixel records of `channels` values (`buf`, the same size on every
+/// rank) in `order`, `combine(front, back)` merging the records of the pixels of a piece
+/// behind (`back`) into those in front (`front`); then a gather to rank 0, which gets the
+/// whole result (the others `None`). Compositing ([`composite`]) merges by *under*; the
+/// split MIP by maximum ([`MipPart::merge`](super::mip::MipPart::merge)).
+pub fn reduce<E: Exchange + ?Sized>(
+    ex: &mut E,
+    order: &[usize],
+    mut buf: Vec<f32>,
+    channels: usize,
+    combine: fn(&mut [f32], &[f32]),
+) -> Result<(Option<Vec<f32>>, CompositeStats), DistributedError> {
+    let started = Instant::now();
     let p = ex.size();
     let mut sorted = order.to_vec();
     sorted.sort_unstable();
@@ -94,9 +127,8 @@ pub fn composite<E: Exchange + ?Sized>(
             "the visibility order {order:?} is not an order of the {p} ranks"
         )));
     }
-    let (w, h) = (partial.width(), partial.height());
-    let n = w * h;
-    let mut buf: Vec<f32> = partial.pixels().iter().flatten().copied().collect();
+    let c = channels.max(1);
+    let n = buf.len() / c;
     let mut stats = CompositeStats::default();
     let me = ex.rank();
     let pos = order.iter().position(|&r| r == me).unwrap_or(0);
@@ -107,8 +139,8 @@ pub fn composite<E: Exchange + ?Sized>(
             send(ex, order[pos - 1], &buf, &mut stats)?;
             None
         } else {
-            let back = recv(ex, order[pos + 1], 4 * n, &mut stats)?;
-            over_back(&mut buf, &back);
+            let back = recv(ex, order[pos + 1], c * n, &mut stats)?;
+            combine(&mut buf, &back);
             Some(pos / 2)
         }
     } else {
@@ -116,37 +148,9 @@ pub fn composite<E: Exchange + ?Sized>(
     };
     // Binary swap among the m participants.
     if let Some(v) = v {
-        let (mut s, mut e) = (0, n);
-        let mut k = 0;
-        while (1usize << k) < plan.m {
-            let mid = s + (e - s) / 2;
-            let partner_v = v ^ (1 << k);
-            let partner = plan.rank_of(order, partner_v);
-            let front = v < partner_v;
-            let (keep, give) = if v >> k & 1 == 0 {
-                ((s, mid), (mid, e))
-            } else {
-                ((mid, e), (s, mid))
-            };
-            let got = ex.exchange(partner, &buf[4 * give.0..4 * give.1])?;
-            stats.messages += 1;
-            stats.bytes_sent += 4 * 4 * (give.1 - give.0) as u64;
-            check_len(got.len(), 4 * (keep.1 - keep.0), partner)?;
-            stats.bytes_received += 4 * got.len() as u64;
-            let mine = &mut buf[4 * keep.0..4 * keep.1];
-            if front {
-                over_back(mine, &got);
-            } else {
-                let mut acc = got;
-                over_back(&mut acc, mine);
-                mine.copy_from_slice(&acc);
-            }
-            (s, e) = keep;
-            k += 1;
-            stats.rounds += 1;
-        }
+        let (s, e) = swap(ex, order, &plan, v, (&mut buf, c), combine, &mut stats)?;
         if me != 0 {
-            send(ex, 0, &buf[4 * s..4 * e], &mut stats)?;
+            send(ex, 0, &buf[c * s..c * e], &mut stats)?;
         }
     }
     if me != 0 {
@@ -154,25 +158,60 @@ pub fn composite<E: Exchange + ?Sized>(
         return Ok((None, stats));
     }
     // Gather the pieces on rank 0.
-    let mut image = vec![0.0f32; 4 * n];
+    let mut whole = vec![0.0f32; c * n];
     for u in 0..plan.m {
         let (s, e) = piece(u, plan.m, n);
         let r = plan.rank_of(order, u);
         if r == 0 {
-            image[4 * s..4 * e].copy_from_slice(&buf[4 * s..4 * e]);
+            whole[c * s..c * e].copy_from_slice(&buf[c * s..c * e]);
         } else {
-            let got = recv(ex, r, 4 * (e - s), &mut stats)?;
-            image[4 * s..4 * e].copy_from_slice(&got);
+            let got = recv(ex, r, c * (e - s), &mut stats)?;
+            whole[c * s..c * e].copy_from_slice(&got);
         }
     }
-    let pixels = image
-        .chunks_exact(4)
-        .map(|c| [c[0], c[1], c[2], c[3]])
-        .collect();
-    let image = Image::from_pixels(w, h, pixels)
-        .map_err(|e| DistributedError::Exchange(format!("the gathered image: {e}")))?;
     stats.seconds = started.elapsed().as_secs_f64();
-    Ok((Some(image), stats))
+    Ok((Some(whole), stats))
+}
+
+/// The rounds of binary swap of participant `v`: returns the pixels `[s, e)` it ends with.
+fn swap<E: Exchange + ?Sized>(
+    ex: &mut E,
+    order: &[usize],
+    plan: &Plan,
+    v: usize,
+    (buf, c): (&mut [f32], usize),
+    combine: fn(&mut [f32], &[f32]),
+    stats: &mut CompositeStats,
+) -> Result<(usize, usize), DistributedError> {
+    let (mut s, mut e) = (0, buf.len() / c);
+    let mut k = 0;
+    while (1usize << k) < plan.m {
+        let mid = s + (e - s) / 2;
+        let partner_v = v ^ (1 << k);
+        let partner = plan.rank_of(order, partner_v);
+        let (keep, give) = if v >> k & 1 == 0 {
+            ((s, mid), (mid, e))
+        } else {
+            ((mid, e), (s, mid))
+        };
+        let got = ex.exchange(partner, &buf[c * give.0..c * give.1])?;
+        stats.messages += 1;
+        stats.bytes_sent += 4 * (c * (give.1 - give.0)) as u64;
+        check_len(got.len(), c * (keep.1 - keep.0), partner)?;
+        stats.bytes_received += 4 * got.len() as u64;
+        let mine = &mut buf[c * keep.0..c * keep.1];
+        if v < partner_v {
+            combine(mine, &got);
+        } else {
+            let mut acc = got;
+            combine(&mut acc, mine);
+            mine.copy_from_slice(&acc);
+        }
+        (s, e) = keep;
+        k += 1;
+        stats.rounds += 1;
+    }
+    Ok((s, e))
 }
 
 /// Composites `back` behind `front`, pixel by pixel, into `front`.

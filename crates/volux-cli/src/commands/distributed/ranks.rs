@@ -19,8 +19,8 @@ use volux_render::bricked::{
 use volux_render::distributed::exchange::Exchange;
 use volux_render::distributed::job::RegionJob;
 use volux_render::distributed::kdtree::{KdSplit, ViewPoint};
+use volux_render::distributed::part::Part;
 use volux_render::distributed::reads::CountedChunks;
-use volux_render::distributed::swap::composite;
 use volux_render::scene::Volume;
 
 use crate::cli::RenderArgs;
@@ -83,7 +83,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CmdError> {
         return failed(rank, "unreachable".into());
     };
     let t = Instant::now();
-    let composited = composite(&mut world, &order, &part);
+    let composited = part.combine(&mut world, &order);
     let (image, cstats) = match composited {
         Ok(c) => c,
         Err(e) => return failed(rank, format!("rank {rank}: compositing: {e}")),
@@ -158,12 +158,12 @@ fn plan(args: &RenderArgs) -> Result<Plan, CmdError> {
     })
 }
 
-/// This rank's partial image, the visibility order, and its figures so far.
+/// This rank's part (a partial image, or MIP maxima), the visibility order, and its figures so far.
 fn render(
     plan: &Plan,
     rank: usize,
     size: usize,
-) -> Result<(Image, Vec<usize>, RankStats), CmdError> {
+) -> Result<(Part, Vec<usize>, RankStats), CmdError> {
     let ms = omezarr::open_multiscale(&plan.store, &plan.zarr())
         .map_err(|e| format!("{}: {e}", plan.store.display()))?;
     let level = ms.levels().get(plan.job.level).cloned().ok_or_else(|| {
@@ -190,7 +190,7 @@ fn render(
         render_ms,
         ..Default::default()
     };
-    Ok((part.image, order, stats))
+    Ok((part, order, stats))
 }
 
 /// Rank 0 writes the PNG (and the raw image), each through a temporary name.
