@@ -1,8 +1,8 @@
 //! `mpirun -np N volux render STORE --distributed` on 2 and 3 ranks equals the
 //! single-process render (`--lod 0 --no-early-termination`; MIP refuses the flag, having no
-//! opacity) within 1e-6 per channel of the raw linear image, composited (Riemann) and by
-//! maximum intensity projection; a missing store is one error line and no output. Needs the
-//! `mpi` feature and `mpirun` (OpenMPI):
+//! opacity) within 1e-6 per channel of the raw linear image: composited (Riemann, and with
+//! shaded isosurfaces) and by maximum intensity projection; a missing store is one error
+//! line and no output. Needs the `mpi` feature and `mpirun` (OpenMPI):
 //! `cargo test -p volux-cli --features mpi --test distributed`.
 #![cfg(feature = "mpi")]
 use std::path::Path;
@@ -138,6 +138,17 @@ fn two_and_three_ranks_equal_the_single_process_render() {
     );
     check(d, "riemann", &[]);
     check(d, "mip", &["--mip"]);
+    check(
+        d,
+        "iso",
+        &[
+            "--iso",
+            "0.3:1,0.5,0.2,0.4",
+            "--iso",
+            "0.55:0.2,0.6,1,0.6",
+            "--shade",
+        ],
+    );
     // An error on the ranks: one line from rank 0, a failed run, no image.
     let out = mpirun(
         d,

@@ -13,7 +13,9 @@
 //! integral of its part of the ray, and the *under* operator composites the parts, so the
 //! picture equals the single-process render (within float rounding: 1e-6 per channel,
 //! tested for 1 to 5 ranks). Early ray termination is off: a rank behind another cannot
-//! know that the rays it samples are already opaque in front.
+//! know that the rays it samples are already opaque in front. Isosurfaces too: the step from
+//! a region's last sample to the next region's first belongs to the front region, which
+//! finds and refines the crossings in it exactly as one process does.
 //!
 //! Maximum intensity projection is exact too, by another reduction: each rank keeps per
 //! pixel the largest sample of its part of the ray's lattice, its index and its refined

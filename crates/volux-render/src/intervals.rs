@@ -37,6 +37,13 @@ pub trait IntervalSource: Sync {
         t1
     }
 
+    /// Whether the ray's last sample in these intervals owns the step to the next sample of
+    /// its lattice beyond them (a region of a split render: the isosurfaces crossed in that
+    /// step are found there, the next region starting afresh). `false` by default.
+    fn owns_step_past_end(&self) -> bool {
+        false
+    }
+
     /// The fraction of the volume known to be empty (renderers skip empty space only when it
     /// pays: walking the intervals costs time too).
     fn empty_fraction(&self) -> f64;

@@ -82,6 +82,14 @@ impl IntervalSource for RegionRays<'_> {
         }
     }
 
+    /// The region owns the step from its last sample on a ray to the next lattice point,
+    /// across its far face (read from the neighbour's chunks, within [`reach`]): the
+    /// isosurfaces crossed in that step are found and refined here, once, and the next
+    /// region starts without a previous sample.
+    fn owns_step_past_end(&self) -> bool {
+        true
+    }
+
     /// Reported as all empty, so that the ray caster always walks these intervals.
     fn empty_fraction(&self) -> f64 {
         1.0
@@ -89,13 +97,10 @@ impl IntervalSource for RegionRays<'_> {
 }
 
 /// Checks that `opts` can be rendered split, and returns them with early termination off.
-/// Refused: isosurfaces, jitter, sculpt masks and labels (and, by [`SpanRule::of`], the
-/// reference integrator).
+/// Refused: jitter, sculpt masks and labels (and, by [`SpanRule::of`], the reference
+/// integrator).
 pub fn region_options(opts: &RenderOptions) -> Result<RenderOptions, DistributedError> {
     let refuse = |what: &str| Err(DistributedError::Unsupported(what.into()));
-    if !opts.isosurfaces.is_empty() {
-        return refuse("isosurfaces (a crossing between two regions' samples would be lost)");
-    }
     if opts.jitter {
         return refuse("jitter (the lattice of a ray would differ per region)");
     }
@@ -116,10 +121,13 @@ pub fn region_options(opts: &RenderOptions) -> Result<RenderOptions, Distributed
 /// with no background (the ray caster applies none: front ends add it when writing), ready
 /// for [`composite`](super::swap::composite), or under MIP the region's maxima
 /// ([`mip_region`]); [`Part::combine`] combines either. Riemann, trapezoid, Simpson,
-/// pre-integration and MIP give exactly the single-process render's samples; adaptive
-/// Simpson subdivides each region's piece of a ray on its own, so its image differs from
-/// the single-process one by up to about its tolerance; the reference integrator is
-/// refused.
+/// pre-integration and MIP give exactly the single-process render's samples, and so do
+/// isosurfaces (a crossing in the step from a region's last sample to the next region's
+/// first is found by the front region, [`IntervalSource::owns_step_past_end`], refined
+/// between the same two samples as in one process, and composited last in its part);
+/// adaptive Simpson subdivides each region's piece of a ray on its own, so its image
+/// differs from the single-process one by up to about its tolerance; the reference
+/// integrator is refused.
 pub fn render_region<F: Field>(
     field: &F,
     place: Placement,

@@ -1,6 +1,6 @@
 //! Distributed renders (1 to 5 ranks on threads) against the single-process bricked render
 //! with early termination off: every integrator the bricked path supports, shading, MIP,
-//! an oblique camera grazing a region face; the k-d split, the visibility order from many
+//! isosurfaces, an oblique camera grazing a region face; the k-d split, the visibility order from many
 //! viewpoints, and the chunks each rank reads.
 use std::sync::Arc;
 
@@ -18,6 +18,7 @@ use crate::bricked::{
     level_placement, render_cache_region, render_level, BrickCache, BrickedVolume,
 };
 use crate::integrate::{AdaptiveParams, Integrator, StepControl};
+use crate::isosurface::{Isosurfaces, Isovalue};
 use crate::raycast::RenderOptions;
 use crate::shading::BlinnPhong;
 
@@ -293,8 +294,83 @@ fn mip_on_one_to_five_ranks_equals_the_single_process_mip() {
     eprintln!("MIP: largest difference {worst:e}");
 }
 
+/// Isosurfaces: a crossing between the last sample of one region and the first of the next
+/// is found once, by the front region (it reads the next sample across its face), and
+/// refined at the same point as in one process; several isovalues, unlit and lit, the
+/// volume emission-only and shaded, three steps, and the grazing camera.
 #[test]
-fn the_reference_integrator_and_isosurfaces_are_refused() {
+fn isosurfaces_on_one_to_five_ranks_equal_the_single_process_render() {
+    let g = grid();
+    let isos = Isosurfaces::new(vec![
+        Isovalue {
+            value: 55.0,
+            rgba: [0.9, 0.3, 0.2, 0.35],
+        },
+        Isovalue {
+            value: 72.5,
+            rgba: [0.2, 0.8, 0.3, 0.5],
+        },
+        Isovalue {
+            value: 93.0,
+            rgba: [0.3, 0.4, 1.0, 0.7],
+        },
+    ])
+    .unwrap();
+    let with_isos = |mut o: RenderOptions, step: f64, lit: bool, shaded: bool| {
+        o.integrator = Integrator::Riemann { step };
+        o.isosurfaces = isos.clone();
+        o.iso_lighting = lit.then(BlinnPhong::default);
+        o.shading = shaded.then(BlinnPhong::default);
+        o
+    };
+    let mut cases = Vec::new();
+    for (step, spec, lit, shaded) in [
+        (0.4, r#"{"azimuth": 33, "elevation": 21}"#, false, false),
+        (0.7, r#"{"azimuth": 200, "elevation": -40}"#, true, false),
+        (
+            0.5,
+            r#"{"azimuth": -70, "elevation": 35, "projection": "orthographic"}"#,
+            true,
+            true,
+        ),
+    ] {
+        let o = with_isos(options(&g, spec), step, lit, shaded);
+        for n in 1..=5 {
+            cases.push((
+                format!("step {step}, lit {lit}, shaded {shaded}"),
+                n,
+                o.clone(),
+            ));
+        }
+    }
+    for n in [2, 3, 4, 5] {
+        cases.push((
+            "grazing".into(),
+            n,
+            with_isos(grazing(&g, n), 0.5, true, false),
+        ));
+    }
+    let mut worst = 0.0f32;
+    for (name, n, o) in &cases {
+        let want = single(&g, o);
+        assert!(
+            want.coverage(0.01) > 0.1,
+            "{name}: the picture shows something"
+        );
+        let (got, reads) = distributed(&g, *n, o).unwrap();
+        let d = max_diff(&got, &want);
+        assert!(
+            d <= 1e-6,
+            "isosurfaces {name}, {n} ranks: max difference {d}"
+        );
+        assert!(reads.iter().all(|s| s.other == 0), "{n} ranks: {reads:?}");
+        worst = worst.max(d);
+    }
+    eprintln!("isosurfaces: largest difference {worst:e}");
+}
+
+#[test]
+fn the_reference_integrator_is_refused() {
     let g = grid();
     let mut o = options(&g, "{}");
     o.integrator = Integrator::Reference;

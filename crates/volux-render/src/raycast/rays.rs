@@ -308,7 +308,9 @@ impl<F: Field> RayContext<'_, F> {
     /// The left Riemann sum (eq. 2.14) of lit rays (shading or isosurfaces), one sample at a
     /// time with early ray termination; emission-only rays take the lane stream (`stream.rs`),
     /// which computes the same sums. Samples sit on the lattice `t0 + (i + jitter) h` whatever
-    /// the skipped spans, so skipping empty space changes nothing in the image.
+    /// the skipped spans, so skipping empty space changes nothing in the image. Intervals
+    /// that own the step past their end (a region of a split render) also composite the
+    /// isosurfaces crossed between their last sample and the next lattice point.
     fn riemann(
         &self,
         o_v: DVec3,
@@ -326,11 +328,13 @@ impl<F: Field> RayContext<'_, F> {
         let mut prev: Option<(f64, f32)> = None;
         let mut crossings = Vec::new();
         let start = t0 + jitter * h;
+        let mut past = t1;
         'spans: for &(a, b) in spans {
             let mut i = first_at_or_after(start, h, a) as u64;
             loop {
                 let t = start + h * i as f64;
                 if t >= b {
+                    past = t;
                     break;
                 }
                 let p = o_v + d_v * t as f32;
@@ -356,7 +360,30 @@ impl<F: Field> RayContext<'_, F> {
                 }
             }
         }
+        if past < t1 && self.intervals.is_some_and(|i| i.owns_step_past_end()) {
+            n += self.isosurfaces_past(prev, past, (o_v, d_v), &mut crossings, &mut acc);
+        }
         PixelOut::composited(&acc, n)
+    }
+
+    /// The isosurfaces crossed between the last sample `prev` and the lattice point `past`
+    /// after it, when the intervals own that step (a region of a split render); the
+    /// samples taken.
+    fn isosurfaces_past(
+        &self,
+        prev: Option<(f64, f32)>,
+        past: f64,
+        ray: (Vec3, Vec3),
+        crossings: &mut Vec<Crossing>,
+        acc: &mut RayAccumulator,
+    ) -> u64 {
+        if prev.is_none() || self.opts.isosurfaces.is_empty() {
+            return 0;
+        }
+        if let Some(v) = self.field.sample(ray.0 + ray.1 * past as f32) {
+            self.isosurfaces_between(prev, (past, v), ray, crossings, acc);
+        }
+        1
     }
 
     /// A classified sample at voxel position `p` on a ray of world direction `view`, lit when
