@@ -165,8 +165,9 @@ impl MipView {
             return None;
         }
         let ray = LatticeRay::new(o_v, d_v, t0, self.step);
-        // Samples lo - 1 ..= hi (the neighbours of the region's first and last).
-        let first = lo.saturating_sub(1);
+        // Samples lo - 1 ..= hi (the neighbours of the region's first and last), within
+        // the lattice.
+        let first = (lo - 1).max(0);
         let last = (hi + 1).min(n);
         let v = ray.samples(field, first, last);
         let at = |i: i32| v[(i - first) as usize];
