@@ -282,6 +282,62 @@ impl SculptMask {
         }
     }
 
+    /// Which of the points `lanes` picks (bit `l` for the point at `x[l]`, `y[l]`, `z[l]`)
+    /// are hidden, as [`SculptMask::visible`] decides: bit `l` set for a hidden one. The
+    /// cells and the positions in them are found for all lanes together (straight-line code
+    /// the compiler vectorizes: one by one, the float to index conversions cost more than
+    /// the rest of the test), then each picked lane reads its macrocell's state, its cell's
+    /// corners, and interpolates only in cells the cut crosses.
+    #[inline]
+    pub fn hidden_lanes<const N: usize>(&self, p: &[[f32; N]; 3], lanes: u32) -> u32 {
+        // Rounding by adding 2^23 is exact below 2^22; larger grids take `visible`.
+        const ROUND: f32 = 8_388_608.0;
+        if self.dims.iter().any(|&d| d > 1 << 22) {
+            return (0..N.min(32))
+                .filter(|&l| lanes >> l & 1 == 1 && !self.visible([p[0][l], p[1][l], p[2][l]]))
+                .fold(0, |h, l| h | 1 << l);
+        }
+        let hi: [f32; 3] = std::array::from_fn(|a| self.dims[a].saturating_sub(1) as f32);
+        let top: [f32; 3] = std::array::from_fn(|a| self.dims[a].saturating_sub(2) as f32);
+        let mut cell = [[0u32; N]; 3];
+        let mut frac = [[0f32; N]; 3];
+        for a in 0..3 {
+            for l in 0..N {
+                // Clamped as `cell_of` clamps (NaN to 0: `max` and `min` return the number),
+                // then the cell's corner `floor(min(x, top))` by float operations and bits
+                // (vectorized; `as` conversions are not, and cost more than the rest).
+                let x = p[a][l].max(0.0).min(hi[a]);
+                let xc = x.min(top[a]);
+                let big = xc + ROUND;
+                let near = big - ROUND;
+                let down = near > xc;
+                cell[a][l] = (big.to_bits() & 0x7F_FFFF) - u32::from(down);
+                frac[a][l] = x - (near - if down { 1.0 } else { 0.0 });
+            }
+        }
+        let [bx, by, _] = self.blocks_per_axis;
+        let mut hidden = 0;
+        let all = if N >= 32 { u32::MAX } else { (1u32 << N) - 1 };
+        let mut left = lanes & all;
+        while left != 0 {
+            let l = left.trailing_zeros() as usize;
+            left &= left - 1;
+            let c = [0, 1, 2].map(|a| cell[a][l] as usize);
+            let b = c[0] / Self::BLOCK + bx * (c[1] / Self::BLOCK + by * (c[2] / Self::BLOCK));
+            let visible = match self.blocks[b] {
+                VISIBLE => true,
+                REMOVED => false,
+                _ => match self.cells[b].as_deref().map(|s| s.corners(c)) {
+                    Some(Corners::Kept) => true,
+                    Some(Corners::Removed) => false,
+                    _ => self.visible_in_cell(c, [0, 1, 2].map(|a| frac[a][l])),
+                },
+            };
+            hidden |= u32::from(!visible) << l;
+        }
+        hidden
+    }
+
     /// The cell of `p` (clamped to the grid) and the position in it.
     #[inline]
     fn cell_of(&self, p: [f32; 3]) -> ([usize; 3], [f32; 3]) {

@@ -204,21 +204,29 @@ fn visibility_is_the_interpolated_mask_at_one_half_and_block_states_agree() {
         partial_seen += usize::from(v > 0.0 && v < 1.0);
     }
     assert!(partial_seen > 100);
-    // The lane-wise answer is the one-point answer, out-of-range and NaN lanes included.
+    // The lane-wise answers are the one-point answer, out-of-range and NaN lanes included
+    // (`hidden_lanes` only for the lanes picked).
     for _ in 0..2000 {
         let mut p = [[0f32; 8]; 3];
         for v in p.iter_mut().flatten() {
             *v = rnd(34) as f32 - 2.0;
         }
         p[1][3] = f32::NAN;
+        // Points on cell faces, and on the grid's last faces.
+        p[0][5] = p[0][5].round();
+        p[2][6] = p[2][6].round();
+        p[0][7] = 29.0;
+        p[1][7] = 25.0;
+        p[2][1] = 18.0;
         let mut keep = [true; 8];
         mask.visible_lanes(&p, &mut keep);
+        let picked = (rnd(257) as u32) | 1 << 5;
+        let hidden = mask.hidden_lanes(&p, picked);
         for l in 0..8 {
-            assert_eq!(
-                keep[l],
-                mask.visible([p[0][l], p[1][l], p[2][l]]),
-                "lane {l}"
-            );
+            let visible = mask.visible([p[0][l], p[1][l], p[2][l]]);
+            assert_eq!(keep[l], visible, "lane {l}");
+            let want = picked >> l & 1 == 1 && !visible;
+            assert_eq!(hidden >> l & 1 == 1, want, "hidden lane {l} of {picked:#b}");
         }
     }
     // A removed block is removed at every point.
