@@ -1,5 +1,5 @@
 //! Maximum intensity projection split by region, exactly: the single-process MIP
-//! (`raycast/mip_stream.rs`, [`mip::refine_peak`]) shows the TF colour of one value per
+//! (`raycast/mip_stream.rs`, [`refine_peak`]) shows the TF colour of one value per
 //! ray, the largest sample of its lattice `t0 + i step <= t1` (the first of equal maxima)
 //! refined between that sample and its two neighbours. A maximum of refined values would
 //! not do (a smaller lattice peak can refine above the largest one), so each rank keeps,

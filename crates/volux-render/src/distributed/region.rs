@@ -83,7 +83,7 @@ impl IntervalSource for RegionRays<'_> {
     }
 
     /// The region owns the step from its last sample on a ray to the next lattice point,
-    /// across its far face (read from the neighbour's chunks, within [`reach`]): the
+    /// across its far face (read from the neighbour's chunks, within `reach`): the
     /// isosurfaces crossed in that step are found and refined here, once, and the next
     /// region starts without a previous sample.
     fn owns_step_past_end(&self) -> bool {
