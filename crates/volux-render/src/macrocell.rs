@@ -361,6 +361,31 @@ mod tests {
     use super::*;
     use volux_core::TransferFunction;
 
+    /// A ray from a random point of the box `[-margin, hi]` in a random direction.
+    fn random_ray(rng: &mut volux_testkit::TestRng, hi: [f64; 3], margin: f64) -> (DVec3, DVec3) {
+        let o = DVec3::from(hi.map(|h| rng.range(-margin, h)));
+        let d = DVec3::from([0; 3].map(|_| rng.range(-1.0, 1.0)));
+        (o, d)
+    }
+
+    /// The spans of walks stopped `reach` past where each started, resumed where it stopped.
+    fn chained(
+        occ: &Occupancy,
+        o: DVec3,
+        d: DVec3,
+        (t0, t1): (f64, f64),
+        reach: f64,
+    ) -> Vec<(f64, f64)> {
+        let (mut out, mut part, mut from) = (Vec::new(), Vec::new(), t0);
+        while from < t1 {
+            let to = occ.occupied_until(o, d, (from, t1), from + reach, &mut part);
+            assert!(to > from || to >= t1, "no progress at {from}");
+            out.extend_from_slice(&part);
+            from = to;
+        }
+        out
+    }
+
     #[test]
     fn ranges_cover_their_samples() {
         let dims = [20, 11, 9];
@@ -446,16 +471,7 @@ mod tests {
         let occ = Occupancy::new(&g, &table, &[]);
         let mut spans = Vec::new();
         for _ in 0..300 {
-            let o = DVec3::new(
-                rng.range(-5.0, 33.0),
-                rng.range(-5.0, 27.0),
-                rng.range(-5.0, 22.0),
-            );
-            let d = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
+            let (o, d) = random_ray(&mut rng, [33.0, 27.0, 22.0], 5.0);
             let ext = DVec3::new(28.0, 22.0, 17.0);
             let Some((t0, t1)) = crate::raycast::ray_box(o, d, DVec3::ZERO, ext) else {
                 continue;
@@ -468,14 +484,7 @@ mod tests {
             );
             // Walks stopped early and resumed where they stopped give the same spans.
             for reach in [0.0, 3.0, 17.0] {
-                let (mut chained, mut part, mut from) = (Vec::new(), Vec::new(), t0);
-                while from < t1 {
-                    let to = occ.occupied_until(o, d, (from, t1), from + reach, &mut part);
-                    assert!(to > from || to >= t1, "no progress at {from}");
-                    chained.extend_from_slice(&part);
-                    from = to;
-                }
-                assert_eq!(chained, spans, "reach {reach}");
+                assert_eq!(chained(&occ, o, d, (t0, t1), reach), spans, "reach {reach}");
             }
             // March in small steps: a point in a non-empty macrocell lies in an interval.
             let n = 2000;
@@ -519,18 +528,9 @@ mod tests {
             classes[c[0] + 11 * (c[1] + 9 * c[2])]
         };
         let ext = DVec3::new(88.0, 72.0, 56.0);
-        let (mut spans, mut part) = (Vec::new(), Vec::new());
+        let mut spans = Vec::new();
         for _ in 0..400 {
-            let o = DVec3::new(
-                rng.range(-9.0, 97.0),
-                rng.range(-9.0, 81.0),
-                rng.range(-9.0, 65.0),
-            );
-            let d = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
+            let (o, d) = random_ray(&mut rng, [97.0, 81.0, 65.0], 9.0);
             let Some((t0, t1)) = crate::raycast::ray_box(o, d, DVec3::ZERO, ext) else {
                 continue;
             };
@@ -568,13 +568,7 @@ mod tests {
                 }
             }
             for reach in [0.0, 5.0, 30.0] {
-                let (mut chained, mut from) = (Vec::new(), t0);
-                while from < t1 {
-                    let to = occ.occupied_until(o, d, (from, t1), from + reach, &mut part);
-                    assert!(to > from || to >= t1, "no progress at {from}");
-                    chained.extend_from_slice(&part);
-                    from = to;
-                }
+                let chained = chained(&occ, o, d, (t0, t1), reach);
                 // A restart computes the crossings afresh rather than by adding steps: the
                 // same distances, to rounding.
                 assert_eq!(
