@@ -1,7 +1,7 @@
 //! The sculpt mask: one bit per voxel in sparse 8³ bricks, with a per-macrocell summary.
 use rayon::prelude::*;
 
-use super::cell_states::{summarize, CellStates, Corners, B, PARTIAL, REMOVED, VISIBLE};
+use super::cell_states::{summarize, CellStates, B, PARTIAL, REMOVED, VISIBLE};
 use super::region::{Coverage, Region};
 use crate::error::{Error, Result};
 
@@ -58,6 +58,17 @@ fn blend(bits: u8, f: [f32; 3]) -> f32 {
     let x01 = lerp(v(4), v(5), f[0]);
     let x11 = lerp(v(6), v(7), f[0]);
     lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2])
+}
+
+/// Whether the point at `f` in a cell with kept corners `bits` is visible: from the bits
+/// alone when they agree (no arithmetic), else by the blend.
+#[inline(always)]
+fn visible_at(bits: u8, f: [f32; 3]) -> bool {
+    match bits {
+        0xFF => true,
+        0 => false,
+        bits => blend(bits, f) >= 0.5,
+    }
 }
 
 /// Which voxels of a grid are kept after sculpting (seed `004` sec. 4.4.1, at full resolution):
@@ -247,15 +258,21 @@ impl SculptMask {
     #[inline(always)]
     pub fn visible(&self, p: [f32; 3]) -> bool {
         let (c, f) = self.cell_of(p);
+        self.visible_in(c, f)
+    }
+
+    /// [`SculptMask::visible`] of the point at `f` in cell `c`: from the macrocell's state,
+    /// then from the cell's corners, blended only when they differ.
+    #[inline(always)]
+    fn visible_in(&self, c: [usize; 3], f: [f32; 3]) -> bool {
         let [bx, by, _] = self.blocks_per_axis;
         let b = c[0] / Self::BLOCK + bx * (c[1] / Self::BLOCK + by * (c[2] / Self::BLOCK));
         match self.blocks[b] {
             VISIBLE => true,
             REMOVED => false,
-            _ => match self.cells[b].as_deref().map(|s| s.corners(c)) {
-                Some(Corners::Kept) => true,
-                Some(Corners::Removed) => false,
-                _ => self.visible_in_cell(c, f),
+            _ => match self.cells[b].as_deref() {
+                Some(cells) => visible_at(cells.corners(c), f),
+                None => visible_at(self.corner_bits(c), f),
             },
         }
     }
@@ -315,7 +332,6 @@ impl SculptMask {
                 frac[a][l] = x - (near - if down { 1.0 } else { 0.0 });
             }
         }
-        let [bx, by, _] = self.blocks_per_axis;
         let mut hidden = 0;
         let all = if N >= 32 { u32::MAX } else { (1u32 << N) - 1 };
         let mut left = lanes & all;
@@ -323,16 +339,7 @@ impl SculptMask {
             let l = left.trailing_zeros() as usize;
             left &= left - 1;
             let c = [0, 1, 2].map(|a| cell[a][l] as usize);
-            let b = c[0] / Self::BLOCK + bx * (c[1] / Self::BLOCK + by * (c[2] / Self::BLOCK));
-            let visible = match self.blocks[b] {
-                VISIBLE => true,
-                REMOVED => false,
-                _ => match self.cells[b].as_deref().map(|s| s.corners(c)) {
-                    Some(Corners::Kept) => true,
-                    Some(Corners::Removed) => false,
-                    _ => self.visible_in_cell(c, [0, 1, 2].map(|a| frac[a][l])),
-                },
-            };
+            let visible = self.visible_in(c, [0, 1, 2].map(|a| frac[a][l]));
             hidden |= u32::from(!visible) << l;
         }
         hidden
@@ -355,17 +362,6 @@ impl SculptMask {
 
     fn interpolate(&self, c: [usize; 3], f: [f32; 3]) -> f32 {
         blend(self.corner_bits(c), f)
-    }
-
-    /// Whether the point at `f` in cell `c` is visible: from the corners' bits alone when they
-    /// agree (no arithmetic), else by the interpolation.
-    #[inline(never)]
-    fn visible_in_cell(&self, c: [usize; 3], f: [f32; 3]) -> bool {
-        match self.corner_bits(c) {
-            0xFF => true,
-            0 => false,
-            bits => blend(bits, f) >= 0.5,
-        }
     }
 
     /// Which corners of cell `c` are kept: bit `dx + 2 dy + 4 dz` for the corner at
