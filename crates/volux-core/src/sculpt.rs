@@ -16,6 +16,7 @@
 //! classification and lives in the renderer (`volux_render::sculpt`).
 
 mod cell_states;
+mod cut;
 pub mod labels;
 mod mask;
 pub mod region;

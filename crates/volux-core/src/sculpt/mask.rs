@@ -2,11 +2,9 @@
 use rayon::prelude::*;
 
 use super::cell_states::{summarize, CellStates, B, PARTIAL, REMOVED, VISIBLE};
+use super::cut::{covered_bricks, cut_brick, valid_bits, WORDS};
 use super::region::{Coverage, Region};
 use crate::error::{Error, Result};
-
-/// Bits of one brick (`B³`), in 64-bit words.
-const WORDS: usize = B * B * B / 64;
 
 /// One brick of the mask: wholly kept, wholly removed, or one bit per voxel (x fastest, then
 /// y, then z; bit set = kept). Bricks are kept normalized: `Bits` only when its in-range voxels
@@ -396,17 +394,18 @@ impl SculptMask {
     }
 
     /// Removes every kept voxel of `region` and returns what changed (for
-    /// [`SculptMask::restore`]). Bricks the region covers wholly are removed without looking
-    /// at their voxels; only the bricks it crosses are tested voxel by voxel, in parallel.
-    /// The macrocell states of the bricks changed are updated.
+    /// [`SculptMask::restore`]). The bricks the region touches are found by halving boxes of
+    /// bricks ([`covered_bricks`]); those it covers wholly are removed without looking at
+    /// their voxels, and only the others are cut ([`cut_brick`]), in parallel. The macrocell
+    /// states of the bricks changed are updated.
     pub fn remove(&mut self, region: &(impl Region + ?Sized)) -> MaskEdit {
         let Some((lo, hi)) = region.index_bounds(self.dims) else {
             return MaskEdit::default();
         };
-        let candidates = self.bricks_between(lo, hi);
+        let candidates = covered_bricks(region, self.dims, self.bricks_per_axis, lo, hi);
         let changed: Vec<(usize, Brick, u64)> = candidates
             .into_par_iter()
-            .filter_map(|b| self.removed_in(b, region))
+            .filter_map(|(b, coverage)| self.removed_in(b, coverage, region))
             .collect();
         let mut edit = MaskEdit::default();
         for (b, brick, removed) in changed {
@@ -435,38 +434,30 @@ impl SculptMask {
         self.update_blocks_of(&bricks);
     }
 
-    /// Brick `b` with `region` removed, and the voxels removed; `None` when nothing changes.
-    fn removed_in(&self, b: usize, region: &(impl Region + ?Sized)) -> Option<(usize, Brick, u64)> {
+    /// Brick `b`, which `region` covers as `coverage` says, with the region removed, and the
+    /// voxels removed; `None` when nothing changes.
+    fn removed_in(
+        &self,
+        b: usize,
+        coverage: Coverage,
+        region: &(impl Region + ?Sized),
+    ) -> Option<(usize, Brick, u64)> {
         let old = &self.bricks[b];
-        if *old == Brick::Removed {
-            return None;
-        }
         let (lo, hi) = self.brick_voxels(b);
-        match region.coverage(lo.map(|v| v as f64), hi.map(|v| v as f64)) {
+        let valid = valid_bits(lo, hi);
+        let bits = match old {
+            Brick::Removed => return None,
+            Brick::Kept => valid,
+            Brick::Bits(w) => **w,
+        };
+        let kept = |w: &[u64; WORDS]| w.iter().map(|w| u64::from(w.count_ones())).sum::<u64>();
+        match coverage {
             Coverage::None => None,
-            Coverage::All => {
-                let kept = self.count_kept(b);
-                Some((b, Brick::Removed, kept))
-            }
+            Coverage::All => Some((b, Brick::Removed, kept(&bits))),
             Coverage::Some => {
-                let mut removed = 0u64;
-                let brick = self.brick_of(b, |i, j, k, local| {
-                    let kept = old.get(local) && !region.contains([i, j, k]);
-                    removed += u64::from(old.get(local) && !kept);
-                    kept
-                });
-                (brick != *old).then_some((b, brick, removed))
+                let cut = cut_brick(region, lo, hi, &bits);
+                (cut != bits).then(|| (b, Brick::from_bits(cut, &valid), kept(&bits) - kept(&cut)))
             }
-        }
-    }
-
-    /// The kept voxels of brick `b`.
-    fn count_kept(&self, b: usize) -> u64 {
-        let (lo, hi) = self.brick_voxels(b);
-        match &self.bricks[b] {
-            Brick::Kept => (0..3).map(|a| (hi[a] - lo[a] + 1) as u64).product(),
-            Brick::Removed => 0,
-            Brick::Bits(w) => w.iter().map(|w| u64::from(w.count_ones())).sum(),
         }
     }
 

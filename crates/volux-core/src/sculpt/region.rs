@@ -7,7 +7,6 @@ use glam::{DMat3, DVec2, DVec3};
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::segment::segment_distance;
 
 /// How a region covers the voxel centres of a box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,6 +28,13 @@ pub trait Region: Sync {
     fn coverage(&self, lo: [f64; 3], hi: [f64; 3]) -> Coverage;
     /// Whether the region holds voxel `ijk`.
     fn contains(&self, ijk: [usize; 3]) -> bool;
+    /// The voxels `i0..=i1` (at most 64) of row (`j`, `k`) the region holds, bit `i - i0`
+    /// each ([`Region::contains`] voxel by voxel unless a region has a faster way).
+    fn contains_row(&self, i0: usize, i1: usize, j: usize, k: usize) -> u64 {
+        (i0..=i1).fold(0, |bits, i| {
+            bits | u64::from(self.contains([i, j, k])) << (i - i0)
+        })
+    }
 }
 
 /// Where a grid's voxels lie in the world: `origin + D (spacing ∘ index)`
@@ -162,9 +168,8 @@ fn index_box(lo: DVec3, hi: DVec3, dims: [usize; 3]) -> Option<([usize; 3], [usi
 /// successive points, not a chain of separate discs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScreenStroke {
-    points: Vec<DVec2>,
+    capsules: Vec<Capsule>,
     radius: f64,
-    frame: VoxelFrame,
     projector: Projector,
 }
 
@@ -192,24 +197,59 @@ impl ScreenStroke {
             ));
         }
         camera.validate()?;
+        let points: Vec<DVec2> = points.iter().map(|&p| DVec2::from(p)).collect();
+        let capsules = match points.as_slice() {
+            [p] => vec![Capsule::new(*p, *p)],
+            _ => points
+                .windows(2)
+                .map(|w| Capsule::new(w[0], w[1]))
+                .collect(),
+        };
         Ok(Self {
-            points: points.iter().map(|&p| DVec2::from(p)).collect(),
+            capsules,
             radius,
-            frame,
-            projector: Projector::new(camera, width, height),
+            projector: Projector::new(camera, width, height, &frame),
         })
     }
 
-    /// The capsules of the stroke (one degenerate segment for a single point).
-    fn segments(&self) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
-        let first = std::iter::once((self.points[0], self.points[0]));
-        let rest = self.points.windows(2).map(|w| (w[0], w[1]));
-        first.filter(move |_| self.points.len() == 1).chain(rest)
+    fn inside(&self, q: DVec2) -> bool {
+        let r2 = self.radius * self.radius;
+        self.capsules.iter().any(|c| c.distance2(q) <= r2)
+    }
+}
+
+/// One segment of a stroke (both ends equal for a single point), with what its distance
+/// needs computed once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Capsule {
+    a: DVec2,
+    ab: DVec2,
+    /// `1 / |ab|²`, or 0 for a point.
+    inv_len2: f64,
+}
+
+impl Capsule {
+    fn new(a: DVec2, b: DVec2) -> Self {
+        let ab = b - a;
+        let len2 = ab.length_squared();
+        let inv_len2 = if len2 > 0.0 { 1.0 / len2 } else { 0.0 };
+        Self { a, ab, inv_len2 }
     }
 
-    fn inside(&self, q: DVec2) -> bool {
-        self.segments()
-            .any(|(a, b)| segment_distance(q, a, b) <= self.radius)
+    /// The squared distance from `q` to the segment.
+    #[inline]
+    fn distance2(&self, q: DVec2) -> f64 {
+        let t = ((q - self.a).dot(self.ab) * self.inv_len2).clamp(0.0, 1.0);
+        (q - (self.a + self.ab * t)).length_squared()
+    }
+
+    /// The segment's bounding box grown by `r`.
+    fn bounds(&self, r: f64) -> (DVec2, DVec2) {
+        let b = self.a + self.ab;
+        (
+            self.a.min(b) - DVec2::splat(r),
+            self.a.max(b) + DVec2::splat(r),
+        )
     }
 }
 
@@ -227,7 +267,7 @@ impl Region for ScreenStroke {
                 if c & 2 == 0 { lo[1] } else { hi[1] },
                 if c & 4 == 0 { lo[2] } else { hi[2] },
             );
-            match self.projector.pixel(self.frame.world(ijk)) {
+            match self.projector.pixel(ijk) {
                 Some(p) => *q = p,
                 None => behind += 1,
             }
@@ -239,10 +279,11 @@ impl Region for ScreenStroke {
         }
         // The projection of a box in front of the eye is the convex hull of its corners; a
         // capsule is convex: all corners in one capsule put the whole box in it.
-        let r = self.radius;
+        let r2 = self.radius * self.radius;
         if self
-            .segments()
-            .any(|(a, b)| corners.iter().all(|&q| segment_distance(q, a, b) <= r))
+            .capsules
+            .iter()
+            .any(|c| corners.iter().all(|&q| c.distance2(q) <= r2))
         {
             return Coverage::All;
         }
@@ -251,8 +292,8 @@ impl Region for ScreenStroke {
             .fold((corners[0], corners[0]), |(lo, hi), &q| {
                 (lo.min(q), hi.max(q))
             });
-        let near = self.segments().any(|(a, b)| {
-            let (smin, smax) = (a.min(b) - DVec2::splat(r), a.max(b) + DVec2::splat(r));
+        let near = self.capsules.iter().any(|c| {
+            let (smin, smax) = c.bounds(self.radius);
             smin.x <= max.x && smin.y <= max.y && min.x <= smax.x && min.y <= smax.y
         });
         if near {
@@ -264,17 +305,28 @@ impl Region for ScreenStroke {
 
     fn contains(&self, ijk: [usize; 3]) -> bool {
         let v = DVec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64);
-        self.projector
-            .pixel(self.frame.world(v))
-            .is_some_and(|q| self.inside(q))
+        self.projector.pixel(v).is_some_and(|q| self.inside(q))
+    }
+
+    /// The row's view coordinates one step apart (an addition per voxel instead of the
+    /// matrix product).
+    fn contains_row(&self, i0: usize, i1: usize, j: usize, k: usize) -> u64 {
+        let p = &self.projector;
+        let base = p.to_view * DVec3::new(0.0, j as f64, k as f64) + p.view_origin;
+        (i0..=i1).fold(0, |bits, i| {
+            let v = base + p.to_view.x_axis * i as f64;
+            let inside = p.view_pixel(v).is_some_and(|q| self.inside(q));
+            bits | u64::from(inside) << (i - i0)
+        })
     }
 }
 
-/// [`Camera::project`] with the camera's basis computed once.
+/// [`Camera::project`] of voxel indices, with the camera's basis and the voxel frame folded
+/// into one affine map from index to view coordinates (right, up, depth).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Projector {
-    eye: DVec3,
-    basis: (DVec3, DVec3, DVec3),
+    to_view: DMat3,
+    view_origin: DVec3,
     /// Tangent of half the field of view (perspective) or half the view height (orthographic).
     half: f64,
     perspective: bool,
@@ -282,36 +334,42 @@ struct Projector {
 }
 
 impl Projector {
-    fn new(camera: &Camera, w: usize, h: usize) -> Self {
+    fn new(camera: &Camera, w: usize, h: usize, frame: &VoxelFrame) -> Self {
         let (perspective, half) = match camera.projection {
             Projection::Perspective { fov_y_deg } => (true, (fov_y_deg.to_radians() * 0.5).tan()),
             Projection::Orthographic { height } => (false, height * 0.5),
         };
+        let (r, u, f) = camera.basis();
+        let rows = DMat3::from_cols(r, u, f).transpose();
         Self {
-            eye: camera.eye,
-            basis: camera.basis(),
+            to_view: rows * frame.direction * DMat3::from_diagonal(frame.spacing),
+            view_origin: rows * (frame.origin - camera.eye),
             half,
             perspective,
             size: (w as f64, h as f64),
         }
     }
 
-    /// The pixel position of world point `p`, `None` at or behind the eye in perspective.
+    /// The pixel position of voxel index `ijk`, `None` at or behind the eye in perspective.
     #[inline]
-    fn pixel(&self, p: DVec3) -> Option<DVec2> {
-        let (r, u, f) = self.basis;
-        let d = p - self.eye;
+    fn pixel(&self, ijk: DVec3) -> Option<DVec2> {
+        self.view_pixel(self.to_view * ijk + self.view_origin)
+    }
+
+    /// The pixel position of view coordinates `v`, `None` at or behind the eye in
+    /// perspective.
+    #[inline]
+    fn view_pixel(&self, v: DVec3) -> Option<DVec2> {
         let scale = if self.perspective {
-            let depth = d.dot(f);
-            if depth <= 0.0 {
+            if v.z <= 0.0 {
                 return None;
             }
-            depth * self.half
+            v.z * self.half
         } else {
             self.half
         };
         let (w, h) = self.size;
-        let (x, y) = (d.dot(r) / scale, d.dot(u) / scale);
+        let (x, y) = (v.x / scale, v.y / scale);
         Some(DVec2::new((x * h / w + 1.0) * 0.5 * w, (1.0 - y) * 0.5 * h))
     }
 }

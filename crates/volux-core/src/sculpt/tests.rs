@@ -117,6 +117,41 @@ fn the_eraser_removes_exactly_the_voxels_projecting_into_the_swept_disc() {
     }
 }
 
+/// Large enough that whole boxes of bricks and whole octants of bricks are settled without
+/// their voxels ([`cut`](super::cut)), with a second stroke cutting bricks the first left
+/// partly kept.
+#[test]
+fn strokes_on_a_larger_grid_remove_the_union_of_what_brute_force_projects_into_them() {
+    let g = grid([150, 131, 90], true);
+    let cam = camera(&g, r#"{"azimuth": 40, "elevation": 25, "zoom": 1.4}"#);
+    let size = (200, 160);
+    let strokes: [(&[[f64; 2]], f64); 2] = [
+        (&[[100.0, 80.0]], 31.0),
+        (&[[60.0, 40.0], [120.0, 95.0], [150.0, 60.0]], 12.5),
+    ];
+    let mut mask = SculptMask::new(g.dims()).unwrap();
+    let mut removed = 0;
+    for (pts, r) in strokes {
+        let stroke = ScreenStroke::new(&cam, size, pts, r, VoxelFrame::of(&g)).unwrap();
+        removed += mask.remove(&stroke).removed_voxels();
+    }
+    let [nx, ny, nz] = g.dims();
+    let mut expect_removed = 0u64;
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let gone = strokes
+                    .iter()
+                    .any(|(pts, r)| in_stroke(&g, &cam, size, pts, *r, [i, j, k]));
+                expect_removed += u64::from(gone);
+                assert_eq!(mask.voxel(i, j, k), !gone, "voxel {i},{j},{k}");
+            }
+        }
+    }
+    assert!(expect_removed > 100_000, "removed {expect_removed}");
+    assert_eq!(removed, expect_removed);
+}
+
 #[test]
 fn a_ball_removes_the_voxels_within_its_world_radius_and_undo_restores_bit_for_bit() {
     let g = grid([40, 33, 25], true);
