@@ -31,8 +31,10 @@ pub mod job;
 pub mod kdtree;
 pub mod mip;
 pub mod part;
+pub mod pipeline;
 pub mod reads;
 pub mod region;
+pub mod states;
 pub mod swap;
 #[cfg(test)]
 mod tests;
