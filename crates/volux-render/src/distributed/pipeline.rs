@@ -6,7 +6,8 @@
 //! front to back: the order of the binary swap, one order for every ray from the eye):
 //! each rank resumes every ray where the regions in front of it stopped, takes the steps
 //! that start in its region (a step straddling its far face is its own, its samples past
-//! the face read from the neighbour's chunks within [`reach`]), and hands the states on.
+//! the face read from the neighbour's chunks within the reach of `Near`), and hands the
+//! states on.
 //! The image is cut into bands of rows, run as a wavefront ([`pipeline`]): the first rank
 //! starts band `k + 1` while the second resumes band `k`. The last rank holds the finished
 //! pixels and sends them to rank 0. The image is the single-process render's, bit for bit,
