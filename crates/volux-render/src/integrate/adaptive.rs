@@ -458,7 +458,9 @@ impl DecoupledSpan {
     }
 
     fn finished(&self, ray: &Ray) -> bool {
-        !(self.t1 - self.t > 1e-12 * self.len) || ray.done()
+        // Not `<=`: a NaN distance ends the loop, as it always has.
+        let left = (self.t1 - self.t).partial_cmp(&(1e-12 * self.len));
+        left != Some(std::cmp::Ordering::Greater) || ray.done()
     }
 
     /// Steps until the span is finished or the next inner step would start at or past

@@ -15,6 +15,9 @@ use crate::intervals::IntervalSource;
 use crate::sampling::Field;
 use crate::tiles::{render_tiles, TileGrid, TILE};
 
+/// Scratch space for a ray's spans.
+type Spans = Vec<(f64, f64)>;
+
 /// The rays of a render resumed in one piece of the volume (one interval per ray, as
 /// [`IntervalSource::occupied`] gives it), band by band.
 pub(crate) struct BandCaster<'c, 'a, F> {
@@ -93,7 +96,7 @@ impl<F: Field> RayContext<'_, F> {
         piece: &dyn IntervalSource,
         (x, y): (usize, usize),
         state: RayState,
-        (spans, part): (&mut Vec<(f64, f64)>, &mut Vec<(f64, f64)>),
+        (spans, part): (&mut Spans, &mut Spans),
     ) -> RayState {
         let Integrator::AdaptiveSimpson(p) = self.opts.integrator else {
             return state;
