@@ -1,8 +1,9 @@
 //! `mpirun -np N volux render STORE --distributed` on 2 and 3 ranks equals the
 //! single-process render (`--lod 0 --no-early-termination`; MIP refuses the flag, having no
 //! opacity) within 1e-6 per channel of the raw linear image: composited (Riemann, and with
-//! shaded isosurfaces) and by maximum intensity projection; a missing store is one error
-//! line and no output. Needs the `mpi` feature and `mpirun` (OpenMPI):
+//! shaded isosurfaces) and by maximum intensity projection; adaptive Simpson (its state
+//! pipeline, early termination on and off) exactly; a missing store is one error line and
+//! no output. Needs the `mpi` feature and `mpirun` (OpenMPI):
 //! `cargo test -p volux-cli --features mpi --test distributed`.
 #![cfg(feature = "mpi")]
 use std::path::Path;
@@ -55,8 +56,9 @@ fn check(d: &Path, name: &str, extra: &[&str]) -> f32 {
         "--raw-out",
         &single_raw,
     ];
-    // MIP has no opacity to stop at (the flag is refused with it).
-    if !extra.contains(&"--mip") {
+    // MIP has no opacity to stop at (the flag is refused with it); adaptive Simpson's state
+    // pipeline keeps early termination (its cases say when to turn it off).
+    if !extra.contains(&"--mip") && !extra.contains(&"adaptive-simpson") {
         single.push("--no-early-termination");
     }
     single.extend(view);
@@ -149,6 +151,19 @@ fn two_and_three_ranks_equal_the_single_process_render() {
             "--shade",
         ],
     );
+    // Adaptive Simpson through the state pipeline: bit for bit, the f32 lanes with early
+    // termination, the f64 decoupled control without.
+    let adaptive = [
+        "--integrator",
+        "adaptive-simpson",
+        "--tol",
+        "0.002",
+        "--hmax",
+        "2",
+    ];
+    assert_eq!(check(d, "adaptive", &adaptive), 0.0);
+    let decoupled = [&adaptive[..], &["--decoupled", "--no-early-termination"]].concat();
+    assert_eq!(check(d, "adaptive-decoupled", &decoupled), 0.0);
     // An error on the ranks: one line from rank 0, a failed run, no image.
     let out = mpirun(
         d,

@@ -8,8 +8,9 @@
 //!
 //! Seed `003` renders blocks of a volume separately and merges their images with the
 //! opacity reset at every block boundary; here each rank renders the exact integral of its
-//! part of every ray and the ranks composite front to back in visibility order, so the
-//! image equals the single-process render.
+//! part of every ray and the ranks composite front to back in visibility order (adaptive
+//! Simpson passes its rays' states along that order instead), so the image equals the
+//! single-process render.
 //!
 //! Modules:
 //! - [`error`]: the errors of the MPI layer;

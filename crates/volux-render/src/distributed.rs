@@ -12,10 +12,17 @@
 //! its bricked picture differs from the whole one; here a rank's partial image is the exact
 //! integral of its part of the ray, and the *under* operator composites the parts, so the
 //! picture equals the single-process render (within float rounding: 1e-6 per channel,
-//! tested for 1 to 5 ranks). Early ray termination is off: a rank behind another cannot
-//! know that the rays it samples are already opaque in front. Isosurfaces too: the step from
+//! tested for 1 to 5 ranks). Early ray termination is off (but for adaptive Simpson, below):
+//! a rank behind another cannot know that the rays it samples are already opaque in front. Isosurfaces too: the step from
 //! a region's last sample to the next region's first belongs to the front region, which
 //! finds and refines the crossings in it exactly as one process does.
+//!
+//! Adaptive Simpson (`001_...txt` ch. 4, Algorithms 3 and 4) is exact too, bit for bit and
+//! with early termination, by another schedule: its step, its streak of successes, its
+//! lookahead and its decisions depend on the whole ray so far, so instead of integrating
+//! their pieces alone and compositing, the ranks pass the rays' states along the visibility
+//! order, band by band as a wavefront, each taking the steps that start in its region
+//! ([`pipeline`], the states as messages: [`states`]).
 //!
 //! Maximum intensity projection is exact too, by another reduction: each rank keeps per
 //! pixel the largest sample of its part of the ray's lattice, its index and its refined
@@ -31,8 +38,10 @@ pub mod job;
 pub mod kdtree;
 pub mod mip;
 pub mod part;
+pub mod pipeline;
 pub mod reads;
 pub mod region;
+pub mod states;
 pub mod swap;
 #[cfg(test)]
 mod tests;

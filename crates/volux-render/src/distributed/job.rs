@@ -7,7 +7,7 @@ use volux_core::voi::ClipPlane;
 use volux_core::TransferFunction;
 
 use super::error::DistributedError;
-use super::region::region_options;
+use super::region::{is_pipelined, region_options};
 use crate::integrate::integrator::Integrator;
 use crate::isosurface::Isosurfaces;
 use crate::raycast::RenderOptions;
@@ -17,7 +17,7 @@ use crate::shading::blinn_phong::BlinnPhong;
 
 /// One distributed frame: the pyramid level rendered, the data range the transfer function
 /// is placed on, and the options of the single-process render of the same scene (early
-/// termination off).
+/// termination off, except for adaptive Simpson, whose state pipeline keeps it).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RegionJob {
     /// The pyramid level.
@@ -47,6 +47,10 @@ pub struct RegionJob {
     /// Lighting of the isosurfaces when `shading` is `None`.
     #[serde(default)]
     pub iso_lighting: Option<BlinnPhong>,
+    /// The early-termination opacity (adaptive Simpson only: the other integrators'
+    /// regions cannot know what lies in front of them).
+    #[serde(default)]
+    pub early_termination: Option<f32>,
 }
 
 impl RegionJob {
@@ -83,10 +87,11 @@ impl RegionJob {
             mip: o.mip,
             isosurfaces: o.isosurfaces,
             iso_lighting: o.iso_lighting,
+            early_termination: o.early_termination,
         })
     }
 
-    /// The render options (early termination off).
+    /// The render options (early termination off but for adaptive Simpson).
     pub fn options(&self) -> RenderOptions {
         let mut o = RenderOptions::new(self.camera, self.tf.clone());
         (o.width, o.height) = (self.width, self.height);
@@ -96,7 +101,7 @@ impl RegionJob {
         o.mip = self.mip;
         o.isosurfaces = self.isosurfaces.clone();
         o.iso_lighting = self.iso_lighting;
-        o.early_termination = None;
+        o.early_termination = self.early_termination.filter(|_| is_pipelined(&o));
         o
     }
 }

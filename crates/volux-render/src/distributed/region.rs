@@ -96,9 +96,17 @@ impl IntervalSource for RegionRays<'_> {
     }
 }
 
-/// Checks that `opts` can be rendered split, and returns them with early termination off.
-/// Refused: jitter, sculpt masks and labels (and, by [`SpanRule::of`], the reference
-/// integrator).
+/// Whether `opts` render through the state pipeline
+/// ([`render_pipelined`](super::pipeline::render_pipelined)): adaptive Simpson, not under
+/// MIP.
+pub fn is_pipelined(opts: &RenderOptions) -> bool {
+    matches!(opts.integrator, Integrator::AdaptiveSimpson(_)) && !opts.mip
+}
+
+/// Checks that `opts` can be rendered split, and returns them with early termination off,
+/// except for adaptive Simpson (not under MIP), whose rays pass their states, opacity
+/// included, from region to region ([`pipeline`](super::pipeline)). Refused: jitter,
+/// sculpt masks and labels (and, by [`SpanRule::of`], the reference integrator).
 pub fn region_options(opts: &RenderOptions) -> Result<RenderOptions, DistributedError> {
     let refuse = |what: &str| Err(DistributedError::Unsupported(what.into()));
     if opts.jitter {
@@ -108,6 +116,9 @@ pub fn region_options(opts: &RenderOptions) -> Result<RenderOptions, Distributed
         return refuse("sculpt masks or labels (voxel layers of in-core grids)");
     }
     let mut o = opts.clone();
+    if is_pipelined(opts) {
+        return Ok(o);
+    }
     o.early_termination = None;
     if let Integrator::AdaptiveSimpson(p) = &mut o.integrator {
         p.early_termination = None;
@@ -124,10 +135,11 @@ pub fn region_options(opts: &RenderOptions) -> Result<RenderOptions, Distributed
 /// pre-integration and MIP give exactly the single-process render's samples, and so do
 /// isosurfaces (a crossing in the step from a region's last sample to the next region's
 /// first is found by the front region, [`IntervalSource::owns_step_past_end`], refined
-/// between the same two samples as in one process, and composited last in its part);
-/// adaptive Simpson subdivides each region's piece of a ray on its own, so its image
-/// differs from the single-process one by up to about its tolerance; the reference
-/// integrator is refused.
+/// between the same two samples as in one process, and composited last in its part).
+/// Adaptive Simpson (not under MIP) is refused here: its steps depend on the whole ray so
+/// far, and it renders exactly through the state pipeline instead
+/// ([`render_pipelined`](super::pipeline::render_pipelined)); so is the reference
+/// integrator.
 pub fn render_region<F: Field>(
     field: &F,
     place: Placement,
@@ -150,6 +162,11 @@ pub fn render_region<F: Field>(
         };
         return Ok(Part::Mip(part, opts.tf.resolved(range)));
     }
+    if is_pipelined(&opts) {
+        return Err(DistributedError::Unsupported(
+            "adaptive Simpson region by region (it renders through the state pipeline, render_pipelined)".into(),
+        ));
+    }
     let rule = SpanRule::of(&opts, &place)?;
     let rays = RegionRays {
         split,
@@ -166,7 +183,7 @@ pub fn render_region<F: Field>(
 /// How far past a region face (voxels, per axis) a sample the region needs can lie: a step
 /// (or the largest adaptive step, or the MIP step to the maximum's neighbour) straddling
 /// the face, and a voxel for gradients.
-fn reach(opts: &RenderOptions, place: &Placement) -> [f64; 3] {
+pub(super) fn reach(opts: &RenderOptions, place: &Placement) -> [f64; 3] {
     let unit = place.spacing.min_element();
     let h = match opts.integrator {
         _ if opts.mip => mip_step(&opts.integrator),
@@ -185,7 +202,7 @@ fn reach(opts: &RenderOptions, place: &Placement) -> [f64; 3] {
 /// there ([`reach`] is within a chunk); what does is what the lane streams' idle lanes
 /// sample while they wait (their results unused), which would otherwise read chunks on the
 /// volume's surface anywhere along their last ray.
-struct Near<'a, F> {
+pub(super) struct Near<'a, F> {
     inner: &'a F,
     /// Per axis, the allowed coordinates `[lo, hi)` (clamped as the samplers clamp).
     lo: [f32; 3],
@@ -195,7 +212,12 @@ struct Near<'a, F> {
 
 impl<'a, F: Field> Near<'a, F> {
     /// `None` (no filter) when a sample could reach beyond the neighbouring chunks.
-    fn new(inner: &'a F, split: &KdSplit, region: usize, reach: [f64; 3]) -> Option<Self> {
+    pub(super) fn new(
+        inner: &'a F,
+        split: &KdSplit,
+        region: usize,
+        reach: [f64; 3],
+    ) -> Option<Self> {
         let b = split.regions().get(region)?;
         let (chunk, n) = (split.chunk_shape(), split.chunks_per_axis());
         if (0..3).any(|a| reach[a] + 1.0 >= chunk[a] as f64) {

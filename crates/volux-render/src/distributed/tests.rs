@@ -15,9 +15,9 @@ use super::kdtree::{KdSplit, ViewPoint};
 use super::reads::{CountedChunks, ReadStats};
 use crate::bricked::fixtures::{grid, tf, CHUNK};
 use crate::bricked::{
-    level_placement, render_cache_region, render_level, BrickCache, BrickedVolume,
+    level_placement, render_cache_frame, render_level, BrickCache, BrickedVolume,
 };
-use crate::integrate::{AdaptiveParams, Integrator, StepControl};
+use crate::integrate::Integrator;
 use crate::isosurface::{Isosurfaces, Isovalue};
 use crate::raycast::RenderOptions;
 use crate::shading::BlinnPhong;
@@ -38,14 +38,19 @@ fn options(g: &Grid, spec: &str) -> RenderOptions {
 
 /// The single-process bricked render, early termination off.
 fn single(g: &Grid, opts: &RenderOptions) -> Image {
-    let ms = Multiscale::new("test", vec![chunks(g)]).unwrap();
-    let v = BrickedVolume::open(ms, 1 << 30).unwrap();
     let mut o = opts.clone();
     o.early_termination = None;
     if let Integrator::AdaptiveSimpson(p) = &mut o.integrator {
         p.early_termination = None;
     }
-    render_level(&v, 0, &o).unwrap().image
+    single_as_is(g, &o)
+}
+
+/// The single-process bricked render of `opts` as they are.
+fn single_as_is(g: &Grid, opts: &RenderOptions) -> Image {
+    let ms = Multiscale::new("test", vec![chunks(g)]).unwrap();
+    let v = BrickedVolume::open(ms, 1 << 30).unwrap();
+    render_level(&v, 0, opts).unwrap().image
 }
 
 /// `n` ranks on threads, each with its own cache of a small budget: rank 0's image, and
@@ -68,10 +73,10 @@ fn distributed(
                         let r = ex.rank();
                         let counted = Arc::new(CountedChunks::new(source, split.regions()[r]));
                         let cache = BrickCache::new(counted.clone(), 4 * 8 * 5 * 4 * 4);
-                        let part = render_cache_region(&cache, range, split, r, opts)?;
                         let view = ViewPoint::of(&opts.camera, &level_placement(&cache));
                         let order = split.visibility_order(view);
-                        let (image, _) = part.combine(&mut ex, &order)?;
+                        let (image, _) =
+                            render_cache_frame(&cache, range, (split, r), opts, &mut ex, &order)?;
                         Ok((image, counted.stats()))
                     })
                 })
@@ -142,36 +147,6 @@ fn one_to_five_ranks_equal_the_single_process_render_for_the_exact_integrators()
                 // A rank reads its chunks and its face neighbours only.
                 assert_eq!(s.other, 0, "{name}, {n} ranks: rank {r} read {s:?}");
             }
-        }
-    }
-}
-
-/// Adaptive Simpson subdivides each region's piece of a ray on its own (the pieces start
-/// and end at the region faces, and the error control sees only its piece), so the split
-/// render is not the single-process one sample for sample; it stays within the tolerance.
-#[test]
-fn adaptive_simpson_split_stays_within_its_tolerance() {
-    let g = grid();
-    let adaptive = AdaptiveParams {
-        tol: 1e-3,
-        h0: 0.3,
-        hmin: 0.02,
-        hmax: 1.0,
-        control: StepControl::Coupled,
-        early_termination: None,
-    };
-    for control in [StepControl::Coupled, StepControl::Decoupled] {
-        let mut o = options(&g, r#"{"azimuth": 33, "elevation": 21}"#);
-        o.integrator = Integrator::AdaptiveSimpson(AdaptiveParams {
-            control,
-            ..adaptive
-        });
-        let want = single(&g, &o);
-        for n in [1, 2, 3, 5] {
-            let (got, _) = distributed(&g, n, &o).unwrap();
-            let d = max_diff(&got, &want);
-            let bound = if n == 1 { 1e-6 } else { 2e-3 };
-            assert!(d <= bound, "{control:?}, {n} ranks: max difference {d}");
         }
     }
 }
@@ -474,3 +449,5 @@ fn hash(i: usize, salt: u32) -> f64 {
     v ^= v >> 15;
     v as f64 / 4_294_967_296.0
 }
+
+mod adaptive;

@@ -21,6 +21,7 @@
 //!   integral then crosses that interval with its own step, which persists from interval to
 //!   interval, evaluating the inner integral inside by plain Simpson (any step shorter than
 //!   an accepted one is accepted too, as the seed argues).
+use super::adaptive_state::{F64Ray, StepState};
 pub use super::adaptive_step::{
     standard_factor, standard_growth, AdaptiveParams, StepControl, PEAK_NEAR_HMIN,
 };
@@ -144,19 +145,57 @@ impl Ray {
             color: [0.0; 3],
             depth: 0.0,
             trans: 1.0,
-            // 1 - exp(-depth) >= a  <=>  depth >= -ln(1 - a).
-            depth_stop: p
-                .early_termination
-                .map_or(f64::INFINITY, |a| -(1.0 - a.min(1.0)).ln()),
+            depth_stop: depth_stop(p),
             samples: 0,
             error: 0.0,
             missed: false,
             after_gap: false,
         }
     }
+    /// The ray carried in `s` (within one interval: no gap follows).
+    fn resumed(p: &AdaptiveParams, s: &F64Ray) -> Self {
+        Self {
+            color: s.color,
+            depth: s.depth,
+            trans: s.trans,
+            depth_stop: depth_stop(p),
+            samples: s.samples,
+            error: s.error,
+            missed: s.missed,
+            after_gap: false,
+        }
+    }
+    /// The state to carry, the next step starting at `t` from the sample `first`.
+    fn save(&self, t: f64, first: Medium, inner: StepState, outer: StepState) -> F64Ray {
+        F64Ray {
+            t,
+            first,
+            inner,
+            outer,
+            color: self.color,
+            depth: self.depth,
+            trans: self.trans,
+            samples: self.samples,
+            error: self.error,
+            missed: self.missed,
+        }
+    }
     fn done(&self) -> bool {
         self.depth >= self.depth_stop
     }
+    fn integral(&self) -> RayIntegral {
+        let mut out = RayIntegral::from_parts(self.color, self.depth, self.samples);
+        out.error = self.error;
+        out.tolerance_missed = self.missed;
+        out
+    }
+}
+
+/// The depth at which the opacity reaches the early-termination threshold:
+/// `1 - exp(-depth) >= a  <=>  depth >= -ln(1 - a)`.
+fn depth_stop(p: &AdaptiveParams) -> f64 {
+    p.early_termination
+        .map_or(f64::INFINITY, |a| -(1.0 - a.min(1.0)).ln())
 }
 
 /// Integrates `[t0, t1]` with the iterative adaptive Simpson method.
@@ -194,10 +233,67 @@ pub fn adaptive_simpson_intervals(
         }
         ray.after_gap = true;
     }
-    let mut out = RayIntegral::from_parts(ray.color, ray.depth, ray.samples);
-    out.error = ray.error;
-    out.tolerance_missed = ray.missed;
-    out
+    ray.integral()
+}
+
+/// Where [`adaptive_simpson_resume`] left a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Resumed {
+    /// The next step starts at or past the stop: the state to resume from.
+    Paused(F64Ray),
+    /// The ray's end reached (or its opacity the early-termination threshold).
+    Finished(RayIntegral),
+}
+
+/// Adaptive Simpson of one ray over `[t0, t1]`, the ray's whole extent (its length is the
+/// `L` of the tolerance `eps h / L`), resumed from `from` (`None`: the ray's start, whose
+/// first sample is taken at `t0`) and stopped before the first step that would start at or
+/// past `t_stop` (a step starting before it is taken whole, its samples past `t_stop`
+/// too). Pieces integrated one after the other, each from where the last stopped, take the
+/// steps and the decisions of the whole ray (`001_...txt` ch. 4, Algorithms 3 and 4, their
+/// step, streak of successes, lookahead and absolute transmittance carried across): from
+/// the start with `t_stop >= t1`, this is [`adaptive_simpson`] bit for bit.
+pub fn adaptive_simpson_resume(
+    m: &mut impl RayMedium,
+    (t0, t1): (f64, f64),
+    t_stop: f64,
+    p: &AdaptiveParams,
+    from: Option<&F64Ray>,
+) -> Resumed {
+    let (mut ray, t, first, inner, outer) = match from {
+        Some(s) => {
+            let step = |c| StepSize::resumed(p, c);
+            let ray = Ray::resumed(p, s);
+            (ray, s.t, s.first, step(&s.inner), step(&s.outer))
+        }
+        None => {
+            let mut ray = Ray::new(p);
+            if t1 <= t0 || ray.done() {
+                return Resumed::Finished(ray.integral());
+            }
+            let first = m.at(t0);
+            ray.samples += 1;
+            let start = StepSize::start(p, false);
+            (ray, t0, first, start, StepSize::start(p, false))
+        }
+    };
+    let len = t1 - t0;
+    let (finished, state) = if p.control.is_coupled() {
+        let mut span = CoupledSpan::resumed((t0, t1), t, len, first, p, inner);
+        span.run(m, &mut ray, p, t_stop);
+        let state = ray.save(span.t, span.probe.s[0], span.step.state(), outer.state());
+        (span.finished(&ray), state)
+    } else {
+        let mut span = DecoupledSpan::new((t, t1), len, first, p, [inner, outer]);
+        span.run(m, p, &mut ray, t_stop);
+        let (i, o) = (span.inner.state(), span.outer.state());
+        (span.finished(&ray), ray.save(span.t, span.probe.s[0], i, o))
+    };
+    if finished {
+        Resumed::Finished(ray.integral())
+    } else {
+        Resumed::Paused(state)
+    }
 }
 
 /// Adaptive Simpson over consecutive pieces `[breaks[i], breaks[i + 1]]` (sorted), with no
@@ -221,10 +317,7 @@ pub fn adaptive_simpson_pieces(
             }
         }
     }
-    let mut out = RayIntegral::from_parts(ray.color, ray.depth, ray.samples);
-    out.error = ray.error;
-    out.tolerance_missed = ray.missed;
-    out
+    ray.integral()
 }
 
 fn clamp_step(h: f64, p: &AdaptiveParams, room: f64) -> f64 {
@@ -242,10 +335,7 @@ fn coupled_scaled(
     ray: &mut Ray,
 ) {
     let mut span = CoupledSpan::new((t0, t1), len, first, p, ray);
-    while !span.finished(ray) {
-        span.probe.fill(m, &mut ray.samples);
-        span.step(m, ray, p);
-    }
+    span.run(m, ray, p, f64::INFINITY);
 }
 
 /// Coupled control over one interval `[t0, t1]`, advanced one probe at a time: fill the probe,
@@ -262,13 +352,33 @@ struct CoupledSpan {
 impl CoupledSpan {
     fn new((t0, t1): (f64, f64), len: f64, first: Medium, p: &AdaptiveParams, ray: &Ray) -> Self {
         let step = StepSize::start(p, ray.after_gap);
+        Self::resumed((t0, t1), t0, len, first, p, step)
+    }
+
+    /// The span `[t0, t1]` at `t`, whose sample is `first`, with the control `step`.
+    fn resumed(
+        (t0, t1): (f64, f64),
+        t: f64,
+        len: f64,
+        first: Medium,
+        p: &AdaptiveParams,
+        step: StepSize,
+    ) -> Self {
         Self {
             t0,
             t1,
-            t: t0,
+            t,
             tol_per_length: SAFETY * p.tol / len,
-            probe: Probe::new(t0, clamp_step(step.h, p, t1 - t0), first),
+            probe: Probe::new(t, clamp_step(step.h, p, t1 - t), first),
             step,
+        }
+    }
+
+    /// Steps until the span is finished or the next step would start at or past `t_stop`.
+    fn run(&mut self, m: &mut impl RayMedium, ray: &mut Ray, p: &AdaptiveParams, t_stop: f64) {
+        while !self.finished(ray) && self.t < t_stop {
+            self.probe.fill(m, &mut ray.samples);
+            self.step(m, ray, p);
         }
     }
 
@@ -311,29 +421,74 @@ fn decoupled(
     p: &AdaptiveParams,
     ray: &mut Ray,
 ) {
-    let mut inner = StepSize::start(p, ray.after_gap);
-    let mut outer = StepSize::start(p, ray.after_gap);
-    let mut t = t0;
-    let mut probe = Probe::new(t, clamp_step(inner.h, p, t1 - t), first);
-    while t1 - t > 1e-12 * len && !ray.done() {
-        probe.fill(m, &mut ray.samples);
-        let s = probe.s;
-        let ev = eval_step(ray.depth, ray.trans, probe.h, &s);
-        let err = ray.trans * ev.err_depth.abs();
-        let blind = hidden(m, &s);
-        let tol_h = SAFETY * p.tol * probe.h / len;
-        if (err > tol_h || blind) && probe.h > p.hmin * (1.0 + 1e-9) {
-            inner.failure(probe.h, err, tol_h, blind);
-            probe.halve();
-            continue;
+    let inner = StepSize::start(p, ray.after_gap);
+    let outer = StepSize::start(p, ray.after_gap);
+    let mut span = DecoupledSpan::new((t0, t1), len, first, p, [inner, outer]);
+    span.run(m, p, ray, f64::INFINITY);
+}
+
+/// Decoupled control (Algorithm 4) from `t` to `t1`: the inner step, and the outer step
+/// that persists from inner interval to inner interval.
+struct DecoupledSpan {
+    t: f64,
+    t1: f64,
+    len: f64,
+    inner: StepSize,
+    outer: StepSize,
+    probe: Probe,
+}
+
+impl DecoupledSpan {
+    fn new(
+        (t, t1): (f64, f64),
+        len: f64,
+        first: Medium,
+        p: &AdaptiveParams,
+        [inner, outer]: [StepSize; 2],
+    ) -> Self {
+        let probe = Probe::new(t, clamp_step(inner.h, p, t1 - t), first);
+        Self {
+            t,
+            t1,
+            len,
+            inner,
+            outer,
+            probe,
         }
-        let h_int = probe.h;
-        if s.iter().any(|x| x.tau > 0.0) {
-            outer_interval(m, t, h_int, s, p, len, &mut outer, ray);
+    }
+
+    fn finished(&self, ray: &Ray) -> bool {
+        // Not `<=`: a NaN distance ends the loop, as it always has.
+        let left = (self.t1 - self.t).partial_cmp(&(1e-12 * self.len));
+        left != Some(std::cmp::Ordering::Greater) || ray.done()
+    }
+
+    /// Steps until the span is finished or the next inner step would start at or past
+    /// `t_stop`.
+    fn run(&mut self, m: &mut impl RayMedium, p: &AdaptiveParams, ray: &mut Ray, t_stop: f64) {
+        let len = self.len;
+        while !self.finished(ray) && self.t < t_stop {
+            let probe = &mut self.probe;
+            probe.fill(m, &mut ray.samples);
+            let s = probe.s;
+            let ev = eval_step(ray.depth, ray.trans, probe.h, &s);
+            let err = ray.trans * ev.err_depth.abs();
+            let blind = hidden(m, &s);
+            let tol_h = SAFETY * p.tol * probe.h / len;
+            if (err > tol_h || blind) && probe.h > p.hmin * (1.0 + 1e-9) {
+                self.inner.failure(probe.h, err, tol_h, blind);
+                probe.halve();
+                continue;
+            }
+            let h_int = probe.h;
+            if s.iter().any(|x| x.tau > 0.0) {
+                outer_interval(m, self.t, h_int, s, p, len, &mut self.outer, ray);
+            }
+            self.t += h_int;
+            self.inner.success(h_int, p.hmax, err, tol_h);
+            let next = clamp_step(self.inner.h, p, self.t1 - self.t);
+            self.probe.restart(self.t, next, s[4]);
         }
-        t += h_int;
-        inner.success(h_int, p.hmax, err, tol_h);
-        probe.restart(t, clamp_step(inner.h, p, t1 - t), s[4]);
     }
 }
 

@@ -59,6 +59,9 @@ enum Phase {
     Entering,
     /// The next round samples the current step's points.
     Stepping,
+    /// Stopped before a step starting at or past the ray's stop
+    /// ([`AdaptiveLanes::stop_at`]): the caller exports its state.
+    Paused,
 }
 
 /// Coupled adaptive Simpson over [`RAYS`] rays, each over disjoint ordered intervals, driven
@@ -87,6 +90,8 @@ pub struct AdaptiveLanes {
     t_end: [f32; RAYS],
     h: [f32; RAYS],
     to_end: [bool; RAYS],
+    /// Where the ray pauses: before a step starting at or past it (infinite: never).
+    t_stop: [f64; RAYS],
     /// Whether steps are sized by the error-per-step controller
     /// ([`standard_factor`](super::adaptive::standard_factor)) rather than Algorithm 3.
     standard: bool,
@@ -150,6 +155,7 @@ impl AdaptiveLanes {
             t_end: [0.0; RAYS],
             h: [0.0; RAYS],
             to_end: [false; RAYS],
+            t_stop: [f64::INFINITY; RAYS],
             standard: p.control == StepControl::CoupledStandard,
             step_h: [0.0; RAYS],
             successes: [0; RAYS],
@@ -176,6 +182,7 @@ impl AdaptiveLanes {
     pub fn start(&mut self, r: usize, len: f64) {
         self.phase[r] = Phase::NeedsSpan;
         self.after_gap[r] = false;
+        self.t_stop[r] = f64::INFINITY;
         self.tol_per_length[r] = if len > 0.0 {
             (f64::from(self.tol) / len) as f32
         } else {
@@ -199,6 +206,17 @@ impl AdaptiveLanes {
     /// Whether the ray in slot `r` waits for its next interval (or to be finished).
     pub fn needs_span(&self, r: usize) -> bool {
         self.phase[r] == Phase::NeedsSpan
+    }
+
+    /// Pauses the ray in slot `r` before its first step that would start at or past `t`
+    /// (a step starting before it is taken whole).
+    pub fn stop_at(&mut self, r: usize, t: f64) {
+        self.t_stop[r] = t;
+    }
+
+    /// Whether the ray in slot `r` has paused at its stop ([`AdaptiveLanes::stop_at`]).
+    pub fn is_paused(&self, r: usize) -> bool {
+        self.phase[r] == Phase::Paused
     }
 
     /// Whether the ray in slot `r` has reached the early-termination opacity.
@@ -262,7 +280,7 @@ impl AdaptiveLanes {
                     self.propose(r);
                 }
                 Phase::Stepping => self.judge(r, m, &rules, quarter),
-                Phase::Idle | Phase::NeedsSpan => {}
+                Phase::Idle | Phase::NeedsSpan | Phase::Paused => {}
             }
         }
     }
@@ -299,6 +317,9 @@ impl AdaptiveLanes {
             } else {
                 self.t[r] += h;
                 self.propose(r);
+                if f64::from(self.t[r]) >= self.t_stop[r] {
+                    self.phase[r] = Phase::Paused;
+                }
             }
         } else if self.standard && blind {
             self.before_peak(r, h, quarter);
@@ -561,5 +582,6 @@ pub fn exp_lanes<const N: usize>(x: &mut [f32; N]) {
     }
 }
 
+mod resume;
 #[cfg(test)]
 mod tests;

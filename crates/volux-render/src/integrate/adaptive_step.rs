@@ -3,6 +3,7 @@
 //! seed's halving and doubling, or the error-per-step controller ([`standard_factor`]). The
 //! rules and the integration loops are in [`super::adaptive`]; the f32 lanes
 //! ([`super::adaptive_lanes`]) follow the same decisions.
+use super::adaptive_state::StepState;
 use super::medium::{Medium, RayMedium};
 
 /// How the steps of the inner and outer integrals are controlled (`001_...txt` sec. 4).
@@ -234,6 +235,26 @@ impl StepSize {
         } else {
             self.h = probe.h * 0.5;
             probe.halve();
+        }
+    }
+
+    /// The state to carry to a later piece of the ray ([`StepState`]).
+    pub(super) fn state(&self) -> StepState {
+        StepState {
+            h: self.h,
+            successes: self.successes,
+            peak_ahead: self.peak_ahead,
+        }
+    }
+
+    /// The control carried in `s`, with `p`'s kind and `hmin`.
+    pub(super) fn resumed(p: &AdaptiveParams, s: &StepState) -> Self {
+        Self {
+            h: s.h,
+            successes: s.successes,
+            standard: p.control == StepControl::CoupledStandard,
+            hmin: p.hmin,
+            peak_ahead: s.peak_ahead,
         }
     }
 

@@ -17,6 +17,8 @@
 //!   coupled or decoupled step control, error estimated per channel R, G, B, A, in f64;
 //! - [`adaptive_step`]: its parameters and step control (the seed's, or the error-per-step
 //!   controller), shared with the lanes;
+//! - [`adaptive_state`]: what a ray carries between two steps, to integrate it piece by
+//!   piece with the steps of the whole (a distributed render's regions);
 //! - [`adaptive_lanes::AdaptiveLanes`]: the same coupled control for four rays at once in f32
 //!   lanes, the fast path of renderers that sample several rays together;
 //! - [`segment`]: the colour of a segment along which the scalar is linear ([`SegmentRule`]:
@@ -28,6 +30,7 @@
 //! - [`preintegrated`]: the grid's pre-integration table over (front, back) values.
 pub mod adaptive;
 pub mod adaptive_lanes;
+pub mod adaptive_state;
 pub mod adaptive_step;
 pub mod fixed;
 pub mod fragment;

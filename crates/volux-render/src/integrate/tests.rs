@@ -287,3 +287,5 @@ fn standard_factor_follows_the_fourth_root() {
     assert_eq!(standard_growth(0.0, 1.0, 1), 1.0);
     assert_eq!(standard_growth(0.0, 1.0, 2), 5.0);
 }
+
+mod resume;

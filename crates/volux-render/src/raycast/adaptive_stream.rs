@@ -8,7 +8,7 @@
 //! their rules, error estimates and `exp` run lane-wise. Rays enter the slots in 4 x 4 pixel
 //! blocks, so that a round's points lie close together in the volume. Shaded renders light
 //! each round's colours lane-wise with the cached gradient volume, as the stream does.
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::context::{pixel, PixelOut, RayContext};
 use super::stream::{block_order, StreamShading};
@@ -26,6 +26,8 @@ struct Slot {
     spans: Vec<(f64, f64)>,
     next: usize,
 }
+
+mod resume;
 
 // A round's points fill one call of the sampler.
 const _: () = assert!(crate::integrate::adaptive_lanes::LANES == LANES);
@@ -83,31 +85,27 @@ impl<F: Field> RayContext<'_, F> {
         let (tw, th) = ((x0 + TILE).min(w) - x0, (y0 + TILE).min(h) - y0);
         let mut px = vec![PixelOut::default(); tw * th];
         let mut queue = block_order(tw, th).into_iter();
-        let mut f = Flight {
-            lanes: AdaptiveLanes::new(&path.params),
-            slots: Default::default(),
-            origin: [[0.0; RAYS]; 3],
-            dir: [[0.0; RAYS]; 3],
-            to_eye: [[0.0; LANES]; 3],
-            light: [[0.0; LANES]; 3],
-            half: [[0.0; LANES]; 3],
-            lit: [false; LANES],
-        };
+        let mut f = Flight::new(&path);
         for r in 0..RAYS {
             self.load_ray(&mut f, r, Vec::new(), &mut queue, (x0, y0, tw));
             self.advance(&mut f, r, &mut px, &mut queue, (x0, y0, tw));
         }
         while f.lanes.is_busy() {
-            let media = match path.shading {
-                Some(sh) => self.round_media::<true>(&f, &path, Some(sh)),
-                None => self.round_media::<false>(&f, &path, None),
-            };
-            f.lanes.supply(&media);
+            self.round(&mut f, &path);
             for r in 0..RAYS {
                 self.advance(&mut f, r, &mut px, &mut queue, (x0, y0, tw));
             }
         }
         px
+    }
+
+    /// Samples, classifies and judges one round of the rays in flight.
+    fn round(&self, f: &mut Flight, path: &LanePath<'_>) {
+        let media = match path.shading {
+            Some(sh) => self.round_media::<true>(f, path, Some(sh)),
+            None => self.round_media::<false>(f, path, None),
+        };
+        f.lanes.supply(&media);
     }
 
     /// Samples and classifies the points of this round.
@@ -203,24 +201,7 @@ impl<F: Field> RayContext<'_, F> {
             let (gx, gy) = (x0 + pixel % tw, y0 + pixel / tw);
             let ray = self.rays.ray(gx as f64 + 0.5, gy as f64 + 0.5);
             if let Some((o_v, d_v, ..)) = self.setup(ray.origin, ray.dir, &mut spans) {
-                let (o, d): (Vec3, Vec3) = (o_v.as_vec3(), d_v.as_vec3());
-                for a in 0..3 {
-                    (f.origin[a][r], f.dir[a][r]) = (o[a], d[a]);
-                }
-                if let Some(sh) = self.stream_shading() {
-                    let view = (d_v * self.place.spacing).normalize_or_zero().as_vec3();
-                    let ray = sh.model.ray_light(view);
-                    let dirs = ray.unwrap_or_default();
-                    // The ray's lanes: its point k is lane (k - 1) RAYS + r.
-                    for l in (r..LANES).step_by(RAYS) {
-                        for a in 0..3 {
-                            f.to_eye[a][l] = dirs.to_eye[a];
-                            f.light[a][l] = dirs.light[a];
-                            f.half[a][l] = dirs.half[a];
-                        }
-                        f.lit[l] = ray.is_some();
-                    }
-                }
+                self.aim(f, r, o_v, d_v);
                 f.lanes
                     .start(r, spans.iter().map(|(a, b)| (b - a).max(0.0)).sum());
                 f.slots[r] = Some(Slot {
@@ -233,5 +214,42 @@ impl<F: Field> RayContext<'_, F> {
         }
         f.slots[r] = None;
         f.lanes.idle(r);
+    }
+
+    /// Slot `r`'s ray becomes the voxel-space ray `o_v + t d_v`, with its lighting.
+    fn aim(&self, f: &mut Flight, r: usize, o_v: DVec3, d_v: DVec3) {
+        let (o, d): (Vec3, Vec3) = (o_v.as_vec3(), d_v.as_vec3());
+        for a in 0..3 {
+            (f.origin[a][r], f.dir[a][r]) = (o[a], d[a]);
+        }
+        if let Some(sh) = self.stream_shading() {
+            let view = (d_v * self.place.spacing).normalize_or_zero().as_vec3();
+            let ray = sh.model.ray_light(view);
+            let dirs = ray.unwrap_or_default();
+            // The ray's lanes: its point k is lane (k - 1) RAYS + r.
+            for l in (r..LANES).step_by(RAYS) {
+                for a in 0..3 {
+                    f.to_eye[a][l] = dirs.to_eye[a];
+                    f.light[a][l] = dirs.light[a];
+                    f.half[a][l] = dirs.half[a];
+                }
+                f.lit[l] = ray.is_some();
+            }
+        }
+    }
+}
+
+impl Flight {
+    fn new(path: &LanePath<'_>) -> Self {
+        Self {
+            lanes: AdaptiveLanes::new(&path.params),
+            slots: Default::default(),
+            origin: [[0.0; RAYS]; 3],
+            dir: [[0.0; RAYS]; 3],
+            to_eye: [[0.0; LANES]; 3],
+            light: [[0.0; LANES]; 3],
+            half: [[0.0; LANES]; 3],
+            lit: [false; LANES],
+        }
     }
 }

@@ -26,6 +26,7 @@ mod mip_stream;
 pub mod options;
 mod rays;
 pub mod renderer;
+mod resume;
 mod stream;
 #[cfg(test)]
 mod tests;
@@ -37,4 +38,5 @@ pub(crate) use context::{first_at_or_after, local_clip_planes};
 pub use options::{Placement, RenderOptions, Rendered};
 pub(crate) use renderer::{grid_frame, grid_settings};
 pub use renderer::{render_grid, GridRenderer};
+pub(crate) use resume::with_band_caster;
 pub use traverse::{render_field, render_field_in};

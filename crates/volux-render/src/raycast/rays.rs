@@ -179,7 +179,7 @@ impl<F: Field> RayContext<'_, F> {
     }
 
     /// The table-classified medium along a ray (voxel-space origin and direction).
-    fn medium(&self, o_v: DVec3, d_v: DVec3) -> GridRay<'_, F> {
+    pub(super) fn medium(&self, o_v: DVec3, d_v: DVec3) -> GridRay<'_, F> {
         GridRay {
             field: self.field,
             o_v,

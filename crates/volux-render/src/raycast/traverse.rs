@@ -148,6 +148,21 @@ fn render_sampled<F: Field>(
 ) -> Result<Rendered, RenderError> {
     opts.validate()?;
     let start = Instant::now();
+    with_context(field, place, range, opts, derived, |ctx| {
+        render_tiles_of(ctx, derived.lanes, start)
+    })
+}
+
+/// Runs `body` with the context of a render of `field` (the classification, the intervals,
+/// the lane tables, the rays): what every tile of the render shares.
+pub(crate) fn with_context<F: Field, R>(
+    field: &F,
+    place: Placement,
+    range: [f64; 2],
+    opts: &RenderOptions,
+    derived: Derived<'_>,
+    body: impl FnOnce(&RayContext<'_, F>) -> R,
+) -> R {
     let turned;
     let opts = match lights_to_local(opts, &place) {
         Some(o) => {
@@ -227,11 +242,22 @@ fn render_sampled<F: Field>(
         clip: local_clip_planes(&place, &opts.clip_planes),
         opts,
     };
+    body(&ctx)
+}
+
+/// Renders the tiles of the image with `ctx` (`lanes`: whether tiles may take the lane
+/// paths), timed from `start`.
+fn render_tiles_of<F: Field>(
+    ctx: &RayContext<'_, F>,
+    lanes: bool,
+    start: Instant,
+) -> Result<Rendered, RenderError> {
+    let opts = ctx.opts;
     let grid = TileGrid::new(opts.width, opts.height, TILE);
     let out = render_tiles(&grid, &opts.control, |_, r| {
         let (x0, y0) = (r.x0, r.y0);
         // Label colours are looked up ray by ray.
-        let px = if !derived.lanes || opts.labels.is_some() {
+        let px = if !lanes || opts.labels.is_some() {
             ctx.tile_ray_by_ray(x0, y0)
         } else if opts.mip {
             ctx.mip_stream(x0, y0)

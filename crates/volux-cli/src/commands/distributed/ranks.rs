@@ -2,8 +2,11 @@
 //! as the single-process render would draw it) and broadcasts it; every rank opens the
 //! store, renders its k-d region reading only its chunks and their face neighbours, the
 //! ranks agree that every region rendered, composite by binary swap, and rank 0 writes the
-//! PNG (a temporary name renamed into place) and the per-rank figures. An error on any rank
-//! is reported once, by rank 0, as one line; nothing is written then.
+//! PNG (a temporary name renamed into place) and the per-rank figures. Adaptive Simpson
+//! instead passes its rays' states from region to region in visibility order (the state
+//! pipeline of `volux_render::distributed::pipeline`, exact), its regions rendered as the
+//! states arrive; the ranks then agree that it succeeded. An error on any rank is reported
+//! once, by rank 0, as one line; nothing is written then.
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -12,15 +15,17 @@ use serde::{Deserialize, Serialize};
 use volux_core::Image;
 use volux_io::omezarr::{self, ZarrOptions};
 use volux_mpi::stats::RankStats;
-use volux_mpi::Mpi;
+use volux_mpi::{Mpi, World};
 use volux_render::bricked::{
-    level_placement, render_cache_region, BrickCache, BrickedRenderer, BrickedVolume, Lod,
+    level_placement, render_cache_frame, render_cache_region, BrickCache, BrickedRenderer,
+    BrickedVolume, Lod,
 };
 use volux_render::distributed::exchange::Exchange;
 use volux_render::distributed::job::RegionJob;
 use volux_render::distributed::kdtree::{KdSplit, ViewPoint};
 use volux_render::distributed::part::Part;
 use volux_render::distributed::reads::CountedChunks;
+use volux_render::distributed::region::is_pipelined;
 use volux_render::scene::Volume;
 
 use crate::cli::RenderArgs;
@@ -65,31 +70,31 @@ pub fn run(args: &RenderArgs) -> Result<(), CmdError> {
         Ok(Err(e)) => return failed(rank, e),
         Err(e) => return failed(rank, format!("the plan of the render: {e}")),
     };
-    let rendered = render(&plan, rank, world.size());
-    if !world.all(rendered.is_ok()) {
-        let mine = rendered
-            .as_ref()
-            .err()
-            .map(|e| format!("rank {rank}: {e}"))
-            .unwrap_or_default();
-        let first = world.gather_bytes(0, mine.as_bytes()).and_then(|all| {
-            all.into_iter()
-                .map(|b| String::from_utf8_lossy(&b).into_owned())
-                .find(|m| !m.is_empty())
-        });
-        return failed(rank, first.unwrap_or_default());
-    }
-    let Ok((part, order, mut stats)) = rendered else {
-        return failed(rank, "unreachable".into());
+    let (image, stats) = if is_pipelined(&plan.job.options()) {
+        let region = open_region(&plan, rank, world.size());
+        let Some(region) = agree(&world, rank, region)? else {
+            return Ok(());
+        };
+        let piped = pipelined(&plan, region, &mut world);
+        match agree(&world, rank, piped)? {
+            Some(done) => done,
+            None => return Ok(()),
+        }
+    } else {
+        let rendered = render(&plan, rank, world.size());
+        let Some((part, order, mut stats)) = agree(&world, rank, rendered)? else {
+            return Ok(());
+        };
+        let t = Instant::now();
+        let composited = part.combine(&mut world, &order);
+        let (image, cstats) = match composited {
+            Ok(c) => c,
+            Err(e) => return failed(rank, format!("rank {rank}: compositing: {e}")),
+        };
+        stats.composite_ms = t.elapsed().as_secs_f64() * 1e3;
+        stats.composite = cstats;
+        (image, stats)
     };
-    let t = Instant::now();
-    let composited = part.combine(&mut world, &order);
-    let (image, cstats) = match composited {
-        Ok(c) => c,
-        Err(e) => return failed(rank, format!("rank {rank}: compositing: {e}")),
-    };
-    stats.composite_ms = t.elapsed().as_secs_f64() * 1e3;
-    stats.composite = cstats;
     let json = serde_json::to_vec(&stats).unwrap_or_default();
     let gathered = world.gather_bytes(0, &json);
     let (Some(image), Some(gathered)) = (image, gathered) else {
@@ -107,6 +112,84 @@ pub fn run(args: &RenderArgs) -> Result<(), CmdError> {
     Ok(())
 }
 
+/// Whether `result` is good on every rank: its value (`Some`), or, where some rank failed,
+/// rank 0's error naming the first failed rank, the others `Ok(None)`.
+fn agree<T, E: std::fmt::Display>(
+    world: &World,
+    rank: usize,
+    result: Result<T, E>,
+) -> Result<Option<T>, CmdError> {
+    if world.all(result.is_ok()) {
+        return Ok(result.ok());
+    }
+    let mine = result
+        .as_ref()
+        .err()
+        .map(|e| format!("rank {rank}: {e}"))
+        .unwrap_or_default();
+    let first = world.gather_bytes(0, mine.as_bytes()).and_then(|all| {
+        all.into_iter()
+            .map(|b| String::from_utf8_lossy(&b).into_owned())
+            .find(|m| !m.is_empty())
+    });
+    failed(rank, first.unwrap_or_default()).map(|()| None)
+}
+
+/// This rank's region of the level, opened: the split, the counted chunks, the cache.
+struct Region {
+    split: KdSplit,
+    counted: Arc<CountedChunks>,
+    cache: BrickCache,
+}
+
+/// Opens this rank's region of the plan's level.
+fn open_region(plan: &Plan, rank: usize, size: usize) -> Result<Region, CmdError> {
+    let ms = omezarr::open_multiscale(&plan.store, &plan.zarr())
+        .map_err(|e| format!("{}: {e}", plan.store.display()))?;
+    let level = ms.levels().get(plan.job.level).cloned().ok_or_else(|| {
+        format!(
+            "{}: level {} does not exist",
+            plan.store.display(),
+            plan.job.level
+        )
+    })?;
+    let split = KdSplit::new(level.layout(), size)?;
+    let counted = Arc::new(CountedChunks::new(level, split.regions()[rank]));
+    let cache = BrickCache::new(counted.clone(), plan.budget);
+    Ok(Region {
+        split,
+        counted,
+        cache,
+    })
+}
+
+/// Adaptive Simpson: this rank's region rendered band by band in the state pipeline; rank
+/// 0 gets the image. Its figures: render time, and the rest as compositing.
+fn pipelined(
+    plan: &Plan,
+    region: Region,
+    world: &mut World,
+) -> Result<(Option<Image>, RankStats), CmdError> {
+    let rank = world.rank();
+    let opts = plan.job.options();
+    let view = ViewPoint::of(&opts.camera, &level_placement(&region.cache));
+    let order = region.split.visibility_order(view);
+    let (cache, split) = (&region.cache, &region.split);
+    let (image, frame) =
+        render_cache_frame(cache, plan.job.range, (split, rank), &opts, world, &order)?;
+    let b = split.regions()[rank];
+    let stats = RankStats {
+        rank,
+        region_chunks: b.count(),
+        region: [b.lo, b.hi],
+        reads: region.counted.stats(),
+        render_ms: frame.render_seconds * 1e3,
+        composite_ms: frame.composite.seconds * 1e3,
+        composite: frame.composite,
+    };
+    Ok((image, stats))
+}
+
 /// Rank 0 returns the error (printed as one line); the others end quietly (rank 0's exit
 /// status fails the run).
 fn failed(rank: usize, message: String) -> Result<(), CmdError> {
@@ -117,7 +200,8 @@ fn failed(rank: usize, message: String) -> Result<(), CmdError> {
 }
 
 /// Rank 0: the frame of `args`, as `volux render STORE --lod N --no-early-termination`
-/// draws it (level 0 unless --lod says otherwise).
+/// draws it (level 0 unless --lod says otherwise; adaptive Simpson keeps the scene's early
+/// termination: `volux render STORE --lod N`).
 fn plan(args: &RenderArgs) -> Result<Plan, CmdError> {
     RenderPlan::new(args)?;
     let file = args
@@ -164,19 +248,12 @@ fn render(
     rank: usize,
     size: usize,
 ) -> Result<(Part, Vec<usize>, RankStats), CmdError> {
-    let ms = omezarr::open_multiscale(&plan.store, &plan.zarr())
-        .map_err(|e| format!("{}: {e}", plan.store.display()))?;
-    let level = ms.levels().get(plan.job.level).cloned().ok_or_else(|| {
-        format!(
-            "{}: level {} does not exist",
-            plan.store.display(),
-            plan.job.level
-        )
-    })?;
-    let split = KdSplit::new(level.layout(), size)?;
+    let Region {
+        split,
+        counted,
+        cache,
+    } = open_region(plan, rank, size)?;
     let region = split.regions()[rank];
-    let counted = Arc::new(CountedChunks::new(level, region));
-    let cache = BrickCache::new(counted.clone(), plan.budget);
     let opts = plan.job.options();
     let t = Instant::now();
     let part = render_cache_region(&cache, plan.job.range, &split, rank, &opts)?;
