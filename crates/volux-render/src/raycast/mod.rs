@@ -22,6 +22,7 @@ mod adaptive_stream;
 pub(crate) mod bricks;
 pub mod clip;
 mod context;
+mod mask_tiles;
 mod mip_stream;
 pub mod options;
 mod rays;

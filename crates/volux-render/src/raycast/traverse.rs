@@ -5,7 +5,8 @@ use std::time::Instant;
 use volux_core::image::Image;
 use volux_core::sculpt::SculptMask;
 
-use super::context::{local_clip_planes, Classification, Derived, LocalRays, RayContext};
+use super::context::{local_clip_planes, Classification, Derived, LocalRays, PixelOut, RayContext};
+use super::mask_tiles::MaskTiles;
 use super::options::{Placement, RenderOptions, Rendered};
 use crate::error::RenderError;
 use crate::frame::{Rebuilt, RenderStats};
@@ -81,7 +82,10 @@ pub fn render_field_in<F: Field>(
 }
 
 /// Renders `field`, seen through the scene's sculpt mask when it has one (every path then
-/// samples [`Masked`], and the macrocells the mask removes wholly are skipped).
+/// samples [`Masked`], and the macrocells the mask removes wholly are skipped), except in
+/// the tiles whose rays cross only macrocells the mask leaves wholly visible
+/// ([`MaskTiles`]): those are rendered as without the mask, which gives them the same
+/// samples.
 pub(crate) fn render_with<F: Field>(
     field: &F,
     place: Placement,
@@ -96,7 +100,12 @@ pub(crate) fn render_with<F: Field>(
         Some(mask) => {
             check_dims("sculpt mask", mask.dims(), place.dims)?;
             let masked = Masked { inner: field, mask };
-            render_sampled(&masked, place, range, opts, derived)
+            let grid = TileGrid::new(opts.width, opts.height, TILE);
+            let tiles = MaskTiles::new(mask, &place, opts, grid);
+            if opts.labels.is_some() || !tiles.any_untouched() {
+                return render_sampled(&masked, place, range, opts, derived);
+            }
+            render_split(field, &masked, &tiles, place, range, opts, derived)
         }
         None => render_sampled(field, place, range, opts, derived),
     }
@@ -150,6 +159,36 @@ fn render_sampled<F: Field>(
     let start = Instant::now();
     with_context(field, place, range, opts, derived, |ctx| {
         render_tiles_of(ctx, derived.lanes, start)
+    })
+}
+
+/// [`render_sampled`] of `masked` in the tiles the mask may change, and of `field` without
+/// the mask in the others.
+fn render_split<F: Field>(
+    field: &F,
+    masked: &Masked<'_, F>,
+    tiles: &MaskTiles,
+    place: Placement,
+    range: [f64; 2],
+    opts: &RenderOptions,
+    derived: Derived<'_>,
+) -> Result<Rendered, RenderError> {
+    opts.validate()?;
+    let start = Instant::now();
+    let unmasked = RenderOptions {
+        mask: None,
+        ..opts.clone()
+    };
+    with_context(masked, place, range, opts, derived, |cut| {
+        with_context(field, place, range, &unmasked, derived, |whole| {
+            render_tiles_by(opts, start, |x0, y0| {
+                if tiles.touched(x0, y0) {
+                    tile_pixels(cut, derived.lanes, x0, y0)
+                } else {
+                    tile_pixels(whole, derived.lanes, x0, y0)
+                }
+            })
+        })
     })
 }
 
@@ -252,29 +291,44 @@ fn render_tiles_of<F: Field>(
     lanes: bool,
     start: Instant,
 ) -> Result<Rendered, RenderError> {
+    render_tiles_by(ctx.opts, start, |x0, y0| tile_pixels(ctx, lanes, x0, y0))
+}
+
+/// The pixels of the tile whose first pixel is (`x0`, `y0`), by the path its options take.
+fn tile_pixels<F: Field>(
+    ctx: &RayContext<'_, F>,
+    lanes: bool,
+    x0: usize,
+    y0: usize,
+) -> Vec<PixelOut> {
     let opts = ctx.opts;
+    // Label colours are looked up ray by ray.
+    if !lanes || opts.labels.is_some() {
+        ctx.tile_ray_by_ray(x0, y0)
+    } else if opts.mip {
+        ctx.mip_stream(x0, y0)
+    } else if let Some(st) = ctx.packet_table() {
+        ctx.lane_stream(st, x0, y0)
+    } else if let Some(pt) = ctx.preintegrated_stream_table() {
+        ctx.lane_stream(pt, x0, y0)
+    } else if let Some(tr) = ctx.trapezoid_stream_rule() {
+        ctx.lane_stream(&tr, x0, y0)
+    } else if let Some(p) = ctx.adaptive_stream_params() {
+        ctx.adaptive_stream(p, x0, y0)
+    } else {
+        ctx.tile_ray_by_ray(x0, y0)
+    }
+}
+
+/// The image of `opts` from the pixels `tile` gives each tile, with its stats, timed from
+/// `start`.
+fn render_tiles_by(
+    opts: &RenderOptions,
+    start: Instant,
+    tile: impl Fn(usize, usize) -> Vec<PixelOut> + Sync,
+) -> Result<Rendered, RenderError> {
     let grid = TileGrid::new(opts.width, opts.height, TILE);
-    let out = render_tiles(&grid, &opts.control, |_, r| {
-        let (x0, y0) = (r.x0, r.y0);
-        // Label colours are looked up ray by ray.
-        let px = if !lanes || opts.labels.is_some() {
-            ctx.tile_ray_by_ray(x0, y0)
-        } else if opts.mip {
-            ctx.mip_stream(x0, y0)
-        } else if let Some(st) = ctx.packet_table() {
-            ctx.lane_stream(st, x0, y0)
-        } else if let Some(pt) = ctx.preintegrated_stream_table() {
-            ctx.lane_stream(pt, x0, y0)
-        } else if let Some(tr) = ctx.trapezoid_stream_rule() {
-            ctx.lane_stream(&tr, x0, y0)
-        } else if let Some(p) = ctx.adaptive_stream_params() {
-            ctx.adaptive_stream(p, x0, y0)
-        } else {
-            ctx.tile_ray_by_ray(x0, y0)
-        };
-        (px, ())
-    })?
-    .pixels;
+    let out = render_tiles(&grid, &opts.control, |_, r| (tile(r.x0, r.y0), ()))?.pixels;
     let (w, h) = (opts.width, opts.height);
     let stats = RenderStats {
         rays: out.iter().filter(|p| p.hit).count() as u64,
