@@ -395,8 +395,8 @@ impl SculptMask {
 
     /// Removes every kept voxel of `region` and returns what changed (for
     /// [`SculptMask::restore`]). The bricks the region touches are found by halving boxes of
-    /// bricks ([`covered_bricks`]); those it covers wholly are removed without looking at
-    /// their voxels, and only the others are cut ([`cut_brick`]), in parallel. The macrocell
+    /// bricks (`cut::covered_bricks`); those it covers wholly are removed without looking at
+    /// their voxels, and only the others are cut (`cut::cut_brick`), in parallel. The macrocell
     /// states of the bricks changed are updated.
     pub fn remove(&mut self, region: &(impl Region + ?Sized)) -> MaskEdit {
         let Some((lo, hi)) = region.index_bounds(self.dims) else {
