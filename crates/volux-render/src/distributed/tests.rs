@@ -451,3 +451,51 @@ fn hash(i: usize, salt: u32) -> f64 {
 }
 
 mod adaptive;
+
+/// Long rays (about 600 samples through a 72³ grid, opacity up to 0.9): the ranks' parts of
+/// a ray, composited, equal the whole ray within 3e-7 (the issue asks for 1e-6) for every
+/// integrator the swap composites. Summed in one `f32` chain per ray, the pictures differed
+/// by up to 1.19e-6 (48 x 48, step 0.25); with the lanes' blocks unbounded (one `f32` chain
+/// per span, folded into `f64`), by 5.4e-7 to 7.2e-7; with blocks of 32 steps, 1.2e-7.
+#[test]
+fn long_rays_composited_by_the_ranks_equal_the_whole_rays_within_3e_7() {
+    let n = 72usize;
+    let mut v = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let [x, y, z] = [i, j, k].map(|c| c as f32 / 71.0);
+                v.push(60.0 + 10.0 * (9.0 * x).sin() * (7.0 * y).cos() + 8.0 * (11.0 * z).sin());
+            }
+        }
+    }
+    let samples = volux_core::grid::Samples::F32(volux_core::grid::Buffer::owned(v));
+    let g = Grid::new([n; 3], [1.0; 3], [0.0; 3], samples).unwrap();
+    let tf = volux_core::TransferFunction::from_json(
+        r#"{"color": [[40,0.2,0.4,1],[60,1,0.8,0.3],[80,1,1,1]],
+            "extinction": [[40,0.006],[60,0.03],[80,0.012]]}"#,
+    )
+    .unwrap();
+    let cam = CameraSpec::from_json(r#"{"azimuth": 33, "elevation": 21}"#)
+        .unwrap()
+        .resolve(&g.bounds())
+        .unwrap();
+    for integrator in [
+        Integrator::Riemann { step: 0.2 },
+        Integrator::Trapezoid { step: 0.2 },
+        Integrator::Simpson { step: 0.2 },
+        Integrator::Preintegrated { step: 0.2 },
+    ] {
+        let mut o = RenderOptions::new(cam, tf.clone());
+        (o.width, o.height) = (48, 48);
+        o.integrator = integrator;
+        let want = single(&g, &o);
+        let opacity = want.pixels().iter().map(|p| p[3]).fold(0.0, f32::max);
+        assert!(opacity > 0.85, "{}: opacity {opacity}", integrator.name());
+        for ranks in [2, 3, 4] {
+            let (got, _) = distributed(&g, ranks, &o).unwrap();
+            let d = max_diff(&got, &want);
+            assert!(d <= 3e-7, "{}, {ranks} ranks: {d:e}", integrator.name());
+        }
+    }
+}

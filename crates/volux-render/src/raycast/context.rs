@@ -31,7 +31,7 @@ impl PixelOut {
     /// A hit ray composited into `acc` with `samples` samples (no error estimate).
     pub(crate) fn composited(acc: &RayAccumulator, samples: u64) -> Self {
         Self {
-            rgba: acc.rgba,
+            rgba: acc.pixel(),
             samples,
             error: 0.0,
             missed: false,

@@ -321,7 +321,7 @@ impl<F: Field> RayContext<'_, F> {
         jitter: f64,
     ) -> PixelOut {
         let (o_v, d_v) = (o_v.as_vec3(), d_v.as_vec3());
-        let stop = self.opts.early_termination.unwrap_or(2.0);
+        let stop = f64::from(self.opts.early_termination.unwrap_or(2.0));
         let view = (d_v * self.place.spacing.as_vec3()).normalize_or_zero();
         let mut acc = RayAccumulator::default();
         let mut n = 0u64;
@@ -523,7 +523,7 @@ impl<F: Field> RayContext<'_, F> {
         let Some(table) = self.preintegration else {
             return PixelOut::default();
         };
-        let stop = self.opts.early_termination.unwrap_or(2.0);
+        let stop = f64::from(self.opts.early_termination.unwrap_or(2.0));
         let start = (t0 + jitter * h - h).max(t0 - h);
         let value = |t: f64| self.field.sample((o_v + d_v * t.clamp(t0, t1)).as_vec3());
         let mut acc = RayAccumulator::default();

@@ -14,6 +14,15 @@
 //! ray of the tile (in 4 x 4 pixel blocks, so that lanes read neighbouring voxels); that
 //! bookkeeping runs once per span, not per sample.
 //!
+//! A lane sums its ray in blocks of at most [`BLOCK_STEPS`] steps: the block's slabs are
+//! composited in `f32` from zero, and the block is then composited under the ray's `f64` sum
+//! ([`Lanes::fold`]). A single `f32` chain over hundreds of samples drifts by about 1e-6 (each
+//! step rounds to half an ulp of the opacity so far, near 1); a block's partial sum is small,
+//! so its rounding is too, and the ray composited in pieces (bricks, ranks: `003`) agrees with
+//! the ray composited whole to about 1e-7. Keeping the whole sum in `f64` did the same at
+//! 11 % of the Riemann frame (156 against 140 ms on Marschner-Lobb); the blocks cost 2.3 % of
+//! a CT frame's instructions (callgrind, Riemann 0.25).
+//!
 //! Sample `i` of a ray sits at `t_i = start + i h`, `start = t0 + jitter h` (voxel space:
 //! `base + i step`): a function of the ray and `i` only, so skipping empty space never moves a
 //! sample. The Riemann slab `i` is `[t_i, t_i + h]`; the pre-integrated segment `i` is
@@ -22,7 +31,7 @@ use glam::{DVec3, Vec3};
 
 use super::context::{first_at_or_after, pixel_hash, PixelOut, RayContext};
 use crate::classify::LaneTable;
-use crate::composite::{under_if, under_partial, RayAccumulator};
+use crate::composite::{under64, under_if, under_partial, RayAccumulator};
 use crate::integrate::adaptive_lanes::exp_lanes;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{riemann_step, Integrator};
@@ -237,6 +246,21 @@ fn composite_entries<R: SlabRule>(
     for l in 0..LANES {
         let undefined = back[l].is_nan() | (R::SEGMENTS & front[l].is_nan());
         under_if(&mut acc[l], e[l], !undefined);
+    }
+}
+
+/// The most steps a lane composites in `f32` before folding them into its `f64` sum.
+const BLOCK_STEPS: i32 = 32;
+
+/// The opacity of a block at which a ray of opacity `a` so far reaches `stop`: the `x` with
+/// `a + (1 - a) x = stop`; minus infinity once `a` reaches `stop`, infinite for a ray without
+/// early termination that is opaque.
+#[inline(always)]
+fn block_stop(stop: f64, a: f64) -> f32 {
+    if a >= stop {
+        f32::NEG_INFINITY
+    } else {
+        ((stop - a) / (1.0 - a)) as f32
     }
 }
 
@@ -472,11 +496,17 @@ impl LaneLattice {
 struct Lanes {
     /// The lattices; a lane's run ends with the full slabs of its current span.
     lattice: LaneLattice,
+    /// Each lane's current block, composited from zero in `f32`.
     acc: [[f32; 4]; LANES],
+    /// Each lane's ray up to its current block, in `f64` ([`RayAccumulator`]).
+    sum: [[f64; 4]; LANES],
     /// The last sample taken (the front of the next segment; NaN where undefined).
     front: [f32; LANES],
-    /// Opacity at which the lane's ray stops; infinite for an idle lane.
+    /// Opacity of the current block at which the lane's ray stops (from `ray_stop` and
+    /// `sum`); infinite for an idle lane.
     stop: [f32; LANES],
+    /// Opacity at which the lane's ray stops; infinite for an idle lane.
+    ray_stop: [f64; LANES],
     /// Lighting directions of the lane's ray (towards the eye, the light, their half vector)
     /// and whether it is lit.
     to_eye: Lanes3,
@@ -495,8 +525,10 @@ impl Lanes {
         Self {
             lattice: LaneLattice::new(),
             acc: [[0.0; 4]; LANES],
+            sum: [[0.0; 4]; LANES],
             front: [0.0; LANES],
             stop: [f32::INFINITY; LANES],
+            ray_stop: [f64::INFINITY; LANES],
             to_eye: [[0.0; LANES]; 3],
             light: [[0.0; LANES]; 3],
             half: [[0.0; LANES]; 3],
@@ -512,7 +544,56 @@ impl Lanes {
         self.live[l] = false;
         self.hiding &= !(1 << l);
         self.stop[l] = f32::INFINITY;
+        self.ray_stop[l] = f64::INFINITY;
         self.lattice.idle(l);
+    }
+
+    /// Lane `l` starts a ray that stops at opacity `stop`.
+    fn start(&mut self, l: usize, stop: f64) {
+        self.live[l] = true;
+        self.ray_stop[l] = stop;
+        self.set_sum(l, RayAccumulator::default());
+    }
+
+    /// Composites lane `l`'s block under its ray's sum and starts a new block.
+    #[inline(always)]
+    fn fold(&mut self, l: usize) {
+        let mut sum = self.sum[l];
+        under64(&mut sum, self.acc[l].map(f64::from));
+        self.set_sum(l, RayAccumulator { rgba: sum });
+    }
+
+    /// [`Lanes::fold`] of every lane, lane-wise.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn fold_all(&mut self) {
+        let mut w = [0.0f64; LANES];
+        for l in 0..LANES {
+            w[l] = 1.0 - self.sum[l][3];
+        }
+        for l in 0..LANES {
+            for c in 0..4 {
+                self.sum[l][c] += w[l] * f64::from(self.acc[l][c]);
+            }
+        }
+        self.acc = [[0.0; 4]; LANES];
+        for l in 0..LANES {
+            self.stop[l] = block_stop(self.ray_stop[l], self.sum[l][3]);
+        }
+    }
+
+    /// Lane `l`'s ray so far, its block folded in.
+    fn ray(&mut self, l: usize) -> RayAccumulator {
+        self.fold(l);
+        RayAccumulator { rgba: self.sum[l] }
+    }
+
+    /// Lane `l`'s ray is `sum`, with an empty block ([`block_stop`]).
+    #[inline(always)]
+    fn set_sum(&mut self, l: usize, sum: RayAccumulator) {
+        self.sum[l] = sum.rgba;
+        self.acc[l] = [0.0; 4];
+        self.stop[l] = block_stop(self.ray_stop[l], sum.rgba[3]);
     }
 }
 
@@ -558,7 +639,9 @@ impl<F: Field> RayContext<'_, F> {
         // compiler extracted, incremented and compared each lane's index on its own).
         // Every lane advances one sample per step: the run counts the steps, and the lanes'
         // indices advance by that count at its end.
-        let run = lanes.lattice.run();
+        // Runs of at most a block: folding inside the run cost more (4 % of a CT frame's
+        // instructions against 2.3 %: the lanes' sums no longer stayed in registers).
+        let run = lanes.lattice.run().min(BLOCK_STEPS);
         let first = lanes.lattice.i.map(|i| i as f32);
         let mut k = 0;
         while k < run {
@@ -598,6 +681,7 @@ impl<F: Field> RayContext<'_, F> {
         for i in lanes.lattice.i.iter_mut() {
             *i += k;
         }
+        lanes.fold_all();
         let mut mask = lanes.lattice.ended();
         for l in 0..LANES {
             mask |= u32::from(lanes.acc[l][3] >= lanes.stop[l]) << l;
@@ -711,9 +795,9 @@ impl<F: Field> RayContext<'_, F> {
         l: usize,
         (from, to): (i32, i32),
     ) -> bool {
+        let mut acc = lanes.ray(l);
+        let stop = lanes.ray_stop[l];
         let r = &mut lanes.rays[l];
-        let mut acc = RayAccumulator { rgba: lanes.acc[l] };
-        let stop = lanes.stop[l];
         for i in from..to {
             let t = r.start + r.h * f64::from(i);
             let v = self.field.sample(r.position(i));
@@ -734,18 +818,18 @@ impl<F: Field> RayContext<'_, F> {
                 riemann_step(&mut acc, c, (r.t1 - t).min(r.h) as f32);
             }
             if acc.alpha() >= stop {
-                lanes.acc[l] = acc.rgba;
+                lanes.set_sum(l, acc);
                 return false;
             }
         }
-        lanes.acc[l] = acc.rgba;
+        lanes.set_sum(l, acc);
         true
     }
 
     /// Writes lane `l`'s pixel.
     fn finish(&self, lanes: &mut Lanes, l: usize, px: &mut [PixelOut]) {
+        let acc = lanes.ray(l);
         let r = &lanes.rays[l];
-        let acc = RayAccumulator { rgba: lanes.acc[l] };
         px[r.pixel] = PixelOut::composited(&acc, r.samples);
         lanes.idle(l);
     }
@@ -812,10 +896,8 @@ impl<F: Field> RayContext<'_, F> {
                 lanes.lit[l] = ray.is_some();
             }
             lanes.rays[l].partial = lanes.rays[l].first_partial(R::SEGMENTS);
-            lanes.acc[l] = [0.0; 4];
             lanes.lattice.set(l, base, stp);
-            lanes.live[l] = true;
-            lanes.stop[l] = self.opts.early_termination.unwrap_or(2.0);
+            lanes.start(l, f64::from(self.opts.early_termination.unwrap_or(2.0)));
             if self.continue_ray(rule, lanes, l, 0) {
                 return;
             }
