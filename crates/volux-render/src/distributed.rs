@@ -12,7 +12,8 @@
 //! its bricked picture differs from the whole one; here a rank's partial image is the exact
 //! integral of its part of the ray, and the *under* operator composites the parts, so the
 //! picture equals the single-process render (within float rounding: 1e-6 per channel,
-//! tested for 1 to 5 ranks). Early ray termination is off (but for adaptive Simpson, below):
+//! tested for 1 to 5 ranks, and 3e-7 on rays of about 600 samples, whose sums are kept in
+//! `f64`: [`crate::composite`]). Early ray termination is off (but for adaptive Simpson, below):
 //! a rank behind another cannot know that the rays it samples are already opaque in front. Isosurfaces too: the step from
 //! a region's last sample to the next region's first belongs to the front region, which
 //! finds and refines the crossings in it exactly as one process does.
