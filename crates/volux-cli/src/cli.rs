@@ -36,8 +36,13 @@ pub enum Command {
     /// Describe a file: format, dims or counts, spacing, type, value range, histogram, memory,
     /// mesh validation.
     Info {
-        /// The file (or DICOM folder).
-        file: PathBuf,
+        /// The file (or DICOM folder); none with --gpu.
+        #[arg(required_unless_present = "gpu")]
+        file: Option<PathBuf>,
+        /// List the GPU adapters the GPU backend can render on, the one `--backend gpu`
+        /// picks first (needs a build with the `gpu` feature).
+        #[arg(long)]
+        gpu: bool,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
@@ -331,6 +336,12 @@ pub struct RenderArgs {
     /// Integrate every ray to its end (no early ray termination).
     #[arg(long)]
     pub no_early_termination: bool,
+    /// Where to render: `cpu` (the reference engine), `gpu` (wgpu: grid ray casting with
+    /// Riemann sums, clip planes and early termination; a build with the `gpu` feature), or
+    /// `auto`: the GPU when the build has it, an adapter exists and it draws the scene, else
+    /// the CPU.
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    pub backend: Backend,
     /// Measure on the visible surface, as `volux measure` does, and draw it: pixel X,Y
     /// (at least two; a polyline in the order given) picked where the opacity along its ray
     /// reaches 0.5 after the clip planes and the mask; the points and the polyline are drawn
@@ -827,4 +838,15 @@ mod tests {
         let size = option(render, &clap::Id::from("size"));
         assert_eq!(size.get_default_values(), ["512x512"]);
     }
+}
+
+/// Where `volux render` renders (`--backend`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// The GPU when there is one that draws the scene, else the CPU.
+    Auto,
+    /// The CPU engine (the reference).
+    Cpu,
+    /// The GPU backend (`volux-gpu`), or an error saying why not.
+    Gpu,
 }

@@ -183,6 +183,17 @@ impl LaneTable {
         (i as u32, x - i as f32)
     }
 
+    /// The entries, with the copy of the last one after them (for a GPU table: a backend
+    /// interpolates them as [`LaneTable::lookup`] does).
+    pub fn entries(&self) -> &[[f32; 4]] {
+        &self.entries[..]
+    }
+
+    /// The domain as `(lo, scale)`: value `s` sits at entry position `(s - lo) scale`.
+    pub fn domain(&self) -> (f32, f32) {
+        (self.lo, self.scale)
+    }
+
     /// The entries `i` and `i + 1` interpolated at fraction `f`.
     #[inline(always)]
     pub fn at(&self, i: u32, f: f32) -> [f32; 4] {

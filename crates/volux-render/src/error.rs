@@ -13,6 +13,10 @@ pub enum RenderError {
     /// An error of the data model.
     #[error("{0}")]
     Data(#[from] volux_core::Error),
+    /// A rendering backend (the GPU) failed or cannot draw the scene: no adapter, a device
+    /// limit, out of device memory, a lost device.
+    #[error("{0}")]
+    Backend(String),
     /// A session file that cannot be read, or that describes no valid scene.
     #[error("session {path}: {reason}")]
     Session {

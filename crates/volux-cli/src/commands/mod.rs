@@ -2,6 +2,7 @@
 //! [`crate::settings`], and every render goes through the engine API
 //! ([`volux_render::engine`]).
 mod accuracy;
+mod backend;
 mod bench;
 pub(crate) mod bricked;
 pub mod common;
@@ -31,7 +32,16 @@ use common::CmdError;
 pub fn run(cli: Cli) -> Result<(), CmdError> {
     let show = progress::enabled(cli.quiet);
     match cli.command {
-        Command::Info { file, json, load } => {
+        Command::Info {
+            file,
+            gpu,
+            json,
+            load,
+        } => {
+            if gpu {
+                return backend::list_adapters(json);
+            }
+            let file = file.ok_or("give the file to describe")?;
             // A store is described from its metadata (unless a level is to be loaded).
             let store = volux_io::detect(&file).ok() == Some(volux_io::Format::OmeZarr);
             if store && load.level.is_none() {

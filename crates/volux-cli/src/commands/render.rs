@@ -6,14 +6,14 @@ use volux_core::heatmap::{heat_map, heat_map_legend_text};
 use volux_core::image::PngOptions;
 use volux_core::{synth, CameraSpec, Image, TransferFunction};
 use volux_io::{Dataset, Format};
-use volux_render::engine::{create_renderer, Frame};
+use volux_render::engine::Frame;
 use volux_render::framing::{visible_bounds, Invisible};
 use volux_render::scene::{Scene, Volume};
 use volux_render::tiles::Control;
 
 use super::common::CmdError;
 use super::report;
-use crate::cli::RenderArgs;
+use crate::cli::{Backend, RenderArgs};
 use crate::progress;
 use crate::settings::RenderPlan;
 
@@ -47,7 +47,7 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     if let Some(spec) = &args.orbit {
         return super::orbit::run(args, spec, &volume, &scene, &plan.png);
     }
-    let mut frame = render(&volume, &scene, show)?;
+    let mut frame = render_on(&volume, &scene, show, args.backend)?;
     if let Some(m) = &measured {
         m.draw(&mut frame.image);
     }
@@ -142,9 +142,19 @@ fn write_error_map(
     Ok(())
 }
 
-/// Renders one frame of `scene` with a progress bar.
+/// Renders one frame of `scene` on the CPU with a progress bar.
 pub fn render(volume: &Volume, scene: &Scene, show: bool) -> Result<Frame, CmdError> {
-    let mut renderer = create_renderer(volume, &scene.method)?;
+    render_on(volume, scene, show, Backend::Cpu)
+}
+
+/// Renders one frame of `scene` on `backend` with a progress bar.
+pub fn render_on(
+    volume: &Volume,
+    scene: &Scene,
+    show: bool,
+    backend: Backend,
+) -> Result<Frame, CmdError> {
+    let mut renderer = super::backend::renderer(volume, scene, backend)?;
     let (pb, progress) = progress::rows(show, scene.view.height);
     let control = Control {
         cancel: None,

@@ -1,0 +1,106 @@
+//! `--backend`: the renderer a command renders with, on the CPU or the GPU (`volux-gpu`,
+//! behind the `gpu` feature), and `volux info --gpu`.
+use volux_render::engine::create_renderer;
+use volux_render::renderer::Renderer;
+use volux_render::scene::{Scene, Volume};
+
+use super::common::CmdError;
+use crate::cli::Backend;
+
+/// The renderer of `scene` on `volume` for `backend`: `auto` takes the GPU when it can and
+/// says on stderr why not when a GPU build cannot.
+pub fn renderer(
+    volume: &Volume,
+    scene: &Scene,
+    backend: Backend,
+) -> Result<Box<dyn Renderer>, CmdError> {
+    match backend {
+        Backend::Cpu => Ok(create_renderer(volume, &scene.method)?),
+        Backend::Gpu => gpu::renderer(volume, scene),
+        Backend::Auto => match gpu::renderer(volume, scene) {
+            Ok(r) => Ok(r),
+            Err(why) => {
+                if gpu::BUILT {
+                    eprintln!("volux: rendering on the CPU: {why}");
+                }
+                Ok(create_renderer(volume, &scene.method)?)
+            }
+        },
+    }
+}
+
+/// `volux info --gpu`: the adapters, preferred first.
+pub fn list_adapters(json: bool) -> Result<(), CmdError> {
+    let adapters = gpu::adapters()?;
+    if json {
+        println!("{}", serde_json::to_string(&adapters)?);
+    } else if adapters.is_empty() {
+        println!("no GPU adapter (install a Vulkan driver, e.g. mesa-vulkan-drivers)");
+    } else {
+        for (i, a) in adapters.iter().enumerate() {
+            let first = if i == 0 {
+                "  (--backend gpu uses it)"
+            } else {
+                ""
+            };
+            println!("{i}: {a}{first}");
+        }
+    }
+    Ok(())
+}
+
+#[cfg(feature = "gpu")]
+mod gpu {
+    use std::sync::Arc;
+
+    use volux_gpu::{GpuContext, GpuGridRenderer};
+    use volux_render::renderer::Renderer;
+    use volux_render::scene::{Scene, Volume};
+    use volux_render::RenderError;
+
+    use crate::commands::common::CmdError;
+
+    pub const BUILT: bool = true;
+
+    pub fn renderer(volume: &Volume, scene: &Scene) -> Result<Box<dyn Renderer>, CmdError> {
+        let Volume::Grid(grid) = volume else {
+            return Err(format!(
+                "the GPU backend draws grids held in memory, not a {}",
+                volume.kind()
+            )
+            .into());
+        };
+        GpuGridRenderer::supports(scene).map_err(RenderError::Backend)?;
+        let ctx = Arc::new(GpuContext::new().map_err(RenderError::from)?);
+        eprintln!("volux: rendering on the GPU: {}", ctx.adapter());
+        let r = GpuGridRenderer::new(ctx, grid.clone()).map_err(RenderError::from)?;
+        Ok(Box::new(r))
+    }
+
+    pub fn adapters() -> Result<Vec<String>, CmdError> {
+        Ok(volux_gpu::adapters()
+            .iter()
+            .map(|a| a.to_string())
+            .collect())
+    }
+}
+
+#[cfg(not(feature = "gpu"))]
+mod gpu {
+    use volux_render::renderer::Renderer;
+    use volux_render::scene::{Scene, Volume};
+
+    use crate::commands::common::CmdError;
+
+    pub const BUILT: bool = false;
+
+    const NOT_BUILT: &str = "this volux was built without the GPU backend (cargo build --release -p volux-cli --features gpu)";
+
+    pub fn renderer(_: &Volume, _: &Scene) -> Result<Box<dyn Renderer>, CmdError> {
+        Err(NOT_BUILT.into())
+    }
+
+    pub fn adapters() -> Result<Vec<String>, CmdError> {
+        Err(NOT_BUILT.into())
+    }
+}

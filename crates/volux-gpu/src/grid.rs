@@ -1,0 +1,352 @@
+//! Grid ray casting on the GPU ([`GpuGridRenderer`]): the grid resident in a 3D texture, one
+//! compute invocation per pixel (`raycast.wgsl`), the image read back.
+use std::sync::{mpsc, Arc};
+use std::time::Instant;
+
+use volux_core::image::Image;
+use volux_core::Grid;
+use volux_render::classify::ClassifyTable;
+use volux_render::frame::{Frame, FrameStats, MethodStats, Rebuilt, RenderStats};
+use volux_render::integrate::Integrator;
+use volux_render::raycast::{Placement, RenderOptions};
+use volux_render::renderer::Renderer;
+use volux_render::sampling::Reconstruction;
+use volux_render::scene::{GridRaycast, Method, Scene, Volume};
+use volux_render::tiles::Control;
+use volux_render::{check_image_size, RenderError};
+use wgpu::util::DeviceExt;
+
+use crate::context::GpuContext;
+use crate::error::GpuError;
+use crate::params::{local_planes, Params};
+
+const WORKGROUP: u32 = 8;
+
+/// Grid ray casting on the GPU: Riemann sums with step-corrected opacity, clip planes and
+/// early ray termination (see the crate docs for what it refuses). The grid is uploaded once,
+/// as `f32` (undefined and infinite values as NaN, drawn as empty medium as on the CPU).
+pub struct GpuGridRenderer {
+    ctx: Arc<GpuContext>,
+    grid: Arc<Grid>,
+    volume: wgpu::TextureView,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl GpuGridRenderer {
+    /// Uploads `grid` to the device of `ctx`; an error when it is over the device's 3D
+    /// texture size.
+    pub fn new(ctx: Arc<GpuContext>, grid: Arc<Grid>) -> Result<Self, GpuError> {
+        let limits = ctx.limits();
+        let dims = grid.dims();
+        let side = limits.max_texture_dimension_3d as usize;
+        if dims.iter().any(|&n| n > side) {
+            return Err(GpuError::OverLimit {
+                what: format!("a grid of {}x{}x{}", dims[0], dims[1], dims[2]),
+                limit: format!("3D textures up to {side} per side"),
+            });
+        }
+        let volume = ctx.checked(|| upload(&ctx, &grid))??;
+        let pipeline = ctx.checked(|| pipeline(&ctx.device))?;
+        Ok(Self {
+            ctx,
+            grid,
+            volume,
+            pipeline,
+        })
+    }
+
+    /// Whether the shader draws `scene` (a grid ray casting scene): `Err` says what it does
+    /// not draw yet, for a front end to fall back to the CPU or to say so.
+    pub fn supports(scene: &Scene) -> Result<(), String> {
+        let settings = match scene.method {
+            Method::GridRaycast(s) => s,
+            Method::Auto => GridRaycast::default(),
+            ref m => return Err(format!("the GPU backend does not draw '{}'", m.name())),
+        };
+        let a = &scene.appearance;
+        let refused = if !matches!(settings.integrator, Integrator::Riemann { .. }) {
+            Some(format!("the {} integrator", settings.integrator.name()))
+        } else if settings.reconstruction != Reconstruction::Trilinear {
+            Some("tricubic reconstruction".into())
+        } else if settings.jitter {
+            Some("jitter".into())
+        } else if a.shade_volume {
+            Some("volume shading".into())
+        } else if !a.isosurfaces.is_empty() {
+            Some("isosurfaces".into())
+        } else if a.mip {
+            Some("maximum intensity projection".into())
+        } else if scene.mask.is_some() {
+            Some("a sculpt mask".into())
+        } else if scene.labels.is_some() {
+            Some("region labels".into())
+        } else {
+            None
+        };
+        match refused {
+            Some(what) => Err(format!(
+                "the GPU backend does not draw {what} yet (use --backend cpu)"
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// The adapter this renderer draws on.
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    fn render_options(
+        &self,
+        scene: &Scene,
+        control: &Control,
+    ) -> Result<RenderOptions, RenderError> {
+        let volume = Volume::Grid(self.grid.clone());
+        let settings = match scene.method.resolve(&volume)? {
+            Method::GridRaycast(s) => s,
+            m => {
+                return Err(RenderError::InvalidOptions(format!(
+                    "the GPU grid renderer cannot draw method '{}'",
+                    m.name()
+                )))
+            }
+        };
+        Self::supports(scene).map_err(RenderError::Backend)?;
+        let opts = RenderOptions::from_scene(scene, &settings, control);
+        check_image_size(opts.width, opts.height)?;
+        Ok(opts)
+    }
+}
+
+impl Renderer for GpuGridRenderer {
+    fn name(&self) -> &'static str {
+        "raycast"
+    }
+
+    fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
+        let started = Instant::now();
+        let opts = self.render_options(scene, control)?;
+        if control.is_cancelled() {
+            return Err(RenderError::Cancelled);
+        }
+        let (rgba, samples) = self.ctx.checked(|| self.dispatch(&opts))??;
+        let image = Image::from_pixels(opts.width, opts.height, rgba)?;
+        let seconds = started.elapsed().as_secs_f64();
+        let rays = samples.iter().filter(|&&n| n > 0).count() as u64;
+        Ok(Frame {
+            image,
+            error_map: None,
+            stats: FrameStats {
+                ms: seconds * 1e3,
+                pixels: opts.width * opts.height,
+                rebuilt: Rebuilt::ALL,
+                method: MethodStats::GridRaycast(RenderStats {
+                    rays,
+                    samples: samples.iter().map(|&n| u64::from(n)).sum(),
+                    seconds,
+                    rays_over_tolerance: 0,
+                    rebuilt: Rebuilt::ALL,
+                }),
+            },
+        })
+    }
+}
+
+impl GpuGridRenderer {
+    /// Runs the shader for `opts`: the pixels and each pixel's sample count.
+    fn dispatch(&self, opts: &RenderOptions) -> Result<(Vec<[f32; 4]>, Vec<u32>), GpuError> {
+        let Integrator::Riemann { step } = opts.integrator else {
+            return Err(GpuError::Failed("only Riemann sums are drawn".into()));
+        };
+        let device = &self.ctx.device;
+        let pixels = (opts.width * opts.height) as u64;
+        let limits = self.ctx.limits();
+        let bytes = pixels * 16;
+        let most = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        if bytes > most {
+            return Err(GpuError::OverLimit {
+                what: format!("an image of {}x{}", opts.width, opts.height),
+                limit: format!("storage buffers up to {most} bytes"),
+            });
+        }
+        let place = Placement::of(&self.grid);
+        let h = step * place.spacing.min_element();
+        let table = ClassifyTable::new(&opts.tf, self.grid.range(), ClassifyTable::DEFAULT_SIZE);
+        let (slab, taus) = (table.for_step(h as f32), table.for_lanes());
+        let planes = local_planes(opts, &place);
+        let params = Params::new(opts, &place, h, &slab, opts.clip_planes.len());
+        let storage = |label: &str, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let slab_buf = storage("slab table", bytemuck::cast_slice(slab.entries()));
+        let tau_buf = storage("extinction table", bytemuck::cast_slice(taus.entries()));
+        let plane_buf = storage("clip planes", bytemuck::cast_slice(&planes));
+        let output = |label: &str, size: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let (rgba_buf, count_buf) = (output("rgba", bytes), output("samples", pixels * 4));
+        let entries = [
+            (0, uniform.as_entire_binding()),
+            (1, wgpu::BindingResource::TextureView(&self.volume)),
+            (2, slab_buf.as_entire_binding()),
+            (3, tau_buf.as_entire_binding()),
+            (4, plane_buf.as_entire_binding()),
+            (5, rgba_buf.as_entire_binding()),
+            (6, count_buf.as_entire_binding()),
+        ]
+        .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("raycast"),
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups(
+                (opts.width as u32).div_ceil(WORKGROUP),
+                (opts.height as u32).div_ceil(WORKGROUP),
+                1,
+            );
+        }
+        let rgba_read = readback(device, &mut encoder, &rgba_buf, bytes);
+        let count_read = readback(device, &mut encoder, &count_buf, pixels * 4);
+        self.ctx.queue.submit([encoder.finish()]);
+        let rgba: Vec<[f32; 4]> = bytemuck::cast_slice(&map(device, &rgba_read)?).to_vec();
+        let counts: Vec<u32> = bytemuck::cast_slice(&map(device, &count_read)?).to_vec();
+        Ok((rgba, counts))
+    }
+}
+
+/// A buffer the copy of `src` lands in, to be mapped on the host.
+fn readback(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    src: &wgpu::Buffer,
+    size: u64,
+) -> wgpu::Buffer {
+    let dst = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    encoder.copy_buffer_to_buffer(src, 0, &dst, 0, size);
+    dst
+}
+
+/// The bytes of `buf` once the device is done with it.
+fn map(device: &wgpu::Device, buf: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let slice = buf.slice(..);
+    let (tx, rx) = mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        })
+        .map_err(|e| GpuError::Failed(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| GpuError::Failed(e.to_string()))?
+        .map_err(|e| GpuError::Failed(e.to_string()))?;
+    let bytes = slice.get_mapped_range().to_vec();
+    buf.unmap();
+    Ok(bytes)
+}
+
+/// The grid as an `r32float` 3D texture, non-finite values as NaN.
+fn upload(ctx: &GpuContext, grid: &Grid) -> Result<wgpu::TextureView, GpuError> {
+    let [nx, ny, nz] = grid.dims();
+    let size = wgpu::Extent3d {
+        width: nx as u32,
+        height: ny as u32,
+        depth_or_array_layers: nz as u32,
+    };
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("volume"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D3,
+        format: wgpu::TextureFormat::R32Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    // A slab of z layers at a time, so that the f32 copy never holds the whole grid twice.
+    let layer = nx * ny;
+    let per_write = (16 << 20) / (4 * layer).max(1);
+    let per_write = per_write.max(1);
+    let samples = grid.samples();
+    let mut z = 0;
+    while z < nz {
+        let n = per_write.min(nz - z);
+        let values: Vec<f32> = (z * layer..(z + n) * layer)
+            .map(|i| {
+                let v = samples.get_f32(i);
+                if v.is_finite() {
+                    v
+                } else {
+                    f32::NAN
+                }
+            })
+            .collect();
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: z as u32,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&values),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * nx as u32),
+                rows_per_image: Some(ny as u32),
+            },
+            wgpu::Extent3d {
+                depth_or_array_layers: n as u32,
+                ..size
+            },
+        );
+        z += n;
+    }
+    Ok(texture.create_view(&Default::default()))
+}
+
+/// The ray casting pipeline (`raycast.wgsl`).
+fn pipeline(device: &wgpu::Device) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("raycast.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(include_str!("raycast.wgsl").into()),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("raycast"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
