@@ -544,3 +544,46 @@ fn the_camera_frames_what_the_tf_shows_and_named_views_turn_it() {
         assert!((c - visible).abs() < 0.05, "{view}: {c} vs front {visible}");
     }
 }
+
+/// A build without the `gpu` feature refuses `--backend gpu` and `info --gpu` with how to
+/// build it, and renders `--backend auto` and `cpu` on the CPU without a word about the GPU.
+#[cfg(not(feature = "gpu"))]
+#[test]
+fn the_gpu_backend_of_a_build_without_it_is_refused_with_how_to_build_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    data(d);
+    let err = refused(
+        &[
+            "render",
+            "grid.raw",
+            "--backend",
+            "gpu",
+            "--size",
+            "32x32",
+            "-o",
+            "x.png",
+        ],
+        d,
+    );
+    assert!(err.contains("--features gpu"), "{err}");
+    let out = volux(&["info", "--gpu"], d);
+    assert!(!out.status.success() && stderr(&out).contains("--features gpu"));
+    for backend in ["auto", "cpu"] {
+        let err = accepted(
+            &[
+                "render",
+                "grid.raw",
+                "--backend",
+                backend,
+                "--size",
+                "32x32",
+                "-o",
+                "x.png",
+            ],
+            d,
+        );
+        assert!(!err.contains("GPU"), "{backend}: {err}");
+        assert!(d.join("x.png").exists());
+    }
+}

@@ -5,7 +5,6 @@ use std::time::Instant;
 
 use volux_core::image::Image;
 use volux_core::Grid;
-use volux_render::classify::ClassifyTable;
 use volux_render::frame::{Frame, FrameStats, MethodStats, Rebuilt, RenderStats};
 use volux_render::integrate::Integrator;
 use volux_render::raycast::{Placement, RenderOptions};
@@ -19,8 +18,12 @@ use wgpu::util::DeviceExt;
 use crate::context::GpuContext;
 use crate::error::GpuError;
 use crate::params::{local_planes, Params};
+use crate::tables::Tables;
 
 const WORKGROUP: u32 = 8;
+
+/// A frame's pixels and each pixel's sample count.
+type Readback = (Vec<[f32; 4]>, Vec<u32>);
 
 /// Grid ray casting on the GPU: Riemann sums with step-corrected opacity, clip planes and
 /// early ray termination (see the crate docs for what it refuses). The grid is uploaded once,
@@ -30,6 +33,8 @@ pub struct GpuGridRenderer {
     grid: Arc<Grid>,
     volume: wgpu::TextureView,
     pipeline: wgpu::ComputePipeline,
+    /// The last frame's classification, kept while the TF and the step stay.
+    tables: Option<Tables>,
 }
 
 impl GpuGridRenderer {
@@ -52,6 +57,7 @@ impl GpuGridRenderer {
             grid,
             volume,
             pipeline,
+            tables: None,
         })
     }
 
@@ -129,7 +135,13 @@ impl Renderer for GpuGridRenderer {
         if control.is_cancelled() {
             return Err(RenderError::Cancelled);
         }
-        let (rgba, samples) = self.ctx.checked(|| self.dispatch(&opts))??;
+        let ctx = self.ctx.clone();
+        let ((rgba, samples), classified) = ctx.checked(|| self.dispatch(&opts))??;
+        let rebuilt = Rebuilt {
+            data: false,
+            classification: classified,
+            view: true,
+        };
         let image = Image::from_pixels(opts.width, opts.height, rgba)?;
         let seconds = started.elapsed().as_secs_f64();
         let rays = samples.iter().filter(|&&n| n > 0).count() as u64;
@@ -139,13 +151,13 @@ impl Renderer for GpuGridRenderer {
             stats: FrameStats {
                 ms: seconds * 1e3,
                 pixels: opts.width * opts.height,
-                rebuilt: Rebuilt::ALL,
+                rebuilt,
                 method: MethodStats::GridRaycast(RenderStats {
                     rays,
                     samples: samples.iter().map(|&n| u64::from(n)).sum(),
                     seconds,
                     rays_over_tolerance: 0,
-                    rebuilt: Rebuilt::ALL,
+                    rebuilt,
                 }),
             },
         })
@@ -153,8 +165,9 @@ impl Renderer for GpuGridRenderer {
 }
 
 impl GpuGridRenderer {
-    /// Runs the shader for `opts`: the pixels and each pixel's sample count.
-    fn dispatch(&self, opts: &RenderOptions) -> Result<(Vec<[f32; 4]>, Vec<u32>), GpuError> {
+    /// Runs the shader for `opts`: the pixels and each pixel's sample count, and whether the
+    /// classification tables were rebuilt.
+    fn dispatch(&mut self, opts: &RenderOptions) -> Result<(Readback, bool), GpuError> {
         let Integrator::Riemann { step } = opts.integrator else {
             return Err(GpuError::Failed("only Riemann sums are drawn".into()));
         };
@@ -171,10 +184,15 @@ impl GpuGridRenderer {
         }
         let place = Placement::of(&self.grid);
         let h = step * place.spacing.min_element();
-        let table = ClassifyTable::new(&opts.tf, self.grid.range(), ClassifyTable::DEFAULT_SIZE);
-        let (slab, taus) = (table.for_step(h as f32), table.for_lanes());
+        let stale = !self.tables.as_ref().is_some_and(|t| t.is_for(&opts.tf, h));
+        if stale {
+            self.tables = Some(Tables::new(device, &opts.tf, self.grid.range(), h));
+        }
+        let Some(tables) = &self.tables else {
+            return Err(GpuError::Failed("no classification tables".into()));
+        };
         let planes = local_planes(opts, &place);
-        let params = Params::new(opts, &place, h, &slab, opts.clip_planes.len());
+        let params = Params::new(opts, &place, h, tables, opts.clip_planes.len());
         let storage = |label: &str, contents: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -187,8 +205,6 @@ impl GpuGridRenderer {
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let slab_buf = storage("slab table", bytemuck::cast_slice(slab.entries()));
-        let tau_buf = storage("extinction table", bytemuck::cast_slice(taus.entries()));
         let plane_buf = storage("clip planes", bytemuck::cast_slice(&planes));
         let output = |label: &str, size: u64| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -202,8 +218,8 @@ impl GpuGridRenderer {
         let entries = [
             (0, uniform.as_entire_binding()),
             (1, wgpu::BindingResource::TextureView(&self.volume)),
-            (2, slab_buf.as_entire_binding()),
-            (3, tau_buf.as_entire_binding()),
+            (2, tables.slab.as_entire_binding()),
+            (3, tables.tau.as_entire_binding()),
             (4, plane_buf.as_entire_binding()),
             (5, rgba_buf.as_entire_binding()),
             (6, count_buf.as_entire_binding()),
@@ -230,7 +246,7 @@ impl GpuGridRenderer {
         self.ctx.queue.submit([encoder.finish()]);
         let rgba: Vec<[f32; 4]> = bytemuck::cast_slice(&map(device, &rgba_read)?).to_vec();
         let counts: Vec<u32> = bytemuck::cast_slice(&map(device, &count_read)?).to_vec();
-        Ok((rgba, counts))
+        Ok(((rgba, counts), stale))
     }
 }
 

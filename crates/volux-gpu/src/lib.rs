@@ -17,6 +17,7 @@ mod context;
 mod error;
 mod grid;
 mod params;
+mod tables;
 
 pub use context::{adapters, AdapterSummary, GpuContext};
 pub use error::GpuError;

@@ -3,8 +3,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
 use volux_core::camera::Projection;
-use volux_render::classify::LaneTable;
-use volux_render::raycast::{Placement, RenderOptions};
+use volux_render::raycast::{local_clip_planes, Placement, RenderOptions};
+
+use crate::tables::Tables;
 
 /// The shader's `Params` (`raycast.wgsl`), field for field.
 #[repr(C)]
@@ -32,7 +33,7 @@ impl Params {
         opts: &RenderOptions,
         place: &Placement,
         h: f64,
-        table: &LaneTable,
+        tables: &Tables,
         planes: usize,
     ) -> Self {
         let cam = &opts.camera;
@@ -41,7 +42,7 @@ impl Params {
             Projection::Perspective { fov_y_deg } => (0, (fov_y_deg.to_radians() * 0.5).tan()),
             Projection::Orthographic { height } => (1, height),
         };
-        let (lo, scale) = table.domain();
+        let (lo, scale) = tables.domain;
         let stop = opts.early_termination.unwrap_or(2.0);
         let [nx, ny, nz] = place.dims.map(|n| n as u32);
         Self {
@@ -56,7 +57,7 @@ impl Params {
                 opts.width as u32,
                 opts.height as u32,
                 projection,
-                table.entries().len() as u32,
+                tables.entries as u32,
             ],
             lens: [
                 lens as f32,
@@ -68,17 +69,13 @@ impl Params {
     }
 }
 
-/// The clip planes of `opts` in the grid's local frame, `[nx, ny, nz, offset]` each, and one
-/// unused plane when there are none (a storage buffer is never empty).
+/// The clip planes of `opts` in the grid's local frame ([`local_clip_planes`]),
+/// `[nx, ny, nz, offset]` each, and one unused plane when there are none (a storage buffer is
+/// never empty).
 pub(crate) fn local_planes(opts: &RenderOptions, place: &Placement) -> Vec<[f32; 4]> {
-    let mut out: Vec<[f32; 4]> = opts
-        .clip_planes
+    let mut out: Vec<[f32; 4]> = local_clip_planes(place, &opts.clip_planes)
         .iter()
-        .map(|p| {
-            let n = place.vector_to_local(p.normal);
-            let offset = p.offset + p.normal.dot(place.origin) - n.dot(place.origin);
-            v4(n, offset as f32)
-        })
+        .map(|p| v4(p.normal, p.offset as f32))
         .collect();
     if out.is_empty() {
         out.push([0.0; 4]);

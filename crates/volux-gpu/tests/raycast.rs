@@ -158,3 +158,37 @@ fn what_the_shader_does_not_draw_is_refused_with_a_reason() {
     let err = GpuGridRenderer::supports(&s).unwrap_err();
     assert!(err.contains("trapezoid"), "{err}");
 }
+
+#[test]
+fn the_classification_is_kept_while_the_tf_and_step_stay() {
+    let Some(ctx) = context() else { return };
+    let g = Arc::new(grid());
+    let mut gpu = GpuGridRenderer::new(ctx, g.clone()).unwrap();
+    let mut s = scene(&g, "{}", 0.5);
+    let classified = |gpu: &mut GpuGridRenderer, s: &Scene| {
+        let frame = gpu.render(s, &Control::default()).unwrap();
+        frame.stats.rebuilt.classification
+    };
+    assert!(classified(&mut gpu, &s));
+    s.view.camera = CameraSpec::from_json(r#"{"azimuth": 90}"#)
+        .unwrap()
+        .resolve(&g.bounds())
+        .unwrap();
+    assert!(!classified(&mut gpu, &s), "a new camera keeps the tables");
+    s.appearance.opacity_scale = 2.0;
+    assert!(classified(&mut gpu, &s), "a new TF rebuilds them");
+    s.method = Method::GridRaycast(GridRaycast {
+        integrator: Integrator::Riemann { step: 0.3 },
+        ..GridRaycast::default()
+    });
+    assert!(classified(&mut gpu, &s), "a new step rebuilds them");
+    // And the picture after the rebuild is the CPU's.
+    let (mean, max) = compare(
+        &gpu.render(&s, &Control::default()).unwrap().image,
+        &cpu(&g, &s),
+    );
+    assert!(
+        mean < 1.0 / 255.0 && max < 1e-4,
+        "mean {mean:e}, max {max:e}"
+    );
+}

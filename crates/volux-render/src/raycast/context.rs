@@ -143,7 +143,7 @@ pub(crate) struct RayContext<'a, F> {
 /// local point `p` (`o` the origin, `R` the direction), so `n . x + d` becomes
 /// `(Rᵀ n) . p + d + n . o - (Rᵀ n) . o`. `R` is orthonormal: the normal stays a unit vector
 /// and distances along rays are unchanged.
-pub(crate) fn local_clip_planes(place: &Placement, planes: &[ClipPlane]) -> Vec<ClipPlane> {
+pub fn local_clip_planes(place: &Placement, planes: &[ClipPlane]) -> Vec<ClipPlane> {
     planes
         .iter()
         .map(|p| {

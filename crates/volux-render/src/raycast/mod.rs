@@ -35,7 +35,8 @@ mod traverse;
 
 pub use crate::frame::RenderStats;
 pub use clip::{ray_box, to_voxel, voxel_crossings};
-pub(crate) use context::{first_at_or_after, local_clip_planes};
+pub(crate) use context::first_at_or_after;
+pub use context::local_clip_planes;
 pub use options::{Placement, RenderOptions, Rendered};
 pub(crate) use renderer::{grid_frame, grid_settings};
 pub use renderer::{render_grid, GridRenderer};
