@@ -337,7 +337,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_early_termination: bool,
     /// Where to render: `cpu` (the reference engine), `gpu` (wgpu: grid ray casting with
-    /// Riemann sums, clip planes and early termination; a build with the `gpu` feature), or
+    /// Riemann sums or MIP, clip planes and early termination; a build with the `gpu`
+    /// feature), or
     /// `auto`: the GPU when the build has it, an adapter exists and it draws the scene, else
     /// the CPU.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]

@@ -80,8 +80,6 @@ impl GpuGridRenderer {
             Some("volume shading".into())
         } else if !a.isosurfaces.is_empty() {
             Some("isosurfaces".into())
-        } else if a.mip {
-            Some("maximum intensity projection".into())
         } else if scene.mask.is_some() {
             Some("a sculpt mask".into())
         } else if scene.labels.is_some() {

@@ -7,7 +7,8 @@
 //!   one thread per pixel, rays generated in the shader from the camera, clipped to the box
 //!   and the clip planes, the same sample lattice and classification table as the CPU lanes,
 //!   `f32` accumulation (not `004`'s 8-bit buffers, section 6.1), early ray termination,
-//!   and maximum intensity projection.
+//!   and maximum intensity projection (the largest lattice sample refined by a parabola and
+//!   polished, as `volux_render::mip`).
 //!
 //! What the shader does not draw yet (shading, isosurfaces, the other integrators, the
 //! sculpt mask, region labels, jitter, tricubic reconstruction, bricked grids) is refused

@@ -20,6 +20,7 @@ pub(crate) struct Params {
     dims: [u32; 4],
     size: [u32; 4],
     lens: [f32; 4],
+    mode: [u32; 4],
 }
 
 fn v4(v: DVec3, w: f32) -> [f32; 4] {
@@ -65,6 +66,7 @@ impl Params {
                 lo,
                 scale,
             ],
+            mode: [u32::from(opts.mip), 0, 0, 0],
         }
     }
 }

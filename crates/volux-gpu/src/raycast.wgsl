@@ -21,6 +21,8 @@ struct Params {
     size: vec4<u32>,
     // tan(fov / 2) or the orthographic view height, aspect, table lo, table scale.
     lens: vec4<f32>,
+    // x: 1 for maximum intensity projection.
+    mode: vec4<u32>,
 };
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -121,6 +123,80 @@ fn extent(o: vec3<f32>, dir: vec3<f32>, o_v: vec3<f32>, d_v: vec3<f32>) -> vec2<
     return vec2<f32>(t0, t1);
 }
 
+// The vertex of the parabola through (-h, y0), (0, y1), (h, y2) where y1 is the largest:
+// (offset in [-h/2, h/2], value >= y1), or (0, y1) for a flat or non-peaked triple
+// (`volux_render::mip::parabolic_peak`, in f32).
+fn parabolic_peak(y0: f32, y1: f32, y2: f32, h: f32) -> vec2<f32> {
+    let curv = y0 - 2.0 * y1 + y2;
+    if (!(y0 <= y1 && y2 <= y1 && curv < 0.0)) {
+        return vec2<f32>(0.0, y1);
+    }
+    let offset = clamp(h * (y0 - y2) / (2.0 * curv), -0.5 * h, 0.5 * h);
+    let value = y1 - (y2 - y0) * (y2 - y0) / (8.0 * curv);
+    return vec2<f32>(offset, max(value, y1));
+}
+
+struct Traced {
+    rgba: vec4<f32>,
+    samples: u32,
+};
+
+// Maximum intensity projection (`volux_render::mip::max_along`): the largest sample of the
+// lattice t0 + i h <= t1 (the first of equal ones), refined by the parabola through it and
+// its neighbours and polished by one more sample at the vertex; the TF colour there, opaque.
+fn mip(o_v: vec3<f32>, d_v: vec3<f32>, t0: f32, t1: f32) -> Traced {
+    let h = params.origin.w;
+    let base = o_v + d_v * t0;
+    let stride = d_v * h;
+    let nan = bitcast<f32>(0x7fc00000u);
+    var found = false;
+    var best = 0.0;
+    var best_i = 0u;
+    var before = nan;
+    var after = nan;
+    var waiting = false;
+    var prev = nan;
+    var samples = 0u;
+    var i = 0u;
+    loop {
+        if (t0 + h * f32(i) > t1) {
+            break;
+        }
+        let v = sample(base + stride * f32(i));
+        samples += 1u;
+        if (waiting) {
+            after = v;
+        }
+        let better = !is_nan(v) && (!found || v > best);
+        waiting = better;
+        if (better) {
+            found = true;
+            best = v;
+            best_i = i;
+            before = prev;
+            after = nan;
+        }
+        prev = v;
+        i += 1u;
+    }
+    if (!found) {
+        return Traced(vec4<f32>(0.0), samples);
+    }
+    var v = best;
+    if (!is_nan(before) && !is_nan(after)) {
+        let peak = parabolic_peak(before, best, after, h);
+        v = peak.y;
+        if (peak.x != 0.0) {
+            let s = sample(o_v + d_v * (t0 + h * f32(best_i) + peak.x));
+            samples += 1u;
+            if (!is_nan(s)) {
+                v = select(best, s, s >= best);
+            }
+        }
+    }
+    return Traced(vec4<f32>(tau_at(v).xyz, 1.0), samples);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = params.size.x;
@@ -142,6 +218,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let o_v = (o - params.origin.xyz) * params.inv_spacing.xyz;
     let d_v = dir * params.inv_spacing.xyz;
     let span = extent(o, dir, o_v, d_v);
+    if (params.mode.x == 1u && span.y > span.x) {
+        let traced = mip(o_v, d_v, span.x, span.y);
+        out_rgba[pixel] = traced.rgba;
+        out_samples[pixel] = traced.samples;
+        return;
+    }
     var acc = vec4<f32>(0.0);
     var samples = 0u;
     if (span.y > span.x) {
