@@ -563,22 +563,12 @@ impl Lanes {
         self.set_sum(l, RayAccumulator { rgba: sum });
     }
 
-    /// [`Lanes::fold`] of every lane, lane-wise.
-    #[allow(clippy::needless_range_loop)]
+    /// [`Lanes::fold`] of every lane (written lane-wise, the fold took 0.2 % fewer
+    /// instructions: not worth a second copy of it).
     #[inline(always)]
     fn fold_all(&mut self) {
-        let mut w = [0.0f64; LANES];
         for l in 0..LANES {
-            w[l] = 1.0 - self.sum[l][3];
-        }
-        for l in 0..LANES {
-            for c in 0..4 {
-                self.sum[l][c] += w[l] * f64::from(self.acc[l][c]);
-            }
-        }
-        self.acc = [[0.0; 4]; LANES];
-        for l in 0..LANES {
-            self.stop[l] = block_stop(self.ray_stop[l], self.sum[l][3]);
+            self.fold(l);
         }
     }
 
