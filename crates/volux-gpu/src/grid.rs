@@ -7,35 +7,53 @@ use volux_core::image::Image;
 use volux_core::Grid;
 use volux_render::frame::{Frame, FrameStats, MethodStats, Rebuilt, RenderStats};
 use volux_render::integrate::Integrator;
+use volux_render::macrocell::MacrocellGrid;
 use volux_render::raycast::{Placement, RenderOptions};
 use volux_render::renderer::Renderer;
-use volux_render::sampling::Reconstruction;
+use volux_render::sampling::{Reconstruction, Trilinear};
 use volux_render::scene::{GridRaycast, Method, Scene, Volume};
+use volux_render::shading::GradientVolume;
 use volux_render::tiles::Control;
 use volux_render::{check_image_size, RenderError};
 use wgpu::util::DeviceExt;
 
 use crate::context::GpuContext;
 use crate::error::GpuError;
-use crate::params::{local_planes, Params};
-use crate::tables::Tables;
+use crate::params::{flags, frame_data, Drawn, Params};
+use crate::resources::{no_gradients, upload_gradients, words_buffer, MaskBits};
+use crate::tables::{TableKey, Tables};
 
 const WORKGROUP: u32 = 8;
 
 /// A frame's pixels and each pixel's sample count.
 type Readback = (Vec<[f32; 4]>, Vec<u32>);
 
-/// Grid ray casting on the GPU: Riemann sums with step-corrected opacity, clip planes and
-/// early ray termination (see the crate docs for what it refuses). The grid is uploaded once,
-/// as `f32` (undefined and infinite values as NaN, drawn as empty medium as on the CPU).
+/// Grid ray casting on the GPU: Riemann sums with step-corrected opacity and
+/// pre-integration, Blinn-Phong shading, isosurfaces, maximum intensity projection, clip
+/// planes, the sculpt mask, empty-space skipping and early ray termination (see the crate
+/// docs for what it refuses). The grid is uploaded once, as `f32` (undefined and infinite
+/// values as NaN, drawn as empty medium as on the CPU).
 pub struct GpuGridRenderer {
     ctx: Arc<GpuContext>,
     grid: Arc<Grid>,
     volume: wgpu::TextureView,
     pipeline: wgpu::ComputePipeline,
+    /// The min/max of each macrocell (from the data, built once).
+    macrocells: MacrocellGrid,
     /// The last frame's classification, kept while the TF and the step stay.
     tables: Option<Tables>,
+    /// The gradient volume and its world units per count, uploaded on the first shaded
+    /// frame (`None` inside when it is over the memory budget: gradients on the fly).
+    gradients: Option<Option<(wgpu::TextureView, [f32; 3])>>,
+    /// Bound where a frame uses no gradient volume or no mask.
+    no_gradients: wgpu::TextureView,
+    no_mask: wgpu::Buffer,
+    /// The sculpt mask's bits, for the mask (by address) of one generation.
+    mask: Option<(usize, MaskBits)>,
 }
+
+/// The most isovalues the shader composites.
+pub const MAX_ISOVALUES: usize = 8;
 
 impl GpuGridRenderer {
     /// Uploads `grid` to the device of `ctx`; an error when it is over the device's 3D
@@ -52,12 +70,21 @@ impl GpuGridRenderer {
         }
         let volume = ctx.checked(|| upload(&ctx, &grid))??;
         let pipeline = ctx.checked(|| pipeline(&ctx.device))?;
+        let macrocells =
+            volux_core::with_samples!(grid.samples(), |s| MacrocellGrid::build(s, grid.dims()));
+        let no_gradients = ctx.checked(|| no_gradients(&ctx))?;
+        let no_mask = words_buffer(&ctx.device, "no sculpt mask", &[u32::MAX]);
         Ok(Self {
             ctx,
             grid,
             volume,
             pipeline,
+            macrocells,
             tables: None,
+            gradients: None,
+            no_gradients,
+            no_mask,
+            mask: None,
         })
     }
 
@@ -70,18 +97,19 @@ impl GpuGridRenderer {
             ref m => return Err(format!("the GPU backend does not draw '{}'", m.name())),
         };
         let a = &scene.appearance;
-        let refused = if !matches!(settings.integrator, Integrator::Riemann { .. }) {
+        let drawn = matches!(
+            settings.integrator,
+            Integrator::Riemann { .. } | Integrator::Preintegrated { .. }
+        );
+        let refused = if !drawn {
             Some(format!("the {} integrator", settings.integrator.name()))
         } else if settings.reconstruction != Reconstruction::Trilinear {
             Some("tricubic reconstruction".into())
-        } else if settings.jitter {
-            Some("jitter".into())
-        } else if a.shade_volume {
-            Some("volume shading".into())
-        } else if !a.isosurfaces.is_empty() {
-            Some("isosurfaces".into())
-        } else if scene.mask.is_some() {
-            Some("a sculpt mask".into())
+        } else if a.isosurfaces.len() > MAX_ISOVALUES {
+            Some(format!(
+                "more than {MAX_ISOVALUES} isosurfaces ({})",
+                a.isosurfaces.len()
+            ))
         } else if scene.labels.is_some() {
             Some("region labels".into())
         } else {
@@ -166,44 +194,49 @@ impl GpuGridRenderer {
     /// Runs the shader for `opts`: the pixels and each pixel's sample count, and whether the
     /// classification tables were rebuilt.
     fn dispatch(&mut self, opts: &RenderOptions) -> Result<(Readback, bool), GpuError> {
-        let Integrator::Riemann { step } = opts.integrator else {
-            return Err(GpuError::Failed("only Riemann sums are drawn".into()));
+        let (Integrator::Riemann { step } | Integrator::Preintegrated { step }) = opts.integrator
+        else {
+            return Err(GpuError::Failed(
+                "only Riemann sums and pre-integration are drawn".into(),
+            ));
         };
-        let device = &self.ctx.device;
         let pixels = (opts.width * opts.height) as u64;
-        let limits = self.ctx.limits();
         let bytes = pixels * 16;
-        let most = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
-        if bytes > most {
-            return Err(GpuError::OverLimit {
-                what: format!("an image of {}x{}", opts.width, opts.height),
-                limit: format!("storage buffers up to {most} bytes"),
-            });
-        }
+        self.check_buffer(bytes, opts)?;
         let place = Placement::of(&self.grid);
         let h = step * place.spacing.min_element();
-        let stale = !self.tables.as_ref().is_some_and(|t| t.is_for(&opts.tf, h));
-        if stale {
-            self.tables = Some(Tables::new(device, &opts.tf, self.grid.range(), h));
+        let stale = self.classify(opts, h)?;
+        let mut flags = flags::SKIP;
+        let to_world = self.prepare_gradients(opts, &mut flags)?;
+        self.prepare_mask(opts, &mut flags)?;
+        if opts.jitter {
+            flags |= flags::JITTER;
+        }
+        if opts.iso_lighting.is_some() || opts.shading.is_some() {
+            flags |= flags::ISO_LIT;
         }
         let Some(tables) = &self.tables else {
             return Err(GpuError::Failed("no classification tables".into()));
         };
-        let planes = local_planes(opts, &place);
-        let params = Params::new(opts, &place, h, tables, opts.clip_planes.len());
-        let storage = |label: &str, contents: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
+        let drawn = Drawn {
+            tables,
+            flags,
+            to_world,
+            cells: self.macrocells.counts(),
+            planes: opts.clip_planes.len(),
         };
+        let params = Params::new(opts, &place, h, &drawn);
+        let device = &self.ctx.device;
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params"),
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let plane_buf = storage("clip planes", bytemuck::cast_slice(&planes));
+        let frame = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("clip planes and isovalues"),
+            contents: bytemuck::cast_slice(&frame_data(opts, &place)),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let output = |label: &str, size: u64| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -213,14 +246,25 @@ impl GpuGridRenderer {
             })
         };
         let (rgba_buf, count_buf) = (output("rgba", bytes), output("samples", pixels * 4));
+        let gradients = match &self.gradients {
+            Some(Some((view, _))) if flags & flags::GRADIENT_VOLUME != 0 => view,
+            _ => &self.no_gradients,
+        };
+        let mask = match &self.mask {
+            Some((_, bits)) if flags & flags::MASK != 0 => &bits.buffer,
+            _ => &self.no_mask,
+        };
         let entries = [
             (0, uniform.as_entire_binding()),
             (1, wgpu::BindingResource::TextureView(&self.volume)),
-            (2, tables.slab.as_entire_binding()),
-            (3, tables.tau.as_entire_binding()),
-            (4, plane_buf.as_entire_binding()),
-            (5, rgba_buf.as_entire_binding()),
-            (6, count_buf.as_entire_binding()),
+            (2, tables.lut.as_entire_binding()),
+            (3, tables.preint.as_entire_binding()),
+            (4, frame.as_entire_binding()),
+            (5, tables.cells.as_entire_binding()),
+            (6, mask.as_entire_binding()),
+            (7, wgpu::BindingResource::TextureView(gradients)),
+            (8, rgba_buf.as_entire_binding()),
+            (9, count_buf.as_entire_binding()),
         ]
         .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource });
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -245,6 +289,99 @@ impl GpuGridRenderer {
         let rgba: Vec<[f32; 4]> = bytemuck::cast_slice(&map(device, &rgba_read)?).to_vec();
         let counts: Vec<u32> = bytemuck::cast_slice(&map(device, &count_read)?).to_vec();
         Ok(((rgba, counts), stale))
+    }
+
+    /// An error when the image's `bytes` are over the device's storage buffers.
+    fn check_buffer(&self, bytes: u64, opts: &RenderOptions) -> Result<(), GpuError> {
+        let limits = self.ctx.limits();
+        let most = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        if bytes > most {
+            return Err(GpuError::OverLimit {
+                what: format!("an image of {}x{}", opts.width, opts.height),
+                limit: format!("storage buffers up to {most} bytes"),
+            });
+        }
+        Ok(())
+    }
+
+    /// Rebuilds the tables unless they are those of `opts` at step `h`; whether it did.
+    fn classify(&mut self, opts: &RenderOptions, h: f64) -> Result<bool, GpuError> {
+        let key = TableKey {
+            tf: opts.tf.clone(),
+            h,
+            isovalues: opts
+                .isosurfaces
+                .as_slice()
+                .iter()
+                .map(|i| i.value)
+                .collect(),
+            preintegrated: matches!(opts.integrator, Integrator::Preintegrated { .. }),
+        };
+        if self.tables.as_ref().is_some_and(|t| t.is_for(&key)) {
+            return Ok(false);
+        }
+        let range = self.grid.range();
+        let tables = Tables::new(&self.ctx.device, key, range, &self.macrocells)?;
+        self.tables = Some(tables);
+        Ok(true)
+    }
+
+    /// The gradient volume's units per count when shaded samples use it (built and uploaded
+    /// on the first shaded frame), setting the flags it needs.
+    fn prepare_gradients(
+        &mut self,
+        opts: &RenderOptions,
+        flags: &mut u32,
+    ) -> Result<[f32; 3], GpuError> {
+        if opts.shading.is_none() {
+            return Ok([0.0; 3]);
+        }
+        *flags |= flags::SHADE;
+        if self.gradients.is_none() {
+            let g = &*self.grid;
+            let built = volux_core::with_samples!(g.samples(), |s| GradientVolume::build(
+                &Trilinear::new(s, g.dims()),
+                g.spacing().as_vec3(),
+                0
+            ));
+            let ctx = self.ctx.clone();
+            self.gradients = Some(match built {
+                Ok(volume) => Some(ctx.checked(|| upload_gradients(&ctx, &volume))?),
+                Err(_) => None,
+            });
+        }
+        match &self.gradients {
+            Some(Some((_, to_world))) => {
+                *flags |= flags::GRADIENT_VOLUME;
+                Ok(*to_world)
+            }
+            _ => Ok([0.0; 3]),
+        }
+    }
+
+    /// Uploads the scene's sculpt mask when it is new or has changed, setting its flag.
+    fn prepare_mask(&mut self, opts: &RenderOptions, flags: &mut u32) -> Result<(), GpuError> {
+        let Some(mask) = &opts.mask else {
+            return Ok(());
+        };
+        if mask.dims() != self.grid.dims() {
+            return Err(GpuError::Failed(format!(
+                "the sculpt mask is {:?} voxels but the grid is {:?}",
+                mask.dims(),
+                self.grid.dims()
+            )));
+        }
+        *flags |= flags::MASK;
+        let address = Arc::as_ptr(mask) as usize;
+        let current = self
+            .mask
+            .as_ref()
+            .is_some_and(|(a, bits)| *a == address && bits.generation == mask.generation());
+        if !current {
+            let ctx = self.ctx.clone();
+            self.mask = Some((address, ctx.checked(|| MaskBits::new(&ctx, mask))??));
+        }
+        Ok(())
     }
 }
 

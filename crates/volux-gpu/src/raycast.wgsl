@@ -1,9 +1,22 @@
-// Grid ray casting, one invocation per pixel (seed `001`'s Riemann sum with step-corrected
-// opacity, composited front to back in f32). The same rays, sample lattice and table as the
-// CPU lanes (`volux_render::raycast::stream`): sample i of a ray sits at t0 + i h, each slab
-// [t_i, t_i + h] takes the premultiplied slab entry of the step table, the last slab cut at the
-// ray's exit takes 1 - exp(-tau len) from the extinction table, an undefined (NaN) sample adds
-// nothing.
+// Grid ray casting, one invocation per pixel, composited front to back in f32 (seed `001`).
+// The same rays, sample lattice and tables as the CPU engine (`volux_render::raycast`):
+//
+// - Riemann (`001` eq. 2.14): sample i of a ray sits at t0 + (i + jitter) h, each slab
+//   [t_i, t_i + h] takes the premultiplied entry of the step table, the last slab cut at the
+//   ray's exit takes 1 - exp(-tau len) from the extinction table;
+// - pre-integration (`000` §2.6): the segments between consecutive lattice points (the first
+//   and last cut at the ray's ends) from the 2D table of their end values, a shortened one
+//   opacity-corrected (`composite::under_partial`);
+// - Blinn-Phong shading (`002` §4.6) with the gradient volume's gradients, or on the fly
+//   (central differences at +-1 voxel, `shading::gradient`) for the isosurfaces of unshaded
+//   volumes;
+// - isosurfaces (`002` §4.6): crossings between consecutive samples, refined by Illinois
+//   regula falsi on the field (`isosurface.rs`), lit and composited in depth order;
+// - empty-space skipping: a sample in a macrocell whose values are all transparent (and hold
+//   no isovalue) jumps to the first lattice point past the macrocell, so no sample moves;
+// - the sculpt mask (`004` §4.4.1): a sample where the mask, interpolated, is under 0.5 is
+//   undefined, as a NaN sample: it adds nothing, nor does a segment ending at it;
+// - maximum intensity projection.
 
 struct Params {
     // Camera in the grid's local frame (world units): eye, right, up, forward.
@@ -21,20 +34,59 @@ struct Params {
     size: vec4<u32>,
     // tan(fov / 2) or the orthographic view height, aspect, table lo, table scale.
     lens: vec4<f32>,
-    // x: 1 for maximum intensity projection.
+    // x: 1 for maximum intensity projection; y: 0 Riemann, 1 pre-integration; z: flags
+    // (below); w: isovalues.
     mode: vec4<u32>,
+    // ambient, diffuse, specular, shininess.
+    phong: vec4<f32>,
+    // xyz: direction towards the light; w: 1 for a headlight.
+    light: vec4<f32>,
+    // xyz: world units per count of the gradient volume; w: the smallest lit gradient.
+    gradient: vec4<f32>,
+    // xyz: spacing; w: the pre-integration table's lo.
+    spacing: vec4<f32>,
+    // xyz: macrocells per axis; w: pre-integration table entries per axis.
+    cells: vec4<u32>,
+    // x: the pre-integration table's scale; y: the jitter-free first lattice offset (0).
+    extra: vec4<f32>,
 };
+
+const SHADE: u32 = 1u;
+const GRADIENT_VOLUME: u32 = 2u;
+const MASK: u32 = 4u;
+const SKIP: u32 = 8u;
+const JITTER: u32 = 16u;
+const ISO_LIT: u32 = 32u;
+const MAX_ISO: u32 = 8u;
+// Voxel cells per macrocell (`MacrocellGrid::BLOCK`).
+const BLOCK: f32 = 8.0;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var volume: texture_3d<f32>;
-// Per entry: premultiplied colour and opacity of one full slab.
-@group(0) @binding(2) var<storage, read> slab_table: array<vec4<f32>>;
-// Per entry: colour and extinction per world unit.
-@group(0) @binding(3) var<storage, read> tau_table: array<vec4<f32>>;
-// Local-frame clip planes: normal . p + w >= 0 is kept.
-@group(0) @binding(4) var<storage, read> planes: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> out_rgba: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> out_samples: array<u32>;
+// The slab table (premultiplied colour and opacity of one full slab), then the extinction
+// table (colour and extinction per world unit), `size.w` entries each.
+@group(0) @binding(2) var<storage, read> tables: array<vec4<f32>>;
+// The pre-integration table, row-major by front value (one unused entry without it).
+@group(0) @binding(3) var<storage, read> preint: array<vec4<f32>>;
+// The clip planes (local frame: normal . p + w >= 0 is kept), then per isovalue its value
+// (x) and its colour and opacity.
+@group(0) @binding(4) var<storage, read> frame: array<vec4<f32>>;
+// Per macrocell: 1 where rays sample it, 0 where they skip it.
+@group(0) @binding(5) var<storage, read> cells: array<u32>;
+// The sculpt mask, a bit per voxel (x fastest), 1 where kept.
+@group(0) @binding(6) var<storage, read> mask_bits: array<u32>;
+// The gradient volume: gradient counts per voxel (x, y, z, 0).
+@group(0) @binding(7) var gradients: texture_3d<i32>;
+@group(0) @binding(8) var<storage, read_write> out_rgba: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> out_samples: array<u32>;
+
+fn flag(f: u32) -> bool {
+    return (params.mode.z & f) != 0u;
+}
+
+fn nan() -> f32 {
+    return bitcast<f32>(0x7fc00000u);
+}
 
 fn is_nan(v: f32) -> bool {
     return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
@@ -49,7 +101,7 @@ fn axis(p: f32, n: u32) -> vec2<f32> {
     return vec2<f32>(i, p - i);
 }
 
-// Trilinear sample at voxel-space p, clamped to the box (the lattice lies in it but for
+// Trilinear sample at voxel-space q, clamped to the box (the lattice lies in it but for
 // rounding); NaN where a corner is undefined.
 fn sample(q: vec3<f32>) -> f32 {
     let n = params.dims.xyz;
@@ -72,6 +124,38 @@ fn sample(q: vec3<f32>) -> f32 {
     return mix(c0, c1, az.y);
 }
 
+// Whether voxel v is kept by the sculpt mask.
+fn kept(v: vec3<u32>) -> f32 {
+    let n = params.dims;
+    let i = v.x + n.x * (v.y + n.y * v.z);
+    return f32((mask_bits[i >> 5u] >> (i & 31u)) & 1u);
+}
+
+// `SculptMask::visible`: the cell's kept corners blended at the point, at least 0.5.
+fn visible(q: vec3<f32>) -> bool {
+    let n = params.dims.xyz;
+    let hi = vec3<f32>(n - vec3<u32>(1u));
+    let x = clamp(q, vec3<f32>(0.0), hi);
+    let top = vec3<f32>(max(n, vec3<u32>(2u)) - vec3<u32>(2u));
+    let c = min(floor(x), top);
+    let f = x - c;
+    let lo = vec3<u32>(c);
+    let up = min(lo + vec3<u32>(1u), n - vec3<u32>(1u));
+    let x00 = mix(kept(lo), kept(vec3<u32>(up.x, lo.y, lo.z)), f.x);
+    let x10 = mix(kept(vec3<u32>(lo.x, up.y, lo.z)), kept(vec3<u32>(up.x, up.y, lo.z)), f.x);
+    let x01 = mix(kept(vec3<u32>(lo.x, lo.y, up.z)), kept(vec3<u32>(up.x, lo.y, up.z)), f.x);
+    let x11 = mix(kept(vec3<u32>(lo.x, up.y, up.z)), kept(up), f.x);
+    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z) >= 0.5;
+}
+
+// The field: the trilinear sample, undefined where the mask hides the point.
+fn field(q: vec3<f32>) -> f32 {
+    if (flag(MASK) && !visible(q)) {
+        return nan();
+    }
+    return sample(q);
+}
+
 // The table entry below value s and the fraction towards the next, as `LaneTable::position`
 // computes them (NaN reads entry 0).
 fn position(s: f32) -> vec2<f32> {
@@ -87,14 +171,304 @@ fn position(s: f32) -> vec2<f32> {
 fn slab_at(s: f32) -> vec4<f32> {
     let p = position(s);
     let i = u32(p.x);
-    return mix(slab_table[i], slab_table[i + 1u], p.y);
+    return mix(tables[i], tables[i + 1u], p.y);
 }
 
 // The extinction table at value s.
 fn tau_at(s: f32) -> vec4<f32> {
     let p = position(s);
-    let i = u32(p.x);
-    return mix(tau_table[i], tau_table[i + 1u], p.y);
+    let i = u32(p.x) + params.size.w;
+    return mix(tables[i], tables[i + 1u], p.y);
+}
+
+// `PreintegrationTable::position_f32`: the row or column below s and the fraction.
+fn preint_position(s: f32) -> vec2<f32> {
+    let n = params.cells.w;
+    let last = f32(n - 1u);
+    var x = (s - params.spacing.w) * params.extra.x;
+    x = select(0.0, x, x > 0.0);
+    x = select(last, x, x < last);
+    let i = min(floor(x), f32(n - 2u));
+    return vec2<f32>(i, x - i);
+}
+
+// `PreintegrationTable::lookup_lanes`: the segment from s_f to s_b, bilinear.
+fn preint_at(s_f: f32, s_b: f32) -> vec4<f32> {
+    let n = params.cells.w;
+    let a = preint_position(s_f);
+    let b = preint_position(s_b);
+    let row0 = u32(a.x) * n + u32(b.x);
+    let row1 = row0 + n;
+    let top = preint[row0] + (preint[row0 + 1u] - preint[row0]) * b.y;
+    let bottom = preint[row1] + (preint[row1 + 1u] - preint[row1]) * b.y;
+    return top + (bottom - top) * a.y;
+}
+
+// The gradient volume's gradient at q (`GradientVolume::gradient`), world units.
+fn gradient_volume(q: vec3<f32>) -> vec3<f32> {
+    let n = params.dims.xyz;
+    let p = clamp(q, vec3<f32>(0.0), vec3<f32>(n - vec3<u32>(1u)));
+    let ax = axis(p.x, n.x);
+    let ay = axis(p.y, n.y);
+    let az = axis(p.z, n.z);
+    let b = vec3<i32>(i32(ax.x), i32(ay.x), i32(az.x));
+    let d = vec3<i32>(select(0, 1, n.x > 1u), select(0, 1, n.y > 1u), select(0, 1, n.z > 1u));
+    let g000 = vec3<f32>(textureLoad(gradients, b, 0).xyz);
+    let g100 = vec3<f32>(textureLoad(gradients, b + vec3<i32>(d.x, 0, 0), 0).xyz);
+    let g010 = vec3<f32>(textureLoad(gradients, b + vec3<i32>(0, d.y, 0), 0).xyz);
+    let g110 = vec3<f32>(textureLoad(gradients, b + vec3<i32>(d.x, d.y, 0), 0).xyz);
+    let g001 = vec3<f32>(textureLoad(gradients, b + vec3<i32>(0, 0, d.z), 0).xyz);
+    let g101 = vec3<f32>(textureLoad(gradients, b + vec3<i32>(d.x, 0, d.z), 0).xyz);
+    let g011 = vec3<f32>(textureLoad(gradients, b + vec3<i32>(0, d.y, d.z), 0).xyz);
+    let g111 = vec3<f32>(textureLoad(gradients, b + vec3<i32>(d.x, d.y, d.z), 0).xyz);
+    let c0 = mix(mix(g000, g100, ax.y), mix(g010, g110, ax.y), ay.y);
+    let c1 = mix(mix(g001, g101, ax.y), mix(g011, g111, ax.y), ay.y);
+    return mix(c0, c1, az.y) * params.gradient.xyz;
+}
+
+// One axis of `shading::gradient`: central where both ends are defined, one-sided through
+// the centre where one is missing, else 0.
+fn difference(lo: f32, a: f32, hi: f32, b: f32, c: f32, centre: f32) -> f32 {
+    if (!is_nan(a) && !is_nan(b)) {
+        return (b - a) / (hi - lo);
+    }
+    if (!is_nan(a) && c > lo && !is_nan(centre)) {
+        return (centre - a) / (c - lo);
+    }
+    if (!is_nan(b) && hi > c && !is_nan(centre)) {
+        return (b - centre) / (hi - c);
+    }
+    return 0.0;
+}
+
+// `shading::gradient`: central differences of the field at +-1 voxel, world units.
+fn gradient_fly(q: vec3<f32>) -> vec3<f32> {
+    let n = params.dims.xyz;
+    let p = clamp(q, vec3<f32>(0.0), vec3<f32>(n - vec3<u32>(1u)));
+    let centre = field(p);
+    var g = vec3<f32>(0.0);
+    for (var a = 0; a < 3; a++) {
+        let last = f32(n[a] - 1u);
+        if (last <= 0.0) {
+            continue;
+        }
+        let lo = max(p[a] - 1.0, 0.0);
+        let hi = min(p[a] + 1.0, last);
+        var plo = p;
+        var phi = p;
+        plo[a] = lo;
+        phi[a] = hi;
+        let d = difference(lo, field(plo), hi, field(phi), p[a], centre);
+        let w = d / params.spacing[a];
+        if (!is_nan(w) && abs(w) <= 3.4e38) {
+            g[a] = w;
+        }
+    }
+    return g;
+}
+
+fn gradient_at(q: vec3<f32>) -> vec3<f32> {
+    if (flag(GRADIENT_VOLUME)) {
+        return gradient_volume(q);
+    }
+    return gradient_fly(q);
+}
+
+// `BlinnPhong::shade`: two-sided Blinn-Phong of colour rgb with gradient g seen along view
+// (unit, from the eye); unlit below the smallest gradient.
+fn shade(rgb: vec3<f32>, g: vec3<f32>, view: vec3<f32>) -> vec3<f32> {
+    let len = length(g);
+    let to_eye = -view;
+    if (!(len >= params.gradient.w && len > 0.0 && len <= 3.4e38)) {
+        return rgb;
+    }
+    var n = g / len;
+    if (dot(n, to_eye) < 0.0) {
+        n = -n;
+    }
+    var l = to_eye;
+    if (params.light.w == 0.0) {
+        l = params.light.xyz;
+    }
+    let n_l = dot(n, l);
+    var diffuse = 0.0;
+    var specular = 0.0;
+    if (n_l > 0.0) {
+        let sum = l + to_eye;
+        let s_len = length(sum);
+        var n_h = 0.0;
+        if (s_len > 0.0) {
+            n_h = max(dot(n, sum / s_len), 0.0);
+        }
+        diffuse = n_l;
+        specular = pow(n_h, params.phong.w);
+    }
+    let k = params.phong.x + params.phong.y * diffuse;
+    return rgb * k + vec3<f32>(params.phong.z * specular);
+}
+
+// A premultiplied entry e lit at q (its colour e.rgb / e.a).
+fn lit(e: vec4<f32>, q: vec3<f32>, view: vec3<f32>) -> vec4<f32> {
+    if (!flag(SHADE) || !(e.w > 0.0)) {
+        return e;
+    }
+    let c = shade(e.xyz / e.w, gradient_at(q), view);
+    return vec4<f32>(c * e.w, e.w);
+}
+
+// `composite::under`: a layer of colour rgb and opacity a behind acc.
+fn under(acc: vec4<f32>, e: vec4<f32>) -> vec4<f32> {
+    return acc + (1.0 - acc.w) * e;
+}
+
+// `composite::under_partial`: the entry of a full segment, cut to the fraction frac.
+fn under_partial(acc: vec4<f32>, e: vec4<f32>, frac: f32) -> vec4<f32> {
+    var alpha = e.w;
+    if (frac < 0.999999) {
+        alpha = 1.0 - pow(max(1.0 - e.w, 0.0), frac);
+    }
+    var scale = frac;
+    if (e.w > 0.0) {
+        scale = alpha / e.w;
+    }
+    return acc + (1.0 - acc.w) * vec4<f32>(e.xyz * scale, alpha);
+}
+
+struct Ray {
+    // Voxel-space origin and direction (per world unit of t).
+    o_v: vec3<f32>,
+    d_v: vec3<f32>,
+    // Unit direction in the grid's frame, for lighting.
+    view: vec3<f32>,
+    t0: f32,
+    t1: f32,
+};
+
+// The distance at which the ray leaves the macrocell holding voxel-space p.
+fn cell_exit(ray: Ray, p: vec3<f32>) -> f32 {
+    let c = floor(max(p, vec3<f32>(0.0)) / BLOCK);
+    let lo = c * BLOCK;
+    let hi = lo + BLOCK;
+    let inv = 1.0 / ray.d_v;
+    let ta = (lo - ray.o_v) * inv;
+    let tb = (hi - ray.o_v) * inv;
+    let far = max(ta, tb);
+    return min(min(far.x, far.y), far.z);
+}
+
+// Whether the macrocell holding voxel-space p is skipped.
+fn skipped(p: vec3<f32>) -> bool {
+    if (!flag(SKIP)) {
+        return false;
+    }
+    let n = params.cells.xyz;
+    let c = min(vec3<u32>(max(p, vec3<f32>(0.0)) / BLOCK), n - vec3<u32>(1u));
+    return cells[c.x + n.x * (c.y + n.y * c.z)] == 0u;
+}
+
+// The first lattice index (start + i h) at or after the distance t, conservatively (a point
+// on the boundary is sampled, not skipped).
+fn index_after(start: f32, h: f32, t: f32, i: u32) -> u32 {
+    let k = ceil((t - start) / h - 1e-3);
+    return max(i + 1u, u32(max(k, 0.0)));
+}
+
+// The root of field - c between (ta, fa) and (tb, fb) of opposite signs (`isosurface::refine`):
+// Illinois regula falsi with a bisection safeguard.
+fn refine(ray: Ray, ta0: f32, fa0: f32, tb0: f32, fb0: f32, c: f32) -> f32 {
+    var a = ta0;
+    var fa = fa0;
+    var b = tb0;
+    var fb = fb0;
+    let tol = 1e-5 * abs(tb0 - ta0);
+    var kept = 0;
+    var width = abs(b - a);
+    for (var it = 0; it < 32; it++) {
+        if (abs(b - a) <= tol) {
+            break;
+        }
+        var t = secant(a, fa, b, fb);
+        if (it % 3 == 2 && abs(b - a) > 0.5 * width) {
+            t = 0.5 * (a + b);
+        }
+        if (it % 3 == 2) {
+            width = abs(b - a);
+        }
+        let ft = field(ray.o_v + ray.d_v * t) - c;
+        if (ft == 0.0) {
+            return t;
+        }
+        if (is_nan(ft) || abs(ft) > 3.4e38) {
+            break;
+        }
+        if ((ft < 0.0) == (fb < 0.0)) {
+            b = t;
+            fb = ft;
+            if (kept == 1) {
+                fa *= 0.5;
+            }
+            kept = 1;
+        } else {
+            a = t;
+            fa = ft;
+            if (kept == -1) {
+                fb *= 0.5;
+            }
+            kept = -1;
+        }
+    }
+    return secant(a, fa, b, fb);
+}
+
+fn secant(a: f32, fa: f32, b: f32, fb: f32) -> f32 {
+    let t = a - fa * (b - a) / (fb - fa);
+    if (t > min(a, b) && t < max(a, b)) {
+        return t;
+    }
+    return 0.5 * (a + b);
+}
+
+// The isosurfaces crossed between (tp, vp) and (t, v), lit and composited under acc in depth
+// order (`Isosurfaces::crossings`: an isovalue c in (vp, v] or [v, vp)).
+fn isosurfaces(acc_in: vec4<f32>, ray: Ray, tp: f32, vp: f32, t: f32, v: f32) -> vec4<f32> {
+    var acc = acc_in;
+    if (is_nan(vp) || is_nan(v) || vp == v) {
+        return acc;
+    }
+    var ts: array<f32, 8>;
+    var ks: array<u32, 8>;
+    var m = 0u;
+    let planes = params.dims.w;
+    for (var k = 0u; k < params.mode.w; k++) {
+        let c = frame[planes + 2u * k].x;
+        let crossed = (vp < v && vp < c && c <= v) || (v < vp && v <= c && c < vp);
+        if (!crossed) {
+            continue;
+        }
+        var tc = t;
+        if (v != c) {
+            tc = refine(ray, tp, vp - c, t, v - c, c);
+        }
+        // Insertion by depth.
+        var j = m;
+        while (j > 0u && ts[j - 1u] > tc) {
+            ts[j] = ts[j - 1u];
+            ks[j] = ks[j - 1u];
+            j -= 1u;
+        }
+        ts[j] = tc;
+        ks[j] = k;
+        m += 1u;
+    }
+    for (var j = 0u; j < m; j++) {
+        let iso = frame[planes + 2u * ks[j] + 1u];
+        var rgb = iso.xyz;
+        if (flag(ISO_LIT)) {
+            rgb = shade(rgb, gradient_at(ray.o_v + ray.d_v * ts[j]), ray.view);
+        }
+        acc = under(acc, vec4<f32>(rgb * iso.w, iso.w));
+    }
+    return acc;
 }
 
 // The ray's entry and exit distances through the box [0, dims - 1] (voxel space) and the
@@ -109,7 +483,7 @@ fn extent(o: vec3<f32>, dir: vec3<f32>, o_v: vec3<f32>, d_v: vec3<f32>) -> vec2<
     var t0 = max(max(max(near.x, near.y), near.z), 0.0);
     var t1 = min(min(far.x, far.y), far.z);
     for (var k = 0u; k < params.dims.w; k++) {
-        let pl = planes[k];
+        let pl = frame[k];
         let d0 = dot(pl.xyz, o) + pl.w;
         let rate = dot(pl.xyz, dir);
         if (rate > 0.0) {
@@ -144,25 +518,24 @@ struct Traced {
 // Maximum intensity projection (`volux_render::mip::max_along`): the largest sample of the
 // lattice t0 + i h <= t1 (the first of equal ones), refined by the parabola through it and
 // its neighbours and polished by one more sample at the vertex; the TF colour there, opaque.
-fn mip(o_v: vec3<f32>, d_v: vec3<f32>, t0: f32, t1: f32) -> Traced {
+fn mip(ray: Ray) -> Traced {
     let h = params.origin.w;
-    let base = o_v + d_v * t0;
-    let stride = d_v * h;
-    let nan = bitcast<f32>(0x7fc00000u);
+    let base = ray.o_v + ray.d_v * ray.t0;
+    let stride = ray.d_v * h;
     var found = false;
     var best = 0.0;
     var best_i = 0u;
-    var before = nan;
-    var after = nan;
+    var before = nan();
+    var after = nan();
     var waiting = false;
-    var prev = nan;
+    var prev = nan();
     var samples = 0u;
     var i = 0u;
     loop {
-        if (t0 + h * f32(i) > t1) {
+        if (ray.t0 + h * f32(i) > ray.t1) {
             break;
         }
-        let v = sample(base + stride * f32(i));
+        let v = field(base + stride * f32(i));
         samples += 1u;
         if (waiting) {
             after = v;
@@ -174,7 +547,7 @@ fn mip(o_v: vec3<f32>, d_v: vec3<f32>, t0: f32, t1: f32) -> Traced {
             best = v;
             best_i = i;
             before = prev;
-            after = nan;
+            after = nan();
         }
         prev = v;
         i += 1u;
@@ -187,7 +560,7 @@ fn mip(o_v: vec3<f32>, d_v: vec3<f32>, t0: f32, t1: f32) -> Traced {
         let peak = parabolic_peak(before, best, after, h);
         v = peak.y;
         if (peak.x != 0.0) {
-            let s = sample(o_v + d_v * (t0 + h * f32(best_i) + peak.x));
+            let s = field(ray.o_v + ray.d_v * (ray.t0 + h * f32(best_i) + peak.x));
             samples += 1u;
             if (!is_nan(s)) {
                 v = select(best, s, s >= best);
@@ -195,6 +568,126 @@ fn mip(o_v: vec3<f32>, d_v: vec3<f32>, t0: f32, t1: f32) -> Traced {
         }
     }
     return Traced(vec4<f32>(tau_at(v).xyz, 1.0), samples);
+}
+
+// The left Riemann sum with step-corrected opacity, lit and with isosurfaces when asked.
+fn riemann(ray: Ray, jitter: f32) -> Traced {
+    let h = params.origin.w;
+    let stop = params.inv_spacing.w;
+    let start = ray.t0 + jitter * h;
+    let base = ray.o_v + ray.d_v * start;
+    let stride = ray.d_v * h;
+    var acc = vec4<f32>(0.0);
+    var samples = 0u;
+    var tp = 0.0;
+    var vp = nan();
+    var i = 0u;
+    loop {
+        let t = start + h * f32(i);
+        if (t >= ray.t1) {
+            break;
+        }
+        let p = base + stride * f32(i);
+        if (skipped(p)) {
+            i = index_after(start, h, cell_exit(ray, p), i);
+            continue;
+        }
+        let v = field(p);
+        samples += 1u;
+        if (is_nan(v)) {
+            vp = nan();
+            i += 1u;
+            continue;
+        }
+        if (params.mode.w > 0u) {
+            acc = isosurfaces(acc, ray, tp, vp, t, v);
+        }
+        var e: vec4<f32>;
+        if (t + h <= ray.t1) {
+            e = slab_at(v);
+        } else {
+            let c = tau_at(v);
+            let a = 1.0 - exp(-c.w * (ray.t1 - t));
+            e = vec4<f32>(c.xyz * a, a);
+        }
+        acc = under(acc, lit(e, p, ray.view));
+        tp = t;
+        vp = v;
+        if (acc.w >= stop) {
+            break;
+        }
+        i += 1u;
+    }
+    return Traced(acc, samples);
+}
+
+// The value at distance t, clamped to the ray.
+fn value_at(ray: Ray, t: f32) -> f32 {
+    return field(ray.o_v + ray.d_v * clamp(t, ray.t0, ray.t1));
+}
+
+// Pre-integration: the segments between the lattice points start + i h (start = t0 +
+// (jitter - 1) h), cut to the ray, each from the table of its end values.
+fn preintegrated(ray: Ray, jitter: f32) -> Traced {
+    let h = params.origin.w;
+    let stop = params.inv_spacing.w;
+    let start = ray.t0 + (jitter - 1.0) * h;
+    var acc = vec4<f32>(0.0);
+    var samples = 0u;
+    var front = nan();
+    var have_front = false;
+    var i = 0u;
+    loop {
+        let ta = max(start + h * f32(i), ray.t0);
+        let tb = min(start + h * f32(i + 1u), ray.t1);
+        if (ta >= ray.t1) {
+            break;
+        }
+        if (tb <= ta) {
+            i += 1u;
+            continue;
+        }
+        let pa = ray.o_v + ray.d_v * ta;
+        if (skipped(pa)) {
+            // Segments wholly in the macrocell add nothing: on from the last lattice point in
+            // it, with a fresh front value.
+            let k = index_after(start, h, cell_exit(ray, pa), i + 1u) - 1u;
+            if (k > i) {
+                i = k;
+                have_front = false;
+                continue;
+            }
+        }
+        if (!have_front) {
+            front = value_at(ray, ta);
+            samples += 1u;
+        }
+        let back = value_at(ray, tb);
+        samples += 1u;
+        if (!is_nan(front) && !is_nan(back)) {
+            let mid = ray.o_v + ray.d_v * (0.5 * (ta + tb));
+            let e = lit(preint_at(front, back), mid, ray.view);
+            acc = under_partial(acc, e, (tb - ta) / h);
+        }
+        front = back;
+        have_front = true;
+        i += 1u;
+        if (acc.w >= stop) {
+            break;
+        }
+    }
+    return Traced(acc, samples);
+}
+
+// `RayContext`'s jitter: a hash of the pixel, in [0, 1).
+fn pixel_hash(x: u32, y: u32) -> f32 {
+    var v = (x * 0x9E3779B9u) ^ (y * 0x85EBCA6Bu);
+    v ^= v >> 16u;
+    v *= 0x7FEB352Du;
+    v ^= v >> 15u;
+    v *= 0x846CA68Bu;
+    v ^= v >> 16u;
+    return f32(v) / 4294967296.0;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -218,46 +711,24 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let o_v = (o - params.origin.xyz) * params.inv_spacing.xyz;
     let d_v = dir * params.inv_spacing.xyz;
     let span = extent(o, dir, o_v, d_v);
-    if (params.mode.x == 1u && span.y > span.x) {
-        let traced = mip(o_v, d_v, span.x, span.y);
-        out_rgba[pixel] = traced.rgba;
-        out_samples[pixel] = traced.samples;
+    if (!(span.y > span.x)) {
+        out_rgba[pixel] = vec4<f32>(0.0);
+        out_samples[pixel] = 0u;
         return;
     }
-    var acc = vec4<f32>(0.0);
-    var samples = 0u;
-    if (span.y > span.x) {
-        let step = params.origin.w;
-        let stop = params.inv_spacing.w;
-        let t0 = span.x;
-        let t1 = span.y;
-        let base = o_v + d_v * t0;
-        let stride = d_v * step;
-        var i = 0u;
-        loop {
-            let t = t0 + step * f32(i);
-            if (t >= t1) {
-                break;
-            }
-            let v = sample(base + stride * f32(i));
-            samples += 1u;
-            if (!is_nan(v)) {
-                var e: vec4<f32>;
-                if (t + step <= t1) {
-                    e = slab_at(v);
-                } else {
-                    let c = tau_at(v);
-                    let a = 1.0 - exp(-c.w * (t1 - t));
-                    e = vec4<f32>(c.xyz * a, a);
-                }
-                acc += (1.0 - acc.w) * e;
-                if (acc.w >= stop) {
-                    break;
-                }
-            }
-            i += 1u;
-        }
+    let ray = Ray(o_v, d_v, normalize(d_v * params.spacing.xyz), span.x, span.y);
+    var jitter = 0.0;
+    if (flag(JITTER)) {
+        jitter = pixel_hash(id.x, id.y);
     }
-    out_rgba[pixel] = acc;
-    out_samples[pixel] = samples;
+    var traced: Traced;
+    if (params.mode.x == 1u) {
+        traced = mip(ray);
+    } else if (params.mode.y == 1u) {
+        traced = preintegrated(ray, jitter);
+    } else {
+        traced = riemann(ray, jitter);
+    }
+    out_rgba[pixel] = traced.rgba;
+    out_samples[pixel] = traced.samples;
 }

@@ -1,52 +1,89 @@
 //! The classification on the device ([`Tables`]): the transfer function tabulated as the CPU
-//! lanes tabulate it, kept between frames while the TF and the step stay.
+//! lanes tabulate it, the macrocells it leaves empty, and the pre-integration table, kept
+//! between frames while the TF, the step, the isovalues and the integrator stay.
 use volux_core::TransferFunction;
 use volux_render::classify::ClassifyTable;
+use volux_render::integrate::preintegrated::PreintegrationTable;
+use volux_render::macrocell::MacrocellGrid;
 use wgpu::util::DeviceExt;
 
-/// The slab table (premultiplied colour and opacity of one full step, `for_step(h)`) and the
-/// extinction table (colour and extinction per world unit, for the shortened last slab) of a
-/// TF over a value range, in storage buffers.
+use crate::error::GpuError;
+
+/// What the tables were built from.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct TableKey {
+    pub(crate) tf: TransferFunction,
+    /// The step (world units).
+    pub(crate) h: f64,
+    pub(crate) isovalues: Vec<f32>,
+    pub(crate) preintegrated: bool,
+}
+
+/// The slab table (premultiplied colour and opacity of one full step, `for_step(h)`) followed
+/// by the extinction table (colour and extinction per world unit, for the shortened last slab
+/// and MIP's colour) in one storage buffer; the macrocells' flags (1 sampled, 0 skipped); the
+/// pre-integration table (one unused entry without it).
 pub(crate) struct Tables {
-    tf: TransferFunction,
-    h: f64,
-    pub(crate) slab: wgpu::Buffer,
-    pub(crate) tau: wgpu::Buffer,
+    key: TableKey,
+    pub(crate) lut: wgpu::Buffer,
+    pub(crate) cells: wgpu::Buffer,
+    pub(crate) preint: wgpu::Buffer,
     /// `(lo, scale)`: value `s` sits at entry `(s - lo) scale`.
     pub(crate) domain: (f32, f32),
     /// Entries per table (with the copy of the last one).
     pub(crate) entries: usize,
+    /// The pre-integration table's `(lo, scale)` and entries per axis.
+    pub(crate) preint_domain: (f32, f32, usize),
 }
 
 impl Tables {
-    /// The tables of `tf` over `range` for the step `h` (world units).
+    /// The tables of `key` over `range` (the grid's values), with the macrocells of `cells`.
     pub(crate) fn new(
         device: &wgpu::Device,
-        tf: &TransferFunction,
+        key: TableKey,
         range: [f64; 2],
-        h: f64,
-    ) -> Self {
-        let table = ClassifyTable::new(tf, range, ClassifyTable::DEFAULT_SIZE);
-        let (slab, tau) = (table.for_step(h as f32), table.for_lanes());
-        let buffer = |label: &str, entries: &[[f32; 4]]| {
+        cells: &MacrocellGrid,
+    ) -> Result<Self, GpuError> {
+        let table = ClassifyTable::new(&key.tf, range, ClassifyTable::DEFAULT_SIZE);
+        let (slab, tau) = (table.for_step(key.h as f32), table.for_lanes());
+        let lut: Vec<[f32; 4]> = slab
+            .entries()
+            .iter()
+            .chain(tau.entries())
+            .copied()
+            .collect();
+        let flags: Vec<u32> = cells
+            .empty_flags(&table, &key.isovalues)
+            .into_iter()
+            .map(|empty| u32::from(!empty))
+            .collect();
+        let (preint, preint_domain) = if key.preintegrated {
+            let t = PreintegrationTable::new(&key.tf, range, key.h).map_err(GpuError::Failed)?;
+            let (lo, scale) = t.lane_domain();
+            (t.table_entries().to_vec(), (lo, scale, t.size()))
+        } else {
+            (vec![[0.0; 4]], (0.0, 0.0, 2))
+        };
+        let storage = |label: &str, contents: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
-                contents: bytemuck::cast_slice(entries),
+                contents,
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
-        Self {
-            tf: tf.clone(),
-            h,
-            slab: buffer("slab table", slab.entries()),
-            tau: buffer("extinction table", tau.entries()),
+        Ok(Self {
+            lut: storage("slab and extinction tables", bytemuck::cast_slice(&lut)),
+            cells: storage("macrocell flags", bytemuck::cast_slice(&flags)),
+            preint: storage("pre-integration table", bytemuck::cast_slice(&preint)),
             domain: slab.domain(),
             entries: slab.entries().len(),
-        }
+            preint_domain,
+            key,
+        })
     }
 
-    /// Whether these are the tables of `tf` at step `h` (the range is the grid's, fixed).
-    pub(crate) fn is_for(&self, tf: &TransferFunction, h: f64) -> bool {
-        self.h == h && &self.tf == tf
+    /// Whether these are the tables of `key` (the range is the grid's, fixed).
+    pub(crate) fn is_for(&self, key: &TableKey) -> bool {
+        &self.key == key
     }
 }

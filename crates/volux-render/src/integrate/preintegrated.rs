@@ -148,6 +148,18 @@ impl PreintegrationTable {
         self.entries[i.min(last) * self.n + j.min(last)]
     }
 
+    /// The entries, row-major: entry `(i, j)` (front value `i`, back value `j`) at
+    /// `i * size + j` (what a GPU backend uploads).
+    pub fn table_entries(&self) -> &[[f32; 4]] {
+        &self.entries
+    }
+
+    /// `(lo, scale)` in `f32` as [`PreintegrationTable::lookup_lanes`] uses them: value `s`
+    /// sits at grid position `(s - lo) scale`.
+    pub fn lane_domain(&self) -> (f32, f32) {
+        (self.lo32, self.scale32)
+    }
+
     /// Premultiplied RGBA of a segment of length [`segment_length`](Self::segment_length)
     /// from front value `s_f` to back value `s_b`, interpolated bilinearly between entries.
     /// Values are clamped to the domain (a segment leaving the domain is integrated as if

@@ -226,6 +226,13 @@ impl GradientVolume {
         })
     }
 
+    /// The quantized gradients, `[x, y, z, 0]` counts per grid sample (x fastest), and the
+    /// world-unit gradient per count along each axis: what a GPU backend uploads to look
+    /// gradients up as [`GradientVolume::gradient`] does.
+    pub fn quantized(&self) -> (&[[i16; 4]], Vec3) {
+        (&self.data, self.to_world)
+    }
+
     /// The key of the data this volume was built from.
     pub fn key(&self) -> GradientKey {
         self.key
