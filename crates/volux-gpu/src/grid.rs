@@ -1,5 +1,6 @@
 //! Grid ray casting on the GPU ([`GpuGridRenderer`]): the grid resident in a 3D texture, one
 //! compute invocation per pixel (`raycast.wgsl`), the image read back.
+use std::collections::HashMap;
 use std::sync::{mpsc, Arc};
 use std::time::Instant;
 
@@ -37,7 +38,8 @@ pub struct GpuGridRenderer {
     ctx: Arc<GpuContext>,
     grid: Arc<Grid>,
     volume: wgpu::TextureView,
-    pipeline: wgpu::ComputePipeline,
+    /// The pipelines compiled so far, by the features they draw and their mode.
+    pipelines: HashMap<u32, wgpu::ComputePipeline>,
     /// The min/max of each macrocell (from the data, built once).
     macrocells: MacrocellGrid,
     /// The last frame's classification, kept while the TF and the step stay.
@@ -69,7 +71,6 @@ impl GpuGridRenderer {
             });
         }
         let volume = ctx.checked(|| upload(&ctx, &grid))??;
-        let pipeline = ctx.checked(|| pipeline(&ctx.device))?;
         let macrocells =
             volux_core::with_samples!(grid.samples(), |s| MacrocellGrid::build(s, grid.dims()));
         let no_gradients = ctx.checked(|| no_gradients(&ctx))?;
@@ -78,7 +79,7 @@ impl GpuGridRenderer {
             ctx,
             grid,
             volume,
-            pipeline,
+            pipelines: HashMap::new(),
             macrocells,
             tables: None,
             gradients: None,
@@ -126,6 +127,24 @@ impl GpuGridRenderer {
     /// The adapter this renderer draws on.
     pub fn context(&self) -> &GpuContext {
         &self.ctx
+    }
+
+    /// Device memory held between frames, in bytes: the grid (4 per voxel), the gradient
+    /// volume once shaded (8 per voxel), the tables and the mask's bits. A frame adds its
+    /// image and sample counts twice (20 bytes per pixel on the device, as much to read
+    /// back).
+    pub fn device_bytes(&self) -> u64 {
+        let voxels = self.grid.dims().iter().map(|&n| n as u64).product::<u64>();
+        let gradients = match self.gradients {
+            Some(Some(_)) => 8 * voxels,
+            _ => 0,
+        };
+        let tables = self
+            .tables
+            .as_ref()
+            .map_or(0, |t| t.lut.size() + t.cells.size() + t.preint.size());
+        let mask = self.mask.as_ref().map_or(0, |(_, m)| m.buffer.size());
+        4 * voxels + gradients + tables + mask
     }
 
     fn render_options(
@@ -212,15 +231,23 @@ impl GpuGridRenderer {
         if opts.jitter {
             flags |= flags::JITTER;
         }
-        if opts.iso_lighting.is_some() || opts.shading.is_some() {
-            flags |= flags::ISO_LIT;
+        if !opts.isosurfaces.is_empty() {
+            flags |= flags::ISOSURFACES;
+            if opts.iso_lighting.is_some() || opts.shading.is_some() {
+                flags |= flags::ISO_LIT;
+            }
         }
+        let mode = match opts.integrator {
+            _ if opts.mip => 1,
+            Integrator::Preintegrated { .. } => 2,
+            _ => 0,
+        };
+        let pipeline = self.pipeline(flags, mode)?;
         let Some(tables) = &self.tables else {
             return Err(GpuError::Failed("no classification tables".into()));
         };
         let drawn = Drawn {
             tables,
-            flags,
             to_world,
             cells: self.macrocells.counts(),
             planes: opts.clip_planes.len(),
@@ -269,13 +296,13 @@ impl GpuGridRenderer {
         .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource });
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("raycast"),
-            layout: &self.pipeline.get_bind_group_layout(0),
+            layout: &pipeline.get_bind_group_layout(0),
             entries: &entries,
         });
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(
                 (opts.width as u32).div_ceil(WORKGROUP),
@@ -289,6 +316,19 @@ impl GpuGridRenderer {
         let rgba: Vec<[f32; 4]> = bytemuck::cast_slice(&map(device, &rgba_read)?).to_vec();
         let counts: Vec<u32> = bytemuck::cast_slice(&map(device, &count_read)?).to_vec();
         Ok(((rgba, counts), stale))
+    }
+
+    /// The pipeline drawing the features `flags` in `mode` (compiled on first use).
+    fn pipeline(&mut self, flags: u32, mode: u32) -> Result<wgpu::ComputePipeline, GpuError> {
+        let key = flags | mode << 16;
+        if let Some(p) = self.pipelines.get(&key) {
+            return Ok(p.clone());
+        }
+        let p = self
+            .ctx
+            .checked(|| pipeline(&self.ctx.device, flags, mode))?;
+        self.pipelines.insert(key, p.clone());
+        Ok(p)
     }
 
     /// An error when the image's `bytes` are over the device's storage buffers.
@@ -486,8 +526,8 @@ fn upload(ctx: &GpuContext, grid: &Grid) -> Result<wgpu::TextureView, GpuError> 
     Ok(texture.create_view(&Default::default()))
 }
 
-/// The ray casting pipeline (`raycast.wgsl`).
-fn pipeline(device: &wgpu::Device) -> wgpu::ComputePipeline {
+/// The ray casting pipeline (`raycast.wgsl`) of the features `flags` in `mode`.
+fn pipeline(device: &wgpu::Device, flags: u32, mode: u32) -> wgpu::ComputePipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("raycast.wgsl"),
         source: wgpu::ShaderSource::Wgsl(include_str!("raycast.wgsl").into()),
@@ -497,7 +537,10 @@ fn pipeline(device: &wgpu::Device) -> wgpu::ComputePipeline {
         layout: None,
         module: &module,
         entry_point: Some("main"),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &[("FLAGS", f64::from(flags)), ("MODE", f64::from(mode))],
+            ..Default::default()
+        },
         cache: None,
     })
 }

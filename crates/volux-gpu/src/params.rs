@@ -3,7 +3,6 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 use volux_core::camera::Projection;
-use volux_render::integrate::Integrator;
 use volux_render::raycast::{local_clip_planes, Placement, RenderOptions};
 use volux_render::shading::Light;
 
@@ -45,13 +44,14 @@ pub(crate) mod flags {
     pub(crate) const JITTER: u32 = 16;
     /// Isosurfaces are lit.
     pub(crate) const ISO_LIT: u32 = 32;
+    /// Isosurfaces are drawn.
+    pub(crate) const ISOSURFACES: u32 = 64;
 }
 
-/// What a frame draws besides the camera: the tables, the shader's flags, the gradient
-/// volume's units per count, the macrocells per axis, and the clip planes and isovalues.
+/// What a frame draws besides the camera: the tables, the gradient volume's units per
+/// count, the macrocells per axis, and the clip planes.
 pub(crate) struct Drawn<'a> {
     pub(crate) tables: &'a Tables,
-    pub(crate) flags: u32,
     pub(crate) to_world: [f32; 3],
     pub(crate) cells: [usize; 3],
     pub(crate) planes: usize,
@@ -104,12 +104,7 @@ impl Params {
                 lo,
                 scale,
             ],
-            mode: [
-                u32::from(opts.mip),
-                u32::from(matches!(opts.integrator, Integrator::Preintegrated { .. })),
-                drawn.flags,
-                isovalues,
-            ],
+            mode: [0, 0, 0, isovalues],
             phong: [
                 model.ambient,
                 model.diffuse,

@@ -4,6 +4,7 @@
 //! - [`pt`]: tets/s of Projected Tetrahedra per colour mode, and its accuracy against the
 //!   brute-force reference;
 //! - [`tetray`]: ms/frame of tetrahedral ray casting;
+//! - [`gpu`](mod@gpu): the GPU backend's grid ray casting, upload time and device memory;
 //! - [`targets`]: the grid speed targets, cases in turn, fastest frame per case;
 //! - [`file`](mod@file): warm frames of any file with any render options.
 //!
@@ -14,6 +15,7 @@ use crate::cli::Suite;
 
 mod common;
 pub mod file;
+mod gpu;
 mod grid;
 mod pt;
 mod sculpt;
@@ -79,6 +81,7 @@ pub fn run(
         Suite::Pt => pt::run(quick, frames, as_json)?,
         Suite::Tetray => tetray::run(quick, frames, as_json)?,
         Suite::Voi => voi::run(frames, n, as_json)?,
+        Suite::Gpu => gpu::run(quick, frames, n, as_json)?,
         Suite::All => {
             let mut rows = grid::run(quick, frames, n, as_json, only)?;
             rows.extend(pt::run(quick, frames, as_json)?);

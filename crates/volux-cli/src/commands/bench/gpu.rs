@@ -1,0 +1,188 @@
+//! `volux bench --suite gpu`: the GPU backend (issue 20) on the preferred adapter: ms/frame
+//! and samples/s of grid ray casting at 512x512 and 1920x1080 (Riemann, shaded, pre-integrated,
+//! MIP), the upload time of each grid and the device memory it holds, on Marschner-Lobb at
+//! `--grid-size`, a 512^3 Marschner-Lobb (the target: 60 frames/s at 1920x1080 on a
+//! data-centre GPU) and the shared CT and MRI heads. On lavapipe (Mesa's software Vulkan)
+//! the figures only prove the path works.
+use crate::commands::common::CmdError;
+
+/// Runs the GPU suite; returns the JSON rows.
+#[cfg(feature = "gpu")]
+pub fn run(
+    quick: bool,
+    frames: usize,
+    n: usize,
+    as_json: bool,
+) -> Result<Vec<serde_json::Value>, CmdError> {
+    on_gpu::run(quick, frames, n, as_json)
+}
+
+/// Without the `gpu` feature: an error saying how to build it.
+#[cfg(not(feature = "gpu"))]
+pub fn run(_: bool, _: usize, _: usize, _: bool) -> Result<Vec<serde_json::Value>, CmdError> {
+    Err(
+        "--suite gpu needs the GPU backend: cargo build --release -p volux-cli --features gpu"
+            .into(),
+    )
+}
+
+#[cfg(feature = "gpu")]
+mod on_gpu {
+    use std::sync::Arc;
+    use std::time::Instant;
+
+    use serde_json::json;
+    use volux_core::{synth, CameraSpec, Grid, TransferFunction};
+    use volux_gpu::{GpuContext, GpuGridRenderer};
+    use volux_render::engine::MethodStats;
+    use volux_render::integrate::Integrator;
+    use volux_render::scene::{GridRaycast, Method, Scene, Volume};
+    use volux_render::RenderError;
+
+    use super::super::common::{frame, grids, median};
+    use crate::commands::common::CmdError;
+
+    /// The cases of a grid: label, integrator, shaded, MIP.
+    const CASES: [(&str, Integrator, bool, bool); 4] = [
+        (
+            "riemann h=0.5",
+            Integrator::Riemann { step: 0.5 },
+            false,
+            false,
+        ),
+        (
+            "riemann h=0.5 shaded",
+            Integrator::Riemann { step: 0.5 },
+            true,
+            false,
+        ),
+        (
+            "preintegrated h=0.5",
+            Integrator::Preintegrated { step: 0.5 },
+            false,
+            false,
+        ),
+        (
+            "riemann h=0.5 mip",
+            Integrator::Riemann { step: 0.5 },
+            false,
+            true,
+        ),
+    ];
+
+    pub fn run(
+        quick: bool,
+        frames: usize,
+        n: usize,
+        as_json: bool,
+    ) -> Result<Vec<serde_json::Value>, CmdError> {
+        let ctx = Arc::new(GpuContext::new().map_err(RenderError::from)?);
+        let adapter = ctx.adapter().to_string();
+        let frames = if quick { 1 } else { frames.max(1) };
+        let sizes: &[(usize, usize)] = if quick {
+            &[(256, 256)]
+        } else {
+            &[(512, 512), (1920, 1080)]
+        };
+        let mut datasets = grids(if quick { n.min(64) } else { n })?;
+        datasets.retain(|(name, _, _)| !name.starts_with("shepp"));
+        if !quick && n != 512 {
+            let tf = datasets[0].2.clone();
+            datasets.push((
+                "marschner-lobb-512".into(),
+                synth::marschner_lobb(512)?.into(),
+                tf,
+            ));
+        }
+        if !as_json {
+            println!("\nGPU backend on {adapter}; frames per case: {frames} (median)");
+            println!(
+                "{:<20} {:>9} {:<22} {:>10} {:>12} {:>12} {:>10} {:>10}",
+                "dataset",
+                "size",
+                "case",
+                "ms/frame",
+                "samples",
+                "Msamples/s",
+                "upload ms",
+                "GPU MiB"
+            );
+        }
+        let mut rows = Vec::new();
+        for (name, volume, tf) in &datasets {
+            let Volume::Grid(grid) = volume else { continue };
+            let (mut renderer, upload_ms) = upload(&ctx, grid)?;
+            for &(w, h) in sizes {
+                for (label, integrator, shaded, mip) in CASES {
+                    let scene = scene(volume, tf, (w, h), integrator, (shaded, mip))?;
+                    let (ms, samples) = time(&mut renderer, &scene, frames)?;
+                    let mib = renderer.device_bytes() as f64 / (1 << 20) as f64;
+                    let rate = samples as f64 / ms * 1e3;
+                    if !as_json {
+                        println!(
+                            "{name:<20} {:>9} {label:<22} {ms:>10.1} {samples:>12} {:>12.1} \
+                             {upload_ms:>10.1} {mib:>10.1}",
+                            format!("{w}x{h}"),
+                            rate / 1e6,
+                        );
+                    }
+                    rows.push(json!({
+                        "suite": "gpu", "adapter": adapter, "dataset": name, "width": w,
+                        "height": h, "case": label, "ms": ms, "samples": samples,
+                        "samples_per_s": rate, "upload_ms": upload_ms, "device_mib": mib,
+                    }));
+                }
+            }
+        }
+        Ok(rows)
+    }
+
+    /// The renderer of `grid` and the milliseconds its upload took.
+    fn upload(ctx: &Arc<GpuContext>, grid: &Arc<Grid>) -> Result<(GpuGridRenderer, f64), CmdError> {
+        let started = Instant::now();
+        let r = GpuGridRenderer::new(ctx.clone(), grid.clone()).map_err(RenderError::from)?;
+        Ok((r, started.elapsed().as_secs_f64() * 1e3))
+    }
+
+    fn scene(
+        volume: &Volume,
+        tf: &TransferFunction,
+        (w, h): (usize, usize),
+        integrator: Integrator,
+        (shaded, mip): (bool, bool),
+    ) -> Result<Scene, CmdError> {
+        let spec = CameraSpec {
+            azimuth: Some(30.0),
+            elevation: Some(20.0),
+            ..Default::default()
+        };
+        let mut scene = Scene::new(spec.resolve(&volume.bounds())?, w, h, tf.clone());
+        scene.method = Method::GridRaycast(GridRaycast {
+            integrator,
+            ..GridRaycast::default()
+        });
+        scene.appearance.shade_volume = shaded;
+        scene.appearance.mip = mip;
+        Ok(scene)
+    }
+
+    /// The median ms of `frames` warm frames (after one that builds the tables and the
+    /// gradient volume) and the samples of one.
+    fn time(
+        renderer: &mut GpuGridRenderer,
+        scene: &Scene,
+        frames: usize,
+    ) -> Result<(f64, u64), CmdError> {
+        frame(renderer, scene)?;
+        let mut times = Vec::new();
+        let mut samples = 0;
+        for _ in 0..frames {
+            let f = frame(renderer, scene)?;
+            times.push(f.stats.ms);
+            if let MethodStats::GridRaycast(s) = f.stats.method {
+                samples = s.samples;
+            }
+        }
+        Ok((median(&mut times), samples))
+    }
+}
