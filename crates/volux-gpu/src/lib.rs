@@ -8,7 +8,11 @@
 //!   and the clip planes, the same sample lattice and classification table as the CPU lanes,
 //!   `f32` accumulation (not `004`'s 8-bit buffers, section 6.1), early ray termination,
 //!   and maximum intensity projection (the largest lattice sample refined by a parabola and
-//!   polished, as `volux_render::mip`).
+//!   polished, as `volux_render::mip`);
+//! - [`GpuPtRenderer`]: Projected Tetrahedra of a tetrahedral mesh (seed `000` chapters 4-5,
+//!   seed `002` section 4): classification by the ternary truth table and the thick vertex
+//!   in a compute shader, a GPU radix sort of centroid depths, the fans rasterized by the
+//!   hardware and coloured with the average or ψ rule, composited back to front.
 //!
 //! What the shader does not draw yet (shading, isosurfaces, the other integrators, the
 //! sculpt mask, region labels, jitter, tricubic reconstruction, bricked grids) is refused
@@ -18,8 +22,10 @@ mod context;
 mod error;
 mod grid;
 mod params;
+mod pt;
 mod tables;
 
 pub use context::{adapters, AdapterSummary, GpuContext};
 pub use error::GpuError;
 pub use grid::GpuGridRenderer;
+pub use pt::GpuPtRenderer;
