@@ -89,6 +89,8 @@ pub struct GpuContext {
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     summary: AdapterSummary,
+    /// Whether `rgba32float` render targets blend (adapter-specific format features).
+    pub(crate) blend_f32: bool,
 }
 
 impl GpuContext {
@@ -99,9 +101,16 @@ impl GpuContext {
         found.sort_by_key(|a| preference(&a.get_info()));
         let adapter = found.into_iter().next().ok_or(GpuError::NoAdapter)?;
         let info = adapter.get_info();
+        let specific = wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
+        let features = adapter.features() & specific;
+        let blend_f32 = features.contains(specific)
+            && adapter
+                .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
+                .flags
+                .contains(wgpu::TextureFormatFeatureFlags::BLENDABLE);
         let desc = wgpu::DeviceDescriptor {
             label: Some("volux"),
-            required_features: wgpu::Features::empty(),
+            required_features: features,
             required_limits: adapter.limits(),
             ..Default::default()
         };
@@ -114,6 +123,7 @@ impl GpuContext {
             device,
             queue,
             summary: AdapterSummary::of(&info),
+            blend_f32,
         })
     }
 

@@ -426,7 +426,7 @@ impl GpuGridRenderer {
 }
 
 /// A buffer the copy of `src` lands in, to be mapped on the host.
-fn readback(
+pub(crate) fn readback(
     device: &wgpu::Device,
     encoder: &mut wgpu::CommandEncoder,
     src: &wgpu::Buffer,
@@ -443,7 +443,7 @@ fn readback(
 }
 
 /// The bytes of `buf` once the device is done with it.
-fn map(device: &wgpu::Device, buf: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+pub(crate) fn map(device: &wgpu::Device, buf: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
     let slice = buf.slice(..);
     let (tx, rx) = mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {

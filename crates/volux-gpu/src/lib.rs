@@ -12,7 +12,11 @@
 //!   lattice sample refined by a parabola and polished, as `volux_render::mip`), the sculpt
 //!   mask (`004` §4.4.1, a bit per voxel, interpolated and thresholded at 0.5), empty-space
 //!   skipping over the CPU's macrocells (samples never move), jitter and early ray
-//!   termination; `003`'s GPU ray casting without its per-block opacity reset.
+//!   termination; `003`'s GPU ray casting without its per-block opacity reset;
+//! - [`GpuPtRenderer`]: Projected Tetrahedra of a tetrahedral mesh (seed `000` chapters 4-5,
+//!   seed `002` section 4): classification by the ternary truth table and the thick vertex
+//!   in a compute shader, a GPU radix sort of centroid depths, the fans rasterized by the
+//!   hardware and coloured with the average or ψ rule, composited back to front.
 //!
 //! What the shader does not draw (the trapezoid, Simpson, adaptive Simpson and reference
 //! integrators, tricubic reconstruction, region labels, more than [`MAX_ISOVALUES`]
@@ -23,9 +27,11 @@ mod context;
 mod error;
 mod grid;
 mod params;
+mod pt;
 mod resources;
 mod tables;
 
 pub use context::{adapters, AdapterSummary, GpuContext};
 pub use error::GpuError;
 pub use grid::{GpuGridRenderer, MAX_ISOVALUES};
+pub use pt::GpuPtRenderer;

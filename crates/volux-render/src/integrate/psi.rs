@@ -409,6 +409,12 @@ impl PsiTable {
         self.n
     }
 
+    /// The tabulated `1 - psi`, row `i` (front thickness node) after row, `size()` entries a
+    /// row: what a GPU backend uploads to draw the same ψ colours.
+    pub fn values(&self) -> &[f32] {
+        &self.one_minus_psi
+    }
+
     /// `psi` at normalized front and back thicknesses `gamma_f`, `gamma_b` (see [`gamma`]),
     /// clamped to `[0, 1]`, interpolated bilinearly. NaN gives NaN; never panics.
     #[inline]
@@ -628,6 +634,12 @@ impl CellClassifier {
             scale: ((size - 1) as f64 / (hi - lo)) as f32,
             last: (size - 1) as f32,
         }
+    }
+
+    /// The table of [`CellClassifier::lookup`]: its entries, the value at entry 0 and entries
+    /// per value unit (what a GPU backend uploads to look values up the same way).
+    pub fn table(&self) -> (&[[f32; 4]], f32, f32) {
+        (&self.entries, self.lo, self.scale)
     }
 
     /// The value domain the table covers: `[min(range, breakpoints), max(range, breakpoints)]`.
