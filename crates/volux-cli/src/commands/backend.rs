@@ -53,7 +53,7 @@ pub fn list_adapters(json: bool) -> Result<(), CmdError> {
 mod gpu {
     use std::sync::Arc;
 
-    use volux_gpu::{GpuContext, GpuGridRenderer};
+    use volux_gpu::{GpuContext, GpuGridRenderer, GpuPtRenderer};
     use volux_render::renderer::Renderer;
     use volux_render::scene::{Scene, Volume};
     use volux_render::RenderError;
@@ -63,18 +63,30 @@ mod gpu {
     pub const BUILT: bool = true;
 
     pub fn renderer(volume: &Volume, scene: &Scene) -> Result<Box<dyn Renderer>, CmdError> {
-        let Volume::Grid(grid) = volume else {
-            return Err(format!(
-                "the GPU backend draws grids held in memory, not a {}",
+        let not_drawn = || {
+            format!(
+                "the GPU backend draws grids and meshes held in memory, not a {}",
                 volume.kind()
             )
-            .into());
         };
-        GpuGridRenderer::supports(scene).map_err(RenderError::Backend)?;
+        match volume {
+            Volume::Grid(_) => GpuGridRenderer::supports(scene),
+            Volume::Mesh(_) => GpuPtRenderer::supports(scene),
+            _ => Err(not_drawn()),
+        }
+        .map_err(RenderError::Backend)?;
         let ctx = Arc::new(GpuContext::new().map_err(RenderError::from)?);
         eprintln!("volux: rendering on the GPU: {}", ctx.adapter());
-        let r = GpuGridRenderer::new(ctx, grid.clone()).map_err(RenderError::from)?;
-        Ok(Box::new(r))
+        let r: Box<dyn Renderer> = match volume {
+            Volume::Grid(grid) => {
+                Box::new(GpuGridRenderer::new(ctx, grid.clone()).map_err(RenderError::from)?)
+            }
+            Volume::Mesh(mesh) => {
+                Box::new(GpuPtRenderer::new(ctx, mesh.clone()).map_err(RenderError::from)?)
+            }
+            _ => return Err(not_drawn().into()),
+        };
+        Ok(r)
     }
 
     pub fn adapters() -> Result<Vec<String>, CmdError> {

@@ -1,9 +1,14 @@
-//! `volux bench --suite gpu`: the GPU backend (issue 20) on the preferred adapter: ms/frame
-//! and samples/s of grid ray casting at 512x512 and 1920x1080 (Riemann, shaded, pre-integrated,
-//! MIP), the upload time of each grid and the device memory it holds, on Marschner-Lobb at
-//! `--grid-size`, a 512^3 Marschner-Lobb (the target: 60 frames/s at 1920x1080 on a
-//! data-centre GPU) and the shared CT and MRI heads. On lavapipe (Mesa's software Vulkan)
-//! the figures only prove the path works.
+//! `volux bench --suite gpu`: the GPU backend (issue 20) on the preferred adapter:
+//!
+//! - grid ray casting: ms/frame and samples/s at 512x512 and 1920x1080 (Riemann, shaded,
+//!   pre-integrated, MIP), the upload time of each grid and the device memory it holds, on
+//!   Marschner-Lobb at `--grid-size`, a 512^3 Marschner-Lobb (the target: 60 frames/s at
+//!   1920x1080 on a data-centre GPU) and the shared CT and MRI heads;
+//! - Projected Tetrahedra: ms/frame and tets/s (ψ colour, centroid order) at the same sizes
+//!   on the 200K and 1.25M-tet meshes and the shared Blunt Fin and LOx Post (the target:
+//!   100 M tets/s on a data-centre GPU), with the upload time.
+//!
+//! On lavapipe (Mesa's software Vulkan) the figures only prove the path works.
 use crate::commands::common::CmdError;
 
 /// Runs the GPU suite; returns the JSON rows.
@@ -33,13 +38,14 @@ mod on_gpu {
 
     use serde_json::json;
     use volux_core::{synth, CameraSpec, Grid, TransferFunction};
-    use volux_gpu::{GpuContext, GpuGridRenderer};
+    use volux_gpu::{GpuContext, GpuGridRenderer, GpuPtRenderer};
     use volux_render::engine::MethodStats;
     use volux_render::integrate::Integrator;
-    use volux_render::scene::{GridRaycast, Method, Scene, Volume};
+    use volux_render::renderer::Renderer;
+    use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, Volume};
     use volux_render::RenderError;
 
-    use super::super::common::{frame, grids, median};
+    use super::super::common::{frame, grids, median, meshes};
     use crate::commands::common::CmdError;
 
     /// The cases of a grid: label, integrator, shaded, MIP.
@@ -96,8 +102,12 @@ mod on_gpu {
         }
         if !as_json {
             println!("\nGPU backend on {adapter}; frames per case: {frames} (median)");
+        }
+        let mut rows = Vec::new();
+        rows.extend(pt_rows(&ctx, quick, frames, sizes, as_json)?);
+        if !as_json {
             println!(
-                "{:<20} {:>9} {:<22} {:>10} {:>12} {:>12} {:>10} {:>10}",
+                "\n{:<20} {:>9} {:<22} {:>10} {:>12} {:>12} {:>10} {:>10}",
                 "dataset",
                 "size",
                 "case",
@@ -108,7 +118,6 @@ mod on_gpu {
                 "GPU MiB"
             );
         }
-        let mut rows = Vec::new();
         for (name, volume, tf) in &datasets {
             let Volume::Grid(grid) = volume else { continue };
             let (mut renderer, upload_ms) = upload(&ctx, grid)?;
@@ -132,6 +141,62 @@ mod on_gpu {
                         "samples_per_s": rate, "upload_ms": upload_ms, "device_mib": mib,
                     }));
                 }
+            }
+        }
+        Ok(rows)
+    }
+
+    /// The Projected Tetrahedra rows: ψ colour, centroid order, each mesh at each size.
+    fn pt_rows(
+        ctx: &Arc<GpuContext>,
+        quick: bool,
+        frames: usize,
+        sizes: &[(usize, usize)],
+        as_json: bool,
+    ) -> Result<Vec<serde_json::Value>, CmdError> {
+        let adapter = ctx.adapter().to_string();
+        if !as_json {
+            println!(
+                "{:<20} {:>9} {:<22} {:>10} {:>12} {:>12} {:>10}",
+                "mesh", "size", "case", "ms/frame", "tets", "Mtets/s", "upload ms"
+            );
+        }
+        let mut rows = Vec::new();
+        for (name, volume) in meshes(quick)? {
+            let Volume::Mesh(mesh) = &volume else {
+                continue;
+            };
+            let started = Instant::now();
+            let mut renderer =
+                GpuPtRenderer::new(ctx.clone(), mesh.clone()).map_err(RenderError::from)?;
+            let upload_ms = started.elapsed().as_secs_f64() * 1e3;
+            let tf = volume.preset_tf("auto")?;
+            for &(w, h) in sizes {
+                let mut scene = scene(
+                    &volume,
+                    &tf,
+                    (w, h),
+                    Integrator::Riemann { step: 0.5 },
+                    (false, false),
+                )?;
+                scene.method = Method::ProjectedTetrahedra(PtSettings::default());
+                scene.early_termination = None;
+                let (ms, _) = time(&mut renderer, &scene, frames)?;
+                let tets = mesh.tets().len();
+                let rate = tets as f64 / ms * 1e3;
+                if !as_json {
+                    println!(
+                        "{name:<20} {:>9} {:<22} {ms:>10.1} {tets:>12} {:>12.1} {upload_ms:>10.1}",
+                        format!("{w}x{h}"),
+                        "pt psi",
+                        rate / 1e6,
+                    );
+                }
+                rows.push(json!({
+                    "suite": "gpu", "adapter": adapter, "dataset": name, "width": w,
+                    "height": h, "case": "pt psi", "ms": ms, "tets": tets,
+                    "tets_per_s": rate, "upload_ms": upload_ms,
+                }));
             }
         }
         Ok(rows)
@@ -169,7 +234,7 @@ mod on_gpu {
     /// The median ms of `frames` warm frames (after one that builds the tables and the
     /// gradient volume) and the samples of one.
     fn time(
-        renderer: &mut GpuGridRenderer,
+        renderer: &mut dyn Renderer,
         scene: &Scene,
         frames: usize,
     ) -> Result<(f64, u64), CmdError> {
