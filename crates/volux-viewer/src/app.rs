@@ -17,6 +17,7 @@ use volux_render::scene::{Method, Scene, Volume};
 use volux_render::sculpt::Sculpt;
 use volux_render::session::{DatasetRef, Session, SliceState};
 
+use crate::backend::{Backend, Device};
 use crate::dataset::{self, Loaded};
 use crate::file_dialog::FileDialog;
 use crate::jobs::{Job, Poll};
@@ -39,6 +40,8 @@ pub struct Options {
     pub save_session: Option<PathBuf>,
     /// The level an OME-Zarr store refines to (`--lod`): automatic, or a fixed level.
     pub lod: Lod,
+    /// Where frames are rendered (`--backend`; the library's default is the CPU).
+    pub backend: Backend,
 }
 
 /// The default background (dark blue-grey, as the CLI's demo).
@@ -124,7 +127,7 @@ impl ViewerApp {
     /// A viewer on `ctx`, opening what `options` name.
     pub fn new(ctx: &egui::Context, options: Options) -> Self {
         let wake_ctx = ctx.clone();
-        let service = RenderService::start(move || wake_ctx.request_repaint());
+        let service = RenderService::start_on(move || wake_ctx.request_repaint(), options.backend);
         let camera = Camera::fit(&volux_core::Aabb {
             min: DVec3::ZERO,
             max: DVec3::ONE,
@@ -504,6 +507,11 @@ impl ViewerApp {
     /// The rendered image of the frame on screen (premultiplied linear RGBA).
     pub fn shown_image(&self) -> Option<&volux_core::Image> {
         self.shown.as_ref().map(|s| &s.frame.image)
+    }
+
+    /// What drew the frame on screen: the CPU engine or the GPU adapter named.
+    pub fn shown_device(&self) -> Option<&Device> {
+        self.shown.as_ref().map(|s| &s.frame.device)
     }
 
     /// Frames per second over the last frames shown.

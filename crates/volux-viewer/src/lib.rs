@@ -32,6 +32,7 @@
 //! - [`panels`]: the menu and the settings panel; [`file_dialog`]: the file dialog;
 //!   [`files`]: TF files, sessions and screenshots read and written; [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
 pub mod app;
+pub mod backend;
 pub mod bench;
 pub mod dataset;
 pub mod file_dialog;

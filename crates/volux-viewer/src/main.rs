@@ -34,6 +34,10 @@ struct Args {
     /// quarter of the available memory, as the CLI's.
     #[arg(long, value_name = "SIZE")]
     memory_budget: Option<String>,
+    /// Where frames are rendered: auto (the GPU when there is an adapter and it draws the
+    /// scene, else the CPU), cpu, or gpu (an error shown in the view when it cannot).
+    #[arg(long, value_name = "auto|cpu|gpu", default_value = "auto")]
+    backend: String,
     /// Seconds of scripted orbit in --bench.
     #[arg(long, default_value_t = 3.0)]
     bench_seconds: f64,
@@ -90,6 +94,7 @@ fn run(args: Args) -> Result<(), String> {
         size,
         save_session: args.save_session,
         lod,
+        backend: volux_viewer::backend::Backend::parse(&args.backend)?,
     };
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()

@@ -24,13 +24,14 @@ use std::time::{Duration, Instant};
 
 use volux_core::Image;
 use volux_render::bricked::{BrickedVolume, Lod};
-use volux_render::engine::{create_renderer, FrameStats, Renderer};
+use volux_render::engine::{FrameStats, Renderer};
 use volux_render::integrate::integrator::Integrator;
 use volux_render::integrate::segment::SegmentRule;
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::tiles::Control;
 use volux_render::RenderError;
 
+use crate::backend::{Backend, Device, Factory};
 use crate::progressive::{self, LevelShown};
 
 /// Time a preview frame aims at (ms): the divisor of the resolution adapts to meet it.
@@ -82,6 +83,8 @@ pub struct Rendered {
     pub scene: Scene,
     /// For a bricked volume: the pyramid level drawn and where refinement stops.
     pub level: Option<LevelShown>,
+    /// What drew it: the CPU engine or the GPU adapter named.
+    pub device: Device,
 }
 
 /// What comes back from the thread.
@@ -119,8 +122,14 @@ pub struct RenderService {
 }
 
 impl RenderService {
-    /// Starts the thread; `wake` is called after each event (a window requests a repaint).
+    /// Starts the thread rendering on the CPU; `wake` is called after each event (a window
+    /// requests a repaint).
     pub fn start(wake: impl Fn() + Send + 'static) -> Self {
+        Self::start_on(wake, Backend::Cpu)
+    }
+
+    /// Starts the thread rendering on `backend` ([`crate::backend`]).
+    pub fn start_on(wake: impl Fn() + Send + 'static, backend: Backend) -> Self {
         let mailbox = Arc::new(Mailbox::default());
         let (tx, events) = channel();
         let worker = Worker {
@@ -128,6 +137,7 @@ impl RenderService {
             tx,
             wake: Box::new(wake),
             renderers: HashMap::new(),
+            factory: Factory::new(backend),
             ns_per_pixel: None,
             previewed: None,
         };
@@ -205,12 +215,17 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// A kept renderer's volume, method name and whether it draws on the GPU.
+type RendererKey = (u64, &'static str, bool);
+
 /// The thread's side.
 struct Worker {
     mailbox: Arc<Mailbox>,
     tx: Sender<Event>,
     wake: Box<dyn Fn() + Send>,
-    renderers: HashMap<(u64, &'static str), Box<dyn Renderer>>,
+    /// The renderers kept, by volume, method and whether on the GPU, with what they draw on.
+    renderers: HashMap<RendererKey, (Box<dyn Renderer>, Device)>,
+    factory: Factory,
     /// Preview cost measured on the last preview, to size the next one.
     ns_per_pixel: Option<f64>,
     /// The last scene previewed: when the same scene comes back without interaction (the
@@ -342,7 +357,7 @@ impl Worker {
             let px = (frame.stats.pixels.max(1)) as f64;
             self.ns_per_pixel = Some(frame.stats.ms * 1e6 / px);
         }
-        self.send(request, frame, full, divisor, Some(shown));
+        self.send(request, frame, (full, divisor), Some(shown), Device::Cpu);
         Ok(())
     }
 
@@ -362,14 +377,22 @@ impl Worker {
         if !full {
             scene.method = preview_method(&scene.method);
         }
-        let resolved = scene.method.resolve(&request.volume.volume)?;
-        let key = (request.volume.id, resolved.name());
+        let volume = &request.volume.volume;
+        let resolved = scene.method.resolve(volume)?;
+        let mut drawn = scene.clone();
+        drawn.method = resolved;
+        let on_gpu = self.factory.on_gpu(volume, &drawn)?;
+        let key = (request.volume.id, resolved.name(), on_gpu);
         if !self.renderers.contains_key(&key) {
-            self.renderers.retain(|(id, _), _| *id == request.volume.id);
-            let r = create_renderer(&request.volume.volume, &resolved)?;
-            self.renderers.insert(key, r);
+            self.renderers
+                .retain(|(id, ..), _| *id == request.volume.id);
+            let made = self.factory.make(volume, &resolved, on_gpu)?;
+            self.renderers.insert(key, made);
         }
-        let renderer = self.renderers.get_mut(&key).expect("inserted above");
+        let Some((renderer, device)) = self.renderers.get_mut(&key) else {
+            return Err(RenderError::InvalidOptions("no renderer".into()));
+        };
+        let device = device.clone();
         let control = Control {
             cancel: Some(request.cancel.clone()),
             progress: None,
@@ -383,7 +406,7 @@ impl Worker {
             let px = (frame.stats.pixels.max(1)) as f64;
             self.ns_per_pixel = Some(frame.stats.ms * 1e6 / px);
         }
-        self.send(request, frame, full, divisor, None);
+        self.send(request, frame, (full, divisor), None, device);
         Ok(())
     }
 
@@ -392,9 +415,9 @@ impl Worker {
         &self,
         request: &Request,
         frame: volux_render::engine::Frame,
-        full: bool,
-        divisor: usize,
+        (full, divisor): (bool, usize),
         level: Option<LevelShown>,
+        device: Device,
     ) {
         let background = *lock(&self.mailbox.background);
         let rendered = Rendered {
@@ -408,6 +431,7 @@ impl Worker {
             latency: request.submitted.elapsed(),
             scene: request.scene.clone(),
             level,
+            device,
         };
         let _ = self.tx.send(Event::Frame(Box::new(rendered)));
         (self.wake)();

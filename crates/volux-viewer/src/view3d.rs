@@ -9,6 +9,7 @@ use volux_render::engine::{FrameStats, MethodStats};
 
 use crate::app::ViewerApp;
 use crate::navigation::{self, StandardView};
+use crate::render_service::Rendered;
 use crate::slices::{direction_name, Plane};
 use crate::{plane_handle, sculpt_tools};
 
@@ -109,14 +110,7 @@ fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
     if let Some(shown) = &app.shown {
         let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
         painter.image(shown.texture.id(), rect, uv, Color32::WHITE);
-        overlay(
-            app,
-            &painter,
-            rect,
-            &shown.frame.stats,
-            shown.frame.full,
-            shown.frame.divisor,
-        );
+        overlay(app, &painter, rect, &shown.frame);
     } else if app.data.is_some() {
         painter.text(
             rect.center(),
@@ -144,21 +138,15 @@ fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
     }
 }
 
-fn overlay(
-    app: &ViewerApp,
-    painter: &egui::Painter,
-    rect: Rect,
-    stats: &FrameStats,
-    full: bool,
-    divisor: usize,
-) {
-    let kind = if full {
+fn overlay(app: &ViewerApp, painter: &egui::Painter, rect: Rect, frame: &Rendered) {
+    let (stats, divisor, device) = (&frame.stats, frame.divisor, &frame.device);
+    let kind = if frame.full {
         "full".to_string()
     } else {
         format!("preview 1/{divisor}")
     };
     let text = format!(
-        "{:.1} ms/frame · {:.1} fps · {kind}\n{}",
+        "{:.1} ms/frame · {:.1} fps · {kind}\n{}\n{device}",
         stats.ms,
         app.fps(),
         method_figure(stats)

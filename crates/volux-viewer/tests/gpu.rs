@@ -1,0 +1,145 @@
+//! The viewer on the GPU backend (`--backend gpu` and `auto`): the render thread draws on
+//! the adapter, each frame says so, its picture is the CPU's, and what the GPU does not
+//! draw is shown as an error (`gpu`) or drawn on the CPU (`auto`). On lavapipe in CI
+//! (`VOLUX_GPU_REQUIRED=1`); skipped with a message on a machine without an adapter.
+#![cfg(feature = "gpu")]
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+use volux_core::{synth, CameraSpec};
+use volux_render::integrate::Integrator;
+use volux_render::scene::{GridRaycast, Method, Scene, Volume};
+use volux_viewer::app::{Options, ViewerApp};
+use volux_viewer::backend::{Backend, Device};
+use volux_viewer::render_service::{Event, RenderService, Rendered, VolumeRef};
+
+/// Whether this machine has an adapter (a skip message when not, a failure in CI).
+fn have_adapter() -> bool {
+    match volux_gpu::GpuContext::new() {
+        Ok(_) => true,
+        Err(e) if std::env::var_os("VOLUX_GPU_REQUIRED").is_none() => {
+            eprintln!("SKIPPED: no GPU adapter ({e}); set VOLUX_GPU_REQUIRED=1 to fail instead");
+            false
+        }
+        Err(e) => panic!("VOLUX_GPU_REQUIRED is set and there is no adapter: {e}"),
+    }
+}
+
+fn volume() -> VolumeRef {
+    VolumeRef {
+        id: 1,
+        volume: Volume::from(synth::marschner_lobb(24).unwrap()),
+    }
+}
+
+fn scene(v: &VolumeRef) -> Scene {
+    let camera = CameraSpec::default().resolve(&v.volume.bounds()).unwrap();
+    Scene::new(camera, 64, 64, v.volume.preset_tf("auto").unwrap())
+}
+
+/// The full frame of `scene` on `backend` (previews skipped), or the failure's message.
+fn full_frame(backend: Backend, v: &VolumeRef, scene: &Scene) -> Result<Rendered, String> {
+    let mut service = RenderService::start_on(|| {}, backend);
+    service.submit(v, scene, false);
+    loop {
+        match service.wait(Duration::from_secs(60)).expect("an event") {
+            Event::Frame(f) if f.full => return Ok(*f),
+            Event::Frame(_) => {}
+            Event::Failed { message, .. } => return Err(message),
+        }
+    }
+}
+
+/// The render thread draws on the adapter, says so, and draws the CPU's picture (mean under
+/// 1/255, max 1e-4: the GPU's `f32` positions).
+#[test]
+fn the_render_thread_draws_on_the_gpu_the_cpus_picture() {
+    if !have_adapter() {
+        return;
+    }
+    let v = volume();
+    let s = scene(&v);
+    let gpu = full_frame(Backend::Gpu, &v, &s).unwrap();
+    let cpu = full_frame(Backend::Cpu, &v, &s).unwrap();
+    assert!(
+        matches!(&gpu.device, Device::Gpu(name) if !name.is_empty()),
+        "{:?}",
+        gpu.device
+    );
+    assert_eq!(cpu.device, Device::Cpu);
+    assert!(gpu.device.to_string().starts_with("GPU: "));
+    let (mut sum, mut max) = (0.0f64, 0.0f32);
+    for (a, b) in gpu.image.pixels().iter().zip(cpu.image.pixels()) {
+        for c in 0..4 {
+            let d = (a[c] - b[c]).abs();
+            sum += f64::from(d);
+            max = max.max(d);
+        }
+    }
+    let mean = sum / (4 * gpu.image.pixels().len()) as f64;
+    eprintln!("viewer GPU frame against CPU: mean {mean:.2e}, max {max:.2e}");
+    assert!(
+        mean < 1.0 / 255.0 && max < 1e-4,
+        "mean {mean:e}, max {max:e}"
+    );
+}
+
+/// What the GPU does not draw (here the Simpson rule): `gpu` shows why,
+/// `auto` draws it on the CPU.
+#[test]
+fn what_the_gpu_does_not_draw_is_an_error_on_gpu_and_the_cpus_on_auto() {
+    if !have_adapter() {
+        return;
+    }
+    let v = volume();
+    let mut s = scene(&v);
+    s.method = Method::GridRaycast(GridRaycast {
+        integrator: Integrator::Simpson { step: 0.5 },
+        ..GridRaycast::default()
+    });
+    let err = full_frame(Backend::Gpu, &v, &s).unwrap_err();
+    assert!(err.contains("simpson"), "{err}");
+    let auto = full_frame(Backend::Auto, &v, &s).unwrap();
+    assert_eq!(auto.device, Device::Cpu);
+    let plain = scene(&v);
+    let auto = full_frame(Backend::Auto, &v, &plain).unwrap();
+    assert!(matches!(auto.device, Device::Gpu(_)), "{:?}", auto.device);
+}
+
+/// The window with `--backend gpu` opens a grid and shows a full frame drawn on the GPU.
+#[test]
+fn the_window_shows_frames_drawn_on_the_gpu() {
+    if !have_adapter() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path: PathBuf = dir.path().join("ml.raw");
+    volux_io::raw::write(&synth::marschner_lobb(24).unwrap(), &path).unwrap();
+    let options = Options {
+        open: Some(path),
+        backend: Backend::Gpu,
+        ..Default::default()
+    };
+    let mut h = Harness::builder()
+        .with_size([900.0, 700.0])
+        .with_max_steps(8)
+        .build_state(
+            move |ctx, app: &mut Option<ViewerApp>| {
+                app.get_or_insert_with(|| ViewerApp::new(ctx, options.clone()));
+                volux_viewer::window::frame(app.as_mut().unwrap(), ctx)
+            },
+            None,
+        );
+    let start = Instant::now();
+    loop {
+        h.step();
+        if let Some(app) = h.state().as_ref().filter(|a| a.shown_full()) {
+            let device = app.shown_device();
+            assert!(matches!(device, Some(Device::Gpu(_))), "{device:?}");
+            return;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "no full frame");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
