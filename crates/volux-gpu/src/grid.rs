@@ -530,7 +530,9 @@ fn upload(ctx: &GpuContext, grid: &Grid) -> Result<wgpu::TextureView, GpuError> 
 fn pipeline(device: &wgpu::Device, flags: u32, mode: u32) -> wgpu::ComputePipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("raycast.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("raycast.wgsl").into()),
+        source: wgpu::ShaderSource::Wgsl(
+            concat!(include_str!("common.wgsl"), include_str!("raycast.wgsl")).into(),
+        ),
     });
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("raycast"),

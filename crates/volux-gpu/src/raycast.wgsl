@@ -18,38 +18,6 @@
 //   undefined, as a NaN sample: it adds nothing, nor does a segment ending at it;
 // - maximum intensity projection.
 
-struct Params {
-    // Camera in the grid's local frame (world units): eye, right, up, forward.
-    eye: vec4<f32>,
-    right: vec4<f32>,
-    up: vec4<f32>,
-    forward: vec4<f32>,
-    // xyz: world position of sample (0,0,0); w: the step h (world units).
-    origin: vec4<f32>,
-    // xyz: 1 / spacing; w: the opacity at which a ray stops (2 without early termination).
-    inv_spacing: vec4<f32>,
-    // xyz: samples per axis; w: clip planes.
-    dims: vec4<u32>,
-    // width, height, projection (0 perspective, 1 orthographic), table entries.
-    size: vec4<u32>,
-    // tan(fov / 2) or the orthographic view height, aspect, table lo, table scale.
-    lens: vec4<f32>,
-    // x, y, z: unused; w: isovalues.
-    mode: vec4<u32>,
-    // ambient, diffuse, specular, shininess.
-    phong: vec4<f32>,
-    // xyz: direction towards the light; w: 1 for a headlight.
-    light: vec4<f32>,
-    // xyz: world units per count of the gradient volume; w: the smallest lit gradient.
-    gradient: vec4<f32>,
-    // xyz: spacing; w: the pre-integration table's lo.
-    spacing: vec4<f32>,
-    // xyz: macrocells per axis; w: pre-integration table entries per axis.
-    cells: vec4<u32>,
-    // x: the pre-integration table's scale; y: the jitter-free first lattice offset (0).
-    extra: vec4<f32>,
-};
-
 // The features a pipeline draws (the flags below) and its mode (0 Riemann, 1 MIP, 2
 // pre-integration), fixed when the pipeline is created, so that the driver compiles out
 // what a frame does not use (lavapipe ran the plain Riemann sum 3 times slower with the
@@ -89,23 +57,6 @@ const BLOCK: f32 = 8.0;
 
 fn flag(f: u32) -> bool {
     return (FLAGS & f) != 0u;
-}
-
-fn nan() -> f32 {
-    return bitcast<f32>(0x7fc00000u);
-}
-
-fn is_nan(v: f32) -> bool {
-    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
-}
-
-fn axis(p: f32, n: u32) -> vec2<f32> {
-    // The cell below p (clamped so that the cell exists) and the fraction in it.
-    if (n < 2u) {
-        return vec2<f32>(0.0, 0.0);
-    }
-    let i = clamp(floor(p), 0.0, f32(n - 2u));
-    return vec2<f32>(i, p - i);
 }
 
 // Trilinear sample at voxel-space q, clamped to the box (the lattice lies in it but for
@@ -161,31 +112,6 @@ fn field(q: vec3<f32>) -> f32 {
         return nan();
     }
     return sample(q);
-}
-
-// The table entry below value s and the fraction towards the next, as `LaneTable::position`
-// computes them (NaN reads entry 0).
-fn position(s: f32) -> vec2<f32> {
-    let last = f32(params.size.w - 1u);
-    var x = (s - params.lens.z) * params.lens.w;
-    x = select(0.0, x, x > 0.0);
-    x = select(last, x, x < last);
-    let i = min(floor(x), f32(params.size.w - 2u));
-    return vec2<f32>(i, x - i);
-}
-
-// The slab table at value s.
-fn slab_at(s: f32) -> vec4<f32> {
-    let p = position(s);
-    let i = u32(p.x);
-    return mix(tables[i], tables[i + 1u], p.y);
-}
-
-// The extinction table at value s.
-fn tau_at(s: f32) -> vec4<f32> {
-    let p = position(s);
-    let i = u32(p.x) + params.size.w;
-    return mix(tables[i], tables[i + 1u], p.y);
 }
 
 // `PreintegrationTable::position_f32`: the row or column below s and the fraction.
@@ -323,11 +249,6 @@ fn lit(e: vec4<f32>, q: vec3<f32>, view: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(c * e.w, e.w);
 }
 
-// `composite::under`: a layer of colour rgb and opacity a behind acc.
-fn under(acc: vec4<f32>, e: vec4<f32>) -> vec4<f32> {
-    return acc + (1.0 - acc.w) * e;
-}
-
 // `composite::under_partial`: the entry of a full segment, cut to the fraction frac.
 fn under_partial(acc: vec4<f32>, e: vec4<f32>, frac: f32) -> vec4<f32> {
     var alpha = e.w;
@@ -340,16 +261,6 @@ fn under_partial(acc: vec4<f32>, e: vec4<f32>, frac: f32) -> vec4<f32> {
     }
     return acc + (1.0 - acc.w) * vec4<f32>(e.xyz * scale, alpha);
 }
-
-struct Ray {
-    // Voxel-space origin and direction (per world unit of t).
-    o_v: vec3<f32>,
-    d_v: vec3<f32>,
-    // Unit direction in the grid's frame, for lighting.
-    view: vec3<f32>,
-    t0: f32,
-    t1: f32,
-};
 
 // The distance at which the ray leaves the macrocell holding voxel-space p.
 fn cell_exit(ray: Ray, p: vec3<f32>) -> f32 {
@@ -476,32 +387,6 @@ fn isosurfaces(acc_in: vec4<f32>, ray: Ray, tp: f32, vp: f32, t: f32, v: f32) ->
         acc = under(acc, vec4<f32>(rgb * iso.w, iso.w));
     }
     return acc;
-}
-
-// The ray's entry and exit distances through the box [0, dims - 1] (voxel space) and the
-// clip planes (local frame); x > y when it misses.
-fn extent(o: vec3<f32>, dir: vec3<f32>, o_v: vec3<f32>, d_v: vec3<f32>) -> vec2<f32> {
-    let hi = vec3<f32>(params.dims.xyz - vec3<u32>(1u));
-    let inv = 1.0 / d_v;
-    let ta = (vec3<f32>(0.0) - o_v) * inv;
-    let tb = (hi - o_v) * inv;
-    let near = min(ta, tb);
-    let far = max(ta, tb);
-    var t0 = max(max(max(near.x, near.y), near.z), 0.0);
-    var t1 = min(min(far.x, far.y), far.z);
-    for (var k = 0u; k < params.dims.w; k++) {
-        let pl = frame[k];
-        let d0 = dot(pl.xyz, o) + pl.w;
-        let rate = dot(pl.xyz, dir);
-        if (rate > 0.0) {
-            t0 = max(t0, -d0 / rate);
-        } else if (rate < 0.0) {
-            t1 = min(t1, -d0 / rate);
-        } else if (d0 < 0.0) {
-            t1 = t0 - 1.0;
-        }
-    }
-    return vec2<f32>(t0, t1);
 }
 
 // The vertex of the parabola through (-h, y0), (0, y1), (h, y2) where y1 is the largest:
@@ -686,44 +571,18 @@ fn preintegrated(ray: Ray, jitter: f32) -> Traced {
     return Traced(acc, samples);
 }
 
-// `RayContext`'s jitter: a hash of the pixel, in [0, 1).
-fn pixel_hash(x: u32, y: u32) -> f32 {
-    var v = (x * 0x9E3779B9u) ^ (y * 0x85EBCA6Bu);
-    v ^= v >> 16u;
-    v *= 0x7FEB352Du;
-    v ^= v >> 15u;
-    v *= 0x846CA68Bu;
-    v ^= v >> 16u;
-    return f32(v) / 4294967296.0;
-}
-
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let w = params.size.x;
-    let h = params.size.y;
-    if (id.x >= w || id.y >= h) {
+    if (id.x >= params.size.x || id.y >= params.size.y) {
         return;
     }
-    let pixel = id.y * w + id.x;
-    let nx = (2.0 * (f32(id.x) + 0.5) / f32(w) - 1.0) * params.lens.y;
-    let ny = 1.0 - 2.0 * (f32(id.y) + 0.5) / f32(h);
-    var o = params.eye.xyz;
-    var dir = params.forward.xyz;
-    if (params.size.z == 0u) {
-        let t = params.lens.x;
-        dir = normalize(params.forward.xyz + params.right.xyz * (nx * t) + params.up.xyz * (ny * t));
-    } else {
-        o = o + (params.right.xyz * nx + params.up.xyz * ny) * (params.lens.x * 0.5);
-    }
-    let o_v = (o - params.origin.xyz) * params.inv_spacing.xyz;
-    let d_v = dir * params.inv_spacing.xyz;
-    let span = extent(o, dir, o_v, d_v);
-    if (!(span.y > span.x)) {
+    let pixel = id.y * params.size.x + id.x;
+    let ray = pixel_ray(id);
+    if (!(ray.t1 > ray.t0)) {
         out_rgba[pixel] = vec4<f32>(0.0);
         out_samples[pixel] = 0u;
         return;
     }
-    let ray = Ray(o_v, d_v, normalize(d_v * params.spacing.xyz), span.x, span.y);
     var jitter = 0.0;
     if (flag(JITTER)) {
         jitter = pixel_hash(id.x, id.y);
