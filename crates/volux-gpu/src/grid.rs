@@ -27,7 +27,7 @@ use crate::tables::{TableKey, Tables};
 const WORKGROUP: u32 = 8;
 
 /// A frame's pixels and each pixel's sample count.
-type Readback = (Vec<[f32; 4]>, Vec<u32>);
+pub(crate) type Readback = (Vec<[f32; 4]>, Vec<u32>);
 
 /// Grid ray casting on the GPU: Riemann sums with step-corrected opacity and
 /// pre-integration, Blinn-Phong shading, isosurfaces, maximum intensity projection, clip

@@ -185,7 +185,7 @@ impl BrickedVolume {
     }
 
     /// Level `level`'s cache.
-    pub(super) fn cache(&self, level: usize) -> Option<&BrickCache> {
+    pub fn cache(&self, level: usize) -> Option<&BrickCache> {
         self.caches.get(level)
     }
 
