@@ -30,10 +30,12 @@ mod params;
 mod pool;
 mod pt;
 mod resources;
+mod select;
 mod tables;
 
 pub use context::{adapters, AdapterSummary, GpuContext};
 pub use error::GpuError;
 pub use grid::{GpuGridRenderer, MAX_ISOVALUES};
-pub use pool::{GpuPoolRenderer, PoolOptions, PoolSource, PoolStats};
+pub use pool::{GpuBrickedRenderer, GpuPoolRenderer, PoolOptions, PoolSource, PoolStats};
 pub use pt::GpuPtRenderer;
+pub use select::{renderer_for, supports};

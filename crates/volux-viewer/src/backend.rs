@@ -3,8 +3,7 @@
 //!
 //! `volux-view --backend auto` (the default) renders a frame on the GPU when an adapter
 //! exists and the GPU backend draws the scene's method and features
-//! ([`GpuGridRenderer::supports`](volux_gpu::GpuGridRenderer::supports),
-//! [`GpuPtRenderer::supports`](volux_gpu::GpuPtRenderer::supports)), else on the CPU;
+//! ([`volux_gpu::supports`]), else on the CPU;
 //! `gpu` insists (the view shows why a scene cannot be drawn there); `cpu` never opens a
 //! device. Every frame says which it was drawn on ([`Device`]).
 use volux_render::engine::{create_renderer, Renderer};
@@ -97,7 +96,7 @@ impl Factory {
 mod gpu {
     use std::sync::Arc;
 
-    use volux_gpu::{GpuContext, GpuGridRenderer, GpuPtRenderer};
+    use volux_gpu::GpuContext;
     use volux_render::engine::Renderer;
     use volux_render::scene::{Scene, Volume};
     use volux_render::RenderError;
@@ -121,12 +120,7 @@ mod gpu {
 
         /// `Ok` when the GPU backend draws `scene` on `volume` and a device is open.
         pub(super) fn draws(&mut self, volume: &Volume, scene: &Scene) -> Result<(), RenderError> {
-            match volume {
-                Volume::Grid(_) => GpuGridRenderer::supports(scene),
-                Volume::Mesh(_) => GpuPtRenderer::supports(scene),
-                _ => Err(format!("the GPU backend does not draw a {}", volume.kind())),
-            }
-            .map_err(RenderError::Backend)?;
+            volux_gpu::supports(volume, scene).map_err(RenderError::Backend)?;
             self.context().map(|_| ())
         }
 
@@ -136,17 +130,7 @@ mod gpu {
         ) -> Result<(Box<dyn Renderer>, Device), RenderError> {
             let ctx = self.context()?;
             let device = Device::Gpu(ctx.adapter().to_string());
-            let r: Box<dyn Renderer> = match volume {
-                Volume::Grid(g) => Box::new(GpuGridRenderer::new(ctx, g.clone())?),
-                Volume::Mesh(m) => Box::new(GpuPtRenderer::new(ctx, m.clone())?),
-                _ => {
-                    return Err(RenderError::Backend(format!(
-                        "the GPU backend does not draw a {}",
-                        volume.kind()
-                    )))
-                }
-            };
-            Ok((r, device))
+            Ok((volux_gpu::renderer_for(ctx, volume)?, device))
         }
     }
 }

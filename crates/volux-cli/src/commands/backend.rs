@@ -53,7 +53,7 @@ pub fn list_adapters(json: bool) -> Result<(), CmdError> {
 mod gpu {
     use std::sync::Arc;
 
-    use volux_gpu::{GpuContext, GpuGridRenderer, GpuPtRenderer};
+    use volux_gpu::GpuContext;
     use volux_render::renderer::Renderer;
     use volux_render::scene::{Scene, Volume};
     use volux_render::RenderError;
@@ -63,30 +63,10 @@ mod gpu {
     pub const BUILT: bool = true;
 
     pub fn renderer(volume: &Volume, scene: &Scene) -> Result<Box<dyn Renderer>, CmdError> {
-        let not_drawn = || {
-            format!(
-                "the GPU backend draws grids and meshes held in memory, not a {}",
-                volume.kind()
-            )
-        };
-        match volume {
-            Volume::Grid(_) => GpuGridRenderer::supports(scene),
-            Volume::Mesh(_) => GpuPtRenderer::supports(scene),
-            _ => Err(not_drawn()),
-        }
-        .map_err(RenderError::Backend)?;
+        volux_gpu::supports(volume, scene).map_err(RenderError::Backend)?;
         let ctx = Arc::new(GpuContext::new().map_err(RenderError::from)?);
         eprintln!("volux: rendering on the GPU: {}", ctx.adapter());
-        let r: Box<dyn Renderer> = match volume {
-            Volume::Grid(grid) => {
-                Box::new(GpuGridRenderer::new(ctx, grid.clone()).map_err(RenderError::from)?)
-            }
-            Volume::Mesh(mesh) => {
-                Box::new(GpuPtRenderer::new(ctx, mesh.clone()).map_err(RenderError::from)?)
-            }
-            _ => return Err(not_drawn().into()),
-        };
-        Ok(r)
+        Ok(volux_gpu::renderer_for(ctx, volume).map_err(RenderError::from)?)
     }
 
     pub fn adapters() -> Result<Vec<String>, CmdError> {

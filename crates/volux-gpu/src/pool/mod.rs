@@ -14,6 +14,7 @@
 //! The pool draws the Riemann sum with step-corrected opacity, clip planes, jitter and
 //! early ray termination; what else a scene asks for is refused by name
 //! ([`GpuPoolRenderer::supports`]).
+mod bricked;
 mod slots;
 mod source;
 
@@ -39,6 +40,7 @@ use crate::error::GpuError;
 use crate::grid::{map, readback, Readback};
 use crate::params::{flags, frame_data, Drawn, Params};
 use crate::tables::{TableKey, Tables};
+pub use bricked::GpuBrickedRenderer;
 use slots::Slots;
 pub use source::PoolSource;
 
