@@ -38,7 +38,9 @@ mod on_gpu {
 
     use serde_json::json;
     use volux_core::{synth, CameraSpec, Grid, TransferFunction};
-    use volux_gpu::{GpuContext, GpuGridRenderer, GpuPtRenderer};
+    use volux_gpu::{
+        GpuContext, GpuGridRenderer, GpuPoolRenderer, GpuPtRenderer, PoolOptions, PoolSource,
+    };
     use volux_render::engine::MethodStats;
     use volux_render::integrate::Integrator;
     use volux_render::renderer::Renderer;
@@ -143,6 +145,9 @@ mod on_gpu {
                 }
             }
         }
+        if let Some((name, volume, tf)) = datasets.first() {
+            rows.extend(pool_rows(&ctx, (name, volume, tf), sizes, frames, as_json)?);
+        }
         Ok(rows)
     }
 
@@ -198,6 +203,63 @@ mod on_gpu {
                     "tets_per_s": rate, "upload_ms": upload_ms,
                 }));
             }
+        }
+        Ok(rows)
+    }
+
+    /// The brick pool: the first grid, Riemann h=0.5, through a pool of a quarter of its
+    /// bytes in bricks of 32 cells: ms/frame, dispatches and bricks uploaded per frame.
+    fn pool_rows(
+        ctx: &Arc<GpuContext>,
+        (name, volume, tf): (&str, &Volume, &TransferFunction),
+        sizes: &[(usize, usize)],
+        frames: usize,
+        as_json: bool,
+    ) -> Result<Vec<serde_json::Value>, CmdError> {
+        let Volume::Grid(grid) = volume else {
+            return Ok(Vec::new());
+        };
+        let voxels: u64 = grid.dims().iter().map(|&n| n as u64).product();
+        let options = PoolOptions {
+            brick: 32,
+            bytes: (voxels).max(8 * 33 * 33 * 33 * 4),
+        };
+        let source = PoolSource::Grid(grid.clone());
+        let mut pool =
+            GpuPoolRenderer::new(ctx.clone(), source, options).map_err(RenderError::from)?;
+        if !as_json {
+            println!(
+                "\n{:<20} {:>9} {:<22} {:>10} {:>8} {:>8} {:>8} {:>8}",
+                "brick pool", "size", "case", "ms/frame", "slots", "bricks", "rounds", "uploads"
+            );
+        }
+        let mut rows = Vec::new();
+        for &(w, h) in sizes {
+            let scene = scene(
+                volume,
+                tf,
+                (w, h),
+                Integrator::Riemann { step: 0.5 },
+                (false, false),
+            )?;
+            let (ms, _) = time(&mut pool, &scene, frames)?;
+            let st = pool.stats();
+            if !as_json {
+                println!(
+                    "{name:<20} {:>9} {:<22} {ms:>10.1} {:>8} {:>8} {:>8} {:>8}",
+                    format!("{w}x{h}"),
+                    "riemann h=0.5 pool",
+                    st.capacity,
+                    st.bricks,
+                    st.rounds,
+                    st.uploads
+                );
+            }
+            rows.push(json!({
+                "suite": "gpu", "dataset": name, "width": w, "height": h,
+                "case": "riemann h=0.5 pool", "ms": ms, "slots": st.capacity,
+                "bricks": st.bricks, "empty": st.empty, "rounds": st.rounds, "uploads": st.uploads,
+            }));
         }
         Ok(rows)
     }
