@@ -3,7 +3,7 @@ use volux_core::TransferFunction;
 use volux_render::scene::Scene;
 
 use super::tables::TfBuffers;
-use super::view::ViewParams;
+use super::view::{Extras, ViewParams};
 use super::{draw, groups, GpuPtRenderer, RadixSort, CELL_BYTES, VERTICES_PER_CELL};
 use crate::error::GpuError;
 
@@ -45,6 +45,14 @@ fn bind(
 }
 
 impl GpuPtRenderer {
+    /// The vertex gradients, or one zero element before the first isosurface.
+    fn gradients(&self) -> &wgpu::Buffer {
+        self.data
+            .gradients
+            .as_ref()
+            .unwrap_or(&self.data.no_gradients)
+    }
+
     /// Renders `scene` with `tf` (the ψ rule or the average): the image's pixels.
     pub(super) fn frame(
         &self,
@@ -62,7 +70,18 @@ impl GpuPtRenderer {
         tfb.shape.psi_nodes = psi_view.texture().width();
         let (w, h) = (scene.view.width, scene.view.height);
         let (tets, vertices) = (mesh.tets().len(), mesh.positions().len());
-        let params = ViewParams::new(&scene.view.camera, (w, h), (tets, vertices), &tfb.shape);
+        let extras = Extras {
+            isosurfaces: scene.appearance.isosurfaces.as_slice(),
+            lighting: scene.appearance.lighting,
+            planes: &scene.clip_planes,
+        };
+        let params = ViewParams::new(
+            &scene.view.camera,
+            (w, h),
+            (tets, vertices),
+            &tfb.shape,
+            &extras,
+        );
         let n = tets as u64;
         let (scratch, _) = RadixSort::scratch_bytes(n);
         let fb = FrameBuffers {
@@ -118,7 +137,7 @@ impl GpuPtRenderer {
                 (1, d.positions.as_entire_binding()),
                 (2, fb.screen.as_entire_binding()),
                 (3, d.tets.as_entire_binding()),
-                (4, d.scalars.as_entire_binding()),
+                (4, self.gradients().as_entire_binding()),
                 (5, self.table.as_entire_binding()),
                 (6, tfb.knots.as_entire_binding()),
                 (7, fb.cells.as_entire_binding()),
@@ -160,6 +179,8 @@ impl GpuPtRenderer {
                 (5, tfb.pieces.as_entire_binding()),
                 (6, tfb.entries.as_entire_binding()),
                 (7, wgpu::BindingResource::TextureView(psi)),
+                (8, self.data.tets.as_entire_binding()),
+                (9, self.gradients().as_entire_binding()),
             ],
         );
         let view = target.create_view(&Default::default());
