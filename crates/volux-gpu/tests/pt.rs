@@ -20,7 +20,9 @@
 //! clipping planes: average mean 1.1e-6 to 1.3e-6, max 1.0e-4 to 3.4e-4, ψ mean 7.6e-6 to
 //! 8.1e-6, max 4.3e-4 to 1.5e-3; planes and isosurfaces together mean 2.0e-6, max 3.2e-4.
 //! The GPU computes each pixel's window in `f32` from the planes' distances to the eye (the
-//! CPU in `f64` from the world-space ray).
+//! CPU in `f64` from the world-space ray). A sequence of frames (the same scene, a camera
+//! change, a recolouring, a new zero set, isovalues, the ψ rule) draws the CPU's pictures
+//! from the caches, keeps the CPU's number of cells, and reports what it rebuilt.
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -30,6 +32,7 @@ use volux_core::voi::ClipPlane;
 use volux_core::{CameraSpec, Grid, Image, TetMesh, TransferFunction};
 use volux_gpu::{GpuContext, GpuPtRenderer};
 use volux_render::engine::create_renderer;
+use volux_render::frame::{MethodStats, Rebuilt};
 use volux_render::integrate::SegmentRule;
 use volux_render::isosurface::{Isosurfaces, Isovalue};
 use volux_render::renderer::Renderer;
@@ -286,4 +289,72 @@ fn clip_planes_on_the_gpu_equal_the_cpu_renderer() {
         "the isovalue 35",
         (MAX_DIFF, 0.005),
     );
+}
+
+/// The GPU frame and its `Rebuilt` flags, checked against the CPU's picture and kept count.
+fn frame_against_cpu(gpu: &mut GpuPtRenderer, m: &Arc<TetMesh>, s: &Scene, what: &str) -> Rebuilt {
+    let volume = Volume::Mesh(m.clone());
+    let mut cpu = create_renderer(&volume, &s.method).unwrap();
+    let want = cpu.render(s, &Control::default()).unwrap();
+    let got = gpu.render(s, &Control::default()).unwrap();
+    let (mean, max) = compare(&got.image, &want.image);
+    eprintln!("{what}: mean {mean:.2e}, max {max:.2e}");
+    assert!(
+        mean < 1.0 / 255.0 && max < MAX_DIFF,
+        "{what}: mean {mean:e}, max {max:e}"
+    );
+    let (MethodStats::ProjectedTetrahedra(g), MethodStats::ProjectedTetrahedra(c)) =
+        (&got.stats.method, &want.stats.method)
+    else {
+        panic!("{what}: PT statistics");
+    };
+    assert_eq!(g.tets_kept, c.tets_kept, "{what}: kept cells");
+    assert_eq!(got.stats.rebuilt, g.rebuilt, "{what}");
+    got.stats.rebuilt
+}
+
+#[test]
+fn frames_rebuild_only_what_changed() {
+    let Some(ctx) = context() else { return };
+    let m = Arc::new(mesh());
+    let mut gpu = GpuPtRenderer::new(ctx, m.clone()).unwrap();
+    let rebuilt = |data, classification, view| Rebuilt {
+        data,
+        classification,
+        view,
+    };
+    let mut s = scene(&m, CAMERAS[0], SegmentRule::Average);
+    let first = frame_against_cpu(&mut gpu, &m, &s, "first frame");
+    assert_eq!(first, rebuilt(false, true, true));
+    let again = frame_against_cpu(&mut gpu, &m, &s, "the same frame");
+    assert_eq!(again, rebuilt(false, false, false));
+    // A camera change: projection, classification and sort, not the TF's tables.
+    s.view.camera = scene(&m, CAMERAS[1], SegmentRule::Average).view.camera;
+    let moved = frame_against_cpu(&mut gpu, &m, &s, "camera change");
+    assert_eq!(moved, rebuilt(false, false, true));
+    // A TF change with the same zero set: its tables, not the cells.
+    let recoloured = TransferFunction::from_json(
+        r#"{"color": [[40,0.9,0.4,0.1],[70,0.2,0.8,1],[110,1,0.3,1]],
+            "extinction": [[40,0],[60,0.2],[75,0.1],[90,0.3],[110,0.1]]}"#,
+    )
+    .unwrap();
+    s.appearance.tf = recoloured;
+    let tf_change = frame_against_cpu(&mut gpu, &m, &s, "TF change");
+    assert_eq!(tf_change, rebuilt(false, true, false));
+    // A new zero set: the kept set and, with it, the cells.
+    s.appearance.tf = TransferFunction::from_json(
+        r#"{"color": [[40,0.9,0.4,0.1],[110,1,0.3,1]],
+            "extinction": [[70,0],[90,0.3],[110,0.1]]}"#,
+    )
+    .unwrap();
+    let zero_set = frame_against_cpu(&mut gpu, &m, &s, "zero set change");
+    assert_eq!(zero_set, rebuilt(false, true, true));
+    // Isovalues: the gradients (once), the kept set and the cells.
+    s.appearance.isosurfaces = isosurfaces();
+    let isos = frame_against_cpu(&mut gpu, &m, &s, "isovalues");
+    assert_eq!(isos, rebuilt(true, true, true));
+    // The ψ rule: the ψ table (once), nothing else.
+    s.method = scene(&m, CAMERAS[0], SegmentRule::Psi).method;
+    let psi = frame_against_cpu(&mut gpu, &m, &s, "psi rule");
+    assert_eq!(psi, rebuilt(true, false, false));
 }

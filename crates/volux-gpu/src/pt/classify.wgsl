@@ -1,8 +1,9 @@
-// Projected Tetrahedra, first pass (seed 000 section 4.1, seed 002 section 4.1): the mesh
-// vertices projected and snapped to the 1/256 pixel grid (`project`), then per tetrahedron
-// (`classify`) the discard under the TF, the four exact orientation tests, the ternary truth
-// table, the thick vertex with its front and back depth and scalar (perspective-correct, as
-// volux_render::pt::project), and the centroid's sort key.
+// Projected Tetrahedra, first pass (seed 000 section 4.1, seed 002 section 4.1): the kept
+// set under the TF and the isovalues (`keep`, run when they change), the mesh vertices
+// projected and snapped to the 1/256 pixel grid (`project`), then per kept tetrahedron
+// (`classify`) the culling by the clipping planes, the four exact orientation tests, the
+// ternary truth table, the thick vertex with its front and back depth, scalar and gradient
+// (perspective-correct, as volux_render::pt::project), and the centroid's sort key.
 
 struct View {
     eye: vec4f,
@@ -53,6 +54,10 @@ const GUARD_BAND: f32 = 1.0e6;
 @group(0) @binding(6) var<storage, read> pieces: array<vec4f>;
 @group(0) @binding(7) var<storage, read_write> cells: array<Cell>;
 @group(0) @binding(8) var<storage, read_write> items: array<vec2u>;
+// Per tetrahedron: 1 kept (finite values, non-zero extinction or an isovalue in its range).
+@group(0) @binding(9) var<storage, read_write> kept: array<u32>;
+// Kept tetrahedra (written by `keep`).
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 
 fn index(id: vec3u, groups: vec3u) -> u32 {
     return id.x + id.y * groups.x * 64u;
@@ -183,23 +188,6 @@ fn outside_a_plane(p: array<vec3f, 4>) -> bool {
         }
     }
     return false;
-}
-
-// The TF piece of the whole range [lo, hi], or NONE when a breakpoint or an isovalue lies
-// inside it.
-fn linear_piece(lo: f32, hi: f32) -> u32 {
-    if crossed(lo, hi) {
-        return NONE;
-    }
-    let k = view.mode.y;
-    var first = 0u;
-    for (var j = 0u; j < k; j++) {
-        first += select(0u, 1u, pieces[j].x <= lo);
-    }
-    if first < k && pieces[first].x < hi {
-        return NONE;
-    }
-    return first;
 }
 
 // --- the thick vertex --------------------------------------------------------------------
@@ -356,12 +344,9 @@ fn classify(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) g
     let pos = array<vec4f, 4>(positions[ids.x], positions[ids.y], positions[ids.z],
         positions[ids.w]);
     let s = vec4f(pos[0].w, pos[1].w, pos[2].w, pos[3].w);
-    let lo = min(min(s.x, s.y), min(s.z, s.w));
-    let hi = max(max(s.x, s.y), max(s.z, s.w));
     let q = array<vec4f, 4>(screen[ids.x], screen[ids.y], screen[ids.z], screen[ids.w]);
     let valid = q[0].w * q[1].w * q[2].w * q[3].w > 0.0;
-    // Non-finite values colour nothing on the CPU: such cells are dropped here.
-    if !(finite(lo) && finite(hi) && valid && visible(lo, hi)) {
+    if !(kept[i] != 0u && valid) {
         skip(i);
         return;
     }
@@ -408,9 +393,30 @@ fn classify(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) g
         cell.v[k] = vec4f(q[k].xy, q[k].z, s[k]);
     }
     cell.v[4] = vec4f(th.xy + o, front.z, front.s);
-    cell.v[5] = vec4f(back.z, back.s, bitcast<f32>(linear_piece(lo, hi)), bitcast<f32>(code));
+    cell.v[5] = vec4f(back.z, back.s, 0.0, bitcast<f32>(code));
     cell.v[6] = vec4f(front.g, 0.0);
     cell.v[7] = vec4f(back.g, 0.0);
     cells[i] = cell;
     items[i] = vec2u(depth_key(centroid_depth(ids)), i);
+}
+
+// The kept set (seed 002 section 4.5, volux_render::pt::render's `update_kept`): cells with
+// finite values whose range has non-zero extinction or holds an isovalue. Non-finite values
+// colour nothing on the CPU: such cells are dropped here.
+@compute @workgroup_size(64)
+fn keep(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let i = index(id, groups);
+    if i >= view.size.z {
+        return;
+    }
+    let ids = tets[i];
+    let s = vec4f(positions[ids.x].w, positions[ids.y].w, positions[ids.z].w,
+        positions[ids.w].w);
+    let lo = min(min(s.x, s.y), min(s.z, s.w));
+    let hi = max(max(s.x, s.y), max(s.z, s.w));
+    let keep = finite(lo) && finite(hi) && visible(lo, hi);
+    kept[i] = select(0u, 1u, keep);
+    if keep {
+        atomicAdd(&counters[0], 1u);
+    }
 }

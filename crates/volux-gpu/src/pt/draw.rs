@@ -14,13 +14,13 @@ pub(crate) fn target_format(blend_f32: bool) -> wgpu::TextureFormat {
     }
 }
 
-/// The first pass: vertex projection and per-tetrahedron classification.
-pub(crate) fn classify_pipelines(device: &wgpu::Device) -> [wgpu::ComputePipeline; 2] {
+/// The first pass: vertex projection, per-tetrahedron classification, and the kept set.
+pub(crate) fn classify_pipelines(device: &wgpu::Device) -> [wgpu::ComputePipeline; 3] {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("classify.wgsl"),
         source: wgpu::ShaderSource::Wgsl(include_str!("classify.wgsl").into()),
     });
-    ["project", "classify"].map(|entry| {
+    ["project", "classify", "keep"].map(|entry| {
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
             layout: None,

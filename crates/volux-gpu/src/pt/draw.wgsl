@@ -127,8 +127,41 @@ fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
     out.back = vec3f(kb, kb * b.x, kb * b.y);
     out.g_front = kf * gf;
     out.g_back = kb * gb;
-    out.piece = bitcast<u32>(c.v[5].z);
+    // The cell's linear TF piece (the average rule only; the TF may change without the cells).
+    if view.mode.w == 0u {
+        let s = vec4f(c.v[0].w, c.v[1].w, c.v[2].w, c.v[3].w);
+        out.piece = linear_piece(min(min(s.x, s.y), min(s.z, s.w)),
+            max(max(s.x, s.y), max(s.z, s.w)));
+    }
     return out;
+}
+
+// Whether an isovalue lies in [lo, hi].
+fn crossed(lo: f32, hi: f32) -> bool {
+    for (var j = 0u; j < view.extra.x; j++) {
+        let v = view.isos[2u * j].x;
+        if lo <= v && v <= hi {
+            return true;
+        }
+    }
+    return false;
+}
+
+// The TF piece of the whole range [lo, hi], or NONE when a breakpoint or an isovalue lies
+// inside it (the CPU's FragmentShader::linear_on).
+fn linear_piece(lo: f32, hi: f32) -> u32 {
+    if crossed(lo, hi) {
+        return NONE;
+    }
+    let k = view.mode.y;
+    var first = 0u;
+    for (var j = 0u; j < k; j++) {
+        first += select(0u, 1u, knots[j].x <= lo);
+    }
+    if first < k && knots[first].x < hi {
+        return NONE;
+    }
+    return first;
 }
 
 // --- colour (volux_render::integrate::psi) ---------------------------------------------

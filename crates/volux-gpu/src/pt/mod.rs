@@ -32,11 +32,24 @@
 //! most [`MAX_PLANES`](view::MAX_PLANES)) ride in the uniform block; the vertex gradients
 //! ([`TetMesh::vertex_gradients`], as the CPU) are uploaded with the first isosurface.
 //!
+//! **Between frames** (`frame.rs`, the update step of `000` §4.2 and `002` §4.5): the mesh
+//! (positions with the scalars, cells, gradients) and the ψ table stay on the device; the
+//! TF's buffers are rebuilt when the TF changes, the kept set (the `keep` pass: one flag per
+//! cell and their count, `PtStats::tets_kept`) when the TF's zero set or the isovalues
+//! change; projection, classification and sort run when the camera, the image size, the
+//! planes, the kept set or the need for gradients change. The cells hold no TF-dependent
+//! data (the average rule's linear piece is found in the vertex shader), so a TF change
+//! with the same zero set only redraws the fans. The frame's `Rebuilt` says which ran:
+//! `data` (ψ table, gradients), `classification` (TF buffers or kept set), `view` (first
+//! pass and sort).
+//!
 //! Not drawn yet, and refused by name ([`GpuPtRenderer::supports`]): the exact and adaptive
 //! Simpson colours, the exact visibility sort (MPVO), the sculpt mask, region labels, and
 //! more isovalues or planes than the uniform block holds. Early termination does not apply
 //! (back-to-front compositing draws every fragment): where the CPU stops a pixel at opacity
-//! `e` the GPU pixel differs by at most `1 - e`.
+//! `e` the GPU pixel differs by at most `1 - e`. `PtStats` reports `tets_kept`; the drawn,
+//! degenerate, clipped and culled counts and the fragment count are not counted on the
+//! device (zero).
 mod draw;
 mod frame;
 mod sort;
@@ -89,12 +102,13 @@ pub struct GpuPtRenderer {
     mesh: Arc<TetMesh>,
     data: MeshBuffers,
     table: wgpu::Buffer,
-    classify: [wgpu::ComputePipeline; 2],
+    classify: [wgpu::ComputePipeline; 3],
     sort: RadixSort,
     draw: wgpu::RenderPipeline,
     format: wgpu::TextureFormat,
     psi: Option<wgpu::TextureView>,
     tiny_psi: wgpu::TextureView,
+    caches: frame::Caches,
 }
 
 impl GpuPtRenderer {
@@ -128,6 +142,7 @@ impl GpuPtRenderer {
             format,
             psi: None,
             tiny_psi,
+            caches: frame::Caches::default(),
         })
     }
 
@@ -263,32 +278,40 @@ impl Renderer for GpuPtRenderer {
         let (w, h) = (scene.view.width, scene.view.height);
         check_image_size(w, h)?;
         let psi = settings.color == SegmentRule::Psi;
-        let mut rebuilt = Rebuilt {
-            data: false,
-            classification: true,
-            view: true,
-        };
+        let mut data = false;
         if psi && self.psi.is_none() {
             let table = PsiTable::new();
             let view = self
                 .ctx
                 .checked(|| tables::psi_texture(&self.ctx.device, &self.ctx.queue, &table))?;
             self.psi = Some(view);
-            rebuilt.data = true;
+            data = true;
         }
         if !scene.appearance.isosurfaces.is_empty() && self.data.gradients.is_none() {
             let (device, mesh) = (&self.ctx.device, &self.mesh);
             let buffer = self.ctx.checked(|| upload_gradients(device, mesh))?;
             self.data.gradients = Some(buffer);
-            rebuilt.data = true;
+            data = true;
         }
         let tf = scene.appearance.effective_tf();
         let ctx = self.ctx.clone();
-        let rgba = ctx.checked(|| self.frame(scene, &tf, psi))??;
-        let image = Image::from_pixels(w, h, rgba)?;
+        let report = match ctx.checked(|| self.frame(scene, &tf, psi)) {
+            Ok(Ok(r)) => r,
+            Ok(Err(e)) | Err(e) => {
+                // What the caches hold may be half built: start afresh next frame.
+                self.caches = frame::Caches::default();
+                return Err(e.into());
+            }
+        };
+        let rebuilt = Rebuilt {
+            data,
+            ..report.rebuilt
+        };
+        let image = Image::from_pixels(w, h, report.rgba)?;
         let seconds = started.elapsed().as_secs_f64();
         let stats = PtStats {
             tets: self.mesh.tets().len(),
+            tets_kept: report.kept,
             seconds,
             rebuilt,
             ..Default::default()

@@ -44,6 +44,7 @@ fn v4(v: DVec3) -> [f32; 4] {
 }
 
 /// What the shaders know of the TF besides their buffers.
+#[derive(Clone, Copy)]
 pub(crate) struct TfShape {
     /// Finite breakpoints.
     pub(crate) knots: u32,
