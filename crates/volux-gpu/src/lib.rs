@@ -18,8 +18,9 @@
 //!   in a compute shader, a GPU radix sort of centroid depths, the fans rasterized by the
 //!   hardware and coloured with the average or ψ rule, lit isosurfaces inside the fragments
 //!   and clip planes (cells culled, fragments trimmed to each pixel's window), composited
-//!   back to front; the kept set, the TF's tables and the sorted cells cached between
-//!   frames and rebuilt only when what they depend on changes.
+//!   front to back ("under" blending, no early termination); the kept set, the TF's tables
+//!   and the sorted cells cached between frames and rebuilt only when what they depend on
+//!   changes.
 //!
 //! What the shader does not draw (the trapezoid, Simpson, adaptive Simpson and reference
 //! integrators, tricubic reconstruction, region labels, more than [`MAX_ISOVALUES`]

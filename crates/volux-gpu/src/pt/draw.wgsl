@@ -1,8 +1,8 @@
 // Projected Tetrahedra, second pass (seed 000 section 4.3, seed 002 sections 4.3-4.4): the
-// fans drawn back to front (12 vertices a cell: up to 4 triangles around the thick vertex),
+// fans drawn front to back (12 vertices a cell: up to 4 triangles around the thick vertex),
 // the vertex shader pulling the classified cell, the fragment shader colouring the ray
 // segment from (s_f, s_b, l), interpolated perspective-correctly front and back apart, as
-// volux_render::pt::render does it; the blend is premultiplied "over".
+// volux_render::pt::render does it; the blend is premultiplied "under" (1 - dst.a, 1).
 
 struct View {
     eye: vec4f,
@@ -87,7 +87,7 @@ fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
     if slot >= n {
         return out;
     }
-    let id = order[n - 1u - slot].y;
+    let id = order[slot].y;
     let c = cells[id];
     let code = bitcast<u32>(c.v[5].w);
     if code >= 81u {

@@ -295,7 +295,7 @@ impl GpuPtRenderer {
         }
     }
 
-    /// Records the fans, back to front, into `target`.
+    /// Records the fans, front to back, into `target`.
     fn second_pass(
         &self,
         encoder: &mut wgpu::CommandEncoder,

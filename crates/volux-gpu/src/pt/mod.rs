@@ -13,7 +13,7 @@
 //! 2. **visibility order** (`sort.wgsl`, `000` §4.2): a stable radix sort of the keys,
 //!    the CPU's centroid order (distance from the eye under perspective);
 //! 3. **second pass** (`draw.wgsl`, `000` §4.3, `002` §4.3-4.4): the fans (1 to 4
-//!    triangles around the thick vertex) rasterized by the hardware in reverse order,
+//!    triangles around the thick vertex) rasterized by the hardware in the sorted order,
 //!    the vertex shader pulling the classified cells, `(s_f, s_b)`, depths and gradients
 //!    interpolated perspective-correctly front and back apart; with clipping planes each
 //!    fragment's segment is trimmed to its pixel's depth window inside the planes (computed
@@ -24,9 +24,10 @@
 //!    isovalues crossed between `s_f` and `s_b` (located on the linear segment, at most 8,
 //!    as `integrate::fragment`), the volume pieces and the surfaces (lit two-sided
 //!    Blinn-Phong with the scene's `appearance.lighting` and the interpolated gradient)
-//!    composited in depth order inside the fragment; the fragments are composited back to
-//!    front with premultiplied "over" into an `rgba32float` target (`rgba16float` where the
-//!    adapter cannot blend `f32`).
+//!    composited in depth order inside the fragment; the fragments are composited front to
+//!    back with premultiplied "under" (blend factors `1 - dst.a` and 1, the CPU's operator
+//!    and order) into an `rgba32float` target (`rgba16float` where the adapter cannot blend
+//!    `f32`).
 //!
 //! The isovalues (at most [`MAX_ISOSURFACES`](view::MAX_ISOSURFACES)) and the planes (at
 //! most [`MAX_PLANES`](view::MAX_PLANES)) ride in the uniform block; the vertex gradients
@@ -45,9 +46,12 @@
 //!
 //! Not drawn yet, and refused by name ([`GpuPtRenderer::supports`]): the exact and adaptive
 //! Simpson colours, the exact visibility sort (MPVO), the sculpt mask, region labels, and
-//! more isovalues or planes than the uniform block holds. Early termination does not apply
-//! (back-to-front compositing draws every fragment): where the CPU stops a pixel at opacity
-//! `e` the GPU pixel differs by at most `1 - e`. `PtStats` reports `tets_kept`; the drawn,
+//! more isovalues or planes than the uniform block holds. Early termination is not done:
+//! the "under" blend still shades and composites every fragment (a fragment shader cannot
+//! read the target's opacity; stopping a pixel would take, e.g., drawing the order in
+//! chunks and, between chunks, marking opaque pixels in a stencil or depth buffer that
+//! the next chunks test, or a compute rasterizer), so where the CPU stops a pixel at
+//! opacity `e` the GPU pixel differs by at most `1 - e`. `PtStats` reports `tets_kept`; the drawn,
 //! degenerate, clipped and culled counts and the fragment count are not counted on the
 //! device (zero).
 mod draw;
