@@ -16,7 +16,11 @@
 //! - [`GpuPtRenderer`]: Projected Tetrahedra of a tetrahedral mesh (seed `000` chapters 4-5,
 //!   seed `002` section 4): classification by the ternary truth table and the thick vertex
 //!   in a compute shader, a GPU radix sort of centroid depths, the fans rasterized by the
-//!   hardware and coloured with the average or ψ rule, composited back to front.
+//!   hardware and coloured with the average or ψ rule, lit isosurfaces inside the fragments
+//!   and clip planes (cells culled, fragments trimmed to each pixel's window), composited
+//!   front to back ("under" blending, no early termination); the kept set, the TF's tables
+//!   and the sorted cells cached between frames and rebuilt only when what they depend on
+//!   changes.
 //!
 //! What the shader does not draw (the trapezoid, Simpson, adaptive Simpson and reference
 //! integrators, tricubic reconstruction, region labels, more than [`MAX_ISOVALUES`]

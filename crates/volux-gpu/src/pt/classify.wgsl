@@ -1,8 +1,9 @@
-// Projected Tetrahedra, first pass (seed 000 section 4.1, seed 002 section 4.1): the mesh
-// vertices projected and snapped to the 1/256 pixel grid (`project`), then per tetrahedron
-// (`classify`) the discard under the TF, the four exact orientation tests, the ternary truth
-// table, the thick vertex with its front and back depth and scalar (perspective-correct, as
-// volux_render::pt::project), and the centroid's sort key.
+// Projected Tetrahedra, first pass (seed 000 section 4.1, seed 002 section 4.1): the kept
+// set under the TF and the isovalues (`keep`, run when they change), the mesh vertices
+// projected and snapped to the 1/256 pixel grid (`project`), then per kept tetrahedron
+// (`classify`) the culling by the clipping planes, the four exact orientation tests, the
+// ternary truth table, the thick vertex with its front and back depth, scalar and gradient
+// (perspective-correct, as volux_render::pt::project), and the centroid's sort key.
 
 struct View {
     eye: vec4f,
@@ -17,12 +18,23 @@ struct View {
     lens: vec4f,
     // classifier entries per value unit, last entry, psi nodes per axis, unused
     table: vec4f,
+    // isovalues, clipping planes, headlight (1) or directional light (0), unused
+    extra: vec4u,
+    // ambient, diffuse, specular, shininess
+    shade: vec4f,
+    // unit direction towards the light, minimum gradient
+    light: vec4f,
+    // per isovalue (value, 0, 0, 0) and its RGBA, sorted by value
+    isos: array<vec4f, 32>,
+    // per plane (normal, distance of the eye) and (normal . right, . up, . forward, 0)
+    planes: array<vec4f, 16>,
 }
 
 // One classified tetrahedron: v[0..4] the thin vertices (x, y, depth, scalar), v[4] the thick
-// vertex (x, y, z_f, s_f), v[5] (z_b, s_b, linear piece, table code or NONE).
+// vertex (x, y, z_f, s_f), v[5] (z_b, s_b, linear piece, table code or NONE), v[6] and v[7]
+// the thick vertex's front and back gradients (with isosurfaces only).
 struct Cell {
-    v: array<vec4f, 6>,
+    v: array<vec4f, 8>,
 }
 
 const NONE: u32 = 0xffffffffu;
@@ -30,16 +42,22 @@ const SUBPIXEL: f32 = 256.0;
 const GUARD_BAND: f32 = 1.0e6;
 
 @group(0) @binding(0) var<uniform> view: View;
+// (x, y, z, scalar) per vertex.
 @group(0) @binding(1) var<storage, read> positions: array<vec4f>;
 @group(0) @binding(2) var<storage, read_write> screen: array<vec4f>;
 @group(0) @binding(3) var<storage, read> tets: array<vec4u>;
-@group(0) @binding(4) var<storage, read> scalars: array<f32>;
+// Vertex gradients (read with isosurfaces only).
+@group(0) @binding(4) var<storage, read> gradients: array<vec4f>;
 // Per entry: kind | fan length << 8, topology vertices (bytes), fan indices 0-3, 4-5.
 @group(0) @binding(5) var<storage, read> table: array<vec4u, 81>;
 // Per TF piece k: (breakpoint k, extinction non-zero on piece k, 0, 0); K + 1 entries.
 @group(0) @binding(6) var<storage, read> pieces: array<vec4f>;
 @group(0) @binding(7) var<storage, read_write> cells: array<Cell>;
 @group(0) @binding(8) var<storage, read_write> items: array<vec2u>;
+// Per tetrahedron: 1 kept (finite values, non-zero extinction or an isovalue in its range).
+@group(0) @binding(9) var<storage, read_write> kept: array<u32>;
+// Kept tetrahedra (written by `keep`).
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 
 fn index(id: vec3u, groups: vec3u) -> u32 {
     return id.x + id.y * groups.x * 64u;
@@ -127,6 +145,9 @@ fn orient(a: vec2i, b: vec2i, c: vec2i) -> i32 {
 // --- the discard (seed 002 section 4.5): zero extinction over the cell's value range ---
 
 fn visible(lo: f32, hi: f32) -> bool {
+    if crossed(lo, hi) {
+        return true;
+    }
     let k = view.mode.y;
     var a = 0u;
     var b = 0u;
@@ -143,17 +164,30 @@ fn visible(lo: f32, hi: f32) -> bool {
     return false;
 }
 
-// The TF piece of the whole range [lo, hi], or NONE when a breakpoint lies inside it.
-fn linear_piece(lo: f32, hi: f32) -> u32 {
-    let k = view.mode.y;
-    var first = 0u;
-    for (var j = 0u; j < k; j++) {
-        first += select(0u, 1u, pieces[j].x <= lo);
+// Whether an isovalue lies in [lo, hi] (the CPU keeps such cells and draws them by the fan).
+fn crossed(lo: f32, hi: f32) -> bool {
+    for (var j = 0u; j < view.extra.x; j++) {
+        let v = view.isos[2u * j].x;
+        if lo <= v && v <= hi {
+            return true;
+        }
     }
-    if first < k && pieces[first].x < hi {
-        return NONE;
+    return false;
+}
+
+// Whether the four vertices (relative to the eye) are all strictly outside one clipping plane.
+fn outside_a_plane(p: array<vec3f, 4>) -> bool {
+    for (var j = 0u; j < view.extra.y; j++) {
+        let a = view.planes[2u * j];
+        var out = true;
+        for (var k = 0u; k < 4u; k++) {
+            out = out && dot(a.xyz, p[k]) + a.w < 0.0;
+        }
+        if out {
+            return true;
+        }
     }
-    return first;
+    return false;
 }
 
 // --- the thick vertex --------------------------------------------------------------------
@@ -162,11 +196,17 @@ struct Tet {
     xy: array<vec2f, 4>,
     z: vec4f,
     s: vec4f,
+    g: array<vec3f, 4>,
 }
 
 struct Point {
     z: f32,
     s: f32,
+    g: vec3f,
+}
+
+fn gradient_at(t: Tet, k: vec4f) -> vec3f {
+    return t.g[0] * k.x + t.g[1] * k.y + t.g[2] * k.z + t.g[3] * k.w;
 }
 
 // The point at screen-space weights w of the four vertices (perspective-correct).
@@ -178,9 +218,9 @@ fn point(t: Tet, w: vec4f) -> Point {
             inv = 1.17549435e-38;
         }
         let z = 1.0 / inv;
-        return Point(z, dot(k, t.s) * z);
+        return Point(z, dot(k, t.s) * z, gradient_at(t, k) * z);
     }
-    return Point(dot(w, t.z), dot(w, t.s));
+    return Point(dot(w, t.z), dot(w, t.s), gradient_at(t, w));
 }
 
 fn unit(i: u32) -> vec4f {
@@ -288,6 +328,7 @@ fn centroid_depth(ids: vec4u) -> f32 {
 
 fn skip(i: u32) {
     var cell: Cell;
+    cell.v[5] = vec4f(0.0);
     cell.v[5].w = bitcast<f32>(NONE);
     cells[i] = cell;
     items[i] = vec2u(NONE, i);
@@ -300,13 +341,18 @@ fn classify(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) g
         return;
     }
     let ids = tets[i];
-    let s = vec4f(scalars[ids.x], scalars[ids.y], scalars[ids.z], scalars[ids.w]);
-    let lo = min(min(s.x, s.y), min(s.z, s.w));
-    let hi = max(max(s.x, s.y), max(s.z, s.w));
+    let pos = array<vec4f, 4>(positions[ids.x], positions[ids.y], positions[ids.z],
+        positions[ids.w]);
+    let s = vec4f(pos[0].w, pos[1].w, pos[2].w, pos[3].w);
     let q = array<vec4f, 4>(screen[ids.x], screen[ids.y], screen[ids.z], screen[ids.w]);
     let valid = q[0].w * q[1].w * q[2].w * q[3].w > 0.0;
-    // Non-finite values colour nothing on the CPU: such cells are dropped here.
-    if !(finite(lo) && finite(hi) && valid && visible(lo, hi)) {
+    if !(kept[i] != 0u && valid) {
+        skip(i);
+        return;
+    }
+    let rel = array<vec3f, 4>(pos[0].xyz - view.eye.xyz, pos[1].xyz - view.eye.xyz,
+        pos[2].xyz - view.eye.xyz, pos[3].xyz - view.eye.xyz);
+    if view.extra.y > 0u && outside_a_plane(rel) {
         skip(i);
         return;
     }
@@ -330,6 +376,11 @@ fn classify(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) g
     }
     t.z = vec4f(q[0].z, q[1].z, q[2].z, q[3].z);
     t.s = s;
+    let lit = view.extra.x > 0u;
+    if lit {
+        t.g = array<vec3f, 4>(gradients[ids.x].xyz, gradients[ids.y].xyz, gradients[ids.z].xyz,
+            gradients[ids.w].xyz);
+    }
     let th = thick(t, e, tests);
     var front = th.a;
     var back = th.b;
@@ -342,7 +393,30 @@ fn classify(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) g
         cell.v[k] = vec4f(q[k].xy, q[k].z, s[k]);
     }
     cell.v[4] = vec4f(th.xy + o, front.z, front.s);
-    cell.v[5] = vec4f(back.z, back.s, bitcast<f32>(linear_piece(lo, hi)), bitcast<f32>(code));
+    cell.v[5] = vec4f(back.z, back.s, 0.0, bitcast<f32>(code));
+    cell.v[6] = vec4f(front.g, 0.0);
+    cell.v[7] = vec4f(back.g, 0.0);
     cells[i] = cell;
     items[i] = vec2u(depth_key(centroid_depth(ids)), i);
+}
+
+// The kept set (seed 002 section 4.5, volux_render::pt::render's `update_kept`): cells with
+// finite values whose range has non-zero extinction or holds an isovalue. Non-finite values
+// colour nothing on the CPU: such cells are dropped here.
+@compute @workgroup_size(64)
+fn keep(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let i = index(id, groups);
+    if i >= view.size.z {
+        return;
+    }
+    let ids = tets[i];
+    let s = vec4f(positions[ids.x].w, positions[ids.y].w, positions[ids.z].w,
+        positions[ids.w].w);
+    let lo = min(min(s.x, s.y), min(s.z, s.w));
+    let hi = max(max(s.x, s.y), max(s.z, s.w));
+    let keep = finite(lo) && finite(hi) && visible(lo, hi);
+    kept[i] = select(0u, 1u, keep);
+    if keep {
+        atomicAdd(&counters[0], 1u);
+    }
 }

@@ -1,6 +1,6 @@
 //! The second pass's pipelines and target (seed `000` §4.3, seed `002` §4.3-4.4): the
 //! first pass in compute (`classify.wgsl`), the fans through the hardware rasterizer
-//! (`draw.wgsl`) into a float target with premultiplied back-to-front "over" blending.
+//! (`draw.wgsl`) into a float target with premultiplied front-to-back "under" blending.
 use crate::error::GpuError;
 use crate::grid::{map, readback};
 
@@ -14,13 +14,13 @@ pub(crate) fn target_format(blend_f32: bool) -> wgpu::TextureFormat {
     }
 }
 
-/// The first pass: vertex projection and per-tetrahedron classification.
-pub(crate) fn classify_pipelines(device: &wgpu::Device) -> [wgpu::ComputePipeline; 2] {
+/// The first pass: vertex projection, per-tetrahedron classification, and the kept set.
+pub(crate) fn classify_pipelines(device: &wgpu::Device) -> [wgpu::ComputePipeline; 3] {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("classify.wgsl"),
         source: wgpu::ShaderSource::Wgsl(include_str!("classify.wgsl").into()),
     });
-    ["project", "classify"].map(|entry| {
+    ["project", "classify", "keep"].map(|entry| {
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
             layout: None,
@@ -32,7 +32,8 @@ pub(crate) fn classify_pipelines(device: &wgpu::Device) -> [wgpu::ComputePipelin
     })
 }
 
-/// The fan pipeline: no culling, no depth, premultiplied "over" (`src + (1 - src.a) dst`).
+/// The fan pipeline: no culling, no depth, the fans drawn front to back with premultiplied
+/// "under" (`dst + (1 - dst.a) src`, the CPU's compositing operator and order).
 pub(crate) fn draw_pipeline(
     device: &wgpu::Device,
     format: wgpu::TextureFormat,
@@ -41,9 +42,9 @@ pub(crate) fn draw_pipeline(
         label: Some("draw.wgsl"),
         source: wgpu::ShaderSource::Wgsl(include_str!("draw.wgsl").into()),
     });
-    let over = wgpu::BlendComponent {
-        src_factor: wgpu::BlendFactor::One,
-        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+    let under = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::OneMinusDstAlpha,
+        dst_factor: wgpu::BlendFactor::One,
         operation: wgpu::BlendOperation::Add,
     };
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -65,8 +66,8 @@ pub(crate) fn draw_pipeline(
             targets: &[Some(wgpu::ColorTargetState {
                 format,
                 blend: Some(wgpu::BlendState {
-                    color: over,
-                    alpha: over,
+                    color: under,
+                    alpha: under,
                 }),
                 write_mask: wgpu::ColorWrites::ALL,
             })],

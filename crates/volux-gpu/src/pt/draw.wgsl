@@ -1,22 +1,36 @@
 // Projected Tetrahedra, second pass (seed 000 section 4.3, seed 002 sections 4.3-4.4): the
-// fans drawn back to front (12 vertices a cell: up to 4 triangles around the thick vertex),
+// fans drawn front to back (12 vertices a cell: up to 4 triangles around the thick vertex),
 // the vertex shader pulling the classified cell, the fragment shader colouring the ray
 // segment from (s_f, s_b, l), interpolated perspective-correctly front and back apart, as
-// volux_render::pt::render does it; the blend is premultiplied "over".
+// volux_render::pt::render does it; the blend is premultiplied "under" (1 - dst.a, 1).
 
 struct View {
     eye: vec4f,
     right: vec4f,
     up: vec4f,
     forward: vec4f,
+    // width, height, tetrahedra, vertices
     size: vec4u,
+    // perspective (1) or orthographic (0), TF breakpoints, classifier entries, rule
     mode: vec4u,
+    // tan(fov/2) or half the height, aspect, near distance, classifier lo
     lens: vec4f,
+    // classifier entries per value unit, last entry, psi nodes per axis, unused
     table: vec4f,
+    // isovalues, clipping planes, headlight (1) or directional light (0), unused
+    extra: vec4u,
+    // ambient, diffuse, specular, shininess
+    shade: vec4f,
+    // unit direction towards the light, minimum gradient
+    light: vec4f,
+    // per isovalue (value, 0, 0, 0) and its RGBA, sorted by value
+    isos: array<vec4f, 32>,
+    // per plane (normal, distance of the eye) and (normal . right, . up, . forward, 0)
+    planes: array<vec4f, 16>,
 }
 
 struct Cell {
-    v: array<vec4f, 6>,
+    v: array<vec4f, 8>,
 }
 
 // A linear piece of the TF: colour and extinction at `origin.x` and their slopes.
@@ -37,6 +51,9 @@ const THIN: f32 = 0.125;
 @group(0) @binding(5) var<storage, read> pieces: array<Piece>;
 @group(0) @binding(6) var<storage, read> entries: array<vec4f>;
 @group(0) @binding(7) var psi: texture_2d<f32>;
+// The cells' vertices and the vertex gradients (read with isosurfaces only).
+@group(0) @binding(8) var<storage, read> tets: array<vec4u>;
+@group(0) @binding(9) var<storage, read> gradients: array<vec4f>;
 
 struct Varyings {
     @builtin(position) position: vec4f,
@@ -44,6 +61,9 @@ struct Varyings {
     @location(0) @interpolate(linear) front: vec3f,
     @location(1) @interpolate(linear) back: vec3f,
     @location(2) @interpolate(flat) piece: u32,
+    // k g front and back (isosurfaces only).
+    @location(3) @interpolate(linear) g_front: vec3f,
+    @location(4) @interpolate(linear) g_back: vec3f,
 }
 
 fn byte(x: u32, i: u32) -> u32 {
@@ -67,7 +87,8 @@ fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
     if slot >= n {
         return out;
     }
-    let c = cells[order[n - 1u - slot].y];
+    let id = order[slot].y;
+    let c = cells[id];
     let code = bitcast<u32>(c.v[5].w);
     if code >= 81u {
         return out;
@@ -83,10 +104,16 @@ fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
     var xy = c.v[4].xy;
     var f = c.v[4].zw;
     var b = c.v[5].xy;
+    var gf = c.v[6].xyz;
+    var gb = c.v[7].xyz;
     if p < 4u {
         xy = c.v[p].xy;
         f = c.v[p].zw;
         b = f;
+        if view.extra.x > 0u {
+            gf = gradients[tets[id][p]].xyz;
+            gb = gf;
+        }
     }
     var kf = 1.0;
     var kb = 1.0;
@@ -98,8 +125,43 @@ fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
     out.position = vec4f(2.0 * xy.x / w.x - 1.0, 1.0 - 2.0 * xy.y / w.y, 0.5, 1.0);
     out.front = vec3f(kf, kf * f.x, kf * f.y);
     out.back = vec3f(kb, kb * b.x, kb * b.y);
-    out.piece = bitcast<u32>(c.v[5].z);
+    out.g_front = kf * gf;
+    out.g_back = kb * gb;
+    // The cell's linear TF piece (the average rule only; the TF may change without the cells).
+    if view.mode.w == 0u {
+        let s = vec4f(c.v[0].w, c.v[1].w, c.v[2].w, c.v[3].w);
+        out.piece = linear_piece(min(min(s.x, s.y), min(s.z, s.w)),
+            max(max(s.x, s.y), max(s.z, s.w)));
+    }
     return out;
+}
+
+// Whether an isovalue lies in [lo, hi].
+fn crossed(lo: f32, hi: f32) -> bool {
+    for (var j = 0u; j < view.extra.x; j++) {
+        let v = view.isos[2u * j].x;
+        if lo <= v && v <= hi {
+            return true;
+        }
+    }
+    return false;
+}
+
+// The TF piece of the whole range [lo, hi], or NONE when a breakpoint or an isovalue lies
+// inside it (the CPU's FragmentShader::linear_on).
+fn linear_piece(lo: f32, hi: f32) -> u32 {
+    if crossed(lo, hi) {
+        return NONE;
+    }
+    let k = view.mode.y;
+    var first = 0u;
+    for (var j = 0u; j < k; j++) {
+        first += select(0u, 1u, knots[j].x <= lo);
+    }
+    if first < k && knots[first].x < hi {
+        return NONE;
+    }
+    return first;
 }
 
 // --- colour (volux_render::integrate::psi) ---------------------------------------------
@@ -247,38 +309,233 @@ fn psi_segment(s_f: f32, s_b: f32, l: f32) -> vec4f {
     return under(acc, psi_piece(s0, s_b, abs(s_b - s0) * per_value));
 }
 
+// The pixel's normalized ray coordinates (nx, ny), before the lens scale.
+fn ndc(pixel: vec2f) -> vec2f {
+    let w = f32(view.size.x);
+    let h = f32(view.size.y);
+    return vec2f((2.0 * pixel.x / w - 1.0) * (w / h), 1.0 - 2.0 * pixel.y / h);
+}
+
 fn secant(pixel: vec2f) -> f32 {
     if view.mode.x == 0u {
         return 1.0;
     }
-    let w = f32(view.size.x);
-    let h = f32(view.size.y);
-    let t = view.lens.x;
-    let nx = (2.0 * pixel.x / w - 1.0) * (w / h) * t;
-    let ny = (1.0 - 2.0 * pixel.y / h) * t;
-    return sqrt(1.0 + nx * nx + ny * ny);
+    let n = ndc(pixel) * view.lens.x;
+    return sqrt(1.0 + n.x * n.x + n.y * n.y);
 }
 
-@fragment
-fn fs(in: Varyings) -> @location(0) vec4f {
-    var z_f = in.front.y / in.front.x;
-    var z_b = in.back.y / in.back.x;
-    if view.mode.x == 1u {
-        z_f = 1.0 / in.front.x;
-        z_b = 1.0 / in.back.x;
+// The pixel's ray direction (volux_render::pt::render's view_dir).
+fn view_dir(pixel: vec2f) -> vec3f {
+    if view.mode.x == 0u {
+        return view.forward.xyz;
     }
-    let s_f = in.front.z / in.front.x;
-    let s_b = in.back.z / in.back.x;
-    let l = max((z_b - z_f) * secant(in.position.xy), 0.0);
-    if !(l > 0.0 && finite(l) && finite(s_f) && finite(s_b)) {
+    let n = ndc(pixel) * view.lens.x;
+    return view.forward.xyz + view.right.xyz * n.x + view.up.xyz * n.y;
+}
+
+// --- isosurfaces (volux_render::integrate::fragment, seed 002 section 4.6) --------------
+
+fn normalize_or_zero(v: vec3f) -> vec3f {
+    let l = length(v);
+    if l > 0.0 && finite(l) {
+        return v / l;
+    }
+    return vec3f(0.0);
+}
+
+// Two-sided Blinn-Phong (volux_render::shading::BlinnPhong::shade).
+fn shade(rgb: vec3f, gradient: vec3f, dir: vec3f) -> vec3f {
+    let len = length(gradient);
+    let to_eye = -normalize_or_zero(dir);
+    if !(len >= view.light.w && len > 0.0 && finite(len)) || all(to_eye == vec3f(0.0)) {
+        return rgb;
+    }
+    var n = gradient / len;
+    if dot(n, to_eye) < 0.0 {
+        n = -n;
+    }
+    var l = view.light.xyz;
+    if view.extra.z == 1u {
+        l = to_eye;
+    }
+    let n_l = dot(n, l);
+    var diffuse = 0.0;
+    var specular = 0.0;
+    if n_l > 0.0 {
+        let h = normalize_or_zero(l + to_eye);
+        let n_h = max(dot(n, h), 0.0);
+        diffuse = n_l;
+        if view.shade.w == 0.0 {
+            specular = 1.0;
+        } else if n_h > 0.0 {
+            specular = pow(n_h, view.shade.w);
+        }
+    }
+    let k = view.shade.x + view.shade.y * diffuse;
+    return rgb * k + vec3f(view.shade.z * specular);
+}
+
+// The volume colour of a segment (no isosurface inside).
+fn segment(s_f: f32, s_b: f32, l: f32, piece: u32) -> vec4f {
+    if !(l > 0.0) {
         return vec4f(0.0);
     }
     if view.mode.w == 1u {
         return psi_segment(s_f, s_b, l);
     }
-    if in.piece != NONE {
-        let mid = piece_at(in.piece, 0.5 * (s_f + s_b));
+    if piece != NONE {
+        let mid = piece_at(piece, 0.5 * (s_f + s_b));
         return average_rgba(mid, mid, l);
     }
     return average_rgba(lookup(s_f), lookup(s_b), l);
+}
+
+// The segment cut at the isovalues it crosses (t in [0, 1), at most 8, as the CPU), the
+// volume pieces and the lit surfaces composited front to back.
+fn fragment_iso(s_f: f32, s_b: f32, l: f32, g_f: vec3f, g_b: vec3f, dir: vec3f) -> vec4f {
+    let lo = min(s_f, s_b);
+    let hi = max(s_f, s_b);
+    var hits: array<vec2f, 8>;
+    var n = 0u;
+    for (var j = 0u; j < view.extra.x; j++) {
+        let v = view.isos[2u * j].x;
+        if v < lo {
+            continue;
+        }
+        if v > hi {
+            break;
+        }
+        let t = (v - s_f) / (s_b - s_f);
+        if t >= 0.0 && t < 1.0 && n < 8u {
+            hits[n] = vec2f(t, f32(j));
+            n++;
+        }
+    }
+    var acc = vec4f(0.0);
+    var s0 = s_f;
+    var t0 = 0.0;
+    for (var m = 0u; m < n; m++) {
+        var h = hits[m];
+        if s_b < s_f {
+            h = hits[n - 1u - m];
+        }
+        let j = u32(h.y);
+        let v = view.isos[2u * j].x;
+        let rgba = view.isos[2u * j + 1u];
+        acc = under(acc, segment(s0, v, (h.x - t0) * l, NONE));
+        let rgb = shade(rgba.xyz, g_f + (g_b - g_f) * h.x, dir);
+        acc = under(acc, vec4f(rgb * rgba.w, rgba.w));
+        s0 = v;
+        t0 = h.x;
+    }
+    return under(acc, segment(s0, s_b, (1.0 - t0) * l, NONE));
+}
+
+// --- clipping planes (volux_render::pt::clip, seed 004 chapter 4) -----------------------
+
+const BIG: f32 = 3.0e38;
+
+// The pixel's window of view depth inside every plane; empty: (1, 0).
+fn window(pixel: vec2f) -> vec2f {
+    let n = ndc(pixel) * view.lens.x;
+    var z0 = -BIG;
+    var z1 = BIG;
+    for (var j = 0u; j < view.extra.y; j++) {
+        let a = view.planes[2u * j];
+        let b = view.planes[2u * j + 1u];
+        let across = b.x * n.x + b.y * n.y;
+        var d0 = a.w;
+        var rate = b.z;
+        if view.mode.x == 1u {
+            rate += across;
+        } else {
+            d0 += across;
+        }
+        if rate > 0.0 {
+            z0 = max(z0, -d0 / rate);
+        } else if rate < 0.0 {
+            z1 = min(z1, -d0 / rate);
+        } else if d0 < 0.0 {
+            return vec2f(1.0, 0.0);
+        }
+    }
+    if !(z1 > z0) {
+        return vec2f(1.0, 0.0);
+    }
+    return vec2f(z0, z1);
+}
+
+struct Span {
+    z_f: f32,
+    s_f: f32,
+    z_b: f32,
+    s_b: f32,
+    g_f: vec3f,
+    g_b: vec3f,
+    kept: bool,
+}
+
+// The span trimmed to the window, the scalars and gradients interpolated at the new ends
+// (volux_render::pt::clip::DepthSpan::trim).
+fn trim(in: Span, w: vec2f) -> Span {
+    var out = in;
+    if in.z_b <= w.x || in.z_f >= w.y || w.x > w.y {
+        out.kept = false;
+        return out;
+    }
+    let d = in.z_b - in.z_f;
+    var a = 0.0;
+    var b = 1.0;
+    if d > 0.0 {
+        a = (max(in.z_f, w.x) - in.z_f) / d;
+        b = (min(in.z_b, w.y) - in.z_f) / d;
+    }
+    out.z_f = max(in.z_f, w.x);
+    out.z_b = min(in.z_b, w.y);
+    if a > 0.0 {
+        out.s_f = in.s_f + (in.s_b - in.s_f) * a;
+    }
+    if b < 1.0 {
+        out.s_b = in.s_f + (in.s_b - in.s_f) * b;
+        out.g_b = in.g_f + (in.g_b - in.g_f) * b;
+    }
+    out.g_f = in.g_f + (in.g_b - in.g_f) * a;
+    if a >= 1.0 {
+        out.g_f = in.g_b;
+    }
+    return out;
+}
+
+@fragment
+fn fs(in: Varyings) -> @location(0) vec4f {
+    var span: Span;
+    span.z_f = in.front.y / in.front.x;
+    span.z_b = in.back.y / in.back.x;
+    if view.mode.x == 1u {
+        span.z_f = 1.0 / in.front.x;
+        span.z_b = 1.0 / in.back.x;
+    }
+    span.s_f = in.front.z / in.front.x;
+    span.s_b = in.back.z / in.back.x;
+    let lit = view.extra.x > 0u;
+    if lit {
+        span.g_f = in.g_front / max(in.front.x, 1.17549435e-38);
+        span.g_b = in.g_back / max(in.back.x, 1.17549435e-38);
+    }
+    span.kept = true;
+    if view.extra.y > 0u {
+        span = trim(span, window(in.position.xy));
+        if !span.kept {
+            discard;
+        }
+    }
+    let l = max((span.z_b - span.z_f) * secant(in.position.xy), 0.0);
+    if !(finite(l) && finite(span.s_f) && finite(span.s_b)) {
+        return vec4f(0.0);
+    }
+    if lit && span.s_f != span.s_b {
+        return fragment_iso(span.s_f, span.s_b, l, span.g_f, span.g_b,
+            view_dir(in.position.xy));
+    }
+    return segment(span.s_f, span.s_b, l, in.piece);
 }

@@ -1,26 +1,69 @@
-//! One frame on the device: the first pass, the sort, the fans, the readback.
-use volux_core::TransferFunction;
+//! One frame on the device, with the caches between frames: the TF's buffers (keyed by the
+//! TF), the kept set (keyed by the TF's zero set and the isovalues, rebuilt by the `keep`
+//! pass of `classify.wgsl`), and the classified and sorted cells (keyed by the camera, the
+//! image size, the clipping planes, the kept set and whether gradients are needed). A frame
+//! runs only the stages whose key changed, then the fans and the readback.
+use volux_core::voi::ClipPlane;
+use volux_core::{Camera, TransferFunction};
+use volux_render::frame::Rebuilt;
 use volux_render::scene::Scene;
 
 use super::tables::TfBuffers;
-use super::view::ViewParams;
+use super::view::{Extras, ViewParams};
 use super::{draw, groups, GpuPtRenderer, RadixSort, CELL_BYTES, VERTICES_PER_CELL};
 use crate::error::GpuError;
+use crate::grid::{map, readback};
 
-/// The per-frame buffers of the first pass.
-struct FrameBuffers {
+/// The mesh-sized buffers of the first pass, allocated with the first frame and kept.
+pub(super) struct FrameBuffers {
     uniform: wgpu::Buffer,
     screen: wgpu::Buffer,
     cells: wgpu::Buffer,
     items: wgpu::Buffer,
     scratch: wgpu::Buffer,
+    kept: wgpu::Buffer,
+    counters: wgpu::Buffer,
 }
 
-fn buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+/// What the classified cells were built from.
+#[derive(Clone, PartialEq)]
+struct ViewKey {
+    camera: Camera,
+    size: (usize, usize),
+    planes: Vec<ClipPlane>,
+    kept_version: u64,
+    lit: bool,
+}
+
+/// The caches of [`GpuPtRenderer`] (see the module docs).
+#[derive(Default)]
+pub(super) struct Caches {
+    buffers: Option<FrameBuffers>,
+    /// The effective TF and its buffers.
+    tf: Option<(TransferFunction, TfBuffers)>,
+    /// The zero set's rows and the isovalues the kept set was built from, and its size.
+    kept: Option<(Vec<[f32; 4]>, Vec<f32>, usize)>,
+    kept_version: u64,
+    view: Option<ViewKey>,
+}
+
+/// What a frame did, for its statistics.
+pub(super) struct FrameReport {
+    pub(super) rgba: Vec<[f32; 4]>,
+    pub(super) rebuilt: Rebuilt,
+    pub(super) kept: usize,
+}
+
+fn buffer(
+    device: &wgpu::Device,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: size.max(16),
-        usage: wgpu::BufferUsages::STORAGE,
+        usage,
         mapped_at_creation: false,
     })
 }
@@ -44,63 +87,178 @@ fn bind(
     })
 }
 
+impl FrameBuffers {
+    fn new(device: &wgpu::Device, (tets, vertices): (usize, usize)) -> Self {
+        use wgpu::BufferUsages as U;
+        let n = tets as u64;
+        let (scratch, _) = RadixSort::scratch_bytes(n);
+        Self {
+            uniform: buffer(
+                device,
+                "pt view",
+                std::mem::size_of::<ViewParams>() as u64,
+                U::UNIFORM | U::COPY_DST,
+            ),
+            screen: buffer(device, "screen", 16 * vertices as u64, U::STORAGE),
+            cells: buffer(device, "cells", CELL_BYTES * n, U::STORAGE),
+            items: buffer(device, "items", 8 * n, U::STORAGE),
+            scratch: buffer(device, "sort scratch", scratch, U::STORAGE),
+            kept: buffer(device, "kept", 4 * n, U::STORAGE),
+            counters: buffer(
+                device,
+                "counters",
+                16,
+                U::STORAGE | U::COPY_DST | U::COPY_SRC,
+            ),
+        }
+    }
+}
+
 impl GpuPtRenderer {
-    /// Renders `scene` with `tf` (the ψ rule or the average): the image's pixels.
+    /// The vertex gradients, or one zero element before the first isosurface.
+    fn gradients(&self) -> &wgpu::Buffer {
+        self.data
+            .gradients
+            .as_ref()
+            .unwrap_or(&self.data.no_gradients)
+    }
+
+    /// Renders `scene` with `tf` (the ψ rule or the average), running only the stages whose
+    /// inputs changed since the last frame.
     pub(super) fn frame(
-        &self,
+        &mut self,
         scene: &Scene,
         tf: &TransferFunction,
         psi: bool,
-    ) -> Result<Vec<[f32; 4]>, GpuError> {
+    ) -> Result<FrameReport, GpuError> {
         let device = &self.ctx.device;
-        let mesh = &self.mesh;
-        let mut tfb = TfBuffers::new(device, tf, mesh.range(), psi);
+        let (tets, vertices) = (self.mesh.tets().len(), self.mesh.positions().len());
+        let mut rebuilt = Rebuilt::default();
+        if self.caches.buffers.is_none() {
+            self.caches.buffers = Some(FrameBuffers::new(device, (tets, vertices)));
+        }
+        if self.caches.tf.as_ref().is_none_or(|(t, _)| t != tf) {
+            let tfb = TfBuffers::new(device, tf, self.mesh.range(), psi);
+            self.caches.tf = Some((tf.clone(), tfb));
+            rebuilt.classification = true;
+        }
+        let (w, h) = (scene.view.width, scene.view.height);
+        let extras = Extras {
+            isosurfaces: scene.appearance.isosurfaces.as_slice(),
+            lighting: scene.appearance.lighting,
+            planes: &scene.clip_planes,
+        };
+        let c = &self.caches;
+        let (Some(fb), Some((_, tfb))) = (&c.buffers, &c.tf) else {
+            return Err(GpuError::Failed("the PT caches were not built".into()));
+        };
         let psi_view = match (&self.psi, psi) {
             (Some(v), true) => v,
             _ => &self.tiny_psi,
         };
-        tfb.shape.psi_nodes = psi_view.texture().width();
-        let (w, h) = (scene.view.width, scene.view.height);
-        let (tets, vertices) = (mesh.tets().len(), mesh.positions().len());
-        let params = ViewParams::new(&scene.view.camera, (w, h), (tets, vertices), &tfb.shape);
-        let n = tets as u64;
-        let (scratch, _) = RadixSort::scratch_bytes(n);
-        let fb = FrameBuffers {
-            uniform: wgpu::util::DeviceExt::create_buffer_init(
-                device,
-                &wgpu::util::BufferInitDescriptor {
-                    label: Some("pt view"),
-                    contents: bytemuck::bytes_of(&params),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                },
-            ),
-            screen: buffer(device, "screen", 16 * vertices as u64),
-            cells: buffer(device, "cells", CELL_BYTES * n),
-            items: buffer(device, "items", 8 * n),
-            scratch: buffer(device, "sort scratch", scratch),
+        let mut shape = tfb.shape;
+        shape.psi = psi;
+        shape.psi_nodes = psi_view.texture().width();
+        let params = ViewParams::new(
+            &scene.view.camera,
+            (w, h),
+            (tets, vertices),
+            &shape,
+            &extras,
+        );
+        self.ctx
+            .queue
+            .write_buffer(&fb.uniform, 0, bytemuck::bytes_of(&params));
+        let isovalues: Vec<f32> = extras.isosurfaces.iter().map(|i| i.value).collect();
+        let kept_fresh = c
+            .kept
+            .as_ref()
+            .is_some_and(|(rows, isos, _)| *rows == tfb.knot_rows && *isos == isovalues);
+        let mut kept = c.kept.as_ref().map_or(0, |k| k.2);
+        let mut kept_version = c.kept_version;
+        if !kept_fresh {
+            kept = self.keep(fb, tfb, tets)?;
+            kept_version += 1;
+            rebuilt.classification = true;
+        }
+        let key = ViewKey {
+            camera: scene.view.camera,
+            size: (w, h),
+            planes: scene.clip_planes.clone(),
+            kept_version,
+            lit: !isovalues.is_empty(),
         };
         let mut encoder = device.create_command_encoder(&Default::default());
-        self.first_pass(&mut encoder, &fb, &tfb, (tets, vertices));
-        self.sort
-            .record(device, &mut encoder, &fb.items, &fb.scratch, tets as u32);
+        if c.view.as_ref() != Some(&key) {
+            self.first_pass(&mut encoder, fb, (tets, vertices));
+            self.sort
+                .record(device, &mut encoder, &fb.items, &fb.scratch, tets as u32);
+            rebuilt.view = true;
+        }
         let target = draw::target(device, self.format, (w as u32, h as u32));
-        self.second_pass(&mut encoder, &fb, &tfb, psi_view, &target, tets);
+        self.second_pass(&mut encoder, fb, tfb, psi_view, &target, tets);
         let (out, padded) = draw::copy_out(device, &mut encoder, &target);
         self.ctx.queue.submit([encoder.finish()]);
-        draw::pixels(device, &out, self.format, (w as u32, h as u32, padded))
+        let rgba = draw::pixels(device, &out, self.format, (w as u32, h as u32, padded))?;
+        let new_kept = (!kept_fresh).then(|| (tfb.knot_rows.clone(), isovalues, kept));
+        if let Some(k) = new_kept {
+            self.caches.kept = Some(k);
+            self.caches.kept_version = kept_version;
+        }
+        self.caches.view = Some(key);
+        Ok(FrameReport {
+            rgba,
+            rebuilt,
+            kept,
+        })
     }
 
-    /// Records the projection and the classification.
+    /// Runs the `keep` pass (the kept set) and reads back how many cells it kept.
+    fn keep(&self, fb: &FrameBuffers, tfb: &TfBuffers, tets: usize) -> Result<usize, GpuError> {
+        let device = &self.ctx.device;
+        let pipeline = &self.classify[2];
+        let group = bind(
+            device,
+            &pipeline.get_bind_group_layout(0),
+            &[
+                (0, fb.uniform.as_entire_binding()),
+                (1, self.data.positions.as_entire_binding()),
+                (3, self.data.tets.as_entire_binding()),
+                (6, tfb.knots.as_entire_binding()),
+                (9, fb.kept.as_entire_binding()),
+                (10, fb.counters.as_entire_binding()),
+            ],
+        );
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&fb.counters, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            let (gx, gy) = groups((tets as u32).div_ceil(64));
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        let out = readback(device, &mut encoder, &fb.counters, 16);
+        self.ctx.queue.submit([encoder.finish()]);
+        let bytes = map(device, &out)?;
+        let count: [u32; 4] = bytemuck::pod_read_unaligned(
+            bytes
+                .get(..16)
+                .ok_or_else(|| GpuError::Failed("short counter readback".into()))?,
+        );
+        Ok(count[0] as usize)
+    }
+
+    /// Records the projection and the classification of the kept cells.
     fn first_pass(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         fb: &FrameBuffers,
-        tfb: &TfBuffers,
         (tets, vertices): (usize, usize),
     ) {
         let device = &self.ctx.device;
         let d = &self.data;
-        let [project, classify] = &self.classify;
+        let [project, classify, _] = &self.classify;
         let project_bind = bind(
             device,
             &project.get_bind_group_layout(0),
@@ -118,11 +276,11 @@ impl GpuPtRenderer {
                 (1, d.positions.as_entire_binding()),
                 (2, fb.screen.as_entire_binding()),
                 (3, d.tets.as_entire_binding()),
-                (4, d.scalars.as_entire_binding()),
+                (4, self.gradients().as_entire_binding()),
                 (5, self.table.as_entire_binding()),
-                (6, tfb.knots.as_entire_binding()),
                 (7, fb.cells.as_entire_binding()),
                 (8, fb.items.as_entire_binding()),
+                (9, fb.kept.as_entire_binding()),
             ],
         );
         let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -137,7 +295,7 @@ impl GpuPtRenderer {
         }
     }
 
-    /// Records the fans, back to front, into `target`.
+    /// Records the fans, front to back, into `target`.
     fn second_pass(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -160,6 +318,8 @@ impl GpuPtRenderer {
                 (5, tfb.pieces.as_entire_binding()),
                 (6, tfb.entries.as_entire_binding()),
                 (7, wgpu::BindingResource::TextureView(psi)),
+                (8, self.data.tets.as_entire_binding()),
+                (9, self.gradients().as_entire_binding()),
             ],
         );
         let view = target.create_view(&Default::default());

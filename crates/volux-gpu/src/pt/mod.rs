@@ -4,24 +4,56 @@
 //!
 //! 1. **first pass** (`classify.wgsl`, `000` §4.1, `002` §4.1): every mesh vertex projected
 //!    and snapped to the CPU's 1/256 pixel grid, then per tetrahedron the discard of cells
-//!    whose value range has zero extinction (`002` §4.5), the four orientation tests (exact,
-//!    in emulated 64-bit integers on the grid), the 81-entry ternary truth table (the CPU's
-//!    `TERNARY_TABLE`, uploaded), the thick vertex with its front and back depth and scalar
+//!    whose value range has zero extinction and that no isovalue crosses (`002` §4.5, the
+//!    CPU's kept set), the culling of cells with all four vertices outside one clipping
+//!    plane (`004` ch. 4), the four orientation tests (exact, in emulated 64-bit integers on
+//!    the grid), the 81-entry ternary truth table (the CPU's `TERNARY_TABLE`, uploaded), the
+//!    thick vertex with its front and back depth, scalar and (with isosurfaces) gradient
 //!    (perspective-correct as `pt::project`) and the centroid's depth key;
 //! 2. **visibility order** (`sort.wgsl`, `000` §4.2): a stable radix sort of the keys,
 //!    the CPU's centroid order (distance from the eye under perspective);
 //! 3. **second pass** (`draw.wgsl`, `000` §4.3, `002` §4.3-4.4): the fans (1 to 4
-//!    triangles around the thick vertex) rasterized by the hardware in reverse order,
-//!    the vertex shader pulling the classified cells, `(s_f, s_b)` and depths interpolated
-//!    perspective-correctly front and back apart, the fragment coloured with the average
-//!    rule or the ψ table (cut at the TF's breakpoints, as the CPU), and composited
-//!    back to front with premultiplied "over" into an `rgba32float` target
-//!    (`rgba16float` where the adapter cannot blend `f32`).
+//!    triangles around the thick vertex) rasterized by the hardware in the sorted order,
+//!    the vertex shader pulling the classified cells, `(s_f, s_b)`, depths and gradients
+//!    interpolated perspective-correctly front and back apart; with clipping planes each
+//!    fragment's segment is trimmed to its pixel's depth window inside the planes (computed
+//!    in the fragment shader from the pixel's ray and the planes' distances to the eye; the
+//!    scalars and gradients interpolated at the trimmed ends, a fragment outside discarded,
+//!    as `pt::clip`); the fragment is coloured with the average rule or the ψ table (cut at
+//!    the TF's breakpoints, as the CPU) and, with isosurfaces (`002` §4.6), cut at the
+//!    isovalues crossed between `s_f` and `s_b` (located on the linear segment, at most 8,
+//!    as `integrate::fragment`), the volume pieces and the surfaces (lit two-sided
+//!    Blinn-Phong with the scene's `appearance.lighting` and the interpolated gradient)
+//!    composited in depth order inside the fragment; the fragments are composited front to
+//!    back with premultiplied "under" (blend factors `1 - dst.a` and 1, the CPU's operator
+//!    and order) into an `rgba32float` target (`rgba16float` where the adapter cannot blend
+//!    `f32`).
+//!
+//! The isovalues (at most [`MAX_ISOSURFACES`](view::MAX_ISOSURFACES)) and the planes (at
+//! most [`MAX_PLANES`](view::MAX_PLANES)) ride in the uniform block; the vertex gradients
+//! ([`TetMesh::vertex_gradients`], as the CPU) are uploaded with the first isosurface.
+//!
+//! **Between frames** (`frame.rs`, the update step of `000` §4.2 and `002` §4.5): the mesh
+//! (positions with the scalars, cells, gradients) and the ψ table stay on the device; the
+//! TF's buffers are rebuilt when the TF changes, the kept set (the `keep` pass: one flag per
+//! cell and their count, `PtStats::tets_kept`) when the TF's zero set or the isovalues
+//! change; projection, classification and sort run when the camera, the image size, the
+//! planes, the kept set or the need for gradients change. The cells hold no TF-dependent
+//! data (the average rule's linear piece is found in the vertex shader), so a TF change
+//! with the same zero set only redraws the fans. The frame's `Rebuilt` says which ran:
+//! `data` (ψ table, gradients), `classification` (TF buffers or kept set), `view` (first
+//! pass and sort).
 //!
 //! Not drawn yet, and refused by name ([`GpuPtRenderer::supports`]): the exact and adaptive
-//! Simpson colours, the exact visibility sort (MPVO), isosurfaces and clip planes. Early
-//! termination does not apply (back-to-front compositing draws every fragment): where the
-//! CPU stops a pixel at opacity `e` the GPU pixel differs by at most `1 - e`.
+//! Simpson colours, the exact visibility sort (MPVO), the sculpt mask, region labels, and
+//! more isovalues or planes than the uniform block holds. Early termination is not done:
+//! the "under" blend still shades and composites every fragment (a fragment shader cannot
+//! read the target's opacity; stopping a pixel would take, e.g., drawing the order in
+//! chunks and, between chunks, marking opaque pixels in a stencil or depth buffer that
+//! the next chunks test, or a compute rasterizer), so where the CPU stops a pixel at
+//! opacity `e` the GPU pixel differs by at most `1 - e`. `PtStats` reports `tets_kept`; the drawn,
+//! degenerate, clipped and culled counts and the fragment count are not counted on the
+//! device (zero).
 mod draw;
 mod frame;
 mod sort;
@@ -46,7 +78,7 @@ use crate::error::GpuError;
 use sort::RadixSort;
 
 /// Bytes of one classified cell (`Cell` of the shaders).
-const CELL_BYTES: u64 = 96;
+const CELL_BYTES: u64 = 128;
 /// Vertices drawn per cell (four triangles at most).
 const VERTICES_PER_CELL: u64 = 12;
 
@@ -58,9 +90,13 @@ pub(crate) fn groups(n: u32) -> (u32, u32) {
 
 /// The mesh on the device.
 struct MeshBuffers {
+    /// `(x, y, z, scalar)` per vertex.
     positions: wgpu::Buffer,
-    scalars: wgpu::Buffer,
     tets: wgpu::Buffer,
+    /// The vertex gradients ([`TetMesh::vertex_gradients`]), uploaded with the first
+    /// isosurface; one zero element before.
+    gradients: Option<wgpu::Buffer>,
+    no_gradients: wgpu::Buffer,
 }
 
 /// Projected Tetrahedra on the GPU (see the module docs): the mesh uploaded once, the ψ
@@ -70,12 +106,13 @@ pub struct GpuPtRenderer {
     mesh: Arc<TetMesh>,
     data: MeshBuffers,
     table: wgpu::Buffer,
-    classify: [wgpu::ComputePipeline; 2],
+    classify: [wgpu::ComputePipeline; 3],
     sort: RadixSort,
     draw: wgpu::RenderPipeline,
     format: wgpu::TextureFormat,
     psi: Option<wgpu::TextureView>,
     tiny_psi: wgpu::TextureView,
+    caches: frame::Caches,
 }
 
 impl GpuPtRenderer {
@@ -109,6 +146,7 @@ impl GpuPtRenderer {
             format,
             psi: None,
             tiny_psi,
+            caches: frame::Caches::default(),
         })
     }
 
@@ -135,8 +173,16 @@ impl GpuPtRenderer {
             ref c => Some(format!("the {} fragment colour", c.name())),
         }
         .or_else(|| (settings.sort == SortMode::Exact).then(|| "the exact visibility sort".into()))
-        .or_else(|| (!scene.appearance.isosurfaces.is_empty()).then(|| "isosurfaces".into()))
-        .or_else(|| (!scene.clip_planes.is_empty()).then(|| "clip planes".into()))
+        .or_else(|| {
+            let n = scene.appearance.isosurfaces.as_slice().len();
+            (n > view::MAX_ISOSURFACES)
+                .then(|| format!("{n} isosurfaces (at most {})", view::MAX_ISOSURFACES))
+        })
+        .or_else(|| {
+            let n = scene.clip_planes.len();
+            (n > view::MAX_PLANES)
+                .then(|| format!("{n} clip planes (at most {})", view::MAX_PLANES))
+        })
         .or_else(|| scene.mask.is_some().then(|| "a sculpt mask".into()))
         .or_else(|| scene.labels.is_some().then(|| "region labels".into()));
         match refused {
@@ -189,18 +235,29 @@ fn upload(device: &wgpu::Device, mesh: &TetMesh) -> MeshBuffers {
     let mut positions: Vec<[f32; 4]> = mesh
         .positions()
         .iter()
-        .map(|p| [p.x, p.y, p.z, 1.0])
+        .zip(mesh.scalars())
+        .map(|(p, &s)| [p.x, p.y, p.z, s])
         .collect();
     positions.resize(positions.len().max(1), [0.0; 4]);
-    let mut scalars = mesh.scalars().to_vec();
-    scalars.resize(scalars.len().max(1), 0.0);
     let mut tets: Vec<[u32; 4]> = mesh.tets().to_vec();
     tets.resize(tets.len().max(1), [0; 4]);
     MeshBuffers {
         positions: storage(device, "positions", &positions),
-        scalars: storage(device, "scalars", &scalars),
         tets: storage(device, "tets", &tets),
+        gradients: None,
+        no_gradients: storage(device, "no gradients", &[[0.0f32; 4]]),
     }
+}
+
+/// The vertex gradients of `mesh` as `vec4`.
+fn upload_gradients(device: &wgpu::Device, mesh: &TetMesh) -> wgpu::Buffer {
+    let mut g: Vec<[f32; 4]> = mesh
+        .vertex_gradients()
+        .iter()
+        .map(|g| [g.x, g.y, g.z, 0.0])
+        .collect();
+    g.resize(g.len().max(1), [0.0; 4]);
+    storage(device, "vertex gradients", &g)
 }
 
 impl Renderer for GpuPtRenderer {
@@ -225,26 +282,40 @@ impl Renderer for GpuPtRenderer {
         let (w, h) = (scene.view.width, scene.view.height);
         check_image_size(w, h)?;
         let psi = settings.color == SegmentRule::Psi;
-        let mut rebuilt = Rebuilt {
-            data: false,
-            classification: true,
-            view: true,
-        };
+        let mut data = false;
         if psi && self.psi.is_none() {
             let table = PsiTable::new();
             let view = self
                 .ctx
                 .checked(|| tables::psi_texture(&self.ctx.device, &self.ctx.queue, &table))?;
             self.psi = Some(view);
-            rebuilt.data = true;
+            data = true;
+        }
+        if !scene.appearance.isosurfaces.is_empty() && self.data.gradients.is_none() {
+            let (device, mesh) = (&self.ctx.device, &self.mesh);
+            let buffer = self.ctx.checked(|| upload_gradients(device, mesh))?;
+            self.data.gradients = Some(buffer);
+            data = true;
         }
         let tf = scene.appearance.effective_tf();
         let ctx = self.ctx.clone();
-        let rgba = ctx.checked(|| self.frame(scene, &tf, psi))??;
-        let image = Image::from_pixels(w, h, rgba)?;
+        let report = match ctx.checked(|| self.frame(scene, &tf, psi)) {
+            Ok(Ok(r)) => r,
+            Ok(Err(e)) | Err(e) => {
+                // What the caches hold may be half built: start afresh next frame.
+                self.caches = frame::Caches::default();
+                return Err(e.into());
+            }
+        };
+        let rebuilt = Rebuilt {
+            data,
+            ..report.rebuilt
+        };
+        let image = Image::from_pixels(w, h, report.rgba)?;
         let seconds = started.elapsed().as_secs_f64();
         let stats = PtStats {
             tets: self.mesh.tets().len(),
+            tets_kept: report.kept,
             seconds,
             rebuilt,
             ..Default::default()

@@ -49,6 +49,8 @@ pub(crate) fn packed_table() -> Vec<[u32; 4]> {
 pub(crate) struct TfBuffers {
     /// `(breakpoint k, piece k non-zero, 0, 0)`, one more than the breakpoints.
     pub(crate) knots: wgpu::Buffer,
+    /// Their rows: the zero set, the key of the kept set.
+    pub(crate) knot_rows: Vec<[f32; 4]>,
     /// Per piece: `(origin, 0, 0, 0)`, the value at the origin, the slope.
     pub(crate) pieces: wgpu::Buffer,
     /// The classification table (`[r, g, b, tau]` per entry).
@@ -93,6 +95,7 @@ impl TfBuffers {
         };
         Self {
             knots: storage("tf breakpoints", bytemuck::cast_slice(&knot_rows)),
+            knot_rows,
             pieces: storage("tf pieces", bytemuck::cast_slice(&piece_rows)),
             entries: storage("classification table", bytemuck::cast_slice(entries)),
             shape: TfShape {
