@@ -22,11 +22,17 @@
 //!   and the sorted cells cached between frames and rebuilt only when what they depend on
 //!   changes.
 //!
-//! What the shader does not draw (the trapezoid, Simpson, adaptive Simpson and reference
-//! integrators, tricubic reconstruction, region labels, more than [`MAX_ISOVALUES`]
-//! isosurfaces, bricked grids) is refused with a
-//! [`RenderError`](volux_render::RenderError) that says so; a front end with
-//! `--backend auto` then renders on the CPU ([`GpuGridRenderer::supports`]).
+//! - [`GpuPoolRenderer`]: grids larger than the device's memory or texture limits through a
+//!   brick pool (seed `003` done in one pass): bricks in the slots of a 3D texture atlas
+//!   with a page table, loaded as rays ask for them, opacity carried across bricks and
+//!   dispatches, transparent bricks never loaded; [`GpuBrickedRenderer`] draws a bricked
+//!   volume (an OME-Zarr store) through a pool of the level each frame needs;
+//! - [`renderer_for`] and [`supports`]: the renderer a front end gets for a volume, and
+//!   whether a scene is drawn.
+//!
+//! What the shaders do not draw is refused with a
+//! [`RenderError`](volux_render::RenderError) that names it (each renderer's `supports`);
+//! a front end with `--backend auto` then renders on the CPU.
 mod context;
 mod error;
 mod grid;
