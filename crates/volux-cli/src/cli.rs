@@ -204,8 +204,8 @@ pub enum Command {
         #[arg(long, value_enum, default_value_t = Suite::All)]
         suite: Suite,
         /// Grid suite: run only the cases whose "dataset integrator parameter" contains this
-        /// text (e.g. `marschner riemann h=0.5`, matched word by word); targets suite: only
-        /// the datasets whose name contains it (e.g. `shepp`).
+        /// text (e.g. `marschner riemann h=0.5`, matched word by word); targets and gpu
+        /// suites: only the datasets (gpu: and meshes) whose name contains it (e.g. `shepp`).
         #[arg(long)]
         only: Option<String>,
         /// Time warm frames of this file (any format) instead of a suite: a turntable of

@@ -273,6 +273,8 @@ fn bench_options_that_change_nothing_are_refused() {
             &["bench", "--suite", "voi", "--quick"],
             "does not apply to --suite voi",
         ),
+        // The CI build has no GPU backend: the suite says how to get it.
+        (&["bench", "--suite", "gpu", "--quick"], "--features gpu"),
     ] {
         let err = refused(args, d);
         assert!(

@@ -18,13 +18,20 @@ pub fn run(
     frames: usize,
     n: usize,
     as_json: bool,
+    only: Option<&str>,
 ) -> Result<Vec<serde_json::Value>, CmdError> {
-    on_gpu::run(quick, frames, n, as_json)
+    on_gpu::run(quick, frames, n, as_json, only)
 }
 
 /// Without the `gpu` feature: an error saying how to build it.
 #[cfg(not(feature = "gpu"))]
-pub fn run(_: bool, _: usize, _: usize, _: bool) -> Result<Vec<serde_json::Value>, CmdError> {
+pub fn run(
+    _: bool,
+    _: usize,
+    _: usize,
+    _: bool,
+    _: Option<&str>,
+) -> Result<Vec<serde_json::Value>, CmdError> {
     Err(
         "--suite gpu needs the GPU backend: cargo build --release -p volux-cli --features gpu"
             .into(),
@@ -47,7 +54,7 @@ mod on_gpu {
     use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, Volume};
     use volux_render::RenderError;
 
-    use super::super::common::{frame, grids, median, meshes};
+    use super::super::common::{frame, grids, median, meshes, selected};
     use crate::commands::common::CmdError;
 
     /// The cases of a grid: label, integrator, shaded, MIP.
@@ -83,6 +90,7 @@ mod on_gpu {
         frames: usize,
         n: usize,
         as_json: bool,
+        only: Option<&str>,
     ) -> Result<Vec<serde_json::Value>, CmdError> {
         let ctx = Arc::new(GpuContext::new().map_err(RenderError::from)?);
         let adapter = ctx.adapter().to_string();
@@ -93,8 +101,8 @@ mod on_gpu {
             &[(512, 512), (1920, 1080)]
         };
         let mut datasets = grids(if quick { n.min(64) } else { n })?;
-        datasets.retain(|(name, _, _)| !name.starts_with("shepp"));
-        if !quick && n != 512 {
+        datasets.retain(|(name, _, _)| !name.starts_with("shepp") && selected(name, only));
+        if !quick && n != 512 && selected("marschner-lobb-512", only) {
             let tf = datasets[0].2.clone();
             datasets.push((
                 "marschner-lobb-512".into(),
@@ -106,7 +114,7 @@ mod on_gpu {
             println!("\nGPU backend on {adapter}; frames per case: {frames} (median)");
         }
         let mut rows = Vec::new();
-        rows.extend(pt_rows(&ctx, quick, frames, sizes, as_json)?);
+        rows.extend(pt_rows(&ctx, (quick, frames, only), sizes, as_json)?);
         if !as_json {
             println!(
                 "\n{:<20} {:>9} {:<22} {:>10} {:>12} {:>12} {:>10} {:>10}",
@@ -145,7 +153,8 @@ mod on_gpu {
                 }
             }
         }
-        if let Some((name, volume, tf)) = datasets.first() {
+        if let Some((name, volume, tf)) = datasets.first().filter(|d| d.0.starts_with("marschner"))
+        {
             rows.extend(pool_rows(&ctx, (name, volume, tf), sizes, frames, as_json)?);
         }
         Ok(rows)
@@ -154,8 +163,7 @@ mod on_gpu {
     /// The Projected Tetrahedra rows: ψ colour, centroid order, each mesh at each size.
     fn pt_rows(
         ctx: &Arc<GpuContext>,
-        quick: bool,
-        frames: usize,
+        (quick, frames, only): (bool, usize, Option<&str>),
         sizes: &[(usize, usize)],
         as_json: bool,
     ) -> Result<Vec<serde_json::Value>, CmdError> {

@@ -70,9 +70,15 @@ pub fn run(
     suite: Suite,
     only: Option<&str>,
 ) -> Result<(), CmdError> {
-    if only.is_some() && !matches!(suite, Suite::Grid | Suite::All | Suite::Targets) {
+    if only.is_some()
+        && !matches!(
+            suite,
+            Suite::Grid | Suite::All | Suite::Targets | Suite::Gpu
+        )
+    {
         return Err(
-            "--only selects cases of the grid suite or datasets of the targets suite".into(),
+            "--only selects cases of the grid suite or datasets of the targets and gpu suites"
+                .into(),
         );
     }
     let rows = match suite {
@@ -81,7 +87,7 @@ pub fn run(
         Suite::Pt => pt::run(quick, frames, as_json)?,
         Suite::Tetray => tetray::run(quick, frames, as_json)?,
         Suite::Voi => voi::run(frames, n, as_json)?,
-        Suite::Gpu => gpu::run(quick, frames, n, as_json)?,
+        Suite::Gpu => gpu::run(quick, frames, n, as_json, only)?,
         Suite::All => {
             let mut rows = grid::run(quick, frames, n, as_json, only)?;
             rows.extend(pt::run(quick, frames, as_json)?);
