@@ -23,6 +23,7 @@ mod context;
 mod error;
 mod grid;
 mod params;
+mod resident;
 mod resources;
 mod tables;
 
