@@ -89,6 +89,21 @@ pub struct GpuContext {
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     summary: AdapterSummary,
+    blends_f32: bool,
+}
+
+const ADAPTER_FORMATS: wgpu::Features = wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
+
+/// Whether the device opened on `adapter` blends into `Rgba32Float` render targets.
+fn blends_f32(adapter: &wgpu::Adapter) -> bool {
+    let formats = adapter.get_texture_format_features(wgpu::TextureFormat::Rgba32Float);
+    adapter.features().contains(ADAPTER_FORMATS)
+        && formats
+            .flags
+            .contains(wgpu::TextureFormatFeatureFlags::BLENDABLE)
+        && formats
+            .allowed_usages
+            .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
 }
 
 impl GpuContext {
@@ -101,7 +116,9 @@ impl GpuContext {
         let info = adapter.get_info();
         let desc = wgpu::DeviceDescriptor {
             label: Some("volux"),
-            required_features: wgpu::Features::empty(),
+            // The adapter's own format capabilities (blending into f32 targets, for texture
+            // slicing), where it reports them.
+            required_features: adapter.features() & ADAPTER_FORMATS,
             required_limits: adapter.limits(),
             ..Default::default()
         };
@@ -114,12 +131,19 @@ impl GpuContext {
             device,
             queue,
             summary: AdapterSummary::of(&info),
+            blends_f32: blends_f32(&adapter),
         })
     }
 
     /// The adapter rendering, in words.
     pub fn adapter(&self) -> &AdapterSummary {
         &self.summary
+    }
+
+    /// Whether the device blends into `f32` render targets (texture slicing draws into
+    /// `Rgba32Float` then, `Rgba16Float` otherwise).
+    pub fn blends_f32(&self) -> bool {
+        self.blends_f32
     }
 
     /// The device's limits.

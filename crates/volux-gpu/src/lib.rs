@@ -12,9 +12,15 @@
 //!   lattice sample refined by a parabola and polished, as `volux_render::mip`), the sculpt
 //!   mask (`004` §4.4.1, a bit per voxel, interpolated and thresholded at 0.5), empty-space
 //!   skipping over the CPU's macrocells (samples never move), jitter and early ray
-//!   termination; `003`'s GPU ray casting without its per-block opacity reset.
+//!   termination; `003`'s GPU ray casting without its per-block opacity reset;
+//! - [`GpuSlicingRenderer`]: texture slicing of a grid (seed `004` ch. 3, `--method
+//!   slicing`): view-aligned slices of the volume of interest (the box cut by the clip
+//!   planes, `004` §4.3.2, swept as in §4.2.2) rasterized and blended back to front ("over",
+//!   eq. 3.2) into an `f32` target, each fragment classified with the ray caster's tables
+//!   (opacity corrected for the slice distance along its ray), the sculpt mask and shading
+//!   per fragment; maximum intensity projection, isosurfaces and labels are refused.
 //!
-//! What the shader does not draw (the trapezoid, Simpson, adaptive Simpson and reference
+//! What the ray casting shader does not draw (the trapezoid, Simpson, adaptive Simpson and reference
 //! integrators, tricubic reconstruction, region labels, more than [`MAX_ISOVALUES`]
 //! isosurfaces, bricked grids) is refused with a
 //! [`RenderError`](volux_render::RenderError) that says so; a front end with
@@ -25,8 +31,12 @@ mod grid;
 mod params;
 mod resident;
 mod resources;
+mod slices;
+mod slicing;
 mod tables;
+mod target;
 
 pub use context::{adapters, AdapterSummary, GpuContext};
 pub use error::GpuError;
 pub use grid::{GpuGridRenderer, MAX_ISOVALUES};
+pub use slicing::GpuSlicingRenderer;
