@@ -1,8 +1,9 @@
 //! `--backend`: the renderer a command renders with, on the CPU or the GPU (`volux-gpu`,
-//! behind the `gpu` feature), and `volux info --gpu`.
+//! behind the `gpu` feature), and `volux info --gpu`. `--method slicing` is drawn by the
+//! GPU only (`volux_gpu::GpuSlicingRenderer`).
 use volux_render::engine::create_renderer;
 use volux_render::renderer::Renderer;
-use volux_render::scene::{Scene, Volume};
+use volux_render::scene::{Method, Scene, Volume};
 
 use super::common::CmdError;
 use crate::cli::Backend;
@@ -19,6 +20,8 @@ pub fn renderer(
         Backend::Gpu => gpu::renderer(volume, scene),
         Backend::Auto => match gpu::renderer(volume, scene) {
             Ok(r) => Ok(r),
+            // Slicing has no CPU renderer: the GPU's reason is the error.
+            Err(why) if matches!(scene.method, Method::Slicing(_)) => Err(why),
             Err(why) => {
                 if gpu::BUILT {
                     eprintln!("volux: rendering on the CPU: {why}");
@@ -53,9 +56,9 @@ pub fn list_adapters(json: bool) -> Result<(), CmdError> {
 mod gpu {
     use std::sync::Arc;
 
-    use volux_gpu::{GpuContext, GpuGridRenderer};
+    use volux_gpu::{GpuContext, GpuGridRenderer, GpuSlicingRenderer};
     use volux_render::renderer::Renderer;
-    use volux_render::scene::{Scene, Volume};
+    use volux_render::scene::{Method, Scene, Volume};
     use volux_render::RenderError;
 
     use crate::commands::common::CmdError;
@@ -70,9 +73,18 @@ mod gpu {
             )
             .into());
         };
-        GpuGridRenderer::supports(scene).map_err(RenderError::Backend)?;
+        let slicing = matches!(scene.method, Method::Slicing(_));
+        if slicing {
+            GpuSlicingRenderer::supports(scene).map_err(RenderError::Backend)?;
+        } else {
+            GpuGridRenderer::supports(scene).map_err(RenderError::Backend)?;
+        }
         let ctx = Arc::new(GpuContext::new().map_err(RenderError::from)?);
         eprintln!("volux: rendering on the GPU: {}", ctx.adapter());
+        if slicing {
+            let r = GpuSlicingRenderer::new(ctx, grid.clone()).map_err(RenderError::from)?;
+            return Ok(Box::new(r));
+        }
         let r = GpuGridRenderer::new(ctx, grid.clone()).map_err(RenderError::from)?;
         Ok(Box::new(r))
     }
