@@ -108,6 +108,7 @@ pub fn check_method(args: &RenderArgs, method: &Method, loaded_grid: bool) -> Re
         Method::TetRaycast(rule) => check_tet_ray(args, *rule, &refuse),
         Method::GridRaycast(g) => check_grid(args, &g.integrator, &refuse),
         Method::Resample { raycast, .. } => check_grid(args, &raycast.integrator, &refuse),
+        Method::Slicing(_) => check_slicing(args, &refuse),
         _ => Ok(()),
     }
 }
@@ -198,6 +199,17 @@ fn check_grid(
     }
     let adaptive = matches!(integrator, Integrator::AdaptiveSimpson(_));
     adaptive_only(args, adaptive, refuse)
+}
+
+/// Texture slicing: slices `--step` apart, trilinear, classified per slab.
+fn check_slicing(args: &RenderArgs, refuse: &Refuse<'_>) -> Result<(), CmdError> {
+    let why = "texture slicing samples trilinearly on slices --step apart";
+    for flag in ["integrator", "reconstruction", "jitter", "color"] {
+        if args.given(flag) {
+            return refuse(flag, why);
+        }
+    }
+    adaptive_only(args, false, refuse)
 }
 
 /// The options of adaptive Simpson, and its error map.

@@ -574,6 +574,9 @@ pub enum MethodArg {
     Raycast,
     /// Meshes resampled onto a grid, then ray cast.
     Resample,
+    /// Grids: texture slicing on the GPU (seed 004 ch. 3), slices --step voxels apart;
+    /// needs the GPU backend.
+    Slicing,
 }
 
 /// `volux render --integrator`.

@@ -12,7 +12,7 @@ use volux_render::integrate::{AdaptiveParams, Integrator, SegmentRule, StepContr
 use volux_render::isosurface::{parse_iso, Isosurfaces};
 use volux_render::pt::SortMode;
 use volux_render::sampling::Reconstruction;
-use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, Volume};
+use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, SlicingSettings, Volume};
 use volux_render::shading::{BlinnPhong, Light};
 
 use crate::cli::{
@@ -294,6 +294,7 @@ pub fn method(args: &RenderArgs, volume: &Volume) -> Result<Method, CmdError> {
             samples: args.resample,
             raycast: grid_raycast(args)?,
         },
+        MethodArg::Slicing => Method::Slicing(SlicingSettings { step: args.step }),
         _ => Method::GridRaycast(grid_raycast(args)?),
     })
 }

@@ -589,3 +589,25 @@ fn the_gpu_backend_of_a_build_without_it_is_refused_with_how_to_build_it() {
         assert!(d.join("x.png").exists());
     }
 }
+
+/// `--method slicing` is a GPU method: the CPU backend refuses it in one line saying to use
+/// `--backend gpu`, and options it has no use for are refused.
+#[test]
+fn slicing_on_the_cpu_is_refused_with_the_backend_to_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    data(d);
+    let base = [
+        "render", "grid.raw", "--method", "slicing", "--size", "32x32",
+    ];
+    let err = refused(
+        &[&base[..], &["--backend", "cpu", "-o", "x.png"]].concat(),
+        d,
+    );
+    assert!(
+        err.contains("GPU method") && err.contains("--backend gpu"),
+        "{err}"
+    );
+    let err = refused(&[&base[..], &["--jitter", "-o", "x.png"]].concat(), d);
+    assert!(err.contains("--jitter does not apply to slicing"), "{err}");
+}

@@ -127,6 +127,12 @@ impl GpuContext {
         })
     }
 
+    /// Whether `rgba32float` render targets blend on this device (else the render-pipeline
+    /// paths draw into `rgba16float`).
+    pub(crate) fn blends_f32(&self) -> bool {
+        self.blend_f32
+    }
+
     /// The adapter rendering, in words.
     pub fn adapter(&self) -> &AdapterSummary {
         &self.summary

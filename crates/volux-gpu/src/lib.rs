@@ -20,8 +20,13 @@
 //!   and clip planes (cells culled, fragments trimmed to each pixel's window), composited
 //!   front to back ("under" blending, no early termination); the kept set, the TF's tables
 //!   and the sorted cells cached between frames and rebuilt only when what they depend on
-//!   changes.
-//!
+//!   changes;
+//! - [`GpuSlicingRenderer`]: texture slicing of a grid (seed `004` ch. 3, `--method
+//!   slicing`): view-aligned slices of the volume of interest (the box cut by the clip
+//!   planes, `004` §4.3.2, swept as in §4.2.2) rasterized and blended back to front ("over",
+//!   eq. 3.2) into an `f32` target, each fragment classified with the ray caster's tables
+//!   (opacity corrected for the slice distance along its ray), the sculpt mask and shading
+//!   per fragment; maximum intensity projection, isosurfaces and labels are refused;
 //! - [`GpuPoolRenderer`]: grids larger than the device's memory or texture limits through a
 //!   brick pool (seed `003` done in one pass): bricks in the slots of a 3D texture atlas
 //!   with a page table, loaded as rays ask for them, opacity carried across bricks and
@@ -39,9 +44,13 @@ mod grid;
 mod params;
 mod pool;
 mod pt;
+mod resident;
 mod resources;
 mod select;
+mod slices;
+mod slicing;
 mod tables;
+mod target;
 
 pub use context::{adapters, AdapterSummary, GpuContext};
 pub use error::GpuError;
@@ -49,3 +58,4 @@ pub use grid::{GpuGridRenderer, MAX_ISOVALUES};
 pub use pool::{GpuBrickedRenderer, GpuPoolRenderer, PoolOptions, PoolSource, PoolStats};
 pub use pt::GpuPtRenderer;
 pub use select::{renderer_for, supports};
+pub use slicing::GpuSlicingRenderer;

@@ -1,22 +1,25 @@
-//! The GPU renderer of a volume, as front ends ask for one ([`renderer_for`]): grids in a
-//! whole 3D texture, or through the brick pool when they are over the device's limits;
+//! The GPU renderer of a volume, as front ends ask for one ([`renderer_for`]): texture
+//! slicing when asked; grids ray cast in a whole 3D texture, or through the brick pool when they are over the device's limits;
 //! meshes with Projected Tetrahedra; bricked volumes through a pool of the level each frame
 //! needs. [`supports`] says beforehand whether a scene is drawn.
 use std::sync::Arc;
 
 use volux_render::renderer::Renderer;
-use volux_render::scene::{Scene, Volume};
+use volux_render::scene::{Method, Scene, Volume};
 
 use crate::context::GpuContext;
 use crate::error::GpuError;
 use crate::pool::{GpuBrickedRenderer, GpuPoolRenderer, PoolOptions, PoolSource};
-use crate::{GpuGridRenderer, GpuPtRenderer};
+use crate::{GpuGridRenderer, GpuPtRenderer, GpuSlicingRenderer};
 
 /// `Ok` when the GPU backend draws `scene` of `volume`, else what it does not draw. (A grid
 /// over the device's texture limits is drawn through the brick pool, which draws less: its
 /// refusal comes with the frame.)
 pub fn supports(volume: &Volume, scene: &Scene) -> Result<(), String> {
     match volume {
+        Volume::Grid(_) if matches!(scene.method, Method::Slicing(_)) => {
+            GpuSlicingRenderer::supports(scene)
+        }
         Volume::Grid(_) => GpuGridRenderer::supports(scene),
         Volume::Mesh(_) => GpuPtRenderer::supports(scene),
         Volume::Bricked(..) => GpuPoolRenderer::supports(scene),
@@ -24,11 +27,19 @@ pub fn supports(volume: &Volume, scene: &Scene) -> Result<(), String> {
     }
 }
 
-/// The GPU renderer of `volume` on the device of `ctx`: a grid over the device's 3D texture
-/// or buffer limits, or one whose upload runs out of device memory, goes through the brick
+/// The GPU renderer of `method` for `volume` on the device of `ctx`: texture slicing for
+/// `--method slicing`, else ray casting or PT; a grid over the device's 3D texture or buffer
+/// limits, or one whose upload runs out of device memory, is ray cast through the brick
 /// pool.
-pub fn renderer_for(ctx: Arc<GpuContext>, volume: &Volume) -> Result<Box<dyn Renderer>, GpuError> {
+pub fn renderer_for(
+    ctx: Arc<GpuContext>,
+    volume: &Volume,
+    method: &Method,
+) -> Result<Box<dyn Renderer>, GpuError> {
     Ok(match volume {
+        Volume::Grid(g) if matches!(method, Method::Slicing(_)) => {
+            Box::new(GpuSlicingRenderer::new(ctx, g.clone())?)
+        }
         Volume::Grid(g) => match GpuGridRenderer::new(ctx.clone(), g.clone()) {
             Ok(r) => Box::new(r),
             Err(GpuError::OverLimit { .. } | GpuError::Failed(_)) => Box::new(

@@ -54,6 +54,12 @@ pub fn create_renderer(volume: &Volume, method: &Method) -> Result<Box<dyn Rende
         (Method::TetRaycast(_), Volume::Mesh(m)) => Box::new(TetRayCaster::new(m.clone())?),
         (Method::Resample { .. }, Volume::Mesh(m)) => Box::new(ResampleRenderer::new(m.clone())),
         (Method::MeshReference, Volume::Mesh(m)) => Box::new(MeshReference::new(m.clone())),
+        (Method::Slicing(_), _) => {
+            return Err(RenderError::InvalidOptions(
+                "slicing is a GPU method: the CPU engine does not draw it (volux: --backend gpu)"
+                    .into(),
+            ))
+        }
         (m, v) => {
             return Err(RenderError::InvalidOptions(format!(
                 "no renderer for {} of a {}",

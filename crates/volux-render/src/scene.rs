@@ -256,6 +256,22 @@ pub struct PtSettings {
     pub count_violations: bool,
 }
 
+/// Texture slicing settings (seed `004` ch. 3): view-aligned slices `step` apart, in the
+/// volume's unit length (voxels). A GPU method: only `volux-gpu` draws it.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlicingSettings {
+    /// The distance between slices (voxels of the smallest spacing).
+    pub step: f64,
+}
+
+impl Default for SlicingSettings {
+    /// Slices half a voxel apart, as the ray caster's default step.
+    fn default() -> Self {
+        Self { step: 0.5 }
+    }
+}
+
 /// Which renderer draws the volume, with its settings.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "name", content = "settings", rename_all = "kebab-case")]
@@ -284,10 +300,15 @@ pub enum Method {
         /// The grid ray casting of the resampled grid.
         raycast: GridRaycast,
     },
+    /// Texture slicing of a grid on the GPU (seed `004` ch. 3): view-aligned slices of the
+    /// volume of interest composited back to front. The CPU engine refuses it
+    /// ([`create_renderer`](crate::engine::create_renderer)).
+    Slicing(SlicingSettings),
 }
 
 impl Method {
-    /// A short name: `auto`, `raycast`, `pt`, `tet-raycast`, `mesh-reference`, `resample`.
+    /// A short name: `auto`, `raycast`, `pt`, `tet-raycast`, `mesh-reference`, `resample`,
+    /// `slicing`.
     pub fn name(&self) -> &'static str {
         match self {
             Self::Auto => "auto",
@@ -296,6 +317,7 @@ impl Method {
             Self::TetRaycast(_) => "tet-raycast",
             Self::MeshReference => "mesh-reference",
             Self::Resample { .. } => "resample",
+            Self::Slicing(_) => "slicing",
         }
     }
 
@@ -338,6 +360,8 @@ impl Method {
             }
             (Self::Resample { .. }, Volume::Mesh(_)) => Ok(*self),
             (Self::Resample { .. }, _) => wrong("it is a grid already"),
+            (Self::Slicing(_), Volume::Grid(_)) => Ok(*self),
+            (Self::Slicing(_), _) => wrong("it slices grids held in memory"),
         }
     }
 }
@@ -503,6 +527,25 @@ mod tests {
             Method::raycast(&m, GridRaycast::default(), SegmentRule::Exact),
             Method::TetRaycast(SegmentRule::Exact)
         ));
+    }
+
+    #[test]
+    fn slicing_is_named_kept_for_grids_and_refused_by_the_cpu_engine() {
+        let g = grid();
+        let slicing = Method::Slicing(SlicingSettings::default());
+        assert_eq!(slicing.name(), "slicing");
+        assert_eq!(slicing.resolve(&g).unwrap(), slicing);
+        assert!(slicing.resolve(&g.to_tets().unwrap()).is_err());
+        let json = serde_json::to_string(&slicing).unwrap();
+        assert_eq!(json, r#"{"name":"slicing","settings":{"step":0.5}}"#);
+        let e = crate::engine::create_renderer(&g, &slicing)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("GPU method") && e.contains("--backend gpu"),
+            "{e}"
+        );
     }
 
     #[test]

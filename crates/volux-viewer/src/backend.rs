@@ -86,7 +86,7 @@ impl Factory {
         on_gpu: bool,
     ) -> Result<(Box<dyn Renderer>, Device), RenderError> {
         if on_gpu {
-            return self.gpu.renderer(volume);
+            return self.gpu.renderer(volume, method);
         }
         Ok((create_renderer(volume, method)?, Device::Cpu))
     }
@@ -98,7 +98,7 @@ mod gpu {
 
     use volux_gpu::GpuContext;
     use volux_render::engine::Renderer;
-    use volux_render::scene::{Scene, Volume};
+    use volux_render::scene::{Method, Scene, Volume};
     use volux_render::RenderError;
 
     use super::Device;
@@ -127,10 +127,11 @@ mod gpu {
         pub(super) fn renderer(
             &mut self,
             volume: &Volume,
+            method: &Method,
         ) -> Result<(Box<dyn Renderer>, Device), RenderError> {
             let ctx = self.context()?;
             let device = Device::Gpu(ctx.adapter().to_string());
-            Ok((volux_gpu::renderer_for(ctx, volume)?, device))
+            Ok((volux_gpu::renderer_for(ctx, volume, method)?, device))
         }
     }
 }
@@ -138,7 +139,7 @@ mod gpu {
 #[cfg(not(feature = "gpu"))]
 mod gpu {
     use volux_render::engine::Renderer;
-    use volux_render::scene::{Scene, Volume};
+    use volux_render::scene::{Method, Scene, Volume};
     use volux_render::RenderError;
 
     use super::Device;
@@ -162,6 +163,7 @@ mod gpu {
         pub(super) fn renderer(
             &mut self,
             _: &Volume,
+            _: &Method,
         ) -> Result<(Box<dyn Renderer>, Device), RenderError> {
             Err(RenderError::Backend(NOT_BUILT.into()))
         }

@@ -66,7 +66,7 @@ mod gpu {
         volux_gpu::supports(volume, scene).map_err(RenderError::Backend)?;
         let ctx = Arc::new(GpuContext::new().map_err(RenderError::from)?);
         eprintln!("volux: rendering on the GPU: {}", ctx.adapter());
-        Ok(volux_gpu::renderer_for(ctx, volume).map_err(RenderError::from)?)
+        Ok(volux_gpu::renderer_for(ctx, volume, &scene.method).map_err(RenderError::from)?)
     }
 
     pub fn adapters() -> Result<Vec<String>, CmdError> {

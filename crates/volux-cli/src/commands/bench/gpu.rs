@@ -179,6 +179,9 @@ mod on_gpu {
             let Volume::Mesh(mesh) = &volume else {
                 continue;
             };
+            if !selected(&name, only) {
+                continue;
+            }
             let started = Instant::now();
             let mut renderer =
                 GpuPtRenderer::new(ctx.clone(), mesh.clone()).map_err(RenderError::from)?;
