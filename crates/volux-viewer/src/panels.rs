@@ -6,7 +6,7 @@ use volux_render::integrate::integrator::Integrator;
 use volux_render::integrate::segment::SegmentRule;
 use volux_render::isosurface::{Isosurfaces, Isovalue};
 use volux_render::sampling::Reconstruction;
-use volux_render::scene::{GridRaycast, Method, PtSettings, SortMode, Volume};
+use volux_render::scene::{GridRaycast, Method, PtSettings, SlicingSettings, SortMode, Volume};
 
 use crate::app::ViewerApp;
 use crate::file_dialog::Purpose;
@@ -126,6 +126,10 @@ fn method_choices(volume: &Volume) -> Vec<(&'static str, Method)> {
                 "Tet ray casting (split)",
                 Method::TetRaycast(SegmentRule::Psi),
             ),
+            (
+                "Texture slicing (GPU)",
+                Method::Slicing(SlicingSettings::default()),
+            ),
         ],
         _ => vec![
             (
@@ -176,6 +180,10 @@ fn method_settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
         }
         Method::ProjectedTetrahedra(p) => pt_settings(ui, p),
         Method::TetRaycast(rule) => rule_settings(ui, rule, true),
+        Method::Slicing(s) => {
+            ui.add(egui::Slider::new(&mut s.step, 0.1..=4.0).text("slice distance (voxels)"))
+                .on_hover_text("view-aligned slices of the volume of interest, drawn on the GPU");
+        }
         _ => {}
     }
 }

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use egui_kittest::Harness;
 use volux_core::{synth, CameraSpec};
 use volux_render::integrate::Integrator;
-use volux_render::scene::{GridRaycast, Method, Scene, Volume};
+use volux_render::scene::{GridRaycast, Method, Scene, SlicingSettings, Volume};
 use volux_viewer::app::{Options, ViewerApp};
 use volux_viewer::backend::{Backend, Device};
 use volux_viewer::render_service::{Event, RenderService, Rendered, VolumeRef};
@@ -105,6 +105,26 @@ fn what_the_gpu_does_not_draw_is_an_error_on_gpu_and_the_cpus_on_auto() {
     let plain = scene(&v);
     let auto = full_frame(Backend::Auto, &v, &plain).unwrap();
     assert!(matches!(auto.device, Device::Gpu(_)), "{:?}", auto.device);
+}
+
+/// Texture slicing (`--method slicing`) is drawn on the GPU on `auto`, and refused with why
+/// on `cpu`.
+#[test]
+fn texture_slicing_is_drawn_on_the_gpu() {
+    if !have_adapter() {
+        return;
+    }
+    let v = volume();
+    let mut s = scene(&v);
+    s.method = Method::Slicing(SlicingSettings::default());
+    let frame = full_frame(Backend::Auto, &v, &s).unwrap();
+    assert!(matches!(frame.device, Device::Gpu(_)), "{:?}", frame.device);
+    assert!(
+        frame.image.coverage(0.01) > 0.1,
+        "the slices show the volume"
+    );
+    let err = full_frame(Backend::Cpu, &v, &s).unwrap_err();
+    assert!(err.contains("GPU method"), "{err}");
 }
 
 /// The window with `--backend gpu` opens a grid and shows a full frame drawn on the GPU.
