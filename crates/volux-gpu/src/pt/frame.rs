@@ -4,9 +4,11 @@
 //! image size, the clipping planes, the kept set and whether gradients are needed). A frame
 //! runs only the stages whose key changed, then the fans and the readback.
 use volux_core::voi::ClipPlane;
-use volux_core::{Camera, TransferFunction};
+use volux_core::{Camera, TetMesh, TransferFunction};
 use volux_render::frame::Rebuilt;
+use volux_render::pt::sort::{mpvo_order, View};
 use volux_render::scene::Scene;
+use wgpu::util::DeviceExt;
 
 use super::tables::TfBuffers;
 use super::view::{Extras, ViewParams};
@@ -33,6 +35,7 @@ struct ViewKey {
     planes: Vec<ClipPlane>,
     kept_version: u64,
     lit: bool,
+    exact: bool,
 }
 
 /// The caches of [`GpuPtRenderer`] (see the module docs).
@@ -45,6 +48,8 @@ pub(super) struct Caches {
     kept: Option<(Vec<[f32; 4]>, Vec<f32>, usize)>,
     kept_version: u64,
     view: Option<ViewKey>,
+    /// The mesh's face adjacency, built with the first exact-order frame.
+    adjacency: Option<Vec<[u32; 4]>>,
 }
 
 /// What a frame did, for its statistics.
@@ -101,7 +106,7 @@ impl FrameBuffers {
             ),
             screen: buffer(device, "screen", 16 * vertices as u64, U::STORAGE),
             cells: buffer(device, "cells", CELL_BYTES * n, U::STORAGE),
-            items: buffer(device, "items", 8 * n, U::STORAGE),
+            items: buffer(device, "items", 8 * n, U::STORAGE | U::COPY_DST),
             scratch: buffer(device, "sort scratch", scratch, U::STORAGE),
             kept: buffer(device, "kept", 4 * n, U::STORAGE),
             counters: buffer(
@@ -112,6 +117,30 @@ impl FrameBuffers {
             ),
         }
     }
+}
+
+/// The CPU's exact visibility order (`volux_render::pt::sort::mpvo_order`, MPVO with
+/// the centroid tie-break, cycles broken) of every cell, as `(0, id)` pairs; the face
+/// adjacency built once.
+fn exact_order(
+    adjacency: &mut Option<Vec<[u32; 4]>>,
+    mesh: &TetMesh,
+    scene: &Scene,
+) -> Result<Vec<[u32; 2]>, GpuError> {
+    let adjacency = adjacency.get_or_insert_with(|| mesh.face_adjacency());
+    let view = View::from_camera(&scene.view.camera);
+    let order = mpvo_order(mesh, adjacency, &view, None)
+        .map_err(|e| GpuError::Failed(format!("exact visibility sort: {e}")))?;
+    if order.len() != mesh.tets().len() {
+        return Err(GpuError::Failed(format!(
+            "exact visibility sort: {} of {} cells",
+            order.len(),
+            mesh.tets().len()
+        )));
+    }
+    let mut items: Vec<[u32; 2]> = order.into_iter().map(|id| [0, id]).collect();
+    items.resize(items.len().max(1), [0, 0]);
+    Ok(items)
 }
 
 impl GpuPtRenderer {
@@ -130,6 +159,7 @@ impl GpuPtRenderer {
         scene: &Scene,
         tf: &TransferFunction,
         psi: bool,
+        exact: bool,
     ) -> Result<FrameReport, GpuError> {
         let device = &self.ctx.device;
         let (tets, vertices) = (self.mesh.tets().len(), self.mesh.positions().len());
@@ -187,12 +217,35 @@ impl GpuPtRenderer {
             planes: scene.clip_planes.clone(),
             kept_version,
             lit: !isovalues.is_empty(),
+            exact,
+        };
+        let view_stale = c.view.as_ref() != Some(&key);
+        let exact_order = match (view_stale, exact) {
+            (true, true) => Some(exact_order(&mut self.caches.adjacency, &self.mesh, scene)?),
+            _ => None,
+        };
+        let c = &self.caches;
+        let (Some(fb), Some((_, tfb))) = (&c.buffers, &c.tf) else {
+            return Err(GpuError::Failed("the PT caches were not built".into()));
         };
         let mut encoder = device.create_command_encoder(&Default::default());
-        if c.view.as_ref() != Some(&key) {
+        if view_stale {
             self.first_pass(&mut encoder, fb, (tets, vertices));
-            self.sort
-                .record(device, &mut encoder, &fb.items, &fb.scratch, tets as u32);
+            match &exact_order {
+                // The CPU's exact order replaces the classified keys: (0, id) in order.
+                Some(order) => {
+                    let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("exact order"),
+                        contents: bytemuck::cast_slice(order),
+                        usage: wgpu::BufferUsages::COPY_SRC,
+                    });
+                    let bytes = 8 * order.len() as u64;
+                    encoder.copy_buffer_to_buffer(&staging, 0, &fb.items, 0, bytes);
+                }
+                None => self
+                    .sort
+                    .record(device, &mut encoder, &fb.items, &fb.scratch, tets as u32),
+            }
             rebuilt.view = true;
         }
         let target = draw::target(device, self.format, (w as u32, h as u32));

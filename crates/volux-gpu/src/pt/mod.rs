@@ -11,7 +11,11 @@
 //!    thick vertex with its front and back depth, scalar and (with isosurfaces) gradient
 //!    (perspective-correct as `pt::project`) and the centroid's depth key;
 //! 2. **visibility order** (`sort.wgsl`, `000` §4.2): a stable radix sort of the keys,
-//!    the CPU's centroid order (distance from the eye under perspective);
+//!    the CPU's centroid order (distance from the eye under perspective); with
+//!    `SortMode::Exact` the CPU's MPVO order instead (`volux_render::pt::sort::mpvo_order`
+//!    of every cell, the face adjacency built once), uploaded as the draw order. The CPU
+//!    draws non-convex meshes or cyclic views per pixel in that mode; the GPU draws the
+//!    MPVO order (cycles broken) there too;
 //! 3. **second pass** (`draw.wgsl`, `000` §4.3, `002` §4.3-4.4): the fans (1 to 4
 //!    triangles around the thick vertex) rasterized by the hardware in the sorted order,
 //!    the vertex shader pulling the classified cells, `(s_f, s_b)`, depths and gradients
@@ -45,7 +49,7 @@
 //! pass and sort).
 //!
 //! Not drawn yet, and refused by name ([`GpuPtRenderer::supports`]): the exact and adaptive
-//! Simpson colours, the exact visibility sort (MPVO), the sculpt mask, region labels, and
+//! Simpson colours, the sculpt mask, region labels, and
 //! more isovalues or planes than the uniform block holds. Early termination is not done:
 //! the "under" blend still shades and composites every fragment (a fragment shader cannot
 //! read the target's opacity; stopping a pixel would take, e.g., drawing the order in
@@ -172,7 +176,6 @@ impl GpuPtRenderer {
             SegmentRule::Average | SegmentRule::Psi => None,
             ref c => Some(format!("the {} fragment colour", c.name())),
         }
-        .or_else(|| (settings.sort == SortMode::Exact).then(|| "the exact visibility sort".into()))
         .or_else(|| {
             let n = scene.appearance.isosurfaces.as_slice().len();
             (n > view::MAX_ISOSURFACES)
@@ -299,7 +302,8 @@ impl Renderer for GpuPtRenderer {
         }
         let tf = scene.appearance.effective_tf();
         let ctx = self.ctx.clone();
-        let report = match ctx.checked(|| self.frame(scene, &tf, psi)) {
+        let exact = settings.sort == SortMode::Exact;
+        let report = match ctx.checked(|| self.frame(scene, &tf, psi, exact)) {
             Ok(Ok(r)) => r,
             Ok(Err(e)) | Err(e) => {
                 // What the caches hold may be half built: start afresh next frame.

@@ -1,8 +1,8 @@
 // Visibility order (seed 000 section 4.2, seed 002 section 4.2): a stable LSD radix sort of
 // (key, id) pairs by key, 4 bits a pass, in three dispatches a pass: per-block digit counts,
 // one exclusive scan of the counts (digit-major, so that equal digits keep block order), and
-// a scatter in which every item's rank among the equal digits before it in its block keeps
-// the order of equal keys (the CPU's order: by depth, ties by id).
+// a scatter in which every item's rank among the equal digits before it in its block (a
+// workgroup scan of per-digit counters, 8 steps) keeps the order of equal keys (the CPU's order: by depth, ties by id).
 
 struct Pass {
     n: u32,
@@ -22,6 +22,7 @@ const RADIX: u32 = 16u;
 var<workgroup> tally: array<atomic<u32>, 16>;
 var<workgroup> digits: array<u32, 256>;
 var<workgroup> sums: array<u32, 256>;
+var<workgroup> ranks: array<vec4u, 256>;
 
 fn digit(key: u32) -> u32 {
     return (key >> params.shift) & (RADIX - 1u);
@@ -79,6 +80,16 @@ fn scan(@builtin(local_invocation_index) li: u32) {
     }
 }
 
+// The item's one-hot digit as 16 8-bit counters (digit d: byte d % 4 of word d / 4).
+fn one_hot(d: u32) -> vec4u {
+    if d >= RADIX {
+        return vec4u(0u);
+    }
+    var v = vec4u(0u);
+    v[d / 4u] = 1u << (8u * (d % 4u));
+    return v;
+}
+
 @compute @workgroup_size(256)
 fn scatter(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
     @builtin(local_invocation_index) li: u32) {
@@ -93,11 +104,25 @@ fn scatter(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: ve
     }
     digits[li] = d;
     workgroupBarrier();
-    if live {
-        var rank = 0u;
-        for (var k = 0u; k < li; k++) {
-            rank += select(0u, 1u, digits[k] == d);
+    // Exclusive per-digit counts: a Hillis-Steele scan of the previous item's one-hot
+    // counters (at most 255 before the last item: no byte overflows).
+    var own = vec4u(0u);
+    if li > 0u {
+        own = one_hot(digits[li - 1u]);
+    }
+    ranks[li] = own;
+    for (var offset = 1u; offset < BLOCK; offset *= 2u) {
+        workgroupBarrier();
+        var add = vec4u(0u);
+        if li >= offset {
+            add = ranks[li - offset];
         }
+        workgroupBarrier();
+        own += add;
+        ranks[li] = own;
+    }
+    if live {
+        let rank = (own[d / 4u] >> (8u * (d % 4u))) & 0xffu;
         dst[counts[d * params.blocks + block] + rank] = item;
     }
 }
