@@ -91,9 +91,10 @@ impl GpuGridRenderer {
         &self.res.ctx
     }
 
-    /// Device memory held between frames, in bytes ([`Resident::device_bytes`]). A frame
-    /// adds its image and sample counts twice (20 bytes per pixel on the device, as much to
-    /// read back).
+    /// Device memory held between frames, in bytes: the grid (4 per voxel), the gradient
+    /// volume once shaded (8 per voxel), the tables and the mask's bits. A frame adds its
+    /// image and sample counts twice (20 bytes per pixel on the device, as much to read
+    /// back).
     pub fn device_bytes(&self) -> u64 {
         self.res.device_bytes()
     }

@@ -9,8 +9,10 @@ use volux_render::scene::{Method, Scene, Volume};
 
 use crate::context::GpuContext;
 use crate::error::GpuError;
+use crate::grid::GpuGridRenderer;
 use crate::pool::{GpuBrickedRenderer, GpuPoolRenderer, PoolOptions, PoolSource};
-use crate::{GpuGridRenderer, GpuPtRenderer, GpuSlicingRenderer};
+use crate::pt::GpuPtRenderer;
+use crate::slicing::GpuSlicingRenderer;
 
 /// `Ok` when the GPU backend draws `scene` of `volume`, else what it does not draw. (A grid
 /// over the device's texture limits is drawn through the brick pool, which draws less: its

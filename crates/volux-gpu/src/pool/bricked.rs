@@ -9,7 +9,9 @@ use volux_render::scene::Scene;
 use volux_render::tiles::Control;
 use volux_render::RenderError;
 
-use super::{GpuPoolRenderer, PoolOptions, PoolSource};
+use super::renderer::GpuPoolRenderer;
+use super::slots::PoolOptions;
+use super::source::PoolSource;
 use crate::context::GpuContext;
 
 /// Grid ray casting of a bricked volume through a brick pool of the level each frame needs

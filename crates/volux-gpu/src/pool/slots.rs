@@ -1,8 +1,27 @@
 //! The atlas of the brick pool ([`Slots`]): its slots, which brick each holds, the page
 //! table handed to the shader, and the loading of asked bricks (longest-resident evicted).
+use super::source::PoolSource;
 use crate::context::GpuContext;
 use crate::error::GpuError;
-use crate::pool::{PoolOptions, PoolSource};
+
+/// How the pool is laid out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PoolOptions {
+    /// Cells per brick side (a multiple of 8, the macrocells' side).
+    pub brick: usize,
+    /// The most bytes the atlas may take on the device.
+    pub bytes: u64,
+}
+
+impl Default for PoolOptions {
+    /// Bricks of 32 cells, an atlas of at most 1 GiB.
+    fn default() -> Self {
+        Self {
+            brick: 32,
+            bytes: 1 << 30,
+        }
+    }
+}
 
 /// The page entry of a brick the TF leaves transparent (`pool.wgsl`'s `EMPTY`).
 const EMPTY: u32 = u32::MAX;

@@ -3,54 +3,20 @@
 //! pass of `classify.wgsl`), and the classified and sorted cells (keyed by the camera, the
 //! image size, the clipping planes, the kept set and whether gradients are needed). A frame
 //! runs only the stages whose key changed, then the fans and the readback.
-use volux_core::voi::ClipPlane;
-use volux_core::{Camera, TetMesh, TransferFunction};
+use volux_core::{TetMesh, TransferFunction};
 use volux_render::frame::Rebuilt;
 use volux_render::pt::sort::{mpvo_order, View};
 use volux_render::scene::Scene;
 use wgpu::util::DeviceExt;
 
+use super::layout::{groups, CELL_BYTES, VERTICES_PER_CELL};
+use super::sort::RadixSort;
+use super::state::{FrameBuffers, ViewKey};
 use super::tables::TfBuffers;
 use super::view::{Extras, ViewParams};
-use super::{draw, groups, GpuPtRenderer, RadixSort, CELL_BYTES, VERTICES_PER_CELL};
+use super::{draw, GpuPtRenderer};
 use crate::error::GpuError;
 use crate::grid::{map, readback};
-
-/// The mesh-sized buffers of the first pass, allocated with the first frame and kept.
-pub(super) struct FrameBuffers {
-    uniform: wgpu::Buffer,
-    screen: wgpu::Buffer,
-    cells: wgpu::Buffer,
-    items: wgpu::Buffer,
-    scratch: wgpu::Buffer,
-    kept: wgpu::Buffer,
-    counters: wgpu::Buffer,
-}
-
-/// What the classified cells were built from.
-#[derive(Clone, PartialEq)]
-struct ViewKey {
-    camera: Camera,
-    size: (usize, usize),
-    planes: Vec<ClipPlane>,
-    kept_version: u64,
-    lit: bool,
-    exact: bool,
-}
-
-/// The caches of [`GpuPtRenderer`] (see the module docs).
-#[derive(Default)]
-pub(super) struct Caches {
-    buffers: Option<FrameBuffers>,
-    /// The effective TF and its buffers.
-    tf: Option<(TransferFunction, TfBuffers)>,
-    /// The zero set's rows and the isovalues the kept set was built from, and its size.
-    kept: Option<(Vec<[f32; 4]>, Vec<f32>, usize)>,
-    kept_version: u64,
-    view: Option<ViewKey>,
-    /// The mesh's face adjacency, built with the first exact-order frame.
-    adjacency: Option<Vec<[u32; 4]>>,
-}
 
 /// What a frame did, for its statistics.
 pub(super) struct FrameReport {

@@ -60,7 +60,9 @@
 //! device (zero).
 mod draw;
 mod frame;
+mod layout;
 mod sort;
+mod state;
 mod tables;
 mod view;
 
@@ -79,18 +81,9 @@ use wgpu::util::DeviceExt;
 
 use crate::context::GpuContext;
 use crate::error::GpuError;
+use layout::{CELL_BYTES, VERTICES_PER_CELL};
 use sort::RadixSort;
-
-/// Bytes of one classified cell (`Cell` of the shaders).
-const CELL_BYTES: u64 = 128;
-/// Vertices drawn per cell (four triangles at most).
-const VERTICES_PER_CELL: u64 = 12;
-
-/// The workgroup grid for `n` groups: at most 65535 along x.
-pub(crate) fn groups(n: u32) -> (u32, u32) {
-    let x = n.clamp(1, 65535);
-    (x, n.div_ceil(x).max(1))
-}
+use state::Caches;
 
 /// The mesh on the device.
 struct MeshBuffers {
@@ -116,7 +109,7 @@ pub struct GpuPtRenderer {
     format: wgpu::TextureFormat,
     psi: Option<wgpu::TextureView>,
     tiny_psi: wgpu::TextureView,
-    caches: frame::Caches,
+    caches: Caches,
 }
 
 impl GpuPtRenderer {
@@ -150,7 +143,7 @@ impl GpuPtRenderer {
             format,
             psi: None,
             tiny_psi,
-            caches: frame::Caches::default(),
+            caches: Caches::default(),
         })
     }
 
@@ -307,7 +300,7 @@ impl Renderer for GpuPtRenderer {
             Ok(Ok(r)) => r,
             Ok(Err(e)) | Err(e) => {
                 // What the caches hold may be half built: start afresh next frame.
-                self.caches = frame::Caches::default();
+                self.caches = Caches::default();
                 return Err(e.into());
             }
         };

@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::groups;
+use super::layout::groups;
 
 /// Items per block of `sort.wgsl`.
 const BLOCK: u32 = 256;
