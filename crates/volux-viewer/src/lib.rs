@@ -13,9 +13,9 @@
 //! - [`app`]: the state (dataset, scene, slices, jobs) and what acts on it; [`window`]: one
 //!   frame of the window (poll, draw the panels, submit);
 //! - [`render_service`]: the render thread (mailbox, previews, full frames, cancellation);
+//!   [`jobs`]: loading and other background work;
 //! - [`backend`]: where frames are rendered (`--backend auto|cpu|gpu`): the CPU engine or the
 //!   GPU backend (`volux-gpu`, the default `gpu` feature), and which drew each frame;
-//!   [`jobs`]: loading and other background work;
 //! - [`store`]: OME-Zarr stores opened out of core as bricked volumes;
 //!   [`progressive`]: progressive level of detail (coarsest level at once, then each finer
 //!   level in the background); [`lod_status`]: the level choice, the level on screen and the
