@@ -52,3 +52,57 @@ fn session_mistakes_are_one_line_each() {
         assert_eq!(err.lines().count(), 1, "{err}");
     }
 }
+
+/// A session names its backend: `render --session` follows it (a GPU session needs a build
+/// with the GPU backend and says so in one line otherwise), and `--backend` overrides it.
+#[test]
+fn a_session_renders_on_its_backend_unless_told_otherwise() {
+    use volux_render::scene::Scene;
+    use volux_render::session::{DatasetRef, Session, SessionBackend};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let grid = volux_core::synth::marschner_lobb(12).unwrap();
+    volux_io::nrrd::write(&grid, &d.join("ml.nrrd")).unwrap();
+    let camera = volux_core::CameraSpec::default()
+        .resolve(&grid.bounds())
+        .unwrap();
+    let scene = Scene::new(
+        camera,
+        24,
+        16,
+        volux_core::TransferFunction::automatic(&volux_core::histogram::Histogram::of_grid(
+            &grid, 64,
+        )),
+    );
+    let dataset = DatasetRef {
+        path: d.join("ml.nrrd"),
+        ..Default::default()
+    };
+    let mut session = Session::new(dataset, &scene, None);
+    session.backend = Some(SessionBackend::Gpu);
+    session.save(&d.join("gpu.json")).unwrap();
+
+    let on_gpu = volux(&["render", "--session", "gpu.json", "-o", "gpu.png"], d);
+    let err = String::from_utf8_lossy(&on_gpu.stderr);
+    if cfg!(not(feature = "gpu")) {
+        assert!(!on_gpu.status.success(), "{err}");
+        assert!(err.contains("--features gpu"), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(!d.join("gpu.png").exists());
+    }
+    let on_cpu = volux(
+        &[
+            "render",
+            "--session",
+            "gpu.json",
+            "--backend",
+            "cpu",
+            "-o",
+            "cpu.png",
+        ],
+        d,
+    );
+    let err = String::from_utf8_lossy(&on_cpu.stderr);
+    assert!(on_cpu.status.success(), "{err}");
+    assert!(d.join("cpu.png").is_file());
+}

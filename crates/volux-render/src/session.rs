@@ -11,7 +11,7 @@
 //!                   "isosurfaces": [], "mip": false },
 //!   "method": { "name": "grid-raycast", "settings": {..} },
 //!   "early_termination": 0.99, "background": [0.0, 0.0, 0.0],
-//!   "slices": { "window": [lo, hi], "crosshair": [x, y, z] } }
+//!   "slices": { "window": [lo, hi], "crosshair": [x, y, z] }, "backend": "auto" }
 //! ```
 //!
 //! A relative dataset path is relative to the folder of the session file. Camera and
@@ -101,6 +101,23 @@ pub struct Session {
     /// The slice views, when the viewer saved them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub slices: Option<SliceState>,
+    /// Where the session is rendered (`volux render --session` follows it unless
+    /// `--backend` is given; `null`: the CPU engine, the reference).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub backend: Option<SessionBackend>,
+}
+
+/// Where a session asks to be rendered: the CPU engine, the GPU backend, or the GPU when
+/// it can draw the scene (`auto`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SessionBackend {
+    /// The GPU where it draws the scene, else the CPU.
+    Auto,
+    /// The CPU engine.
+    Cpu,
+    /// The GPU backend, or an error saying why not.
+    Gpu,
 }
 
 impl Session {
@@ -119,6 +136,7 @@ impl Session {
             sculpt: Vec::new(),
             background,
             slices: None,
+            backend: None,
         }
     }
 
@@ -308,7 +326,11 @@ mod tests {
             window: [0.0, 1.0],
             crosshair: [0.5, 0.5, 0.5],
         });
-        let back = Session::from_json(&session.to_json(), "test").unwrap();
+        session.backend = Some(SessionBackend::Gpu);
+        let json = session.to_json();
+        let raw: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(raw["backend"], "gpu");
+        let back = Session::from_json(&json, "test").unwrap();
         assert_eq!(back, session);
         assert_eq!(back.scene(), scene());
     }

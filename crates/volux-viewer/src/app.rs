@@ -384,7 +384,8 @@ impl ViewerApp {
             .map_or([0.0, 1.0], |d| d.volume.volume.range())
     }
 
-    /// The session of what is on screen (the render size as the 3D view or `--size`).
+    /// The session of what is on screen (the render size as the 3D view or `--size`), with
+    /// the backend the viewer renders on (`--backend`; opening a session keeps the viewer's).
     pub fn session(&self) -> Option<Session> {
         let data = self.data.as_ref()?;
         let mut s = Session::new(
@@ -400,6 +401,7 @@ impl ViewerApp {
             window: self.window,
             crosshair: self.crosshair.to_array(),
         });
+        s.backend = Some(self.options.backend.into());
         Some(s)
     }
 

@@ -8,6 +8,7 @@
 //! device. Every frame says which it was drawn on ([`Device`]).
 use volux_render::engine::{create_renderer, Renderer};
 use volux_render::scene::{Method, Scene, Volume};
+use volux_render::session::SessionBackend;
 use volux_render::RenderError;
 
 /// Which renderer the viewer asks for (`--backend`).
@@ -30,6 +31,16 @@ impl Backend {
             "cpu" => Ok(Self::Cpu),
             "gpu" => Ok(Self::Gpu),
             _ => Err(format!("--backend '{s}': expected auto, cpu or gpu")),
+        }
+    }
+}
+
+impl From<Backend> for SessionBackend {
+    fn from(b: Backend) -> Self {
+        match b {
+            Backend::Auto => Self::Auto,
+            Backend::Cpu => Self::Cpu,
+            Backend::Gpu => Self::Gpu,
         }
     }
 }

@@ -3,17 +3,31 @@
 //! method and every setting, background, clip planes and sculpt steps, seed `004`), so
 //! nothing is taken from defaults that could differ, and the PNG equals the viewer's
 //! screenshot of the same session. The sculpt steps are replayed on the grid to rebuild
-//! its mask ([`Session::scene_on`]).
+//! its mask ([`Session::scene_on`]). It renders on the session's backend (`auto`, `cpu`,
+//! `gpu`; the CPU when it names none) unless `--backend` is given.
 use std::path::Path;
 
 use volux_render::scene::Volume;
-use volux_render::session::Session;
+use volux_render::session::{Session, SessionBackend};
 
 use super::common::CmdError;
-use crate::cli::{LoadArgs, RenderArgs};
+use crate::cli::{Backend, LoadArgs, RenderArgs};
 
 /// Options that may go with `--session` (the rest is in the session).
-const WITH_SESSION: [&str; 2] = ["session", "output"];
+const WITH_SESSION: [&str; 3] = ["session", "output", "backend"];
+
+/// Where the session renders: `--backend` when given, else the session's backend, else the
+/// CPU engine (the reference, as sessions saved before backends existed were rendered).
+fn backend(args: &RenderArgs, session: &Session) -> Backend {
+    if args.given("backend") {
+        return args.backend;
+    }
+    match session.backend {
+        Some(SessionBackend::Auto) => Backend::Auto,
+        Some(SessionBackend::Gpu) => Backend::Gpu,
+        Some(SessionBackend::Cpu) | None => Backend::Cpu,
+    }
+}
 
 /// Renders the session at `path` to `args.output()`.
 pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
@@ -51,7 +65,7 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
         .method
         .resolve(&volume)?
         .check_appearance(&scene.appearance)?;
-    let frame = super::render::render(&volume, &scene, show)?;
+    let frame = super::render::render_on(&volume, &scene, show, backend(args, &session))?;
     frame
         .image
         .write_png(&output, &session.png_options())
