@@ -19,7 +19,7 @@ pub enum Format {
     Nrrd,
     /// MetaImage `.mhd` / `.mha`.
     MetaImage,
-    /// NIfTI-1.
+    /// NIfTI-1 or NIfTI-2.
     Nifti,
     /// VolVis SLC.
     Slc,
@@ -48,7 +48,7 @@ impl Format {
             Format::RawJson => "raw + JSON sidecar",
             Format::Nrrd => "NRRD",
             Format::MetaImage => "MetaImage",
-            Format::Nifti => "NIfTI-1",
+            Format::Nifti => "NIfTI",
             Format::Slc => "SLC",
             Format::Dicom => "DICOM",
             Format::VtkLegacy => "VTK legacy",
@@ -129,6 +129,9 @@ pub fn detect(path: &Path) -> Result<Format> {
         return Ok(Format::VtkLegacy);
     }
     if head.len() >= 348 && (&head[344..348] == b"n+1\0" || &head[344..348] == b"ni1\0") {
+        return Ok(Format::Nifti);
+    }
+    if head.len() >= 8 && (&head[4..8] == b"n+2\0" || &head[4..8] == b"ni2\0") {
         return Ok(Format::Nifti);
     }
     // A `.raw` file is headerless: its first bytes are data, whatever they spell.

@@ -10,7 +10,7 @@
 //! | raw + JSON sidecar (`.raw`, `.raw.gz`) | [`raw`] | `flate2`, `serde_json` |
 //! | NRRD | [`nrrd`] | `flate2` |
 //! | MetaImage `.mhd` / `.mha` | [`metaimage`] | `flate2` |
-//! | NIfTI-1 `.nii` / `.nii.gz` | [`nifti`] | `nifti` |
+//! | NIfTI-1 and NIfTI-2 `.nii` / `.nii.gz`, `.hdr` + `.img` | [`nifti`] | (hand-written header parser) |
 //! | DICOM series and multi-frame | [`dicom`] | `dicom-object` |
 //! | VTK legacy `.vtk` | [`vtk_legacy`] | |
 //! | VTK XML `.vti` / `.vtu` | [`vtk_xml`] | `quick-xml`, `base64`, `flate2` |

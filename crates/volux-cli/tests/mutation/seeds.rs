@@ -304,7 +304,7 @@ fn metaimage_seeds() -> Vec<Seed> {
     ]
 }
 
-// ------------------------------------------------------------------ NIfTI-1
+// ------------------------------------------------------------------ NIfTI-1 and NIfTI-2
 
 /// A little-endian NIfTI-1 header (348 bytes) and the 4-byte extension flag, int16 data.
 fn nifti_header() -> Vec<u8> {
@@ -326,9 +326,50 @@ fn nifti_header() -> Vec<u8> {
     h
 }
 
+/// A big-endian NIfTI-2 header (540 bytes, nibabel's layout) and the extension flag: the
+/// same 6 x 5 x 4 int16 grid with an sform.
+fn nifti2_header() -> Vec<u8> {
+    let mut h = vec![0u8; 544];
+    let mut put = |at: usize, b: &[u8]| {
+        let mut b = b.to_vec();
+        b.reverse();
+        h[at..at + b.len()].copy_from_slice(&b);
+    };
+    put(0, &540i32.to_le_bytes());
+    put(12, &4i16.to_le_bytes()); // datatype: int16
+    put(14, &16i16.to_le_bytes()); // bitpix
+    let dim = [3i64, 6, 5, 4, 1, 1, 1, 1];
+    for (i, d) in dim.iter().enumerate() {
+        put(16 + 8 * i, &d.to_le_bytes());
+    }
+    let pixdim = [1f64, 1.0, 0.5, 2.0, 0.0, 0.0, 0.0, 0.0];
+    for (i, p) in pixdim.iter().enumerate() {
+        put(104 + 8 * i, &p.to_le_bytes());
+    }
+    put(168, &544i64.to_le_bytes()); // vox_offset
+    put(348, &1i32.to_le_bytes()); // sform_code
+    let srow = [
+        [1f64, 0.0, 0.0, -3.0],
+        [0.0, 0.5, 0.0, 2.0],
+        [0.0, 0.0, 2.0, 1.0],
+    ];
+    for (r, row) in srow.iter().enumerate() {
+        for (c, v) in row.iter().enumerate() {
+            put(400 + 32 * r + 8 * c, &v.to_le_bytes());
+        }
+    }
+    h[4..12].copy_from_slice(b"n+2\0\r\n\x1a\n");
+    h
+}
+
 fn nifti_seeds() -> Vec<Seed> {
     let nii = [nifti_header(), i16s(false)].concat();
+    let nii2 = [nifti2_header(), i16s(true)].concat();
     vec![
+        Seed::grid(
+            "nii2",
+            vec![InputFile::new("t2.nii", nii2, Layout::Binary(544))],
+        ),
         Seed::grid(
             "nii",
             vec![InputFile::new("t.nii", nii.clone(), Layout::Binary(352))],

@@ -1,4 +1,4 @@
-//! The NIfTI-1 voxel-to-world affine (`nifti1.h`, "3D IMAGE (VOLUME) ORIENTATION AND
+//! The NIfTI voxel-to-world affine (`nifti1.h`, the same in `nifti2.h`, "3D IMAGE (VOLUME) ORIENTATION AND
 //! LOCATION IN SPACE"), turned into Volux's LPS placement: spacing, origin and direction.
 //!
 //! Method 3 (`sform_code > 0`): the `srow_x/y/z` matrix; its column lengths are the spacing
@@ -57,7 +57,7 @@ fn next(hdr: &Header) -> &'static str {
 
 /// Method 3: the sform rows, RAS to LPS.
 fn sform(hdr: &Header) -> Result<Placement, String> {
-    let r = hdr.srow.map(|row| row.map(f64::from));
+    let r = hdr.srow;
     let col = |j: usize| ras_to_lps(DVec3::new(r[0][j], r[1][j], r[2][j]));
     let (spacing, direction) =
         split_scaled_axes(DMat3::from_cols(col(0), col(1), col(2))).map_err(|e| e.to_string())?;
@@ -74,7 +74,7 @@ fn sform(hdr: &Header) -> Result<Placement, String> {
 
 /// Method 2: the quaternion rotation with `qfac`, RAS to LPS.
 fn qform(hdr: &Header, spacing: [f64; 3]) -> Result<Placement, String> {
-    let r = quaternion_matrix(hdr.quatern.map(f64::from))?;
+    let r = quaternion_matrix(hdr.quatern)?;
     let qfac = if hdr.qfac < 0.0 { -1.0 } else { 1.0 };
     let ras = DMat3::from_cols(r.x_axis, r.y_axis, r.z_axis * qfac);
     let lps = DMat3::from_cols(
@@ -83,7 +83,7 @@ fn qform(hdr: &Header, spacing: [f64; 3]) -> Result<Placement, String> {
         ras_to_lps(ras.z_axis),
     );
     let direction = validate_direction(lps).map_err(|e| e.to_string())?;
-    let origin = ras_to_lps(DVec3::from(hdr.qoffset.map(f64::from)));
+    let origin = ras_to_lps(DVec3::from(hdr.qoffset));
     if !origin.is_finite() {
         return Err(format!("its offset {origin} is not finite"));
     }

@@ -1,4 +1,5 @@
-//! The fixed-layout 348-byte NIfTI-1 header: byte order, dims, datatype, scaling, geometry.
+//! The NIfTI header, version 1 (348 bytes) or 2 (540 bytes): byte order, version, dims,
+//! datatype, scaling, geometry, validated the same way for both.
 use std::path::Path;
 
 use crate::error::ErrorKind;
@@ -6,10 +7,10 @@ use crate::error::ReadError;
 use crate::error::Result;
 use crate::util::header_err;
 
-/// Size of a NIfTI-1 header; `sizeof_hdr` must hold it (in the file's byte order).
-pub(super) const HEADER_BYTES: usize = 348;
-/// Where the voxels of a single-file `.nii` start at the earliest (header + 4 extension bytes).
-pub(super) const MIN_NII_OFFSET: u64 = 352;
+use super::layout::{Fields, RawFields, NIFTI1_BYTES, NIFTI2_BYTES};
+
+/// The most header bytes a reader needs (a NIfTI-2 header).
+pub(super) const MAX_HEADER_BYTES: usize = NIFTI2_BYTES;
 
 /// Element types of the voxel data.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -79,103 +80,123 @@ fn unsupported_dtype_name(code: i16) -> &'static str {
     }
 }
 
-/// The header fields Volux uses.
+/// Which header the file has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Version {
+    /// NIfTI-1, 348 bytes.
+    One,
+    /// NIfTI-2, 540 bytes.
+    Two,
+}
+
+impl Version {
+    /// The header's size in bytes.
+    pub(super) fn header_bytes(self) -> usize {
+        match self {
+            Version::One => NIFTI1_BYTES,
+            Version::Two => NIFTI2_BYTES,
+        }
+    }
+    /// Where the voxels of a single-file `.nii` start at the earliest (header + 4 extension
+    /// bytes).
+    pub(super) fn min_nii_offset(self) -> u64 {
+        self.header_bytes() as u64 + 4
+    }
+    /// `NIfTI-1` or `NIfTI-2`.
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            Version::One => "NIfTI-1",
+            Version::Two => "NIfTI-2",
+        }
+    }
+}
+
+/// The header fields Volux uses, validated; NIfTI-1's fields are widened exactly to NIfTI-2's
+/// types.
 #[derive(Clone, Debug)]
 pub(super) struct Header {
+    pub version: Version,
     /// Little-endian file (from the `sizeof_hdr` check).
     pub le: bool,
     /// `dim[0]`, the number of dimensions (1 to 7).
-    pub dim0: i16,
+    pub dim0: i64,
     /// `dim[1..=3]` folded to three dims (`dim[0]` 2 gives z = 1).
     pub dims: [i64; 3],
     pub dtype: Dtype,
     /// The first `dim[i]` past `dim[0]` that is above 1, as `(i, dim[i])`: the data may hold
     /// more than the dims declare (a time series written with `dim[0]` 3, say).
-    pub unused_dim: Option<(usize, i16)>,
+    pub unused_dim: Option<(usize, i64)>,
     /// `pixdim[1..=3]`.
-    pub pixdim: [f32; 3],
-    pub vox_offset: f32,
-    pub scl_slope: f32,
-    pub scl_inter: f32,
-    pub qform_code: i16,
-    pub sform_code: i16,
-    pub qoffset: [f32; 3],
+    pub pixdim: [f64; 3],
+    pub vox_offset: f64,
+    pub scl_slope: f64,
+    pub scl_inter: f64,
+    pub qform_code: i32,
+    pub sform_code: i32,
+    pub qoffset: [f64; 3],
     /// `quatern_b`, `quatern_c`, `quatern_d`.
-    pub quatern: [f32; 3],
+    pub quatern: [f64; 3],
     /// `pixdim[0]`, the qform's `qfac` (-1: the third axis is reflected).
-    pub qfac: f32,
+    pub qfac: f64,
     /// `srow_x`, `srow_y`, `srow_z`.
-    pub srow: [[f32; 4]; 3],
-    /// `n+1` (single file) rather than `ni1` (`.hdr` + `.img`).
+    pub srow: [[f64; 4]; 3],
+    /// `n+1` / `n+2` (single file) rather than `ni1` / `ni2` (`.hdr` + `.img`).
     pub single_file: bool,
 }
 
-/// Little/big-endian field access on the raw header bytes (all offsets are in range because the
-/// slice is exactly [`HEADER_BYTES`] long and the offsets are constants below it).
-struct Fields<'a> {
-    b: &'a [u8; HEADER_BYTES],
-    le: bool,
-}
-
-impl Fields<'_> {
-    fn bytes<const N: usize>(&self, at: usize) -> [u8; N] {
-        let mut out = [0u8; N];
-        out.copy_from_slice(&self.b[at..at + N]);
-        out
-    }
-    fn i16(&self, at: usize) -> i16 {
-        let b = self.bytes::<2>(at);
-        if self.le {
-            i16::from_le_bytes(b)
-        } else {
-            i16::from_be_bytes(b)
-        }
-    }
-    fn f32(&self, at: usize) -> f32 {
-        let b = self.bytes::<4>(at);
-        if self.le {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        }
-    }
-    fn f32s<const N: usize>(&self, at: usize) -> [f32; N] {
-        std::array::from_fn(|i| self.f32(at + 4 * i))
-    }
-}
-
-/// Parses the 348 header bytes of `path`.
+/// Parses the header at the start of `raw` (the first bytes of `path`, up to 540): NIfTI-1 or
+/// NIfTI-2 by `sizeof_hdr`.
 pub(super) fn parse(path: &Path, raw: &[u8]) -> Result<Header> {
-    let b: &[u8; HEADER_BYTES] = raw
-        .get(..HEADER_BYTES)
-        .and_then(|s| s.try_into().ok())
-        .ok_or_else(|| header_err(path, "the NIfTI-1 header is shorter than 348 bytes"))?;
-    let le = byte_order(path, b)?;
-    let f = Fields { b, le };
-    let single_file = check_magic(path, &f.bytes::<4>(344))?;
-    let dim: [i16; 8] = std::array::from_fn(|i| f.i16(40 + 2 * i));
-    let dims = fold_dims(path, &dim)?;
-    let dtype = datatype(path, f.i16(70))?;
-    check_bitpix(path, dtype, f.i16(70), f.i16(72))?;
-    let pix: [f32; 8] = f.f32s(76);
+    let (le, version) = byte_order(path, raw)?;
+    let need = version.header_bytes();
+    if raw.len() < need {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Truncated {
+                expected: need as u64,
+                found: raw.len() as u64,
+            },
+        ));
+    }
+    let f = Fields::new(raw, le);
+    let r = match version {
+        Version::One => f.nifti1(),
+        Version::Two => f.nifti2(),
+    };
+    let single_file = check_magic(path, version, &r)?;
+    let dims = fold_dims(path, &r.dim)?;
+    let dtype = datatype(path, r.datatype)?;
+    check_bitpix(path, dtype, r.datatype, r.bitpix)?;
     Ok(Header {
+        version,
         le,
-        dim0: dim[0],
+        dim0: r.dim[0],
         dims,
         dtype,
-        unused_dim: unused_dim(&dim),
-        pixdim: [pix[1], pix[2], pix[3]],
-        vox_offset: f.f32(108),
-        scl_slope: f.f32(112),
-        scl_inter: f.f32(116),
-        qform_code: f.i16(252),
-        sform_code: f.i16(254),
-        qoffset: f.f32s(268),
-        quatern: f.f32s(256),
-        qfac: pix[0],
-        srow: [f.f32s(280), f.f32s(296), f.f32s(312)],
+        unused_dim: unused_dim(&r.dim),
+        pixdim: [r.pixdim[1], r.pixdim[2], r.pixdim[3]],
+        vox_offset: r.vox_offset,
+        scl_slope: r.scl_slope,
+        scl_inter: r.scl_inter,
+        qform_code: r.qform_code,
+        sform_code: r.sform_code,
+        qoffset: r.qoffset,
+        quatern: r.quatern,
+        qfac: r.pixdim[0],
+        srow: r.srow,
         single_file,
     })
+}
+
+/// `v` as written: a value that a float32 holds exactly (every NIfTI-1 value) is shown as the
+/// float32 it was, so notes say `0.1` rather than `0.10000000149011612`.
+pub(super) fn show(v: f64) -> String {
+    let single = v as f32;
+    if f64::from(single) == v || v.is_nan() {
+        single.to_string()
+    } else {
+        v.to_string()
+    }
 }
 
 /// The datatype of `code`; [`ErrorKind::Unsupported`] naming the codes Volux does not read.
@@ -209,46 +230,88 @@ fn check_bitpix(path: &Path, dtype: Dtype, code: i16, bitpix: i16) -> Result<()>
 }
 
 /// The first `dim[i]`, `i` past `dim[0]` (valid: 1 to 7), that is above 1.
-fn unused_dim(dim: &[i16; 8]) -> Option<(usize, i16)> {
+fn unused_dim(dim: &[i64; 8]) -> Option<(usize, i64)> {
     let n = usize::try_from(dim[0]).ok()?;
     (n + 1..8).map(|i| (i, dim[i])).find(|&(_, d)| d > 1)
 }
 
-/// The byte order: `sizeof_hdr` is 348 in the file's order.
-fn byte_order(path: &Path, b: &[u8; HEADER_BYTES]) -> Result<bool> {
-    let raw = [b[0], b[1], b[2], b[3]];
-    match (i32::from_le_bytes(raw), i32::from_be_bytes(raw)) {
-        (348, _) => Ok(true),
-        (_, 348) => Ok(false),
-        (540, _) | (_, 540) => Err(ReadError::new(
+/// The byte order and version: `sizeof_hdr` is 348 (NIfTI-1) or 540 (NIfTI-2) in the file's
+/// order.
+fn byte_order(path: &Path, b: &[u8]) -> Result<(bool, Version)> {
+    let Some(&[b0, b1, b2, b3]) = b.get(..4) else {
+        return Err(ReadError::new(
             path,
-            ErrorKind::Unsupported("NIfTI-2 (sizeof_hdr 540); Volux reads NIfTI-1".into()),
-        )),
-        (v, _) => Err(header_err(
-            path,
-            format!("sizeof_hdr is {v}, expected 348: not a NIfTI-1 file"),
-        )),
+            ErrorKind::Truncated {
+                expected: NIFTI1_BYTES as u64,
+                found: b.len() as u64,
+            },
+        ));
+    };
+    let raw = [b0, b1, b2, b3];
+    let version = |v: i32| match v {
+        348 => Some(Version::One),
+        540 => Some(Version::Two),
+        _ => None,
+    };
+    let (le, be) = (i32::from_le_bytes(raw), i32::from_be_bytes(raw));
+    match (version(le), version(be)) {
+        (Some(v), _) => Ok((true, v)),
+        (None, Some(v)) => Ok((false, v)),
+        (None, None) => {
+            let short = b.len() < NIFTI1_BYTES;
+            let kind = if short {
+                ErrorKind::Truncated {
+                    expected: NIFTI1_BYTES as u64,
+                    found: b.len() as u64,
+                }
+            } else {
+                ErrorKind::Header(format!(
+                    "sizeof_hdr is {le}, expected 348 (NIfTI-1) or 540 (NIfTI-2): not a NIfTI file"
+                ))
+            };
+            Err(ReadError::new(path, kind))
+        }
     }
 }
 
-/// Checks the magic string; returns whether the data is in the same file (`n+1`).
-fn check_magic(path: &Path, magic: &[u8; 4]) -> Result<bool> {
-    match magic {
-        b"n+1\0" => Ok(true),
-        b"ni1\0" => Ok(false),
-        _ => Err(ReadError::new(
-            path,
-            ErrorKind::Unsupported(format!(
-                "magic {:?} is neither \"n+1\" nor \"ni1\" (ANALYZE 7.5 files are not read)",
-                String::from_utf8_lossy(magic).trim_end_matches('\0')
-            )),
-        )),
+/// Checks the magic string against the version; returns whether the data is in the same file
+/// (`n+1`, `n+2`).
+fn check_magic(path: &Path, version: Version, r: &RawFields) -> Result<bool> {
+    let single = match (version, &r.magic) {
+        (Version::One, b"n+1\0") | (Version::Two, b"n+2\0") => true,
+        (Version::One, b"ni1\0") | (Version::Two, b"ni2\0") => false,
+        (v, m) => {
+            let want = match v {
+                Version::One => "\"n+1\" or \"ni1\" (ANALYZE 7.5 files are not read)",
+                Version::Two => "\"n+2\" or \"ni2\"",
+            };
+            return Err(ReadError::new(
+                path,
+                ErrorKind::Unsupported(format!(
+                    "magic {:?} of a {} header is not {want}",
+                    String::from_utf8_lossy(m).trim_end_matches('\0'),
+                    v.name()
+                )),
+            ));
+        }
+    };
+    if let Some(sig) = r.signature {
+        if sig != *b"\r\n\x1a\n" {
+            return Err(header_err(
+                path,
+                format!(
+                    "the NIfTI-2 magic ends in {sig:02x?}, not 0d 0a 1a 0a: the file was altered \
+                     (a text-mode transfer changes line ends)"
+                ),
+            ));
+        }
     }
+    Ok(single)
 }
 
 /// Folds `dim[0..8]` to x, y, z: `dim[0]` 2 gives z = 1, 3 is a volume, 4 to 7 are accepted
 /// when every extra dimension is 1.
-fn fold_dims(path: &Path, dim: &[i16; 8]) -> Result<[i64; 3]> {
+fn fold_dims(path: &Path, dim: &[i64; 8]) -> Result<[i64; 3]> {
     let n = dim[0];
     if !(1..=7).contains(&n) {
         return Err(header_err(
@@ -256,7 +319,7 @@ fn fold_dims(path: &Path, dim: &[i16; 8]) -> Result<[i64; 3]> {
             format!("dim[0] is {n}, expected 1 to 7 dimensions"),
         ));
     }
-    let d = |i: usize| i64::from(dim[i]);
+    let d = |i: usize| dim[i];
     match n {
         1 => Err(ReadError::new(
             path,

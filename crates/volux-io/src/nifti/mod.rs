@@ -1,9 +1,12 @@
-//! NIfTI-1 images: single-file `.nii` / `.nii.gz` (magic `n+1`) and `.hdr` + `.img` pairs
-//! (magic `ni1`, the `.img` optionally gzipped), following the NIfTI-1 specification
-//! (<https://nifti.nimh.nih.gov/nifti-1>, `nifti1.h`).
+//! NIfTI-1 and NIfTI-2 images: single-file `.nii` / `.nii.gz` (magic `n+1`, `n+2`) and
+//! `.hdr` + `.img` pairs (magic `ni1`, `ni2`, the `.img` optionally gzipped), following the
+//! NIfTI-1 specification (<https://nifti.nimh.nih.gov/nifti-1>, `nifti1.h`) and NIfTI-2's
+//! (<https://nifti.nimh.nih.gov/nifti-2>, `nifti2.h`).
 //!
-//! The 348-byte header is parsed here (it is fixed-layout; the byte order is the one in which
-//! `sizeof_hdr` reads 348). The `nifti` crate (0.18) was evaluated and rejected: it reads the
+//! The 348-byte NIfTI-1 header and the 540-byte NIfTI-2 header are parsed here (both are
+//! fixed-layout, `layout.rs`; the version and byte order are those in which `sizeof_hdr`
+//! reads 348 or 540). NIfTI-2 holds the same fields widened (64-bit dims, float64 geometry
+//! and scaling), so both go through the same validation below; a NIfTI-2 file is noted. The `nifti` crate (0.18) was evaluated and rejected: it reads the
 //! `dim` fields as `u16`, so a negative dimension becomes a huge one instead of an error; it
 //! takes the byte order from `dim[0]` and never checks `sizeof_hdr`; it sizes the data from
 //! `bitpix` (cast from `i16` to `usize`) rather than from the datatype; it reserves the whole
@@ -22,7 +25,7 @@
 //!   `|pixdim[1..=3]|` (zero or non-finite entries become 1, with a note). NIfTI's RAS
 //!   coordinates are turned into LPS by negating x and y (`affine.rs`); a sheared or
 //!   degenerate affine is noted and the next method used.
-//! - The data starts at `vox_offset` (at least 352 in a `.nii`). Sizes are checked before any
+//! - The data starts at `vox_offset` (at least 352 in a NIfTI-1 `.nii`, 544 in a NIfTI-2 one). Sizes are checked before any
 //!   allocation: a file shorter than the dims need is [`ErrorKind::Truncated`]; data longer
 //!   than the dims declare is read up to the declared size, with a note (for gzip, one byte
 //!   past the data is probed, so the check costs nothing).
@@ -41,15 +44,23 @@ use crate::util::{
 
 mod affine;
 mod header;
+mod layout;
 mod values;
 
-use header::{Header, HEADER_BYTES, MIN_NII_OFFSET};
+use header::{show, Header, Version, MAX_HEADER_BYTES};
 
-/// Reads a NIfTI-1 `.nii`, `.nii.gz` or `.hdr` (with its `.img`) file.
+/// Reads a NIfTI-1 or NIfTI-2 `.nii`, `.nii.gz` or `.hdr` (with its `.img`) file.
 pub fn read(path: &Path) -> Result<Grid> {
-    let raw = read_exact_checked(path, open_maybe_gz(path)?, HEADER_BYTES as u64)?;
+    let mut raw = Vec::with_capacity(MAX_HEADER_BYTES);
+    open_maybe_gz(path)?
+        .take(MAX_HEADER_BYTES as u64)
+        .read_to_end(&mut raw)
+        .map_err(|e| io_error(path, e))?;
     let hdr = header::parse(path, &raw)?;
     let mut notes = Vec::new();
+    if hdr.version == Version::Two {
+        notes.push("NIfTI-2 header (540 bytes, 64-bit dims)".to_string());
+    }
     let (dims, count) =
         volux_core::limits::checked_dims(hdr.dims).map_err(|e| ReadError::new(path, e))?;
     let (data_path, offset) = data_location(path, &hdr, &mut notes)?;
@@ -138,18 +149,23 @@ fn data_location(path: &Path, hdr: &Header, notes: &mut Vec<String>) -> Result<(
     if !v.is_finite() || v < 0.0 || v.fract() != 0.0 || v > 1e15 {
         return Err(header_err(
             path,
-            format!("vox_offset {v} is not a non-negative whole number of bytes"),
+            format!(
+                "vox_offset {} is not a non-negative whole number of bytes",
+                show(v)
+            ),
         ));
     }
     let offset = v as u64;
     if !hdr.single_file {
         return Ok((image_file(path)?, offset));
     }
-    if offset < MIN_NII_OFFSET {
+    let min = hdr.version.min_nii_offset();
+    if offset < min {
         notes.push(format!(
-            "vox_offset {offset} is below the minimum {MIN_NII_OFFSET} of a .nii file; {MIN_NII_OFFSET} was used"
+            "vox_offset {offset} is below the minimum {min} of a {} .nii file; {min} was used",
+            hdr.version.name()
         ));
-        return Ok((path.to_path_buf(), MIN_NII_OFFSET));
+        return Ok((path.to_path_buf(), min));
     }
     Ok((path.to_path_buf(), offset))
 }
@@ -279,13 +295,14 @@ fn read_gz(path: &Path, span: Span, notes: &mut Vec<String>) -> Result<(Vec<u8>,
 fn spacing(hdr: &Header, notes: &mut Vec<String>) -> [f64; 3] {
     let mut out = [1.0; 3];
     for (axis, (&p, o)) in hdr.pixdim.iter().zip(out.iter_mut()).enumerate() {
-        let v = f64::from(p).abs();
+        let v = p.abs();
         if v.is_finite() && v > 0.0 {
             *o = v;
         } else if hdr.dims[axis] > 1 {
             notes.push(format!(
-                "pixdim[{}] is {p}; a spacing of 1 was used on that axis",
-                axis + 1
+                "pixdim[{}] is {}; a spacing of 1 was used on that axis",
+                axis + 1,
+                show(p)
             ));
         }
     }

@@ -4,7 +4,7 @@ use std::path::Path;
 use rayon::prelude::*;
 use volux_core::{Buffer, Samples, ScalarType};
 
-use super::header::{Dtype, Header};
+use super::header::{show, Dtype, Header};
 use crate::error::ReadError;
 use crate::error::Result;
 
@@ -28,14 +28,18 @@ pub(super) fn scaling(hdr: &Header, notes: &mut Vec<String>) -> Option<(f64, f64
     }
     if !slope.is_finite() || !inter.is_finite() {
         notes.push(format!(
-            "scl_slope {slope} / scl_inter {inter} are not finite and were ignored"
+            "scl_slope {} / scl_inter {} are not finite and were ignored",
+            show(slope),
+            show(inter)
         ));
         return None;
     }
     notes.push(format!(
-        "scl_slope {slope} and scl_inter {inter} applied; values stored as float32"
+        "scl_slope {} and scl_inter {} applied; values stored as float32",
+        show(slope),
+        show(inter)
     ));
-    Some((f64::from(slope), f64::from(inter)))
+    Some((slope, inter))
 }
 
 /// Decodes `data` (exactly the voxel bytes) into samples, applying `scaling`.
