@@ -48,8 +48,10 @@ use crate::error::Result;
 
 mod attrs;
 mod bounds;
+mod codec;
 mod geometry;
 mod pixels;
+mod ts;
 
 use attrs::ImageInfo;
 use geometry::{Stack, StackInput};
@@ -151,7 +153,7 @@ fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
     let total = frame
         .checked_mul(frames as u64)
         .ok_or_else(|| invalid(path, "the pixel data size overflows"))?;
-    let bytes = pixels::le_bytes(path, &obj, total, &mut notes)?;
+    let bytes = pixel_bytes(path, &obj, &info, (frames, frame), &mut notes)?;
     let (positions, rescale) = frame_geometry(&obj, &info, frames);
     let labels = (1..=frames).map(|i| format!("frame {i}")).collect();
     let stack = order(
@@ -174,6 +176,30 @@ fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
     let rescale: Vec<_> = stack.order.iter().map(|&i| rescale[i]).collect();
     notes.extend(stack.notes.iter().cloned());
     build_grid(path, &info, &stack, &data, &rescale, notes)
+}
+
+/// The stored values of `frames` frames of `frame` bytes each, little-endian: the PixelData
+/// itself for an uncompressed transfer syntax, else decoded (module `codec`), with a note
+/// naming the transfer syntax (once per syntax).
+fn pixel_bytes<'a>(
+    path: &Path,
+    obj: &'a DefaultDicomObject,
+    info: &ImageInfo,
+    (frames, frame): (usize, u64),
+    notes: &mut Vec<String>,
+) -> Result<std::borrow::Cow<'a, [u8]>> {
+    let ts = info.transfer_syntax.as_str();
+    if ts::is_native(ts) {
+        let total = frame
+            .checked_mul(frames as u64)
+            .ok_or_else(|| invalid(path, "the pixel data size overflows"))?;
+        return pixels::le_bytes(path, obj, total, notes);
+    }
+    let note = ts::note(ts);
+    if !notes.contains(&note) {
+        notes.push(note);
+    }
+    codec::decode(path, obj, info, frames, frame).map(std::borrow::Cow::Owned)
 }
 
 /// Per-frame positions (PlanePositionSequence) and rescale of a multi-frame file; the
@@ -255,8 +281,13 @@ fn build_grid(
         stack.order.len() as i64,
     ];
     let (dims, _) = volux_core::limits::checked_dims(dims).map_err(err)?;
-    let samples =
-        pixels::assemble(data, info.bits, info.signed, rescale, &mut notes).map_err(err)?;
+    let samples = pixels::assemble(
+        data,
+        (info.bits, info.bits_stored, info.signed),
+        rescale,
+        &mut notes,
+    )
+    .map_err(err)?;
     let [row, col] = info.pixel_spacing.unwrap_or_else(|| {
         notes.push("no PixelSpacing: an in-plane spacing of 1 was used".into());
         [1.0, 1.0]
@@ -444,7 +475,7 @@ fn load_series(dir: &Path, slices: &[ImageInfo], mut notes: Vec<String>) -> Resu
     let mut rescale = Vec::with_capacity(slices.len());
     for s in stack.order.iter().filter_map(|&i| slices.get(i)) {
         let obj = open_full(&s.path)?;
-        data.extend_from_slice(&pixels::le_bytes(&s.path, &obj, frame, &mut notes)?);
+        data.extend_from_slice(&pixel_bytes(&s.path, &obj, s, (1, frame), &mut notes)?);
         rescale.push(attrs::rescale(&obj, None));
     }
     notes.extend(stack.notes.iter().cloned());

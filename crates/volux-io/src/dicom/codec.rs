@@ -1,0 +1,314 @@
+//! Compressed (encapsulated) pixel data, decoded with `dicom-pixeldata` to the stored values.
+//!
+//! Only pure-Rust codecs are linked: RLE Lossless, JPEG baseline / extended / lossless
+//! (`jpeg-decoder`) and JPEG 2000 (`openjp2`, the Rust port of OpenJPEG). JPEG-LS has no
+//! pure-Rust decoder among `dicom-pixeldata`'s features (it goes through CharLS, a C++
+//! library), so JPEG-LS files are [`ErrorKind::Unsupported`] naming the transfer syntax.
+//!
+//! The decoders size their output from Rows x Columns and copy what the codestream holds
+//! into it, trusting the two to agree (a JPEG or JPEG 2000 frame larger than Rows x Columns
+//! would overrun the buffer and panic, one that declares 65535 x 65535 would allocate
+//! gigabytes). So before a frame is decoded its codestream header is read here and checked
+//! against the DICOM header: the JPEG frame header (SOF: precision, lines, samples per line,
+//! components), the JPEG 2000 image and tile size (SIZ: size, offset, components, precision,
+//! subsampling) and the RLE header (segment count and offsets). The whole decoded size
+//! (Rows x Columns x frames x bytes) is checked against the memory budget before the first
+//! frame is decoded, and each decoded frame's length is checked before use.
+use std::borrow::Cow;
+use std::path::Path;
+
+use dicom_core::value::Value;
+use dicom_dictionary_std::tags;
+use dicom_pixeldata::PixelDecoder;
+
+use super::attrs::ImageInfo;
+use super::ts::{family, ts_name, unsupported, Family};
+use crate::error::{ErrorKind, ReadError, Result};
+
+fn invalid(path: &Path, msg: String) -> ReadError {
+    ReadError::new(path, ErrorKind::Invalid(msg))
+}
+
+/// Decodes all `frames` frames of `obj` (in file order) to little-endian stored values,
+/// exactly `frame` bytes each.
+pub(super) fn decode(
+    path: &Path,
+    obj: &dicom_object::DefaultDicomObject,
+    info: &ImageInfo,
+    frames: usize,
+    frame: u64,
+) -> Result<Vec<u8>> {
+    let ts = info.transfer_syntax.as_str();
+    let fam = family(ts).ok_or_else(|| {
+        ReadError::new(
+            path,
+            ErrorKind::Unsupported(unsupported(ts).unwrap_or_default()),
+        )
+    })?;
+    let total = frame
+        .checked_mul(frames as u64)
+        .ok_or_else(|| invalid(path, "the pixel data size overflows".into()))?;
+    volux_core::limits::check_alloc("decoded pixel data", total, 1)
+        .map_err(|e| ReadError::new(path, e))?;
+    let (fragments, offsets) = fragments(path, obj)?;
+    let name = ts_name(ts);
+    let mut out = Vec::with_capacity(total as usize);
+    for i in 0..frames {
+        let data = frame_data(&fragments, &offsets, frames, i).ok_or_else(|| {
+            invalid(
+                path,
+                format!(
+                    "the {name} pixel data has no data for frame {} of {frames} ({} \
+                     fragments)",
+                    i + 1,
+                    fragments.len()
+                ),
+            )
+        })?;
+        let checked = match fam {
+            Family::Rle => check_rle(&data, info),
+            Family::Jpeg => check_jpeg(&data, info),
+            Family::Jpeg2000 => check_j2k(&data, info),
+        };
+        checked.map_err(|m| invalid(path, format!("{name} frame {}: {m}", i + 1)))?;
+        let px = obj.decode_pixel_data_frame(i as u32).map_err(|e| {
+            invalid(
+                path,
+                format!("cannot decode {name} frame {}: {}", i + 1, chain(&e)),
+            )
+        })?;
+        let got = px.data();
+        if got.len() as u64 != frame {
+            return Err(invalid(
+                path,
+                format!(
+                    "{name} frame {} decodes to {} bytes, not the {frame} of Rows x Columns x \
+                     BitsAllocated",
+                    i + 1,
+                    got.len()
+                ),
+            ));
+        }
+        out.extend_from_slice(got);
+    }
+    Ok(out)
+}
+
+/// An error and its sources on one line.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut msg = e.to_string();
+    let mut src = e.source();
+    while let Some(s) = src {
+        msg.push_str(": ");
+        msg.push_str(&s.to_string());
+        src = s.source();
+    }
+    msg
+}
+
+/// The fragments and basic offset table of the encapsulated PixelData.
+fn fragments<'a>(
+    path: &Path,
+    obj: &'a dicom_object::DefaultDicomObject,
+) -> Result<(Vec<&'a [u8]>, Vec<u32>)> {
+    let elem = obj
+        .element_opt(tags::PIXEL_DATA)
+        .ok()
+        .flatten()
+        .ok_or_else(|| invalid(path, "no PixelData (7FE0,0010) element".into()))?;
+    match elem.value() {
+        Value::PixelSequence(seq) => Ok((
+            seq.fragments().iter().map(|f| f.as_slice()).collect(),
+            seq.offset_table().to_vec(),
+        )),
+        _ => Err(invalid(
+            path,
+            "the transfer syntax is a compressed one, but the pixel data is not encapsulated \
+             (no fragments)"
+                .into(),
+        )),
+    }
+}
+
+/// The encoded bytes of frame `i`, gathered as `dicom-encoding` gathers them for the
+/// decoders: one fragment per frame when the counts agree, else by the basic offset table.
+fn frame_data<'a>(
+    fragments: &[&'a [u8]],
+    offsets: &[u32],
+    frames: usize,
+    i: usize,
+) -> Option<Cow<'a, [u8]>> {
+    if fragments.len() == frames {
+        return fragments.get(i).map(|f| Cow::Borrowed(*f));
+    }
+    let base = match (offsets.get(i), i) {
+        (Some(&o), _) => o as usize,
+        (None, 0) => 0,
+        (None, _) => return None,
+    };
+    let next = offsets.get(i + 1).map(|&o| o as usize);
+    let (mut at, mut data) = (0usize, Vec::new());
+    for f in fragments {
+        if at >= base {
+            data.extend_from_slice(f);
+        }
+        at = at.saturating_add(f.len() + 8);
+        if next.is_some_and(|n| at >= n) {
+            break;
+        }
+    }
+    Some(Cow::Owned(data))
+}
+
+/// Bytes per sample.
+fn bytes_of(info: &ImageInfo) -> usize {
+    (info.bits / 8) as usize
+}
+
+/// The RLE header: as many segments as bytes per pixel, at increasing offsets inside the
+/// fragment.
+fn check_rle(data: &[u8], info: &ImageInfo) -> Result<(), String> {
+    let word = |i: usize| {
+        data.get(i * 4..i * 4 + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let n = word(0).ok_or("the data is shorter than the 64-byte RLE header")?;
+    let want = bytes_of(info) * info.samples_per_pixel as usize;
+    if n as usize != want {
+        return Err(format!(
+            "the RLE header lists {n} segments, but BitsAllocated {} x SamplesPerPixel {} \
+             needs {want}",
+            info.bits, info.samples_per_pixel
+        ));
+    }
+    let mut prev = 64u32;
+    for s in 1..=want {
+        let o = word(s).ok_or("the data is shorter than the 64-byte RLE header")?;
+        if o < prev || o as usize > data.len() {
+            return Err(format!(
+                "RLE segment {s} starts at byte {o}, outside the {} bytes of the frame or \
+                 before the previous segment",
+                data.len()
+            ));
+        }
+        prev = o;
+    }
+    Ok(())
+}
+
+/// Whether a JPEG marker is a start of frame (SOF0-3, 5-7, 9-11, 13-15).
+fn is_sof(m: u8) -> bool {
+    matches!(m, 0xC0..=0xCF) && !matches!(m, 0xC4 | 0xC8 | 0xCC)
+}
+
+/// The JPEG frame header (SOF) against Rows, Columns, SamplesPerPixel and BitsAllocated.
+fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), String> {
+    if data.get(..2) != Some(&[0xFF, 0xD8][..]) {
+        return Err("the data does not start with a JPEG SOI marker".into());
+    }
+    let mut at = 2usize;
+    loop {
+        let (Some(&ff), Some(&m)) = (data.get(at), data.get(at + 1)) else {
+            return Err("the JPEG data ends before its frame header (SOF)".into());
+        };
+        if ff != 0xFF {
+            return Err(format!("no JPEG marker at byte {at}"));
+        }
+        if m == 0xFF {
+            at += 1; // fill byte
+            continue;
+        }
+        if matches!(m, 0x01 | 0xD0..=0xD7) {
+            at += 2;
+            continue;
+        }
+        let len = data
+            .get(at + 2..at + 4)
+            .map(|b| usize::from(u16::from_be_bytes([b[0], b[1]])))
+            .ok_or("the JPEG data ends inside a marker segment")?;
+        if m == 0xDA || m == 0xD9 {
+            return Err("the JPEG data has no frame header (SOF) before its scan".into());
+        }
+        if is_sof(m) {
+            let h = data
+                .get(at + 4..at + 10)
+                .ok_or("the JPEG data ends inside its frame header (SOF)")?;
+            let (p, y, x, nf) = (
+                u32::from(h[0]),
+                u32::from(u16::from_be_bytes([h[1], h[2]])),
+                u32::from(u16::from_be_bytes([h[3], h[4]])),
+                u32::from(h[5]),
+            );
+            if (y, x) != (info.rows, info.cols) || nf != info.samples_per_pixel {
+                return Err(format!(
+                    "the JPEG frame is {x} x {y} with {nf} components, but Columns x Rows is \
+                     {} x {} with SamplesPerPixel {}",
+                    info.cols, info.rows, info.samples_per_pixel
+                ));
+            }
+            if (p <= 8) != (info.bits == 8) || p > 16 {
+                return Err(format!(
+                    "the JPEG precision is {p} bits, which does not fit BitsAllocated {}",
+                    info.bits
+                ));
+            }
+            return Ok(());
+        }
+        if len < 2 {
+            return Err(format!(
+                "a JPEG marker segment of length {len} at byte {at}"
+            ));
+        }
+        at += 2 + len;
+    }
+}
+
+/// The JPEG 2000 image size (SIZ) against Rows, Columns, SamplesPerPixel and BitsAllocated.
+/// The DICOM JPEG 2000 transfer syntaxes carry a bare codestream (no JP2 boxes, PS3.5 A.4.4).
+fn check_j2k(data: &[u8], info: &ImageInfo) -> Result<(), String> {
+    if data.get(..4) != Some(&[0xFF, 0x4F, 0xFF, 0x51][..]) {
+        return Err(
+            "the data does not start with a JPEG 2000 codestream (SOC then SIZ markers)".into(),
+        );
+    }
+    let u16_at = |i: usize| data.get(i..i + 2).map(|b| u16::from_be_bytes([b[0], b[1]]));
+    let u32_at = |i: usize| {
+        data.get(i..i + 4)
+            .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let short = || "the JPEG 2000 data ends inside its SIZ marker segment".to_string();
+    // SIZ: Lsiz Rsiz Xsiz Ysiz XOsiz YOsiz XTsiz YTsiz XTOsiz YTOsiz Csiz, then per component
+    // Ssiz XRsiz YRsiz.
+    let base = 4;
+    let xsiz = u32_at(base + 4).ok_or_else(short)?;
+    let ysiz = u32_at(base + 8).ok_or_else(short)?;
+    let xo = u32_at(base + 12).ok_or_else(short)?;
+    let yo = u32_at(base + 16).ok_or_else(short)?;
+    let csiz = u16_at(base + 36).ok_or_else(short)?;
+    let (w, h) = (xsiz.checked_sub(xo), ysiz.checked_sub(yo));
+    if (w, h) != (Some(info.cols), Some(info.rows)) || u32::from(csiz) != info.samples_per_pixel {
+        return Err(format!(
+            "the JPEG 2000 image is {} x {} with {csiz} components, but Columns x Rows is {} x \
+             {} with SamplesPerPixel {}",
+            i64::from(xsiz) - i64::from(xo),
+            i64::from(ysiz) - i64::from(yo),
+            info.cols,
+            info.rows,
+            info.samples_per_pixel
+        ));
+    }
+    for c in 0..usize::from(csiz) {
+        let at = base + 38 + 3 * c;
+        let s = data.get(at..at + 3).ok_or_else(short)?;
+        let precision = u32::from(s[0] & 0x7F) + 1;
+        if precision > info.bits || (s[1], s[2]) != (1, 1) {
+            return Err(format!(
+                "JPEG 2000 component {c} has {precision}-bit samples subsampled {} x {}, but \
+                 BitsAllocated is {} (full-resolution components of at most that many bits \
+                 are read)",
+                s[1], s[2], info.bits
+            ));
+        }
+    }
+    Ok(())
+}
