@@ -70,7 +70,15 @@ pub(super) fn decode(
             Family::Jpeg => check_jpeg(&data, info),
             Family::Jpeg2000 => check_j2k(&data, info),
         };
-        checked.map_err(|m| invalid(path, format!("{name} frame {}: {m}", i + 1)))?;
+        checked.map_err(|e| {
+            let kind = match e {
+                Bad::Invalid(m) => ErrorKind::Invalid(format!("{name} frame {}: {m}", i + 1)),
+                Bad::Unsupported(m) => {
+                    ErrorKind::Unsupported(format!("transfer syntax {ts} ({name}): {m}"))
+                }
+            };
+            ReadError::new(path, kind)
+        })?;
         let px = obj.decode_pixel_data_frame(i as u32).map_err(|e| {
             invalid(
                 path,
@@ -92,6 +100,26 @@ pub(super) fn decode(
         out.extend_from_slice(got);
     }
     Ok(out)
+}
+
+/// Why a codestream header is refused.
+enum Bad {
+    /// Damaged or inconsistent with the DICOM header.
+    Invalid(String),
+    /// Valid, but not decoded by the linked codecs.
+    Unsupported(String),
+}
+
+impl From<String> for Bad {
+    fn from(m: String) -> Self {
+        Self::Invalid(m)
+    }
+}
+
+impl From<&str> for Bad {
+    fn from(m: &str) -> Self {
+        Self::Invalid(m.into())
+    }
 }
 
 /// An error and its sources on one line.
@@ -121,12 +149,17 @@ fn fragments<'a>(
             seq.fragments().iter().map(|f| f.as_slice()).collect(),
             seq.offset_table().to_vec(),
         )),
-        _ => Err(invalid(
-            path,
-            "the transfer syntax is a compressed one, but the pixel data is not encapsulated \
-             (no fragments)"
-                .into(),
-        )),
+        _ => {
+            let ts = obj.meta().transfer_syntax();
+            Err(invalid(
+                path,
+                format!(
+                    "transfer syntax {ts} ({}) is a compressed one, but the pixel data is not \
+                     encapsulated (no fragments)",
+                    ts_name(ts)
+                ),
+            ))
+        }
     }
 }
 
@@ -167,7 +200,7 @@ fn bytes_of(info: &ImageInfo) -> usize {
 
 /// The RLE header: as many segments as bytes per pixel, at increasing offsets inside the
 /// fragment.
-fn check_rle(data: &[u8], info: &ImageInfo) -> Result<(), String> {
+fn check_rle(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
     let word = |i: usize| {
         data.get(i * 4..i * 4 + 4)
             .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
@@ -175,25 +208,60 @@ fn check_rle(data: &[u8], info: &ImageInfo) -> Result<(), String> {
     let n = word(0).ok_or("the data is shorter than the 64-byte RLE header")?;
     let want = bytes_of(info) * info.samples_per_pixel as usize;
     if n as usize != want {
-        return Err(format!(
+        return Err(Bad::Invalid(format!(
             "the RLE header lists {n} segments, but BitsAllocated {} x SamplesPerPixel {} \
              needs {want}",
             info.bits, info.samples_per_pixel
-        ));
+        )));
     }
+    let mut starts = Vec::with_capacity(want + 1);
     let mut prev = 64u32;
     for s in 1..=want {
         let o = word(s).ok_or("the data is shorter than the 64-byte RLE header")?;
         if o < prev || o as usize > data.len() {
-            return Err(format!(
+            return Err(Bad::Invalid(format!(
                 "RLE segment {s} starts at byte {o}, outside the {} bytes of the frame or \
                  before the previous segment",
                 data.len()
-            ));
+            )));
         }
+        starts.push(o as usize);
         prev = o;
     }
+    starts.push(data.len());
+    // Each segment holds one byte of every pixel: Rows x Columns bytes once unpacked (one
+    // more where a pad byte ends the segment).
+    let pixels = u64::from(info.rows) * u64::from(info.cols);
+    for (s, w) in starts.windows(2).enumerate() {
+        let n = packbits_len(&data[w[0]..w[1]]);
+        if n < pixels || n > pixels + 1 {
+            return Err(Bad::Invalid(format!(
+                "RLE segment {} unpacks to {n} bytes, but Rows x Columns is {pixels}",
+                s + 1
+            )));
+        }
+    }
     Ok(())
+}
+
+/// The length a PackBits segment unpacks to, counted from its run headers; runs cut off by
+/// the segment's end are not counted (the decoder adapter unwraps the read of a cut run,
+/// and indexes its output up to Rows x Columns: both panic on a segment that falls short).
+fn packbits_len(seg: &[u8]) -> u64 {
+    let (mut at, mut n) = (0usize, 0u64);
+    while let Some(&h) = seg.get(at) {
+        let (adds, next) = match h {
+            0..=127 => (u64::from(h) + 1, at + usize::from(h) + 2),
+            128 => (0, at + 1),
+            _ => (257 - u64::from(h), at + 2),
+        };
+        if next > seg.len() {
+            break;
+        }
+        n += adds;
+        at = next;
+    }
+    n
 }
 
 /// Whether a JPEG marker is a start of frame (SOF0-3, 5-7, 9-11, 13-15).
@@ -202,7 +270,7 @@ fn is_sof(m: u8) -> bool {
 }
 
 /// The JPEG frame header (SOF) against Rows, Columns, SamplesPerPixel and BitsAllocated.
-fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), String> {
+fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
     if data.get(..2) != Some(&[0xFF, 0xD8][..]) {
         return Err("the data does not start with a JPEG SOI marker".into());
     }
@@ -212,7 +280,7 @@ fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), String> {
             return Err("the JPEG data ends before its frame header (SOF)".into());
         };
         if ff != 0xFF {
-            return Err(format!("no JPEG marker at byte {at}"));
+            return Err(Bad::Invalid(format!("no JPEG marker at byte {at}")));
         }
         if m == 0xFF {
             at += 1; // fill byte
@@ -240,24 +308,31 @@ fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), String> {
                 u32::from(h[5]),
             );
             if (y, x) != (info.rows, info.cols) || nf != info.samples_per_pixel {
-                return Err(format!(
+                return Err(Bad::Invalid(format!(
                     "the JPEG frame is {x} x {y} with {nf} components, but Columns x Rows is \
                      {} x {} with SamplesPerPixel {}",
                     info.cols, info.rows, info.samples_per_pixel
-                ));
+                )));
+            }
+            // SOF3, 7, 11, 15 are lossless; the others DCT-based.
+            if !matches!(m, 0xC3 | 0xC7 | 0xCB | 0xCF) && p != 8 {
+                return Err(Bad::Unsupported(format!(
+                    "a {p}-bit DCT-based (lossy) JPEG frame: jpeg-decoder decodes 8-bit lossy \
+                     and 2- to 16-bit lossless JPEG"
+                )));
             }
             if (p <= 8) != (info.bits == 8) || p > 16 {
-                return Err(format!(
+                return Err(Bad::Invalid(format!(
                     "the JPEG precision is {p} bits, which does not fit BitsAllocated {}",
                     info.bits
-                ));
+                )));
             }
             return Ok(());
         }
         if len < 2 {
-            return Err(format!(
+            return Err(Bad::Invalid(format!(
                 "a JPEG marker segment of length {len} at byte {at}"
-            ));
+            )));
         }
         at += 2 + len;
     }
@@ -265,7 +340,7 @@ fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), String> {
 
 /// The JPEG 2000 image size (SIZ) against Rows, Columns, SamplesPerPixel and BitsAllocated.
 /// The DICOM JPEG 2000 transfer syntaxes carry a bare codestream (no JP2 boxes, PS3.5 A.4.4).
-fn check_j2k(data: &[u8], info: &ImageInfo) -> Result<(), String> {
+fn check_j2k(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
     if data.get(..4) != Some(&[0xFF, 0x4F, 0xFF, 0x51][..]) {
         return Err(
             "the data does not start with a JPEG 2000 codestream (SOC then SIZ markers)".into(),
@@ -287,7 +362,7 @@ fn check_j2k(data: &[u8], info: &ImageInfo) -> Result<(), String> {
     let csiz = u16_at(base + 36).ok_or_else(short)?;
     let (w, h) = (xsiz.checked_sub(xo), ysiz.checked_sub(yo));
     if (w, h) != (Some(info.cols), Some(info.rows)) || u32::from(csiz) != info.samples_per_pixel {
-        return Err(format!(
+        return Err(Bad::Invalid(format!(
             "the JPEG 2000 image is {} x {} with {csiz} components, but Columns x Rows is {} x \
              {} with SamplesPerPixel {}",
             i64::from(xsiz) - i64::from(xo),
@@ -295,19 +370,19 @@ fn check_j2k(data: &[u8], info: &ImageInfo) -> Result<(), String> {
             info.cols,
             info.rows,
             info.samples_per_pixel
-        ));
+        )));
     }
     for c in 0..usize::from(csiz) {
         let at = base + 38 + 3 * c;
         let s = data.get(at..at + 3).ok_or_else(short)?;
         let precision = u32::from(s[0] & 0x7F) + 1;
         if precision > info.bits || (s[1], s[2]) != (1, 1) {
-            return Err(format!(
+            return Err(Bad::Invalid(format!(
                 "JPEG 2000 component {c} has {precision}-bit samples subsampled {} x {}, but \
                  BitsAllocated is {} (full-resolution components of at most that many bits \
                  are read)",
                 s[1], s[2], info.bits
-            ));
+            )));
         }
     }
     Ok(())
