@@ -1,9 +1,15 @@
 //! DICOM (PS3.10 files with the 128-byte preamble and `DICM` marker): a folder of single-frame
 //! slices, one series picked by SeriesInstanceUID, or one file (enhanced multi-frame or a
-//! single slice). Parsing uses `dicom-object` 0.10 (a maintained, pure-Rust DICOM parser);
-//! no pixel-data codec is linked, so only uncompressed transfer syntaxes are read (implicit
-//! and explicit VR little endian, explicit VR big endian); compressed ones (JPEG, JPEG 2000,
-//! RLE, deflate) are [`ErrorKind::Unsupported`] naming the transfer syntax.
+//! single slice). Parsing uses `dicom-object` 0.10 (a maintained, pure-Rust DICOM parser).
+//! Uncompressed transfer syntaxes (implicit and explicit VR little endian, explicit VR big
+//! endian) are read directly; compressed pixel data is decoded with `dicom-pixeldata` 0.10
+//! (module `codec`), whose pure-Rust codecs only are linked: RLE Lossless, JPEG baseline
+//! (8-bit) and lossless (`jpeg-decoder`), JPEG 2000 lossless and lossy (`openjp2`, the Rust
+//! port of OpenJPEG). The grid of a compressed file gets a note naming its transfer syntax.
+//! JPEG-LS (decoded by dicom-pixeldata only through CharLS, a C++ library), 12-bit lossy JPEG
+//! (which `jpeg-decoder` does not decode), deflate, High-Throughput JPEG 2000 and the others
+//! are [`ErrorKind::Unsupported`] naming the transfer syntax's UID and name. Decoding gives
+//! the stored values, which then take the same path as uncompressed ones (below).
 //!
 //! - Folder: every file with the `DICM` marker is parsed (others, e.g. `series.json`, and
 //!   non-image DICOM files such as a DICOMDIR are skipped); slices are grouped by
@@ -18,11 +24,15 @@
 //! - Spacing: PixelSpacing is (row spacing = y, column spacing = x); z is the median gap of the
 //!   sorted positions, else SpacingBetweenSlices, else SliceThickness (noted).
 //! - Pixels: BitsAllocated 8 -> uint8, 16 -> uint16 / int16 (PixelRepresentation), 32 ->
-//!   float32 (noted); SamplesPerPixel must be 1. RescaleSlope / RescaleIntercept (per slice or
+//!   float32 (noted; uncompressed only); SamplesPerPixel must be 1. Signed values are
+//!   sign-extended from BitsStored. RescaleSlope / RescaleIntercept (per slice or
 //!   frame) are applied: slope 1 with values that still fit int16 gives int16 (CT Hounsfield
 //!   units), anything else float32. The pixel data length is checked against
 //!   Rows x Columns x frames x bytes before use; a file that ends inside its pixel data is
-//!   [`ErrorKind::Truncated`].
+//!   [`ErrorKind::Truncated`]. Compressed data: the decoded size is checked against the
+//!   memory budget before decoding, each frame's codestream header against Rows, Columns,
+//!   SamplesPerPixel and BitsAllocated (a mismatch is [`ErrorKind::Invalid`]: the decoders
+//!   would overrun their buffers), and each decoded frame's length before use.
 //!
 //! Placement (LPS, the DICOM patient coordinate system, PS3.3 C.7.6.2.1.1): the grid is in
 //! (column, row, slice) order with its origin at the first slice's ImagePositionPatient, and
