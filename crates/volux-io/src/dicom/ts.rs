@@ -89,12 +89,12 @@ pub(super) fn unsupported(ts: &str) -> Option<String> {
         format!(
             "transfer syntax {ts} ({name}): no pure-Rust JPEG-LS decoder is linked \
              (dicom-pixeldata decodes JPEG-LS only through CharLS, a C++ library); Volux decodes \
-             uncompressed, RLE, JPEG (baseline, extended, lossless) and JPEG 2000 pixel data"
+             uncompressed, RLE, 8-bit lossy and lossless JPEG, and JPEG 2000 pixel data"
         )
     } else {
         format!(
-            "transfer syntax {ts} ({name}): Volux decodes uncompressed, RLE, JPEG (baseline, \
-             extended, lossless) and JPEG 2000 pixel data"
+            "transfer syntax {ts} ({name}): Volux decodes uncompressed, RLE, 8-bit lossy and \
+             lossless JPEG, and JPEG 2000 pixel data"
         )
     })
 }
