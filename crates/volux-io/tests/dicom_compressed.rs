@@ -304,7 +304,7 @@ fn truncated_codestreams_are_refused() {
         // The first fragment cut short (its item length patched): a codestream that ends
         // early inside a well-formed file.
         let (start, len) = first_fragment(&bytes);
-        for keep in [len / 2 & !1, len - 2, 40, 2] {
+        for keep in [(len / 2) & !1, len - 2, 40, 2] {
             let mut b = bytes[..start - 4].to_vec();
             b.extend_from_slice(&(keep as u32).to_le_bytes());
             b.extend_from_slice(&bytes[start..start + keep]);
