@@ -103,6 +103,7 @@ pub(super) fn decode(
 }
 
 /// Why a codestream header is refused.
+#[derive(Debug)]
 enum Bad {
     /// Damaged or inconsistent with the DICOM header.
     Invalid(String),
@@ -386,4 +387,163 @@ fn check_j2k(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn info(rows: u32, cols: u32, bits: u32) -> ImageInfo {
+        ImageInfo {
+            path: "t.dcm".into(),
+            transfer_syntax: String::new(),
+            series_uid: String::new(),
+            rows,
+            cols,
+            bits,
+            bits_stored: bits,
+            signed: false,
+            samples_per_pixel: 1,
+            photometric: "MONOCHROME2".into(),
+            frames: 1,
+            frames_stated: None,
+            position: None,
+            orientation: None,
+            instance: None,
+            pixel_spacing: None,
+            spacing_between: None,
+            thickness: None,
+            rescale: (1.0, 0.0),
+        }
+    }
+
+    fn msg(r: Result<(), Bad>) -> String {
+        match r {
+            Ok(()) => panic!("accepted"),
+            Err(Bad::Invalid(m)) => format!("invalid: {m}"),
+            Err(Bad::Unsupported(m)) => format!("unsupported: {m}"),
+        }
+    }
+
+    /// SOI, a DQT-like segment, then a SOF of marker `m`.
+    fn jpeg(m: u8, p: u8, y: u16, x: u16, nf: u8) -> Vec<u8> {
+        let mut v = vec![
+            0xFF, 0xD8, 0xFF, 0xDB, 0x00, 0x04, 0xAA, 0xBB, 0xFF, m, 0x00, 0x0B, p,
+        ];
+        v.extend_from_slice(&y.to_be_bytes());
+        v.extend_from_slice(&x.to_be_bytes());
+        v.extend_from_slice(&[nf, 1, 0x11, 0]);
+        v
+    }
+
+    #[test]
+    fn jpeg_frame_header_against_the_dicom_header() {
+        let i = info(32, 16, 16);
+        check_jpeg(&jpeg(0xC3, 12, 32, 16, 1), &i).unwrap();
+        assert!(msg(check_jpeg(&jpeg(0xC3, 12, 33, 16, 1), &i)).contains("16 x 33"));
+        assert!(msg(check_jpeg(&jpeg(0xC3, 12, 32, 16, 3), &i)).contains("3 components"));
+        // 8-bit precision in 16-bit samples, 16-bit in 8-bit: refused.
+        assert!(msg(check_jpeg(&jpeg(0xC3, 8, 32, 16, 1), &i)).contains("precision"));
+        assert!(
+            msg(check_jpeg(&jpeg(0xC3, 16, 32, 16, 1), &info(32, 16, 8))).contains("precision")
+        );
+        // 12-bit DCT: unsupported (jpeg-decoder), not invalid.
+        assert!(msg(check_jpeg(&jpeg(0xC1, 12, 32, 16, 1), &i)).starts_with("unsupported"));
+        check_jpeg(&jpeg(0xC0, 8, 32, 16, 1), &info(32, 16, 8)).unwrap();
+        // Cut anywhere before the SOF's fields: a clear error.
+        let full = jpeg(0xC3, 12, 32, 16, 1);
+        for n in 0..full.len() - 4 {
+            assert!(check_jpeg(&full[..n], &i).is_err(), "{n}");
+        }
+        // No SOF before the scan; a zero-length segment.
+        let sos = [0xFF, 0xD8, 0xFF, 0xDA, 0x00, 0x08];
+        assert!(msg(check_jpeg(&sos, &i)).contains("no frame header"));
+        let zero = [0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x00, 0xFF, 0xC3];
+        assert!(msg(check_jpeg(&zero, &i)).contains("length 0"));
+    }
+
+    /// SOC, SIZ of one component.
+    fn j2k(w: u32, h: u32, xo: u32, ssiz: u8, sub: u8) -> Vec<u8> {
+        let mut v = vec![0xFF, 0x4F, 0xFF, 0x51, 0x00, 0x29, 0x00, 0x00];
+        for x in [w, h, xo, 0, w, h, 0, 0] {
+            v.extend_from_slice(&x.to_be_bytes());
+        }
+        v.extend_from_slice(&1u16.to_be_bytes());
+        v.extend_from_slice(&[ssiz, sub, 1]);
+        v
+    }
+
+    #[test]
+    fn j2k_image_size_against_the_dicom_header() {
+        let i = info(20, 30, 16);
+        check_j2k(&j2k(30, 20, 0, 11, 1), &i).unwrap();
+        check_j2k(&j2k(35, 20, 5, 15, 1), &i).unwrap();
+        assert!(msg(check_j2k(&j2k(31, 20, 0, 11, 1), &i)).contains("31 x 20"));
+        // An offset past the size: negative width, no overflow.
+        assert!(msg(check_j2k(&j2k(3, 20, 9, 11, 1), &i)).contains("-6 x 20"));
+        assert!(msg(check_j2k(&j2k(30, 20, 0, 16, 1), &i)).contains("17-bit"));
+        assert!(msg(check_j2k(&j2k(30, 20, 0, 11, 2), &i)).contains("subsampled 2 x 1"));
+        let full = j2k(30, 20, 0, 11, 1);
+        for n in 0..full.len() {
+            assert!(check_j2k(&full[..n], &i).is_err(), "{n}");
+        }
+        // A JP2 file (boxes) instead of a bare codestream.
+        assert!(msg(check_j2k(b"\0\0\0\x0CjP  \r\n\x87\n", &i)).contains("codestream"));
+    }
+
+    #[test]
+    fn rle_header_and_segment_lengths() {
+        let i = info(2, 3, 16);
+        // Two segments of 6 bytes: a literal of 6, and a run of 6.
+        let mut v = vec![0u8; 64];
+        v[0..4].copy_from_slice(&2u32.to_le_bytes());
+        v[4..8].copy_from_slice(&64u32.to_le_bytes());
+        v[8..12].copy_from_slice(&71u32.to_le_bytes());
+        v.extend_from_slice(&[5, 1, 2, 3, 4, 5, 6]);
+        v.extend_from_slice(&[(257u16 - 6) as u8, 9]);
+        check_rle(&v, &i).unwrap();
+        // A pad byte ending a segment is accepted (a no-op, or one byte more); two more
+        // bytes are not.
+        let mut padded = v.clone();
+        padded.push(0x80);
+        check_rle(&padded, &i).unwrap();
+        let mut more = v.clone();
+        more.extend_from_slice(&[1, 7, 7]);
+        assert!(msg(check_rle(&more, &i)).contains("unpacks to 8 bytes"));
+        // A run cut by the end of the segment does not count.
+        assert!(msg(check_rle(&v[..v.len() - 1], &i)).contains("unpacks to 0 bytes"));
+        let mut one = v.clone();
+        one[0] = 1;
+        assert!(msg(check_rle(&one, &i)).contains("lists 1 segments"));
+        let mut back = v.clone();
+        back[8..12].copy_from_slice(&10u32.to_le_bytes());
+        assert!(msg(check_rle(&back, &i)).contains("segment 2 starts at byte 10"));
+        assert!(check_rle(&v[..40], &i).is_err());
+    }
+
+    #[test]
+    fn frames_from_fragments() {
+        let (a, b, c): (&[u8], &[u8], &[u8]) = (b"aa", b"bbbb", b"cc");
+        // One fragment per frame.
+        assert_eq!(
+            frame_data(&[a, b], &[], 2, 1).as_deref(),
+            Some(&b"bbbb"[..])
+        );
+        assert_eq!(frame_data(&[a, b], &[], 2, 2), None);
+        // Two frames over three fragments, by the offset table (item headers count 8).
+        let f = [a, b, c];
+        assert_eq!(frame_data(&f, &[0, 10], 2, 0).as_deref(), Some(&b"aa"[..]));
+        assert_eq!(
+            frame_data(&f, &[0, 10], 2, 1).as_deref(),
+            Some(&b"bbbbcc"[..])
+        );
+        // No offset table: only frame 0 (all fragments) is found.
+        assert_eq!(frame_data(&f, &[], 2, 0).as_deref(), Some(&b"aabbbbcc"[..]));
+        assert_eq!(frame_data(&f, &[], 2, 1), None);
+        // An offset past the data: an empty frame, which the decoders refuse.
+        assert_eq!(
+            frame_data(&f, &[0, u32::MAX], 2, 1).as_deref(),
+            Some(&b""[..])
+        );
+    }
 }

@@ -271,3 +271,41 @@ pub(super) fn truncation(path: &Path, transfer_syntax: &str) -> Option<(u64, u64
         .find_map(|(i, _)| hit(i))
         .filter(|&(len, found)| len != u32::MAX as u64 && found < len)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn signed_values_are_sign_extended_from_bits_stored() {
+        // 12 bits stored: 0x0FFF is -1, 0x0800 is -2048, 0x07FF is 2047, whatever the bits
+        // above (0 from a decoder, the sign from a writer, junk).
+        let words: [u16; 5] = [0x0FFF, 0x0800, 0x07FF, 0xFFFF, 0xA001];
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        let out = sign_extend(&bytes, 16, 12, true);
+        let v: Vec<i16> = out
+            .chunks_exact(2)
+            .map(|c| i16::from_le_bytes([c[0], c[1]]))
+            .collect();
+        assert_eq!(v, [-1, -2048, 2047, -1, 1]);
+        // 8-bit, 4 stored.
+        assert_eq!(
+            &*sign_extend(&[0x0F, 0x08, 0x07], 8, 4, true),
+            &[0xFF, 0xF8, 0x07]
+        );
+        // Unsigned, full-width or 32-bit data is kept as it is.
+        assert!(matches!(
+            sign_extend(&bytes, 16, 12, false),
+            Cow::Borrowed(_)
+        ));
+        assert!(matches!(
+            sign_extend(&bytes, 16, 16, true),
+            Cow::Borrowed(_)
+        ));
+        assert!(matches!(sign_extend(&bytes, 16, 0, true), Cow::Borrowed(_)));
+        assert!(matches!(
+            sign_extend(&bytes[..8], 32, 12, true),
+            Cow::Borrowed(_)
+        ));
+    }
+}
