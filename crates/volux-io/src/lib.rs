@@ -11,7 +11,7 @@
 //! | NRRD | [`nrrd`] | `flate2` |
 //! | MetaImage `.mhd` / `.mha` | [`metaimage`] | `flate2` |
 //! | NIfTI-1 and NIfTI-2 `.nii` / `.nii.gz`, `.hdr` + `.img` | [`nifti`] | (hand-written header parser) |
-//! | DICOM series and multi-frame | [`dicom`] | `dicom-object` |
+//! | DICOM series and multi-frame (uncompressed, RLE, JPEG, JPEG 2000) | [`dicom`] | `dicom-object`, `dicom-pixeldata` |
 //! | VTK legacy `.vtk` | [`vtk_legacy`] | |
 //! | VTK XML `.vti` / `.vtu` | [`vtk_xml`] | `quick-xml`, `base64`, `flate2` |
 //! | PLOT3D xyz + q | [`plot3d`] | |

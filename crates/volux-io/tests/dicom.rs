@@ -407,7 +407,7 @@ fn two_series() {
 }
 
 #[test]
-fn compressed_transfer_syntax_is_unsupported() {
+fn compressed_transfer_syntax_with_native_pixel_data_is_invalid() {
     let Some(series) = shared(SERIES) else {
         return;
     };
@@ -424,7 +424,8 @@ fn compressed_transfer_syntax_is_unsupported() {
     for path in [p.as_path(), dir.path()] {
         let k = err_kind(dicom::read(path, None));
         assert!(
-            matches!(&k, ErrorKind::Unsupported(m) if m.contains("1.2.840.10008.1.2.5") && m.contains("RLE")),
+            matches!(&k, ErrorKind::Invalid(m) if m.contains("1.2.840.10008.1.2.5")
+                && m.contains("RLE") && m.contains("not encapsulated")),
             "{k}"
         );
     }

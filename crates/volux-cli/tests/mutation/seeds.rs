@@ -1,5 +1,6 @@
 //! Small valid files of every format Volux reads, written by hand (no shared data, except
-//! the tiny DICOM file of `pydicom_emri_small` when it is present): the seeds of the mutation
+//! the tiny DICOM file of `pydicom_emri_small` when it is present, and compressed DICOM
+//! files from volux-io's committed test fixtures): the seeds of the mutation
 //! harness. Grids are 6 x 5 x 4 with a smooth blob (one NRRD is 256^3); meshes are a unit cube split into five
 //! tetrahedra.
 use volux_testkit::mutate::{compress, gzip, Codec, InputFile, Layout};
@@ -123,6 +124,7 @@ pub fn all() -> Vec<Seed> {
         vtet(),
     ]);
     v.extend(dicom());
+    v.extend(dicom_compressed());
     v
 }
 
@@ -775,4 +777,41 @@ fn dicom() -> Option<Seed> {
         "dicom",
         vec![InputFile::new("t.dcm", bytes, Layout::Binary(1024))],
     ))
+}
+
+/// Compressed DICOM: the 10-frame 32 x 32 crops of `emri_small` committed as volux-io's
+/// fixtures (`tests/fixtures/dicom_compressed`), in RLE Lossless, JPEG Lossless and JPEG 2000
+/// Lossless; the header is the bytes before the PixelData element.
+fn dicom_compressed() -> Vec<Seed> {
+    let files: [(&'static str, &[u8]); 3] = [
+        (
+            "dicom-rle",
+            include_bytes!("../../../volux-io/tests/fixtures/dicom_compressed/emri_rle.dcm"),
+        ),
+        (
+            "dicom-jpeg-lossless",
+            include_bytes!("../../../volux-io/tests/fixtures/dicom_compressed/emri_jpll70.dcm"),
+        ),
+        (
+            "dicom-j2k",
+            include_bytes!("../../../volux-io/tests/fixtures/dicom_compressed/emri_j2k90.dcm"),
+        ),
+    ];
+    files
+        .into_iter()
+        .map(|(format, bytes)| {
+            let header = bytes
+                .windows(4)
+                .position(|w| w == [0xE0, 0x7F, 0x10, 0x00])
+                .unwrap_or(bytes.len() / 2);
+            Seed::grid(
+                format,
+                vec![InputFile::new(
+                    "t.dcm",
+                    bytes.to_vec(),
+                    Layout::Binary(header),
+                )],
+            )
+        })
+        .collect()
 }

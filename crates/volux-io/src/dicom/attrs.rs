@@ -93,6 +93,8 @@ pub(super) struct ImageInfo {
     pub rows: u32,
     pub cols: u32,
     pub bits: u32,
+    /// BitsStored (0 when absent: all of BitsAllocated).
+    pub bits_stored: u32,
     pub signed: bool,
     pub samples_per_pixel: u32,
     pub photometric: String,
@@ -123,6 +125,7 @@ impl ImageInfo {
             rows: u32_of(tags::ROWS)?,
             cols: u32_of(tags::COLUMNS)?,
             bits: u32_of(tags::BITS_ALLOCATED).unwrap_or(0),
+            bits_stored: u32_of(tags::BITS_STORED).unwrap_or(0),
             signed: int(obj, tags::PIXEL_REPRESENTATION) == Some(1),
             samples_per_pixel: u32_of(tags::SAMPLES_PER_PIXEL).unwrap_or(1),
             photometric: string(obj, tags::PHOTOMETRIC_INTERPRETATION).unwrap_or_default(),

@@ -15,7 +15,7 @@
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
-use super::pixels::{EXPLICIT_BE, IMPLICIT_LE};
+use super::ts::{EXPLICIT_BE, IMPLICIT_LE};
 use crate::error::{ErrorKind, ReadError, Result};
 use crate::util::{file_len, io_error, open_regular};
 

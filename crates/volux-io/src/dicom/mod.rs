@@ -1,9 +1,15 @@
 //! DICOM (PS3.10 files with the 128-byte preamble and `DICM` marker): a folder of single-frame
 //! slices, one series picked by SeriesInstanceUID, or one file (enhanced multi-frame or a
-//! single slice). Parsing uses `dicom-object` 0.10 (a maintained, pure-Rust DICOM parser);
-//! no pixel-data codec is linked, so only uncompressed transfer syntaxes are read (implicit
-//! and explicit VR little endian, explicit VR big endian); compressed ones (JPEG, JPEG 2000,
-//! RLE, deflate) are [`ErrorKind::Unsupported`] naming the transfer syntax.
+//! single slice). Parsing uses `dicom-object` 0.10 (a maintained, pure-Rust DICOM parser).
+//! Uncompressed transfer syntaxes (implicit and explicit VR little endian, explicit VR big
+//! endian) are read directly; compressed pixel data is decoded with `dicom-pixeldata` 0.10
+//! (module `codec`), whose pure-Rust codecs only are linked: RLE Lossless, JPEG baseline
+//! (8-bit) and lossless (`jpeg-decoder`), JPEG 2000 lossless and lossy (`openjp2`, the Rust
+//! port of OpenJPEG). The grid of a compressed file gets a note naming its transfer syntax.
+//! JPEG-LS (decoded by dicom-pixeldata only through CharLS, a C++ library), 12-bit lossy JPEG
+//! (which `jpeg-decoder` does not decode), deflate, High-Throughput JPEG 2000 and the others
+//! are [`ErrorKind::Unsupported`] naming the transfer syntax's UID and name. Decoding gives
+//! the stored values, which then take the same path as uncompressed ones (below).
 //!
 //! - Folder: every file with the `DICM` marker is parsed (others, e.g. `series.json`, and
 //!   non-image DICOM files such as a DICOMDIR are skipped); slices are grouped by
@@ -18,11 +24,15 @@
 //! - Spacing: PixelSpacing is (row spacing = y, column spacing = x); z is the median gap of the
 //!   sorted positions, else SpacingBetweenSlices, else SliceThickness (noted).
 //! - Pixels: BitsAllocated 8 -> uint8, 16 -> uint16 / int16 (PixelRepresentation), 32 ->
-//!   float32 (noted); SamplesPerPixel must be 1. RescaleSlope / RescaleIntercept (per slice or
+//!   float32 (noted; uncompressed only); SamplesPerPixel must be 1. Signed values are
+//!   sign-extended from BitsStored. RescaleSlope / RescaleIntercept (per slice or
 //!   frame) are applied: slope 1 with values that still fit int16 gives int16 (CT Hounsfield
 //!   units), anything else float32. The pixel data length is checked against
 //!   Rows x Columns x frames x bytes before use; a file that ends inside its pixel data is
-//!   [`ErrorKind::Truncated`].
+//!   [`ErrorKind::Truncated`]. Compressed data: the decoded size is checked against the
+//!   memory budget before decoding, each frame's codestream header against Rows, Columns,
+//!   SamplesPerPixel and BitsAllocated (a mismatch is [`ErrorKind::Invalid`]: the decoders
+//!   would overrun their buffers), and each decoded frame's length before use.
 //!
 //! Placement (LPS, the DICOM patient coordinate system, PS3.3 C.7.6.2.1.1): the grid is in
 //! (column, row, slice) order with its origin at the first slice's ImagePositionPatient, and
@@ -48,8 +58,10 @@ use crate::error::Result;
 
 mod attrs;
 mod bounds;
+mod codec;
 mod geometry;
 mod pixels;
+mod ts;
 
 use attrs::ImageInfo;
 use geometry::{Stack, StackInput};
@@ -151,7 +163,7 @@ fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
     let total = frame
         .checked_mul(frames as u64)
         .ok_or_else(|| invalid(path, "the pixel data size overflows"))?;
-    let bytes = pixels::le_bytes(path, &obj, total, &mut notes)?;
+    let bytes = pixel_bytes(path, &obj, &info, (frames, frame), &mut notes)?;
     let (positions, rescale) = frame_geometry(&obj, &info, frames);
     let labels = (1..=frames).map(|i| format!("frame {i}")).collect();
     let stack = order(
@@ -174,6 +186,30 @@ fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
     let rescale: Vec<_> = stack.order.iter().map(|&i| rescale[i]).collect();
     notes.extend(stack.notes.iter().cloned());
     build_grid(path, &info, &stack, &data, &rescale, notes)
+}
+
+/// The stored values of `frames` frames of `frame` bytes each, little-endian: the PixelData
+/// itself for an uncompressed transfer syntax, else decoded (module `codec`), with a note
+/// naming the transfer syntax (once per syntax).
+fn pixel_bytes<'a>(
+    path: &Path,
+    obj: &'a DefaultDicomObject,
+    info: &ImageInfo,
+    (frames, frame): (usize, u64),
+    notes: &mut Vec<String>,
+) -> Result<std::borrow::Cow<'a, [u8]>> {
+    let ts = info.transfer_syntax.as_str();
+    if ts::is_native(ts) {
+        let total = frame
+            .checked_mul(frames as u64)
+            .ok_or_else(|| invalid(path, "the pixel data size overflows"))?;
+        return pixels::le_bytes(path, obj, total, notes);
+    }
+    let note = ts::note(ts);
+    if !notes.contains(&note) {
+        notes.push(note);
+    }
+    codec::decode(path, obj, info, frames, frame).map(std::borrow::Cow::Owned)
 }
 
 /// Per-frame positions (PlanePositionSequence) and rescale of a multi-frame file; the
@@ -255,8 +291,13 @@ fn build_grid(
         stack.order.len() as i64,
     ];
     let (dims, _) = volux_core::limits::checked_dims(dims).map_err(err)?;
-    let samples =
-        pixels::assemble(data, info.bits, info.signed, rescale, &mut notes).map_err(err)?;
+    let samples = pixels::assemble(
+        data,
+        (info.bits, info.bits_stored, info.signed),
+        rescale,
+        &mut notes,
+    )
+    .map_err(err)?;
     let [row, col] = info.pixel_spacing.unwrap_or_else(|| {
         notes.push("no PixelSpacing: an in-plane spacing of 1 was used".into());
         [1.0, 1.0]
@@ -444,7 +485,7 @@ fn load_series(dir: &Path, slices: &[ImageInfo], mut notes: Vec<String>) -> Resu
     let mut rescale = Vec::with_capacity(slices.len());
     for s in stack.order.iter().filter_map(|&i| slices.get(i)) {
         let obj = open_full(&s.path)?;
-        data.extend_from_slice(&pixels::le_bytes(&s.path, &obj, frame, &mut notes)?);
+        data.extend_from_slice(&pixel_bytes(&s.path, &obj, s, (1, frame), &mut notes)?);
         rescale.push(attrs::rescale(&obj, None));
     }
     notes.extend(stack.notes.iter().cloned());

@@ -1,4 +1,5 @@
-//! Pixel data of uncompressed transfer syntaxes: extraction, length checks, rescaling.
+//! Pixel data of uncompressed transfer syntaxes (extraction, length checks) and the value
+//! path shared with the compressed ones (sign extension, rescaling).
 use std::borrow::Cow;
 use std::path::Path;
 
@@ -8,43 +9,18 @@ use volux_core::grid::Scalar;
 use volux_core::{with_samples, Buffer, Samples, ScalarType};
 
 use super::attrs::{ImageInfo, Obj};
+use super::ts::{is_native, ts_name, unsupported, EXPLICIT_BE, IMPLICIT_LE};
 use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
 
-/// Implicit VR little endian.
-pub(super) const IMPLICIT_LE: &str = "1.2.840.10008.1.2";
-/// Explicit VR little endian.
-pub(super) const EXPLICIT_LE: &str = "1.2.840.10008.1.2.1";
-/// Explicit VR big endian (retired).
-pub(super) const EXPLICIT_BE: &str = "1.2.840.10008.1.2.2";
-
-/// A readable name for common compressed transfer syntaxes.
-fn ts_name(uid: &str) -> &'static str {
-    match uid {
-        "1.2.840.10008.1.2.1.99" => "Deflated Explicit VR Little Endian",
-        "1.2.840.10008.1.2.4.50" => "JPEG Baseline",
-        "1.2.840.10008.1.2.4.51" => "JPEG Extended",
-        "1.2.840.10008.1.2.4.57" | "1.2.840.10008.1.2.4.70" => "JPEG Lossless",
-        "1.2.840.10008.1.2.4.80" | "1.2.840.10008.1.2.4.81" => "JPEG-LS",
-        "1.2.840.10008.1.2.4.90" | "1.2.840.10008.1.2.4.91" => "JPEG 2000",
-        "1.2.840.10008.1.2.4.201" | "1.2.840.10008.1.2.4.202" | "1.2.840.10008.1.2.4.203" => {
-            "High-Throughput JPEG 2000"
-        }
-        "1.2.840.10008.1.2.5" => "RLE Lossless",
-        _ => "compressed or unknown",
-    }
-}
-
 /// Checks that the pixel format is one Volux decodes.
 pub(super) fn check_format(info: &ImageInfo) -> Result<(), ErrorKind> {
     let ts = info.transfer_syntax.as_str();
-    if ![IMPLICIT_LE, EXPLICIT_LE, EXPLICIT_BE].contains(&ts) {
-        return Err(ErrorKind::Unsupported(format!(
-            "transfer syntax {ts} ({}): Volux reads uncompressed DICOM only (implicit or \
-             explicit VR little endian, explicit VR big endian)",
-            ts_name(ts)
-        )));
+    if !is_native(ts) {
+        if let Some(why) = unsupported(ts) {
+            return Err(ErrorKind::Unsupported(why));
+        }
     }
     if info.samples_per_pixel != 1 {
         return Err(ErrorKind::Unsupported(format!(
@@ -52,10 +28,21 @@ pub(super) fn check_format(info: &ImageInfo) -> Result<(), ErrorKind> {
             info.samples_per_pixel, info.photometric
         )));
     }
-    if ![8, 16, 32].contains(&info.bits) {
+    let bits: &[u32] = if is_native(ts) {
+        &[8, 16, 32]
+    } else {
+        &[8, 16]
+    };
+    if !bits.contains(&info.bits) {
         return Err(ErrorKind::Unsupported(format!(
-            "BitsAllocated {}: Volux reads 8, 16 and 32",
-            info.bits
+            "BitsAllocated {}: Volux reads {} in transfer syntax {ts} ({})",
+            info.bits,
+            if is_native(ts) {
+                "8, 16 and 32"
+            } else {
+                "8 and 16"
+            },
+            ts_name(ts)
         )));
     }
     Ok(())
@@ -139,16 +126,39 @@ fn to_le(p: &PrimitiveValue) -> Cow<'_, [u8]> {
     }
 }
 
-/// Turns the little-endian bytes of all slices into samples, applying each slice's
-/// `(slope, intercept)`: integers stay native when no rescale is needed, become int16 when
-/// slope is 1 and the shifted values fit (CT Hounsfield units), float32 otherwise.
+/// Signed 8- and 16-bit samples sign-extended from their `stored` low bits (BitsStored): the
+/// bits above the stored ones are not part of the value (a decoder may leave them 0, a
+/// writer may fill them with the sign). Unsigned and 32-bit samples are kept as they are.
+fn sign_extend(bytes: &[u8], bits: u32, stored: u32, signed: bool) -> Cow<'_, [u8]> {
+    if !signed || stored == 0 || stored >= bits || bits > 16 {
+        return Cow::Borrowed(bytes);
+    }
+    let shift = bits - stored;
+    Cow::Owned(if bits == 8 {
+        bytes
+            .iter()
+            .map(|&b| (((b << shift) as i8) >> shift) as u8)
+            .collect()
+    } else {
+        bytes
+            .chunks_exact(2)
+            .flat_map(|c| ((i16::from_le_bytes([c[0], c[1]]) << shift) >> shift).to_le_bytes())
+            .collect()
+    })
+}
+
+/// Turns the little-endian bytes of all slices (stored values, whatever the transfer
+/// syntax) into samples: signed values are sign-extended from `bits_stored`, then each
+/// slice's `(slope, intercept)` is applied: integers stay native when no rescale is needed,
+/// become int16 when slope is 1 and the shifted values fit (CT Hounsfield units), float32
+/// otherwise.
 pub(super) fn assemble(
     bytes: &[u8],
-    bits: u32,
-    signed: bool,
+    (bits, bits_stored, signed): (u32, u32, bool),
     rescale: &[(f64, f64)],
     notes: &mut Vec<String>,
 ) -> Result<Samples, volux_core::Error> {
+    let bytes = &*sign_extend(bytes, bits, bits_stored, signed);
     let raw = match (bits, signed) {
         (8, false) => Samples::from_bytes(ScalarType::U8, bytes, true)?,
         (8, true) => {
@@ -260,4 +270,42 @@ pub(super) fn truncation(path: &Path, transfer_syntax: &str) -> Option<(u64, u64
         .filter(|(_, w)| *w == tag)
         .find_map(|(i, _)| hit(i))
         .filter(|&(len, found)| len != u32::MAX as u64 && found < len)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn signed_values_are_sign_extended_from_bits_stored() {
+        // 12 bits stored: 0x0FFF is -1, 0x0800 is -2048, 0x07FF is 2047, whatever the bits
+        // above (0 from a decoder, the sign from a writer, junk).
+        let words: [u16; 5] = [0x0FFF, 0x0800, 0x07FF, 0xFFFF, 0xA001];
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        let out = sign_extend(&bytes, 16, 12, true);
+        let v: Vec<i16> = out
+            .chunks_exact(2)
+            .map(|c| i16::from_le_bytes([c[0], c[1]]))
+            .collect();
+        assert_eq!(v, [-1, -2048, 2047, -1, 1]);
+        // 8-bit, 4 stored.
+        assert_eq!(
+            &*sign_extend(&[0x0F, 0x08, 0x07], 8, 4, true),
+            &[0xFF, 0xF8, 0x07]
+        );
+        // Unsigned, full-width or 32-bit data is kept as it is.
+        assert!(matches!(
+            sign_extend(&bytes, 16, 12, false),
+            Cow::Borrowed(_)
+        ));
+        assert!(matches!(
+            sign_extend(&bytes, 16, 16, true),
+            Cow::Borrowed(_)
+        ));
+        assert!(matches!(sign_extend(&bytes, 16, 0, true), Cow::Borrowed(_)));
+        assert!(matches!(
+            sign_extend(&bytes[..8], 32, 12, true),
+            Cow::Borrowed(_)
+        ));
+    }
 }
