@@ -43,6 +43,7 @@ pub mod plot3d;
 pub mod progress;
 pub mod raw;
 pub mod slc;
+pub mod tiff;
 pub mod util;
 pub mod vtet;
 pub mod vtk_legacy;
