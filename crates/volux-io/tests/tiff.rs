@@ -458,7 +458,8 @@ fn tifffile_ome_two_channels() {
 
 #[test]
 fn tifffile_compressions_and_types() {
-    let cases: [(&str, ScalarType, &str, fn(f64) -> f64); 4] = [
+    type Case = (&'static str, ScalarType, &'static str, fn(f64) -> f64);
+    let cases: [Case; 4] = [
         ("lzw_u16.tif", ScalarType::U16, "LZW compression", |v| v),
         (
             "deflate_u8.tif",
@@ -479,4 +480,64 @@ fn tifffile_compressions_and_types() {
         let n = notes(&g);
         assert!(n.contains(comp), "{name}: {n}");
     }
+}
+
+/// Random corruptions (bytes set to boundary values, bit flips, cuts) of an LZW stack, a
+/// Deflate ImageJ hyperstack and a PackBits OME-TIFF, read in-process: an error or a grid,
+/// never a panic. `VOLUX_TIFF_CORRUPTIONS=N` runs N cases per file (default 700).
+#[test]
+fn random_corruptions_never_panic() {
+    let cases = std::env::var("VOLUX_TIFF_CORRUPTIONS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(700);
+    let dir = tempfile::tempdir().unwrap();
+    let pages: Vec<Vec<u16>> = (0..4)
+        .map(|z| page(9, 7, (z, 0, 0), |v| v as u16))
+        .collect();
+    let lzw = tiff_bytes::<colortype::Gray16>(9, 7, &pages, Compression::Lzw, &Meta::default());
+    let ij = Meta {
+        description: Some(
+            "ImageJ=1.54f\nimages=4\nchannels=2\nslices=2\nunit=micron\nspacing=2\n".into(),
+        ),
+        resolution: Some((2.0, 2.0, ResolutionUnit::None)),
+    };
+    let hyper = tiff_bytes::<colortype::Gray16>(
+        9,
+        7,
+        &pages,
+        Compression::Deflate(DeflateLevel::Fast),
+        &ij,
+    );
+    let ome = Meta {
+        description: Some(ome_xml(9, 7, (2, 2, 1), "XYCZT", r#"PhysicalSizeX="1""#)),
+        resolution: None,
+    };
+    let u8s: Vec<Vec<u8>> = (0..4).map(|z| page(9, 7, (z, 0, 0), |v| v as u8)).collect();
+    let ome = tiff_bytes::<colortype::Gray8>(9, 7, &u8s, Compression::Packbits, &ome);
+    let mut rng = volux_testkit::TestRng::new(0x7469_6666);
+    let mut grids = 0;
+    for (name, seed) in [("a.tif", &lzw), ("b.tif", &hyper), ("c.ome.tif", &ome)] {
+        for _ in 0..cases {
+            let mut bytes = seed.clone();
+            for _ in 0..1 + rng.below(4) {
+                let at = rng.below(bytes.len());
+                match rng.below(4) {
+                    0 => bytes[at] ^= 1 << rng.below(8),
+                    1 => bytes[at] = [0, 0xff, 0x7f, 0x80][rng.below(4)],
+                    2 => {
+                        let v = [0u32, 1, 0xffff, 0x7fff_ffff, 0xffff_ffff][rng.below(5)];
+                        let end = (at + 4).min(bytes.len());
+                        bytes[at..end].copy_from_slice(&v.to_le_bytes()[..end - at]);
+                    }
+                    _ => bytes.truncate(at.max(8)),
+                }
+            }
+            let p = write(dir.path(), name, &bytes);
+            if volux_io::tiff::read(&p, 0, 0).is_ok() {
+                grids += 1;
+            }
+        }
+    }
+    assert!(grids > 0);
 }
