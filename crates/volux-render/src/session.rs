@@ -307,6 +307,8 @@ mod tests {
         let dataset = DatasetRef {
             path: "data/head.nrrd".into(),
             q_variable: Some("energy".into()),
+            channel: Some(1),
+            timepoint: Some(2),
             ..Default::default()
         };
         let mut session = Session::new(dataset, &scene(), Some([0.1, 0.2, 0.3]));
