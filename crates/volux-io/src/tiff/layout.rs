@@ -14,7 +14,7 @@ pub struct Layout {
     pub spacing: [f64; 3],
     /// Where the spacing comes from, in words (a grid note).
     pub spacing_note: String,
-    /// The metadata flavour: `ImageJ`, `OME` or `plain`.
+    /// The metadata flavour: `ImageJ`, `OME`, `plain` or `folder`.
     pub flavour: &'static str,
     /// Further notes (channels and timepoints chosen, ...).
     pub notes: Vec<String>,

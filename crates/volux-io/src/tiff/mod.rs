@@ -84,6 +84,11 @@ pub fn read(path: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
         dec.seek_to_image(ifd).map_err(|e| tiff_err(path, e))?;
         volume.read_page(path, &mut dec, ifd, z)?;
     }
-    let what = format!("TIFF ({} metadata): {n} pages", layout.flavour);
+    let kind = match layout.flavour {
+        "ImageJ" => "ImageJ TIFF",
+        "OME" => "OME-TIFF",
+        _ => "TIFF",
+    };
+    let what = format!("{kind}: {n} pages");
     grid(path, what, first, volume, layout)
 }
