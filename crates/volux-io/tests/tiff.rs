@@ -541,3 +541,23 @@ fn random_corruptions_never_panic() {
     }
     assert!(grids > 0);
 }
+
+#[test]
+fn bigtiff_stack() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut out = Cursor::new(Vec::new());
+    let mut enc = TiffEncoder::new_big(&mut out)
+        .unwrap()
+        .with_compression(Compression::Lzw);
+    for z in 0..3 {
+        let p: Vec<u16> = page(5, 4, (z, 0, 0), |v| v as u16);
+        enc.write_image::<colortype::Gray16>(5, 4, &p).unwrap();
+    }
+    let bytes = out.into_inner();
+    assert_eq!(&bytes[..4], b"II+\0");
+    let p = write(dir.path(), "big.tf8", &bytes);
+    assert_eq!(detect(&p).unwrap(), Format::Tiff);
+    let g = read(&p, 0, 0).unwrap();
+    assert_eq!(g.dims(), [5, 4, 3]);
+    check_values(&g, 0, 0, |v| v);
+}
