@@ -255,10 +255,10 @@ pub struct LoadArgs {
     /// OME-Zarr: the pyramid level to load (0 = full resolution) [default: 0].
     #[arg(long)]
     pub level: Option<usize>,
-    /// OME-Zarr: the channel index [default: 0].
+    /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the channel index [default: 0].
     #[arg(long)]
     pub channel: Option<usize>,
-    /// OME-Zarr: the timepoint index [default: 0].
+    /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the timepoint index [default: 0].
     #[arg(long)]
     pub timepoint: Option<usize>,
 }

@@ -30,8 +30,8 @@ pub struct LoadOptions {
     pub array: Option<String>,
     /// OME-Zarr: the pyramid level to load (default 0, full resolution).
     pub level: Option<usize>,
-    /// OME-Zarr: the channel index (default 0).
+    /// OME-Zarr, ImageJ hyperstacks, OME-TIFF: the channel index (default 0).
     pub channel: usize,
-    /// OME-Zarr: the timepoint index (default 0).
+    /// OME-Zarr, ImageJ hyperstacks, OME-TIFF: the timepoint index (default 0).
     pub timepoint: usize,
 }

@@ -39,6 +39,8 @@ pub enum Format {
     Vtet,
     /// An OME-Zarr store (a directory; NGFF 0.4 on Zarr v2, 0.5 on Zarr v3).
     OmeZarr,
+    /// TIFF stacks: multi-page TIFF, ImageJ hyperstacks, OME-TIFF, folders of TIFF slices.
+    Tiff,
 }
 
 impl Format {
@@ -58,6 +60,7 @@ impl Format {
             Format::Off => "OFF tetrahedral mesh",
             Format::Vtet => "Volux binary tet mesh (.vtet)",
             Format::OmeZarr => "OME-Zarr",
+            Format::Tiff => "TIFF",
         }
     }
 }
@@ -86,6 +89,38 @@ pub fn is_zarr_dir(path: &Path) -> bool {
                 .any(|f| path.join(f).is_file()))
 }
 
+/// Whether a file name ends in `.tif` or `.tiff` (any case).
+pub fn is_tiff_name(name: &str) -> bool {
+    let n = name.to_ascii_lowercase();
+    n.ends_with(".tif") || n.ends_with(".tiff")
+}
+
+/// Whether the folder `path` is a folder of TIFF slices: more than half of its visible
+/// entries are named `*.tif` / `*.tiff` (a DICOM folder's files are named otherwise).
+pub fn is_tiff_dir(path: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(path) else {
+        return false;
+    };
+    let (mut tiff, mut other) = (0usize, 0usize);
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        match (name.starts_with('.'), is_tiff_name(&name)) {
+            (true, _) => {}
+            (false, true) => tiff += 1,
+            (false, false) => other += 1,
+        }
+    }
+    tiff > other
+}
+
+/// Whether `head` starts with the TIFF magic bytes: `II*\0` / `MM\0*`, or BigTIFF's
+/// `II+\0` / `MM\0+`.
+pub fn is_tiff_magic(head: &[u8]) -> bool {
+    [b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"]
+        .iter()
+        .any(|m| head.starts_with(*m))
+}
+
 /// Detects the format of `path` (a file, or a folder of DICOM slices). Only regular files
 /// are opened to sniff their magic bytes: a FIFO, a device or a socket is refused by type
 /// ([`ErrorKind::NotRegular`]).
@@ -94,6 +129,9 @@ pub fn detect(path: &Path) -> Result<Format> {
     if meta.is_dir() {
         if is_zarr_dir(path) {
             return Ok(Format::OmeZarr);
+        }
+        if is_tiff_dir(path) {
+            return Ok(Format::Tiff);
         }
         return Ok(Format::Dicom);
     }
@@ -124,6 +162,10 @@ pub fn detect(path: &Path) -> Result<Format> {
     }
     if head.len() >= 132 && &head[128..132] == b"DICM" {
         return Ok(Format::Dicom);
+    }
+    // After DICOM: a DICOM file's preamble may hold a TIFF header (dual-format files).
+    if is_tiff_magic(head) && !ext(".raw") {
+        return Ok(Format::Tiff);
     }
     if head.starts_with(b"# vtk DataFile") {
         return Ok(Format::VtkLegacy);
@@ -174,6 +216,8 @@ pub fn detect(path: &Path) -> Result<Format> {
         Format::Off
     } else if ext(".vtet") {
         Format::Vtet
+    } else if ext(".tif") || ext(".tiff") {
+        Format::Tiff
     } else if name.contains("xyz") && (ext(".bin") || ext(".x") || ext(".xyz")) {
         Format::Plot3d
     } else if ext(".raw") || sidecar.exists() {

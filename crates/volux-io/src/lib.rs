@@ -1,7 +1,7 @@
 //! # volux-io
 //!
 //! Readers and writers for the formats Volux users have. [`load()`](fn@load) picks the reader from the
-//! file's magic bytes first and its extension second, and returns a [`Dataset`]: a regular
+//! file's magic bytes first and its extension second (a folder by what it holds), and returns a [`Dataset`]: a regular
 //! [`Grid`](volux_core::grid::Grid) or a [`TetMesh`](volux_core::mesh::TetMesh). Every reader checks sizes before allocating, reports truncated or
 //! inconsistent files as a [`ReadError`] naming the file, and never panics on bad input.
 //!
@@ -19,6 +19,7 @@
 //! | OFF tet meshes | [`off`] | `flate2` |
 //! | Volux binary tet mesh `.vtet` | [`vtet`] | |
 //! | OME-Zarr stores (`*.ome.zarr`, NGFF 0.4/0.5, read and written; feature `zarr`) | `omezarr` | `zarrs` |
+//! | TIFF stacks, ImageJ hyperstacks, OME-TIFF, folders of TIFF slices | [`tiff`](mod@tiff) | `tiff`, `quick-xml` |
 //!
 //! The other modules: [`load`](mod@load) (the entry point), [`detect`](mod@detect) (format
 //! detection), [`dataset`] (what readers return), [`error`] (typed errors), [`cells`] (the VTK
@@ -43,6 +44,7 @@ pub mod plot3d;
 pub mod progress;
 pub mod raw;
 pub mod slc;
+pub mod tiff;
 pub mod util;
 pub mod vtet;
 pub mod vtk_legacy;

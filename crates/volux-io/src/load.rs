@@ -1,4 +1,4 @@
-//! [`load`]: any supported file or DICOM folder, the reader chosen by [`detect`].
+//! [`load`]: any supported file, DICOM or TIFF folder, the reader chosen by [`detect`].
 use std::path::Path;
 
 use crate::dataset::{Dataset, LoadOptions};
@@ -26,6 +26,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<(Dataset, Format)> {
         Format::Off => Dataset::Mesh(off::read(path)?),
         Format::Vtet => Dataset::Mesh(vtet::read(path)?),
         Format::OmeZarr => Dataset::Grid(load_zarr(path, opts)?),
+        Format::Tiff => Dataset::Grid(crate::tiff::read(path, opts.channel, opts.timepoint)?),
     };
     Ok((dataset, format))
 }

@@ -55,6 +55,12 @@ pub struct DatasetRef {
     /// A grid split into tetrahedra (for the mesh methods).
     #[serde(default)]
     pub as_tets: bool,
+    /// OME-Zarr, ImageJ hyperstack, OME-TIFF: the channel (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channel: Option<usize>,
+    /// OME-Zarr, ImageJ hyperstack, OME-TIFF: the timepoint (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timepoint: Option<usize>,
 }
 
 /// The slice views' state: the window (values mapped to black and white) and the
@@ -319,6 +325,8 @@ mod tests {
         let dataset = DatasetRef {
             path: "data/head.nrrd".into(),
             q_variable: Some("energy".into()),
+            channel: Some(1),
+            timepoint: Some(2),
             ..Default::default()
         };
         let mut session = Session::new(dataset, &scene(), Some([0.1, 0.2, 0.3]));

@@ -42,6 +42,11 @@ pub struct Options {
     pub lod: Lod,
     /// Where frames are rendered (`--backend`; the library's default is the CPU).
     pub backend: Backend,
+    /// The channel and timepoint of the dataset opened at start (`--channel`,
+    /// `--timepoint`: OME-Zarr, ImageJ hyperstacks, OME-TIFF).
+    pub channel: Option<usize>,
+    /// See [`Options::channel`].
+    pub timepoint: Option<usize>,
 }
 
 /// The default background (dark blue-grey, as the CLI's demo).
@@ -172,13 +177,19 @@ impl ViewerApp {
             level_log: VecDeque::new(),
         };
         if let Some(path) = &options.open {
-            app.open(path);
+            app.open_with(path, options.channel, options.timepoint);
         }
         app
     }
 
     /// Opens a dataset or (a `.json` with a session version) a session, in the background.
     pub fn open(&mut self, path: &Path) {
+        self.open_with(path, None, None);
+    }
+
+    /// [`ViewerApp::open`], a dataset's channel and timepoint chosen (default 0; a session
+    /// keeps its own).
+    pub fn open_with(&mut self, path: &Path, channel: Option<usize>, timepoint: Option<usize>) {
         self.error = None;
         if is_session_file(path) {
             match Session::load(path) {
@@ -194,6 +205,8 @@ impl ViewerApp {
         self.pending_session = None;
         self.start_load(DatasetRef {
             path: path.to_path_buf(),
+            channel,
+            timepoint,
             ..Default::default()
         });
     }

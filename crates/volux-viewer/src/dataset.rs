@@ -90,6 +90,8 @@ pub fn load(source: &DatasetRef) -> Result<Loaded, String> {
         q_file: source.q_file.clone(),
         series_uid: source.series_uid.clone(),
         array: source.array.clone(),
+        channel: source.channel.unwrap_or(0),
+        timepoint: source.timepoint.unwrap_or(0),
         ..LoadOptions::default()
     };
     let shown = source.path.display().to_string();

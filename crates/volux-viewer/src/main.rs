@@ -38,6 +38,12 @@ struct Args {
     /// scene, else the CPU), cpu, or gpu (an error shown in the view when it cannot).
     #[arg(long, value_name = "auto|cpu|gpu", default_value = "auto")]
     backend: String,
+    /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the channel to show [default: 0].
+    #[arg(long)]
+    channel: Option<usize>,
+    /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the timepoint to show [default: 0].
+    #[arg(long)]
+    timepoint: Option<usize>,
     /// Seconds of scripted orbit in --bench.
     #[arg(long, default_value_t = 3.0)]
     bench_seconds: f64,
@@ -95,6 +101,8 @@ fn run(args: Args) -> Result<(), String> {
         save_session: args.save_session,
         lod,
         backend: volux_viewer::backend::Backend::parse(&args.backend)?,
+        channel: args.channel,
+        timepoint: args.timepoint,
     };
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()

@@ -34,6 +34,8 @@ pub fn open(source: &DatasetRef, budget: u64) -> Result<OpenedStore, String> {
     let shown = source.path.display().to_string();
     let opts = ZarrOptions {
         array: source.array.clone(),
+        channel: source.channel.unwrap_or(0),
+        timepoint: source.timepoint.unwrap_or(0),
         ..ZarrOptions::default()
     };
     let store = omezarr::open_store(&source.path, &opts).map_err(|e| format!("{shown}: {e}"))?;

@@ -32,6 +32,7 @@ pub fn load(path: &Path, args: &LoadArgs, show: bool) -> Result<(Dataset, Format
 fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError> {
     let vtk = matches!(format, Format::VtkLegacy | Format::Vti | Format::Vtu);
     let zarr = format == Format::OmeZarr;
+    let stack = zarr || format == Format::Tiff;
     let misplaced = [
         (
             "q-variable",
@@ -58,8 +59,18 @@ fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError>
             "VTK and OME-Zarr",
         ),
         ("level", args.level.is_some(), zarr, "OME-Zarr"),
-        ("channel", args.channel.is_some(), zarr, "OME-Zarr"),
-        ("timepoint", args.timepoint.is_some(), zarr, "OME-Zarr"),
+        (
+            "channel",
+            args.channel.is_some(),
+            stack,
+            "OME-Zarr and TIFF",
+        ),
+        (
+            "timepoint",
+            args.timepoint.is_some(),
+            stack,
+            "OME-Zarr and TIFF",
+        ),
     ];
     match misplaced.iter().find(|(_, given, fits, _)| *given && !fits) {
         Some((flag, _, _, owner)) => Err(format!(

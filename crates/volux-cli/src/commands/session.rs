@@ -51,6 +51,8 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
         q_file: d.q_file.clone(),
         series: d.series_uid.clone(),
         array: d.array.clone(),
+        channel: d.channel,
+        timepoint: d.timepoint,
         ..LoadArgs::default()
     };
     let (data, _) = super::common::load(&d.path, &load, show)

@@ -96,6 +96,8 @@ pub fn dataset_ref(view: &ToolViewArgs) -> DatasetRef {
         series_uid: view.load.series.clone(),
         array: view.load.array.clone(),
         as_tets: false,
+        channel: view.load.channel,
+        timepoint: view.load.timepoint,
     }
 }
 

@@ -125,6 +125,7 @@ pub fn all() -> Vec<Seed> {
     ]);
     v.extend(dicom());
     v.extend(dicom_compressed());
+    v.extend(tiff_seeds());
     v
 }
 
@@ -814,4 +815,77 @@ fn dicom_compressed() -> Vec<Seed> {
             )
         })
         .collect()
+}
+
+// ------------------------------------------------------------------ TIFF
+
+/// Pages of `C` (one per z slice, 6 x 5 each) as one TIFF file, the first page described by
+/// `description`.
+fn tiff_file<C: tiff::encoder::colortype::ColorType>(
+    pages: &[Vec<C::Inner>],
+    compression: tiff::encoder::Compression,
+    description: Option<&str>,
+) -> Vec<u8>
+where
+    [C::Inner]: tiff::encoder::TiffValue,
+{
+    let mut out = std::io::Cursor::new(Vec::new());
+    let mut enc = tiff::encoder::TiffEncoder::new(&mut out)
+        .expect("TIFF header")
+        .with_compression(compression);
+    for (i, p) in pages.iter().enumerate() {
+        let mut img = enc
+            .new_image::<C>(DIMS[0] as u32, DIMS[1] as u32)
+            .expect("TIFF page");
+        if let (0, Some(d)) = (i, description) {
+            img.encoder()
+                .write_tag(tiff::tags::Tag::ImageDescription, d)
+                .expect("TIFF description");
+        }
+        img.write_data(p).expect("TIFF data");
+    }
+    out.into_inner()
+}
+
+/// A multi-page 16-bit LZW stack, and a two-channel OME-TIFF (Deflate, 8-bit, XYZCT).
+fn tiff_seeds() -> Vec<Seed> {
+    use tiff::encoder::{colortype, Compression, DeflateLevel};
+    let plane = DIMS[0] * DIMS[1];
+    let u16_pages: Vec<Vec<u16>> = values()
+        .chunks(plane)
+        .map(|p| p.iter().map(|&v| v as u16).collect())
+        .collect();
+    let lzw = tiff_file::<colortype::Gray16>(&u16_pages, Compression::Lzw, None);
+    let u8_pages: Vec<Vec<u8>> = u8s().chunks(plane).map(<[u8]>::to_vec).collect();
+    let both: Vec<Vec<u8>> = u8_pages.iter().chain(&u8_pages).cloned().collect();
+    let xml = format!(
+        r#"<?xml version="1.0" encoding="UTF-8"?><OME xmlns="http://www.openmicroscopy.org/Schemas/OME/2016-06"><Image ID="Image:0"><Pixels ID="Pixels:0" DimensionOrder="XYZCT" Type="uint8" SizeX="{}" SizeY="{}" SizeZ="{}" SizeC="2" SizeT="1" PhysicalSizeX="1" PhysicalSizeY="0.5" PhysicalSizeZ="2"><Channel ID="Channel:0:0"/><Channel ID="Channel:0:1"/><TiffData IFD="0" PlaneCount="{}"/></Pixels></Image></OME>"#,
+        DIMS[0],
+        DIMS[1],
+        DIMS[2],
+        2 * DIMS[2]
+    );
+    let ome = tiff_file::<colortype::Gray8>(
+        &both,
+        Compression::Deflate(DeflateLevel::Balanced),
+        Some(&xml),
+    );
+    vec![
+        Seed::grid(
+            "tiff-lzw",
+            vec![InputFile::new(
+                "t.tif",
+                lzw.clone(),
+                Layout::Binary(lzw.len()),
+            )],
+        ),
+        Seed::grid(
+            "ome-tiff",
+            vec![InputFile::new(
+                "t.ome.tif",
+                ome.clone(),
+                Layout::Binary(ome.len()),
+            )],
+        ),
+    ]
 }
