@@ -745,3 +745,63 @@ fn dragging_a_tilt_handle_tilts_the_plane() {
     let now = volux_viewer::sculpt_tools::project(&camera, rect, tip).unwrap();
     assert!(now.distance(at + egui::vec2(60.0, -40.0)) < 1.0, "{now:?}");
 }
+
+/// The formats of issue 21 open in the viewer as in `volux info`: an ImageJ hyperstack with
+/// `--channel`/`--timepoint` (the values of the chosen channel and timepoint), a JPEG
+/// Lossless DICOM folder (bit for bit its uncompressed original's range), a bad channel shows
+/// an error and the viewer lives on.
+#[test]
+fn tiff_stacks_and_compressed_dicom_open_with_their_channel() {
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../volux-io/tests/fixtures");
+    let stack = fixtures.join("tiff/imagej_hyperstack.tif");
+    let want = |c: Option<usize>, t: Option<usize>| {
+        let options = volux_io::LoadOptions {
+            channel: c.unwrap_or(0),
+            timepoint: t.unwrap_or(0),
+            ..Default::default()
+        };
+        let (data, _) = volux_io::load(&stack, &options).unwrap();
+        match data {
+            volux_io::Dataset::Grid(g) => g.range(),
+            _ => panic!("a grid"),
+        }
+    };
+    assert_ne!(
+        want(Some(1), Some(2)),
+        want(None, None),
+        "the choice matters"
+    );
+    let open = |path: &Path, channel: Option<usize>, timepoint: Option<usize>| {
+        let options = Options {
+            open: Some(path.to_path_buf()),
+            channel,
+            timepoint,
+            ..Default::default()
+        };
+        Harness::builder()
+            .with_size([1100.0, 800.0])
+            .with_max_steps(8)
+            .build_state(
+                move |ctx, app: &mut App| {
+                    app.get_or_insert_with(|| ViewerApp::new(ctx, options.clone()));
+                    volux_viewer::window::frame(app.as_mut().unwrap(), ctx)
+                },
+                None,
+            )
+    };
+    let mut h = open(&stack, Some(1), Some(2));
+    loaded_with_frame(&mut h);
+    assert_eq!(app(&h).range(), want(Some(1), Some(2)));
+    let mut h = open(&stack, Some(9), None);
+    step_until(&mut h, "the error", |a| a.error.is_some() && !a.busy());
+    let message = app(&h).error.clone().unwrap();
+    assert!(message.contains("channel"), "{message}");
+    let native = fixtures.join("dicom_compressed/mr_native");
+    let mut h = open(&fixtures.join("dicom_compressed/mr_jpll70"), None, None);
+    loaded_with_frame(&mut h);
+    let (data, _) = volux_io::load(&native, &Default::default()).unwrap();
+    let volux_io::Dataset::Grid(g) = data else {
+        panic!("a grid")
+    };
+    assert_eq!(app(&h).range(), g.range());
+}
