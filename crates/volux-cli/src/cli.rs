@@ -258,9 +258,15 @@ pub struct LoadArgs {
     /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the channel index [default: 0].
     #[arg(long)]
     pub channel: Option<usize>,
-    /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the timepoint index [default: 0].
+    /// Files holding several volumes (4-D NIfTI, NRRD, MGH, DICOM series with several
+    /// stacks, OME-Zarr, ImageJ hyperstacks, OME-TIFF): which one along time or the volume
+    /// axis [default: 0]; `volux info` lists them.
     #[arg(long)]
     pub timepoint: Option<usize>,
+    /// Vector and colour volumes: the component read as the scalar [default: the first
+    /// component of a vector; a colour image keeps its colour].
+    #[arg(long)]
+    pub component: Option<usize>,
 }
 
 /// `volux render` options.

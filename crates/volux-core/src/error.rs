@@ -74,6 +74,17 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+    /// A volume asked for along an axis beyond x, y, z (a timepoint, a component) that the
+    /// file does not hold.
+    #[error("{option} {index} does not exist: the file holds {len} ({})", if *len == 0 { "none".to_string() } else { format!("0 to {}", len - 1) })]
+    NoSuchVolume {
+        /// The reader option: `"timepoint"` or `"component"`.
+        option: &'static str,
+        /// The index asked for.
+        index: usize,
+        /// How many there are.
+        len: usize,
+    },
     /// A camera that cannot be used.
     #[error("invalid camera: {0}")]
     InvalidCamera(String),

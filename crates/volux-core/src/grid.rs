@@ -9,8 +9,10 @@ use std::sync::Arc;
 use glam::{DMat3, DVec3};
 
 use crate::aabb::Aabb;
+use crate::color::Rgb;
 use crate::error::{Error, Result};
 use crate::limits::{check_alloc, checked_dims};
+use crate::volume_axes::{AxisKind, ExtraAxis};
 
 /// The native scalar type of a grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -392,6 +394,10 @@ pub struct Grid {
     samples: Samples,
     range: [f64; 2],
     notes: Vec<String>,
+    /// Axes beyond x, y, z of the file this grid is one volume of.
+    extra_axes: Vec<ExtraAxis>,
+    /// The voxels' colour, for an RGB grid (whose samples are then its luminance).
+    color: Option<Arc<Rgb>>,
 }
 
 impl Grid {
@@ -419,9 +425,44 @@ impl Grid {
             samples,
             range: [0.0, 0.0],
             notes: Vec::new(),
+            extra_axes: Vec::new(),
+            color: None,
         };
         grid.sanitize_and_range();
         Ok(grid)
+    }
+
+    /// Builds an RGB grid: its samples are the colour's luminance ([`Rgb::luminance`]), which
+    /// classification and measurement use, and [`Grid::color`] keeps the colour.
+    pub fn from_rgb(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        origin: [f64; 3],
+        rgb: Rgb,
+    ) -> Result<Self> {
+        let mut grid = Self::new(dims, spacing, origin, rgb.luminance())?;
+        grid.extra_axes
+            .push(ExtraAxis::new(AxisKind::Color, 3, None));
+        grid.color = Some(Arc::new(rgb));
+        Ok(grid)
+    }
+
+    /// The voxels' colour when the grid is an RGB image (its samples are then the luminance).
+    pub fn color(&self) -> Option<&Rgb> {
+        self.color.as_deref()
+    }
+
+    /// This grid with a record of an axis beyond x, y, z along which its file holds other
+    /// volumes (time, b-values, components), for `volux info` and the viewer.
+    pub fn with_extra_axis(mut self, axis: ExtraAxis) -> Self {
+        self.extra_axes.push(axis);
+        self
+    }
+
+    /// The axes beyond x, y, z of the file this grid comes from (the colour channels of an
+    /// RGB grid among them); empty for a plain 3-D file.
+    pub fn extra_axes(&self) -> &[ExtraAxis] {
+        &self.extra_axes
     }
 
     fn sanitize_and_range(&mut self) {
@@ -600,7 +641,7 @@ impl Grid {
     }
     /// Bytes held by the samples.
     pub fn memory_bytes(&self) -> usize {
-        self.len() * self.scalar_type().size()
+        self.len() * self.scalar_type().size() + self.color().map_or(0, Rgb::memory_bytes)
     }
     /// All values converted to f32 (a copy; used by writers and tests, not by renderers).
     pub fn to_f32_vec(&self) -> Result<Vec<f32>> {

@@ -10,6 +10,9 @@
 //!   one level; [`bricked::Multiscale`], the pyramid), the seam between chunked storage and the
 //!   bricked renderer (seed `003`);
 //! - [`orientation`]: direction matrices and their patient-orientation letters (LPS, RAS);
+//! - [`color::Rgb`]: the colour channels of an RGB grid, kept beside its luminance;
+//! - [`volume_axes`]: the axes beyond x, y, z (time, b-values, components) of files holding
+//!   several volumes, one of which a grid is;
 //! - [`mesh::TetMesh`]: a tetrahedral mesh with one scalar per vertex, validation, boundary faces,
 //!   face adjacency and per-vertex gradients;
 //! - [`tetrahedralize`]: regular and curvilinear grids split into conforming tetrahedra;
@@ -34,6 +37,7 @@
 pub mod aabb;
 pub mod bricked;
 pub mod camera;
+pub mod color;
 pub mod error;
 pub mod grid;
 pub mod heatmap;
@@ -51,6 +55,7 @@ pub mod transfer;
 pub mod transfer_import;
 pub mod units;
 pub mod voi;
+pub mod volume_axes;
 
 pub use aabb::Aabb;
 pub use camera::{Camera, CameraSpec, Projection, RayGenerator};

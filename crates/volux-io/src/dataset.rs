@@ -32,6 +32,13 @@ pub struct LoadOptions {
     pub level: Option<usize>,
     /// OME-Zarr, ImageJ hyperstacks, OME-TIFF: the channel index (default 0).
     pub channel: usize,
-    /// OME-Zarr, ImageJ hyperstacks, OME-TIFF: the timepoint index (default 0).
+    /// Files holding several volumes: which one along their time or volume axis (fMRI and
+    /// perfusion time series, DWI b-values, the stacks of a DICOM series at the same
+    /// positions, OME-Zarr and TIFF timepoints); default 0. An index past the axis is
+    /// [`volux_core::Error::NoSuchVolume`].
     pub timepoint: usize,
+    /// Files with several values per voxel (NIfTI and NRRD vectors, colour images): the one
+    /// to read as the scalar. `None`: the first component of a vector, and for colour images
+    /// the colour itself (its luminance as the scalar, [`volux_core::color`]).
+    pub component: Option<usize>,
 }

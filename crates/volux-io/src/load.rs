@@ -28,7 +28,36 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<(Dataset, Format)> {
         Format::OmeZarr => Dataset::Grid(load_zarr(path, opts)?),
         Format::Tiff => Dataset::Grid(crate::tiff::read(path, opts.channel, opts.timepoint)?),
     };
+    if !matches!(format, Format::Tiff | Format::OmeZarr) {
+        check_chosen(path, &dataset, opts)?;
+    }
     Ok((dataset, format))
+}
+
+/// A timepoint or component asked for must be the one the reader chose: a reader that found
+/// no such axis in the file leaves no record of it, and the request is then an error rather
+/// than silently ignored (the file holds one volume, or one value per voxel).
+fn check_chosen(path: &Path, dataset: &Dataset, opts: &LoadOptions) -> Result<()> {
+    let axes = match dataset {
+        Dataset::Grid(g) => g.extra_axes(),
+        _ => &[],
+    };
+    let asked = [
+        ("timepoint", (opts.timepoint > 0).then_some(opts.timepoint)),
+        ("component", opts.component.filter(|&c| c > 0)),
+    ];
+    for (option, index) in asked {
+        let Some(index) = index else { continue };
+        let axis = axes.iter().find(|a| a.kind.option() == option);
+        if axis.and_then(|a| a.chosen) != Some(index) {
+            let len = axis.map_or(1, |a| a.len);
+            return Err(crate::error::ReadError::new(
+                path,
+                volux_core::Error::NoSuchVolume { option, index, len },
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// One level of an OME-Zarr store as an in-core grid.

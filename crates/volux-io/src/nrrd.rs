@@ -558,29 +558,62 @@ fn type_name(t: ScalarType) -> &'static str {
 }
 
 /// Writes `grid` as an NRRD file with attached, raw, little-endian data (written atomically),
-/// placed in `left-posterior-superior` space by its spacing, direction and origin.
+/// placed in `left-posterior-superior` space by its spacing, direction and origin. An RGB
+/// grid ([`Grid::color`]) is written with its colour, as a 4-D NRRD whose first axis is
+/// `RGB-color`.
 pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
     let werr = |source| WriteError {
         path: path.to_path_buf(),
         source,
     };
-    volux_core::limits::check_alloc("NRRD output", grid.len() as u64, 4).map_err(werr)?;
+    let color = grid.color();
+    let per_voxel = if color.is_some() { 3 } else { 1 };
+    volux_core::limits::check_alloc("NRRD output", grid.len() as u64 * per_voxel, 4)
+        .map_err(werr)?;
     let [x, y, z] = grid.dims();
     let [ox, oy, oz] = grid.origin().to_array();
     let (d, s) = (grid.direction(), grid.spacing());
     let axis = |c: DVec3| format!("({},{},{})", c.x, c.y, c.z);
     let dirs = [d.x_axis * s.x, d.y_axis * s.y, d.z_axis * s.z].map(axis);
+    // An RGB grid keeps its colour: a 4-D NRRD whose fastest axis is the colour (as 3D
+    // Slicer and ITK write RGB volumes).
+    let (ty, dimension, sizes, kinds, none) = match color {
+        Some(c) => (
+            c.scalar_type(),
+            4,
+            format!("3 {x} {y} {z}"),
+            "kinds: RGB-color domain domain domain\n",
+            "none ",
+        ),
+        None => (grid.scalar_type(), 3, format!("{x} {y} {z}"), "", ""),
+    };
     let header = format!(
-        "NRRD0004\n# written by Volux\ntype: {}\ndimension: 3\nspace: left-posterior-superior\n\
-         sizes: {x} {y} {z}\nspace directions: {} {} {}\n\
-         space origin: ({ox},{oy},{oz})\nendian: little\nencoding: raw\n\n",
-        type_name(grid.scalar_type()),
+        "NRRD0004\n# written by Volux\ntype: {}\ndimension: {dimension}\n\
+         space: left-posterior-superior\nsizes: {sizes}\n{kinds}\
+         space directions: {none}{} {} {}\nspace origin: ({ox},{oy},{oz})\nendian: little\n\
+         encoding: raw\n\n",
+        type_name(ty),
         dirs[0],
         dirs[1],
         dirs[2]
     );
     let mut bytes = header.into_bytes();
-    bytes.extend_from_slice(&raw::samples_le_bytes(grid.samples()));
+    match color {
+        Some(c) => {
+            let [r, g, b] = c.channels().each_ref().map(raw::samples_le_bytes);
+            let size = c.scalar_type().size();
+            for ((r, g), b) in r
+                .chunks_exact(size)
+                .zip(g.chunks_exact(size))
+                .zip(b.chunks_exact(size))
+            {
+                bytes.extend_from_slice(r);
+                bytes.extend_from_slice(g);
+                bytes.extend_from_slice(b);
+            }
+        }
+        None => bytes.extend_from_slice(&raw::samples_le_bytes(grid.samples())),
+    }
     volux_core::image::write_atomically(path, &bytes).map_err(werr)
 }
 

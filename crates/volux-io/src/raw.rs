@@ -4,7 +4,8 @@
 //! `[x, y, z]`, `dtype` (`uint8`, `uint16`, `int16`, `float32`; `int8`, `uint32`, `int32` and
 //! `float64` are accepted and converted to `float32` with a note), `endianness` (`little` or
 //! `big`, default little), `compression` (`gzip`, `none`, or absent: gzip when the name ends in `.gz`), `spacing`, optional
-//! `origin` and `value_range`. Data is x fastest, then y, then z. The sidecar is parsed with
+//! `origin`, `direction` (the LPS directions of the index axes, three columns) and
+//! `value_range`. Data is x fastest, then y, then z. The sidecar is parsed with
 //! `serde_json`; gzip data goes through `flate2` ([`crate::util::open_maybe_gz`]).
 //!
 //! Uncompressed little-endian data of a native type is memory-mapped
@@ -399,6 +400,10 @@ struct Sidecar {
     spacing: Option<[f64; 3]>,
     #[serde(default)]
     origin: Option<[f64; 3]>,
+    /// The LPS world directions of the index axes i, j, k (three columns), as `volux info
+    /// --json` prints them; absent: the identity.
+    #[serde(default)]
+    direction: Option<[[f64; 3]; 3]>,
     #[serde(default)]
     value_range: Option<[f64; 2]>,
 }
@@ -546,7 +551,7 @@ pub fn read(path: &Path) -> Result<Grid> {
         notes.push("sidecar has no spacing: 1 assumed".to_string());
         [1.0; 3]
     });
-    let grid = make_grid(
+    let mut grid = make_grid(
         &data_path,
         l.dims,
         spacing,
@@ -554,6 +559,12 @@ pub fn read(path: &Path) -> Result<Grid> {
         data,
         notes,
     )?;
+    if let Some([i, j, k]) = car.direction {
+        let d = glam::DMat3::from_cols(i.into(), j.into(), k.into());
+        grid = grid
+            .with_direction(d)
+            .map_err(|e| ReadError::new(&sidecar, e))?;
+    }
     let differs = |a: f64, b: f64| (a - b).abs() > 1e-6 * a.abs().max(b.abs()).max(1.0);
     Ok(match car.value_range {
         Some(r) if differs(r[0], grid.range()[0]) || differs(r[1], grid.range()[1]) => {
@@ -588,7 +599,7 @@ pub fn encoded_size(grid: &Grid) -> u64 {
 
 /// Writes `grid` as raw little-endian data in its native type at `path`, plus the sidecar
 /// `path.json` (`dims_xyz`, `dtype`, `endianness`, `compression`, `spacing`, `origin`,
-/// `value_range`). A data name ending in `.gz` (e.g. `ct.raw.gz`, sidecar `ct.raw.gz.json`)
+/// `direction`, `value_range`). A data name ending in `.gz` (e.g. `ct.raw.gz`, sidecar `ct.raw.gz.json`)
 /// is gzip-compressed. Both files are written atomically (temporary name, then rename).
 pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
     write_with_progress(grid, path, &|_, _| {})
@@ -620,8 +631,23 @@ pub fn write_with_progress(
     volux_core::image::write_atomically(&sidecar, &text).map_err(werr(&sidecar))
 }
 
+/// What [`write()`] cannot store of `grid`, in words (one note each): the colour of an RGB
+/// grid (its luminance is written). Front ends say these before writing.
+pub fn unstored(grid: &Grid) -> Vec<String> {
+    let mut out = Vec::new();
+    if grid.color().is_some() {
+        out.push(
+            "raw files hold one scalar per voxel: the colour is not stored, its luminance is \
+             written (write .nrrd to keep the colour)"
+                .to_string(),
+        );
+    }
+    out
+}
+
 /// The sidecar [`write()`] puts beside the data.
 fn sidecar_json(grid: &Grid, gzip: bool) -> serde_json::Value {
+    let d = grid.direction();
     serde_json::json!({
         "kind": "grid",
         "format": "raw",
@@ -632,6 +658,8 @@ fn sidecar_json(grid: &Grid, gzip: bool) -> serde_json::Value {
         "compression": if gzip { "gzip" } else { "none" },
         "spacing": grid.spacing().to_array(),
         "origin": grid.origin().to_array(),
+        "space": "LPS",
+        "direction": [d.x_axis.to_array(), d.y_axis.to_array(), d.z_axis.to_array()],
         "value_range": grid.range(),
     })
 }

@@ -20,6 +20,7 @@ pub fn load(path: &Path, args: &LoadArgs, show: bool) -> Result<(Dataset, Format
         level: args.level,
         channel: args.channel.unwrap_or(0),
         timepoint: args.timepoint.unwrap_or(0),
+        component: args.component,
     };
     let out = volux_io::load(path, &opts);
     pb.finish_and_clear();
@@ -33,6 +34,12 @@ fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError>
     let vtk = matches!(format, Format::VtkLegacy | Format::Vti | Format::Vtu);
     let zarr = format == Format::OmeZarr;
     let stack = zarr || format == Format::Tiff;
+    // Formats that can hold several volumes (a 4th axis) or several values per voxel.
+    let volumes = stack
+        || matches!(
+            format,
+            Format::Nifti | Format::Nrrd | Format::MetaImage | Format::Dicom
+        );
     let misplaced = [
         (
             "q-variable",
@@ -68,8 +75,14 @@ fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError>
         (
             "timepoint",
             args.timepoint.is_some(),
-            stack,
-            "OME-Zarr and TIFF",
+            volumes,
+            "files holding several volumes (NIfTI, NRRD, MetaImage, DICOM, OME-Zarr, TIFF)",
+        ),
+        (
+            "component",
+            args.component.is_some(),
+            volumes && !zarr,
+            "vector and colour volumes (NIfTI, NRRD, MetaImage, DICOM, TIFF)",
         ),
     ];
     match misplaced.iter().find(|(_, given, fits, _)| *given && !fits) {

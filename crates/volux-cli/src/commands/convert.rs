@@ -11,6 +11,15 @@ use crate::progress;
 
 pub fn run(input: &Path, output: &Path, args: &LoadArgs, show: bool) -> Result<(), CmdError> {
     let (data, _) = super::common::load(input, args, show)?;
+    // What the reader did to the values (a scaling, a conversion) travels with the data.
+    let notes = match &data {
+        Dataset::Grid(g) => g.notes(),
+        Dataset::Mesh(m) => m.notes(),
+        _ => &[],
+    };
+    for n in notes {
+        eprintln!("note: {}", crate::messages::sanitize(n));
+    }
     write(data, output, show)?;
     said(output);
     Ok(())
@@ -87,6 +96,9 @@ fn bar(output: &Path, total: u64, show: bool) -> indicatif::ProgressBar {
 
 fn write_grid(g: &Grid, output: &Path, ext: &str, show: bool) -> Result<(), CmdError> {
     if ext.ends_with(".raw") || ext.ends_with(".raw.gz") {
+        for n in volux_io::raw::unstored(g) {
+            eprintln!("note: {n}");
+        }
         let pb = bar(output, volux_io::raw::encoded_size(g), show);
         volux_io::raw::write_with_progress(g, output, &|done, _| pb.set_position(done))?;
         pb.finish_and_clear();

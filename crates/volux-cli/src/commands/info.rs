@@ -52,6 +52,12 @@ fn grid_json(g: &Grid, format: Format) -> serde_json::Value {
         "memory_bytes": g.memory_bytes(),
         "memory_mapped": g.samples().is_mapped(),
         "notes": g.notes(),
+        // Axes beyond x, y, z (time, b-values, components, colour): what the file holds
+        // besides the volume read, and which option chooses among them.
+        "volumes": g.extra_axes().iter().map(|a| json!({
+            "kind": a.kind, "len": a.len, "chosen": a.chosen, "option": a.kind.option(),
+            "values": a.values, "meaning": a.meaning, "text": a.describe(),
+        })).collect::<Vec<_>>(),
     })
 }
 
@@ -88,7 +94,7 @@ fn sparkline(h: &Histogram, width: usize) -> String {
 
 /// The order people read a description in: what the file is first, then its shape, values
 /// and memory (keys not listed follow alphabetically).
-const ORDER: [&str; 23] = [
+const ORDER: [&str; 24] = [
     "format",
     "kind",
     "dims",
@@ -105,6 +111,7 @@ const ORDER: [&str; 23] = [
     "direction",
     "bounds",
     "range",
+    "volumes",
     "axes",
     "histogram",
     "boundary_faces",
@@ -128,6 +135,15 @@ pub(super) fn print_text(path: &Path, v: &serde_json::Value) {
                 println!("  {k:<15} {}", a.len());
                 for l in a {
                     println!("    {}", sanitize(l.as_str().unwrap_or_default()));
+                }
+            }
+            serde_json::Value::Array(a) if k == "volumes" => {
+                for axis in a {
+                    println!(
+                        "  {:<15} {}",
+                        "volumes",
+                        sanitize(axis["text"].as_str().unwrap_or_default())
+                    );
                 }
             }
             serde_json::Value::Array(a) if k == "notes" => {
