@@ -42,3 +42,24 @@ pub struct LoadOptions {
     /// the colour itself (its luminance as the scalar, [`volux_core::color`]).
     pub component: Option<usize>,
 }
+
+/// Which volume of a file holding several to read: the part of [`LoadOptions`] that the
+/// readers of 4-D, vector and colour data share.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VolumeChoice {
+    /// The index along the file's time or volume axis ([`LoadOptions::timepoint`]).
+    pub timepoint: usize,
+    /// The component read as the scalar ([`LoadOptions::component`]); `None`: the first of a
+    /// vector, and the colour of a colour image.
+    pub component: Option<usize>,
+}
+
+impl LoadOptions {
+    /// The timepoint and component asked for.
+    pub fn choice(&self) -> VolumeChoice {
+        VolumeChoice {
+            timepoint: self.timepoint,
+            component: self.component,
+        }
+    }
+}

@@ -50,7 +50,7 @@ pub mod vtet;
 pub mod vtk_legacy;
 pub mod vtk_xml;
 
-pub use dataset::{Dataset, LoadOptions};
+pub use dataset::{Dataset, LoadOptions, VolumeChoice};
 pub use detect::{detect, Format};
 pub use error::{ErrorKind, ReadError, Result, WriteError};
 pub use load::load;
