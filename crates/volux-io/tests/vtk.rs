@@ -721,3 +721,38 @@ fn mutated_files_never_panic() {
         }
     }
 }
+
+/// A zlib block that inflates to far more than the grid holds (a bomb within deflate's
+/// 1032:1 ratio) is refused from its size header, before anything is inflated.
+#[test]
+fn a_compressed_array_larger_than_its_grid_is_refused_before_inflating() {
+    let dir = tempfile::tempdir().unwrap();
+    let declared: u64 = 64 << 20; // 64 MiB of zeros for a 5 x 4 x 6 = 120-point grid
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+    let zeros = vec![0u8; 1 << 20];
+    for _ in 0..(declared >> 20) {
+        z.write_all(&zeros).unwrap();
+    }
+    let block = z.finish().unwrap();
+    let mut appended = Vec::new();
+    for w in [1u32, declared as u32, declared as u32, block.len() as u32] {
+        appended.extend(w.to_le_bytes());
+    }
+    appended.extend(&block);
+    let mut file = br#"<?xml version="1.0"?>
+<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt32" compressor="vtkZLibDataCompressor">
+<ImageData WholeExtent="0 4 0 3 0 5" Origin="0 0 0" Spacing="1 1 1">
+<Piece Extent="0 4 0 3 0 5"><PointData Scalars="v">
+<DataArray type="Float32" Name="v" format="appended" offset="0"/>
+</PointData></Piece></ImageData>
+<AppendedData encoding="raw">_"#
+        .to_vec();
+    file.extend(&appended);
+    file.extend(b"</AppendedData></VTKFile>\n");
+    let p = write(dir.path(), "bomb.vti", &file);
+    let t = std::time::Instant::now();
+    let e = vtk_xml::read(&p, None).unwrap_err().to_string();
+    assert!(e.contains(&format!("declares {declared} bytes")), "{e}");
+    assert!(e.contains("asks for 480 bytes"), "{e}");
+    assert!(t.elapsed().as_secs_f64() < 1.0, "refused in {:?}", t.elapsed());
+}

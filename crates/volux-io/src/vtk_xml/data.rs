@@ -79,9 +79,36 @@ impl Encoding<'_> {
         })
     }
 
-    /// The payload of a raw byte stream that starts with the size header.
-    fn payload(&self, b: &[u8]) -> R<Vec<u8>> {
+    /// Bytes the header at `b` says the payload decodes to (inflated, for compressed data).
+    fn declared_len(&self, b: &[u8]) -> R<u64> {
+        if !self.compressed {
+            return self.word_at(b, 0);
+        }
+        let nb = self.word_at(b, 0)?;
+        let block = self.word_at(b, 1)?;
+        let last = self.word_at(b, 2)?;
+        Ok(match nb {
+            0 => 0,
+            _ => (nb - 1)
+                .saturating_mul(block)
+                .saturating_add(if last == 0 { block } else { last }),
+        })
+    }
+
+    /// The payload of a raw byte stream that starts with the size header. When the dataset
+    /// says how many bytes the array must hold (`expected`), a header declaring another size
+    /// is refused before anything is inflated or copied.
+    fn payload(&self, b: &[u8], expected: Option<u64>) -> R<Vec<u8>> {
         let h = self.header_len(b)?;
+        if let Some(want) = expected {
+            let declared = self.declared_len(b)?;
+            if declared != want {
+                return Err(format!(
+                    "the size header declares {declared} bytes, but the dataset's size asks for \
+                     {want} bytes of values; nothing was decoded"
+                ));
+            }
+        }
         let n = self.data_len(b)?;
         let data = b.get(h..).filter(|d| d.len() as u64 >= n).ok_or_else(|| {
             format!(
@@ -193,9 +220,12 @@ impl Encoding<'_> {
     }
 
     /// The payload of inline base64 text (whitespace removed).
-    fn inline(&self, chars: &[u8]) -> R<Vec<u8>> {
-        let single = || b64(chars).and_then(|b| self.payload(&b));
-        let split = || self.split_streams(chars).and_then(|b| self.payload(&b));
+    fn inline(&self, chars: &[u8], expected: Option<u64>) -> R<Vec<u8>> {
+        let single = || b64(chars).and_then(|b| self.payload(&b, expected));
+        let split = || {
+            self.split_streams(chars)
+                .and_then(|b| self.payload(&b, expected))
+        };
         if self.compressed {
             split().or_else(|e| single().map_err(|_| e))
         } else {
@@ -204,7 +234,7 @@ impl Encoding<'_> {
     }
 
     /// The payload at `offset` in the appended section.
-    fn appended(&self, offset: usize) -> R<Vec<u8>> {
+    fn appended(&self, offset: usize, expected: Option<u64>) -> R<Vec<u8>> {
         let (bytes, raw) = self
             .appended
             .ok_or("format=\"appended\" but the file has no <AppendedData>")?;
@@ -212,15 +242,30 @@ impl Encoding<'_> {
             .get(offset..)
             .ok_or_else(|| format!("offset {offset} is beyond the appended data"))?;
         if raw {
-            self.payload(at)
+            self.payload(at, expected)
         } else {
-            self.split_streams(at).and_then(|b| self.payload(&b))
+            self.split_streams(at)
+                .and_then(|b| self.payload(&b, expected))
         }
     }
 }
 
-/// Decodes a `<DataArray>`: its values and number of components.
-pub fn decode(e: &Elem, enc: &Encoding) -> R<(Values, usize)> {
+/// How many values a `<DataArray>` must hold, when the dataset says it.
+#[derive(Clone, Copy, Debug)]
+pub enum Expect {
+    /// One tuple (of NumberOfComponents values) per point or cell.
+    Tuples(u64),
+    /// This many values, whatever NumberOfComponents says (the 3 x NumberOfPoints
+    /// coordinates).
+    Values(u64),
+    /// Unknown (connectivity, whose length depends on the cell types).
+    Unknown,
+}
+
+/// Decodes a `<DataArray>`: its values and number of components. A binary array whose size
+/// header declares another size than `expect` asks for is refused before it is inflated, so
+/// a small grid cannot make the reader inflate a bomb.
+pub fn decode(e: &Elem, enc: &Encoding, expect: Expect) -> R<(Values, usize)> {
     let name = e.attr("Name").unwrap_or("(unnamed)");
     let t = e
         .attr("type")
@@ -236,6 +281,12 @@ pub fn decode(e: &Elem, enc: &Encoding) -> R<(Values, usize)> {
         None => 1,
     };
     let format = e.attr("format").unwrap_or("ascii");
+    let values = match expect {
+        Expect::Tuples(t) => Some(t.saturating_mul(ncomp as u64)),
+        Expect::Values(v) => Some(v),
+        Expect::Unknown => None,
+    };
+    let expected = values.map(|v| v.saturating_mul(ty.size() as u64));
     let bytes = match format {
         "ascii" => return Ok((ascii(&e.text, ty, name)?, ncomp)),
         "binary" => {
@@ -244,14 +295,14 @@ pub fn decode(e: &Elem, enc: &Encoding) -> R<(Values, usize)> {
                 .bytes()
                 .filter(|b| !b.is_ascii_whitespace())
                 .collect();
-            enc.inline(&chars)
+            enc.inline(&chars, expected)
         }
         "appended" => {
             let off = e.attr("offset").unwrap_or("0").trim();
             let off = off
                 .parse::<usize>()
                 .map_err(|_| format!("array '{name}': bad offset '{off}'"))?;
-            enc.appended(off)
+            enc.appended(off, expected)
         }
         f => return Err(format!("array '{name}': unknown format '{f}'")),
     }

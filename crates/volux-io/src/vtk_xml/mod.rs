@@ -126,15 +126,22 @@ fn piece<'a>(file: &'a Elem, kind: &str) -> std::result::Result<(&'a Elem, &'a E
     }
 }
 
-/// The arrays of `<PointData>` and `<CellData>`, the active `Scalars` array first.
-fn attributes(p: &Elem, enc: &Encoding) -> std::result::Result<Vec<Attribute>, String> {
+/// The arrays of `<PointData>` and `<CellData>`, the active `Scalars` array first; `points`
+/// and `cells` are how many tuples each section's arrays must hold.
+fn attributes(
+    p: &Elem,
+    enc: &Encoding,
+    points: u64,
+    cells: u64,
+) -> std::result::Result<Vec<Attribute>, String> {
     let mut out = Vec::new();
     for (sec, on_cells) in [("PointData", false), ("CellData", true)] {
         let Some(s) = p.child(sec) else { continue };
         let active = s.attr("Scalars");
+        let tuples = if on_cells { cells } else { points };
         let mut arrays = Vec::new();
         for e in s.children_named("DataArray") {
-            let (values, ncomp) = data::decode(e, enc)?;
+            let (values, ncomp) = data::decode(e, enc, data::Expect::Tuples(tuples))?;
             let name = e.attr("Name").unwrap_or("").to_string();
             arrays.push(Attribute {
                 name,
@@ -176,7 +183,8 @@ fn image_data(path: &Path, file: &Elem, enc: &Encoding, want: Option<&str>) -> R
     let spacing = numbers(ds.attr("Spacing"), [1.0; 3], "Spacing").map_err(err)?;
     let o = numbers(ds.attr("Origin"), [0.0; 3], "Origin").map_err(err)?;
     let origin = [0, 1, 2].map(|k| o[k] + ext[2 * k] * spacing[k]);
-    let attrs = attributes(p, enc).map_err(|m| err(ErrorKind::Invalid(m)))?;
+    let cells = dims.iter().map(|&d| (d as u64).saturating_sub(1).max(1)).product();
+    let attrs = attributes(p, enc, n, cells).map_err(|m| err(ErrorKind::Invalid(m)))?;
     let (samples, notes) =
         cells::grid_samples(&attrs, want, n as usize).map_err(|m| err(ErrorKind::Invalid(m)))?;
     let (direction, note) = image_direction(ds.attr("Direction"));
@@ -219,7 +227,7 @@ fn unstructured(
         .child("Points")
         .and_then(|e| e.child("DataArray"))
         .ok_or_else(|| err(ErrorKind::Header("no <Points> array".into())))?;
-    let (v, _) = data::decode(pts, enc).map_err(invalid)?;
+    let (v, _) = data::decode(pts, enc, data::Expect::Values((np as u64).saturating_mul(3))).map_err(invalid)?;
     if v.len() != np.saturating_mul(3) {
         return Err(invalid(format!(
             "Points has {} values, expected 3 x NumberOfPoints = {}",
@@ -238,7 +246,7 @@ fn unstructured(
         .collect();
     drop(v);
     let cells = cell_set(p, enc, nc).map_err(invalid)?;
-    let attrs = attributes(p, enc).map_err(invalid)?;
+    let attrs = attributes(p, enc, np as u64, nc as u64).map_err(invalid)?;
     cells::check_counts(np, nc, &attrs).map_err(invalid)?;
     cells::assemble(path, positions, &cells, &attrs, want)
 }
@@ -250,7 +258,13 @@ fn cell_set(p: &Elem, enc: &Encoding, nc: usize) -> std::result::Result<CellSet,
             .children_named("DataArray")
             .find(|e| e.attr("Name") == Some(name))
             .ok_or_else(|| format!("no Cells array '{name}'"))?;
-        data::decode(e, enc)?.0.to_indices(name)
+        // offsets and types hold one value per cell; connectivity's length depends on
+        // the cell types (bounded by the file's own size before inflating).
+        let expect = match name {
+            "connectivity" => data::Expect::Unknown,
+            _ => data::Expect::Tuples(nc as u64),
+        };
+        data::decode(e, enc, expect)?.0.to_indices(name)
     };
     let set = CellSet {
         connectivity: get("connectivity")?,
