@@ -264,6 +264,22 @@ pub fn plain_volume(data: Dataset) -> Result<Volume, CmdError> {
     }
 }
 
+/// What can be refused from the file's header before it is loaded: a grid too large to be
+/// split into tetrahedra (`--as-tets`), which would otherwise be read whole first.
+pub fn check_before_load(file: &std::path::Path, args: &RenderArgs) -> Result<(), CmdError> {
+    let pt = matches!(args.method, MethodArg::Auto | MethodArg::Pt);
+    if args.as_tets && pt {
+        if let Some(dims) = volux_io::peek_dims(file) {
+            volux_core::limits::check_alloc(
+                "the tetrahedral mesh of the grid",
+                volux_core::tetrahedralize::grid_mesh_bytes(dims),
+                1,
+            )?;
+        }
+    }
+    Ok(())
+}
+
 /// The loaded data as the volume to render: a grid split into tetrahedra for PT
 /// (`--as-tets` with `--method auto|pt`).
 pub fn volume(data: Dataset, args: &RenderArgs) -> Result<Volume, CmdError> {

@@ -611,3 +611,24 @@ fn slicing_on_the_cpu_is_refused_with_the_backend_to_use() {
     let err = refused(&[&base[..], &["--jitter", "-o", "x.png"]].concat(), d);
     assert!(err.contains("--jitter does not apply to slicing"), "{err}");
 }
+
+/// A grid too large to split into tetrahedra is refused from its header, before gigabytes
+/// are read: the sidecar claims 2048^3 samples and the data file holds 8 bytes, so loading
+/// first would report a truncated file instead.
+#[test]
+fn as_tets_is_refused_from_the_header_before_the_grid_is_loaded() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("huge.raw"), [0u8; 8]).unwrap();
+    std::fs::write(
+        d.join("huge.raw.json"),
+        r#"{"dims_xyz": [2048, 2048, 2048], "dtype": "uint8", "spacing": [1, 1, 1]}"#,
+    )
+    .unwrap();
+    let err = refused(&["render", "huge.raw", "--as-tets"], d);
+    assert!(
+        err.contains("the tetrahedral mesh of the grid needs"),
+        "{err}"
+    );
+    assert!(!err.contains("truncated"), "{err}");
+}

@@ -53,4 +53,4 @@ pub mod vtk_xml;
 pub use dataset::{Dataset, LoadOptions, VolumeChoice};
 pub use detect::{detect, Format};
 pub use error::{ErrorKind, ReadError, Result, WriteError};
-pub use load::load;
+pub use load::{load, peek_dims};

@@ -34,6 +34,16 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<(Dataset, Format)> {
     Ok((dataset, format))
 }
 
+/// The dims of the grid `path` holds, read from its header alone when its format has a
+/// cheap one (raw + JSON sidecar); `None` when it would take reading the file. Front ends use
+/// it to refuse, before loading gigabytes, what a grid of that size cannot become.
+pub fn peek_dims(path: &Path) -> Option<[usize; 3]> {
+    match detect(path).ok()? {
+        Format::RawJson => raw::dims(path).ok(),
+        _ => None,
+    }
+}
+
 /// A timepoint or component asked for must be the one the reader chose: a reader that found
 /// no such axis in the file leaves no record of it, and the request is then an error rather
 /// than silently ignored (the file holds one volume, or one value per voxel).

@@ -535,6 +535,14 @@ fn starts_with_gzip_magic(path: &Path) -> bool {
         .is_ok_and(|f| f.take(2).read_exact(&mut head).is_ok() && head == [0x1f, 0x8b])
 }
 
+/// The dims a raw grid's sidecar declares, validated, without reading the data: front ends
+/// check what a render would build from the grid (a tetrahedral mesh) before loading it.
+pub fn dims(path: &Path) -> Result<[usize; 3]> {
+    let (_, sidecar) = data_and_sidecar(path);
+    let car = read_sidecar(&sidecar)?;
+    Ok(layout(&sidecar, &car)?.dims)
+}
+
 /// Reads a raw grid through its sidecar; `path` is the data file or the sidecar itself.
 pub fn read(path: &Path) -> Result<Grid> {
     let (data_path, sidecar) = data_and_sidecar(path);

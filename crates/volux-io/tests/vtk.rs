@@ -754,5 +754,9 @@ fn a_compressed_array_larger_than_its_grid_is_refused_before_inflating() {
     let e = vtk_xml::read(&p, None).unwrap_err().to_string();
     assert!(e.contains(&format!("declares {declared} bytes")), "{e}");
     assert!(e.contains("asks for 480 bytes"), "{e}");
-    assert!(t.elapsed().as_secs_f64() < 1.0, "refused in {:?}", t.elapsed());
+    assert!(
+        t.elapsed().as_secs_f64() < 1.0,
+        "refused in {:?}",
+        t.elapsed()
+    );
 }

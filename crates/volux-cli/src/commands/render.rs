@@ -33,6 +33,7 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
     let (volume, format, loaded_grid) = match super::bricked::volume(file, args)? {
         Some(v) => (v, volux_io::Format::OmeZarr, false),
         None => {
+            crate::settings::check_before_load(file, args)?;
             let (data, format) = super::common::load(file, &args.load, show)?;
             let loaded_grid = matches!(data, Dataset::Grid(_));
             (crate::settings::volume(data, args)?, format, loaded_grid)

@@ -89,9 +89,11 @@ impl Encoding<'_> {
         let last = self.word_at(b, 2)?;
         Ok(match nb {
             0 => 0,
-            _ => (nb - 1)
-                .saturating_mul(block)
-                .saturating_add(if last == 0 { block } else { last }),
+            _ => {
+                (nb - 1)
+                    .saturating_mul(block)
+                    .saturating_add(if last == 0 { block } else { last })
+            }
         })
     }
 

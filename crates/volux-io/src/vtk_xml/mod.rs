@@ -183,7 +183,10 @@ fn image_data(path: &Path, file: &Elem, enc: &Encoding, want: Option<&str>) -> R
     let spacing = numbers(ds.attr("Spacing"), [1.0; 3], "Spacing").map_err(err)?;
     let o = numbers(ds.attr("Origin"), [0.0; 3], "Origin").map_err(err)?;
     let origin = [0, 1, 2].map(|k| o[k] + ext[2 * k] * spacing[k]);
-    let cells = dims.iter().map(|&d| (d as u64).saturating_sub(1).max(1)).product();
+    let cells = dims
+        .iter()
+        .map(|&d| (d as u64).saturating_sub(1).max(1))
+        .product();
     let attrs = attributes(p, enc, n, cells).map_err(|m| err(ErrorKind::Invalid(m)))?;
     let (samples, notes) =
         cells::grid_samples(&attrs, want, n as usize).map_err(|m| err(ErrorKind::Invalid(m)))?;
@@ -227,7 +230,12 @@ fn unstructured(
         .child("Points")
         .and_then(|e| e.child("DataArray"))
         .ok_or_else(|| err(ErrorKind::Header("no <Points> array".into())))?;
-    let (v, _) = data::decode(pts, enc, data::Expect::Values((np as u64).saturating_mul(3))).map_err(invalid)?;
+    let (v, _) = data::decode(
+        pts,
+        enc,
+        data::Expect::Values((np as u64).saturating_mul(3)),
+    )
+    .map_err(invalid)?;
     if v.len() != np.saturating_mul(3) {
         return Err(invalid(format!(
             "Points has {} values, expected 3 x NumberOfPoints = {}",
