@@ -58,9 +58,14 @@ pub struct DatasetRef {
     /// OME-Zarr, ImageJ hyperstack, OME-TIFF: the channel (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub channel: Option<usize>,
-    /// OME-Zarr, ImageJ hyperstack, OME-TIFF: the timepoint (default 0).
+    /// Files holding several volumes (4-D NIfTI, NRRD, DICOM series with several stacks,
+    /// OME-Zarr, ImageJ hyperstack, OME-TIFF): the timepoint (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timepoint: Option<usize>,
+    /// Vector and colour volumes: the component read as the scalar (default: the first of a
+    /// vector; a colour image keeps its colour).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub component: Option<usize>,
 }
 
 /// The slice views' state: the window (values mapped to black and white) and the

@@ -45,8 +45,10 @@ pub struct Options {
     /// The channel and timepoint of the dataset opened at start (`--channel`,
     /// `--timepoint`: OME-Zarr, ImageJ hyperstacks, OME-TIFF).
     pub channel: Option<usize>,
-    /// See [`Options::channel`].
+    /// See [`Options::channel`]; also 4-D NIfTI, NRRD, DICOM series with several stacks.
     pub timepoint: Option<usize>,
+    /// The component read as the scalar (`--component`: vector and colour volumes).
+    pub component: Option<usize>,
 }
 
 /// The default background (dark blue-grey, as the CLI's demo).
@@ -177,19 +179,25 @@ impl ViewerApp {
             level_log: VecDeque::new(),
         };
         if let Some(path) = &options.open {
-            app.open_with(path, options.channel, options.timepoint);
+            let source = DatasetRef {
+                channel: options.channel,
+                timepoint: options.timepoint,
+                component: options.component,
+                ..Default::default()
+            };
+            app.open_with(path, source);
         }
         app
     }
 
     /// Opens a dataset or (a `.json` with a session version) a session, in the background.
     pub fn open(&mut self, path: &Path) {
-        self.open_with(path, None, None);
+        self.open_with(path, DatasetRef::default());
     }
 
-    /// [`ViewerApp::open`], a dataset's channel and timepoint chosen (default 0; a session
-    /// keeps its own).
-    pub fn open_with(&mut self, path: &Path, channel: Option<usize>, timepoint: Option<usize>) {
+    /// [`ViewerApp::open`], the reader's choices (channel, timepoint, component) taken from
+    /// `choice` (a session keeps its own).
+    pub fn open_with(&mut self, path: &Path, choice: DatasetRef) {
         self.error = None;
         if is_session_file(path) {
             match Session::load(path) {
@@ -205,9 +213,7 @@ impl ViewerApp {
         self.pending_session = None;
         self.start_load(DatasetRef {
             path: path.to_path_buf(),
-            channel,
-            timepoint,
-            ..Default::default()
+            ..choice
         });
     }
 
@@ -228,6 +234,20 @@ impl ViewerApp {
         self.load_job = Some(Job::spawn(label, move || {
             with_progress(progress, || dataset::load(&source))
         }));
+    }
+
+    /// Reloads the dataset with another volume chosen along an axis beyond x, y, z
+    /// (`option` "timepoint" or "component"; `None`: the colour of a colour image), keeping
+    /// the view: the current state is applied to the new volume as a session would be.
+    pub fn choose_volume(&mut self, option: &str, index: Option<usize>) {
+        let Some(mut s) = self.session() else { return };
+        match option {
+            "timepoint" => s.dataset.timepoint = index,
+            _ => s.dataset.component = index,
+        }
+        let source = s.dataset.clone();
+        self.pending_session = Some(s);
+        self.start_load(source);
     }
 
     /// Drops the running load: the window is free at once.

@@ -92,14 +92,15 @@ pub fn load(source: &DatasetRef) -> Result<Loaded, String> {
         array: source.array.clone(),
         channel: source.channel.unwrap_or(0),
         timepoint: source.timepoint.unwrap_or(0),
+        component: source.component,
         ..LoadOptions::default()
     };
     let shown = source.path.display().to_string();
     if volux_io::detect(&source.path).ok() == Some(Format::OmeZarr) {
         return load_store(source);
     }
-    let (data, format) =
-        volux_io::load(&source.path, &opts).map_err(|e| format!("{shown}: {e}"))?;
+    // The reader's error names the file (or the file inside a folder) already.
+    let (data, format) = volux_io::load(&source.path, &opts).map_err(|e| e.to_string())?;
     let (volume, slices, notes) = match data {
         Dataset::Grid(g) => {
             let notes = g.notes().to_vec();

@@ -58,6 +58,7 @@ pub mod slices;
 pub mod store;
 pub mod tf_editor;
 pub mod view3d;
+pub mod volume_picker;
 pub mod window;
 
 use std::path::Path;

@@ -41,9 +41,14 @@ struct Args {
     /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the channel to show [default: 0].
     #[arg(long)]
     channel: Option<usize>,
-    /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the timepoint to show [default: 0].
+    /// Files holding several volumes (4-D NIfTI, NRRD, DICOM series with several stacks,
+    /// OME-Zarr, ImageJ hyperstacks, OME-TIFF): the timepoint to show [default: 0].
     #[arg(long)]
     timepoint: Option<usize>,
+    /// Vector and colour volumes: the component shown as the scalar [default: the first
+    /// component of a vector; a colour image keeps its colour].
+    #[arg(long)]
+    component: Option<usize>,
     /// Seconds of scripted orbit in --bench.
     #[arg(long, default_value_t = 3.0)]
     bench_seconds: f64,
@@ -103,6 +108,7 @@ fn run(args: Args) -> Result<(), String> {
         backend: volux_viewer::backend::Backend::parse(&args.backend)?,
         channel: args.channel,
         timepoint: args.timepoint,
+        component: args.component,
     };
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()

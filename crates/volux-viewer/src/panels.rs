@@ -102,6 +102,7 @@ fn settings(app: &mut ViewerApp, ui: &mut egui::Ui) {
         ui.small(note.as_str());
     }
     ui.separator();
+    crate::volume_picker::show(app, ui);
     method_settings(app, ui);
     ui.separator();
     appearance_settings(app, ui);

@@ -53,6 +53,7 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
         array: d.array.clone(),
         channel: d.channel,
         timepoint: d.timepoint,
+        component: d.component,
         ..LoadArgs::default()
     };
     let (data, _) = super::common::load(&d.path, &load, show)

@@ -98,6 +98,7 @@ pub fn dataset_ref(view: &ToolViewArgs) -> DatasetRef {
         as_tets: false,
         channel: view.load.channel,
         timepoint: view.load.timepoint,
+        component: view.load.component,
     }
 }
 
