@@ -336,6 +336,11 @@ pub struct RenderArgs {
     /// Maximum intensity projection.
     #[arg(long)]
     pub mip: bool,
+    /// RGB volumes (colour DICOM, TIFF, NIfTI RGB24, NRRD RGB): colour from the transfer
+    /// function, applied to their luminance, instead of their own colour (the default: the
+    /// data's colour, the TF giving the opacity; `--component N` reads one channel).
+    #[arg(long)]
+    pub tf_colour: bool,
     /// Jitter each ray's first sample (fine noise instead of wood-grain rings).
     #[arg(long)]
     pub jitter: bool,

@@ -448,6 +448,14 @@ impl RenderPlan {
         volume: &Volume,
         loaded_grid: bool,
     ) -> Result<Scene, CmdError> {
+        let rgb = matches!(volume, Volume::Grid(g) if g.color().is_some());
+        if args.tf_colour && !rgb {
+            return Err(
+                "--tf-colour does not apply: it colours RGB volumes by the transfer \
+                        function, and this volume has one value per voxel"
+                    .into(),
+            );
+        }
         let tf = layered_tf(&args.view_args.tf, volume)?;
         let method = method(args, volume)?;
         let placeholder = self.camera.resolve(&volume.bounds())?;
@@ -459,6 +467,7 @@ impl RenderPlan {
         a.shade_volume = args.shade;
         a.isosurfaces = self.isosurfaces.clone();
         a.mip = args.mip;
+        a.data_colour = !args.tf_colour;
         if args.no_early_termination {
             scene.early_termination = None;
         }

@@ -452,6 +452,11 @@ impl Grid {
         self.color.as_deref()
     }
 
+    /// [`Grid::color`], shared (renderers keep it beside their caches).
+    pub fn color_shared(&self) -> Option<Arc<Rgb>> {
+        self.color.clone()
+    }
+
     /// This grid with a record of an axis beyond x, y, z along which its file holds other
     /// volumes (time, b-values, components), for `volux info` and the viewer.
     pub fn with_extra_axis(mut self, axis: ExtraAxis) -> Self {

@@ -18,6 +18,15 @@ use crate::slicing::GpuSlicingRenderer;
 /// over the device's texture limits is drawn through the brick pool, which draws less: its
 /// refusal comes with the frame.)
 pub fn supports(volume: &Volume, scene: &Scene) -> Result<(), String> {
+    if let Volume::Grid(g) = volume {
+        if g.color().is_some() && scene.appearance.data_colour && !scene.appearance.mip {
+            return Err(
+                "the GPU backend does not draw an RGB grid in its own colour yet (use --backend \
+                 cpu)"
+                    .into(),
+            );
+        }
+    }
     match volume {
         Volume::Grid(_) if matches!(scene.method, Method::Slicing(_)) => {
             GpuSlicingRenderer::supports(scene)

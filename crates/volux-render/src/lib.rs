@@ -83,6 +83,7 @@ pub mod classify;
 #[cfg(test)]
 mod clip_tests;
 pub mod composite;
+pub mod data_colour;
 pub mod distributed;
 pub mod engine;
 pub mod error;

@@ -186,6 +186,19 @@ pub struct Appearance {
     /// along its ray, opaque (the ray casters; Projected Tetrahedra composites cells and
     /// ignores it).
     pub mip: bool,
+    /// An RGB grid is drawn in its own colour, the transfer function giving the opacity of
+    /// its luminance ([`crate::data_colour`]); `false`: in the TF's colours, as any grid.
+    /// No effect on grids without colour, nor on MIP.
+    #[serde(default = "yes", skip_serializing_if = "is_yes")]
+    pub data_colour: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn is_yes(b: &bool) -> bool {
+    *b
 }
 
 impl Appearance {
@@ -198,6 +211,7 @@ impl Appearance {
             shade_volume: false,
             isosurfaces: Isosurfaces::default(),
             mip: false,
+            data_colour: true,
         }
     }
 

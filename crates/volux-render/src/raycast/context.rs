@@ -9,6 +9,7 @@ use volux_core::voi::ClipPlane;
 use super::options::{Placement, RenderOptions};
 use crate::classify::{BreakpointRanks, ClassifyTable, LaneTable};
 use crate::composite::RayAccumulator;
+use crate::data_colour::DataColour;
 use crate::integrate::medium::RayIntegral;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::intervals::IntervalSource;
@@ -189,6 +190,8 @@ pub(crate) struct GridRay<'a, F> {
     pub(crate) breakpoints: &'a [f64],
     /// Region labels coloured in place of the TF's colour.
     pub(crate) labels: Option<&'a LabelVolume>,
+    /// An RGB grid's own colour in place of the TF's (under the labels).
+    pub(crate) data_colour: Option<&'a DataColour>,
     /// Shading of the emitted colour: the lighting model and the ray's context.
     pub(crate) shade: Option<RayShading<'a>>,
 }

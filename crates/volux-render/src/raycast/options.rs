@@ -4,6 +4,7 @@ use std::sync::Arc;
 use glam::{DMat3, DVec3};
 use volux_core::sculpt::SculptMask;
 
+use crate::data_colour::DataColour;
 use crate::sculpt::labels::LabelVolume;
 use volux_core::voi::ClipPlane;
 use volux_core::{Camera, Grid, Image, TransferFunction};
@@ -58,6 +59,9 @@ pub struct RenderOptions {
     pub mask: Option<Arc<SculptMask>>,
     /// Region labels drawn in their colours (seed `004` sec. 6.2; rays then go one by one).
     pub labels: Option<Arc<LabelVolume>>,
+    /// An RGB grid's own colour in place of the TF's ([`crate::data_colour`]; rays then go
+    /// one by one). Labels, where there are some, are drawn over it.
+    pub data_colour: Option<Arc<DataColour>>,
     /// Cancellation and progress.
     pub control: Control,
 }
@@ -88,6 +92,7 @@ impl RenderOptions {
             clip_planes: scene.clip_planes.clone(),
             mask: scene.mask.clone(),
             labels: scene.labels.clone(),
+            data_colour: None,
             control: control.clone(),
         }
     }
@@ -112,6 +117,7 @@ impl RenderOptions {
             clip_planes: Vec::new(),
             mask: None,
             labels: None,
+            data_colour: None,
             control: Control::default(),
         }
     }

@@ -41,7 +41,12 @@ impl<F: Field> RayMedium for GridRay<'_, F> {
             return Medium::default();
         };
         let mut m = self.classify(v);
-        if let Some(rgb) = self.labels.and_then(|l| l.colour_at(p.as_vec3())) {
+        let q = p.as_vec3();
+        if let Some(rgb) = self
+            .labels
+            .and_then(|l| l.colour_at(q))
+            .or_else(|| self.data_colour.map(|c| c.colour_at(q)))
+        {
             m.rgb = rgb.map(f64::from);
         }
         if let (Some(sh), true) = (&self.shade, m.tau > 0.0) {
@@ -59,7 +64,11 @@ impl<F: Field> RayMedium for GridRay<'_, F> {
     }
 
     fn at4(&mut self, t: [f64; 4]) -> [Medium; 4] {
-        if self.exact.is_some() || self.shade.is_some() || self.labels.is_some() {
+        if self.exact.is_some()
+            || self.shade.is_some()
+            || self.labels.is_some()
+            || self.data_colour.is_some()
+        {
             return t.map(|t| self.at(t));
         }
         let mut p = [[0.0f32; 4]; 3];
@@ -188,6 +197,7 @@ impl<F: Field> RayContext<'_, F> {
             exact: None,
             breakpoints: &self.breakpoints,
             labels: self.opts.labels.as_deref(),
+            data_colour: self.opts.data_colour.as_deref(),
             shade: self.opts.shading.as_ref().map(|model| RayShading {
                 model,
                 gradients: self.gradients,
@@ -389,7 +399,7 @@ impl<F: Field> RayContext<'_, F> {
     /// A classified sample at voxel position `p` on a ray of world direction `view`, lit when
     /// shading is on and the sample is not transparent.
     pub(super) fn lit_sample(&self, mut c: Classified, p: Vec3, view: Vec3) -> Classified {
-        if let Some(rgb) = self.opts.labels.as_ref().and_then(|l| l.colour_at(p)) {
+        if let Some(rgb) = self.voxel_colour(p) {
             c.rgb = rgb;
         }
         if let (Some(sh), true) = (&self.opts.shading, c.tau > 0.0) {
@@ -401,7 +411,7 @@ impl<F: Field> RayContext<'_, F> {
     /// A pre-integrated segment's premultiplied RGBA `e`, its average colour lit with the
     /// gradient at its middle `mid` when shading is on.
     pub(super) fn lit_segment(&self, e: [f32; 4], mid: Vec3, view: Vec3) -> [f32; 4] {
-        let label = self.opts.labels.as_ref().and_then(|l| l.colour_at(mid));
+        let label = self.voxel_colour(mid);
         let e = match label {
             Some(c) => [c[0] * e[3], c[1] * e[3], c[2] * e[3], e[3]],
             None => e,
@@ -414,6 +424,16 @@ impl<F: Field> RayContext<'_, F> {
             }
             _ => e,
         }
+    }
+
+    /// The colour a voxel carries in place of the TF's at voxel position `p`: its region
+    /// label's, else the RGB grid's own ([`crate::data_colour`]).
+    fn voxel_colour(&self, p: Vec3) -> Option<[f32; 3]> {
+        self.opts
+            .labels
+            .as_ref()
+            .and_then(|l| l.colour_at(p))
+            .or_else(|| self.opts.data_colour.as_ref().map(|c| c.colour_at(p)))
     }
 
     /// The world-space gradient at voxel position `p`.

@@ -10,6 +10,7 @@ use super::bricks::{BrickedTrilinear, Bricks};
 use super::context::{Classification, Derived};
 use super::options::{Placement, RenderOptions, Rendered};
 use super::traverse::render_with;
+use crate::data_colour::DataColour;
 use crate::error::RenderError;
 use crate::frame::{Frame, MethodStats, Rebuilt};
 use crate::integrate::integrator::Integrator;
@@ -43,6 +44,8 @@ pub struct GridRenderer<G: Deref<Target = Grid> = Arc<Grid>> {
     classification: Mutex<Option<Arc<Classification>>>,
     preintegration: Mutex<Option<Arc<PreintegrationTable>>>,
     gradients: OnceLock<Option<GradientVolume>>,
+    /// The grid's own colour, for RGB grids.
+    data_colour: OnceLock<Option<Arc<DataColour>>>,
     /// The bricked samples.
     bricks: OnceLock<Option<Bricks>>,
     /// Bytes the derived structures may take each.
@@ -61,6 +64,7 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
             classification: Mutex::new(None),
             preintegration: Mutex::new(None),
             gradients: OnceLock::new(),
+            data_colour: OnceLock::new(),
             bricks: OnceLock::new(),
             memory_budget: volux_core::limits::memory_budget(),
             lanes: true,
@@ -130,6 +134,13 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
                 )
                 .ok())
             })
+            .as_ref()
+    }
+
+    /// The grid's own colour when it is an RGB grid ([`crate::data_colour`]).
+    pub fn data_colour(&self) -> Option<&Arc<DataColour>> {
+        self.data_colour
+            .get_or_init(|| DataColour::of(&self.grid).map(Arc::new))
             .as_ref()
     }
 
@@ -249,7 +260,11 @@ impl<G: Deref<Target = Grid> + Send> Renderer for GridRenderer<G> {
     fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
         let started = Instant::now();
         let settings = grid_settings(scene)?;
-        let r = GridRenderer::render(self, &RenderOptions::from_scene(scene, &settings, control))?;
+        let mut opts = RenderOptions::from_scene(scene, &settings, control);
+        if scene.appearance.data_colour && !scene.appearance.mip {
+            opts.data_colour = self.data_colour().cloned();
+        }
+        let r = GridRenderer::render(self, &opts)?;
         Ok(grid_frame(r, &settings, started))
     }
 }

@@ -96,13 +96,16 @@ pub(crate) fn render_with<F: Field>(
     if let Some(l) = &opts.labels {
         check_dims("label volume", l.dims(), place.dims)?;
     }
+    if let Some(c) = &opts.data_colour {
+        check_dims("colour", c.dims(), place.dims)?;
+    }
     match opts.mask.as_deref() {
         Some(mask) => {
             check_dims("sculpt mask", mask.dims(), place.dims)?;
             let masked = Masked { inner: field, mask };
             let grid = TileGrid::new(opts.width, opts.height, TILE);
             let tiles = MaskTiles::new(mask, &place, opts, grid);
-            if opts.labels.is_some() || !tiles.any_untouched() {
+            if opts.labels.is_some() || opts.data_colour.is_some() || !tiles.any_untouched() {
                 return render_sampled(&masked, place, range, opts, derived);
             }
             render_split(field, &masked, &tiles, place, range, opts, derived)
@@ -302,8 +305,8 @@ fn tile_pixels<F: Field>(
     y0: usize,
 ) -> Vec<PixelOut> {
     let opts = ctx.opts;
-    // Label colours are looked up ray by ray.
-    if !lanes || opts.labels.is_some() {
+    // Label and data colours are looked up ray by ray.
+    if !lanes || opts.labels.is_some() || opts.data_colour.is_some() {
         ctx.tile_ray_by_ray(x0, y0)
     } else if opts.mip {
         ctx.mip_stream(x0, y0)
