@@ -6,7 +6,7 @@
 //! opacity from the colour's intensity; a reader asked for one channel (`component`) makes a
 //! scalar grid of it instead.
 use crate::error::{Error, Result};
-use crate::grid::{Buffer, Samples, ScalarType};
+use crate::samples::{Buffer, Samples, ScalarType};
 
 /// Luminance weights of red, green and blue (Rec. 709, as ITK's `RGBPixel::GetLuminance`).
 pub const LUMINANCE: [f64; 3] = [0.2125, 0.7154, 0.0721];

@@ -47,6 +47,7 @@ mod json_shape;
 pub mod limits;
 pub mod mesh;
 pub mod orientation;
+pub mod samples;
 pub mod sculpt;
 pub mod segment;
 pub mod synth;

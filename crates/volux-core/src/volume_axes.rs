@@ -4,6 +4,8 @@
 //! info` and the viewer can list them and offer the others.
 use serde::Serialize;
 
+use crate::error::{Error, Result};
+
 /// What an axis beyond x, y, z means, as the file's header says.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -113,11 +115,11 @@ impl ExtraAxis {
 
 /// The index chosen along an axis of `len` volumes, or the error that names the option, the
 /// index and how many there are.
-pub fn choose(option: &'static str, index: usize, len: usize) -> crate::Result<usize> {
+pub fn choose(option: &'static str, index: usize, len: usize) -> Result<usize> {
     if index < len {
         Ok(index)
     } else {
-        Err(crate::Error::NoSuchVolume { option, index, len })
+        Err(Error::NoSuchVolume { option, index, len })
     }
 }
 
@@ -146,7 +148,7 @@ mod tests {
         let e = choose("timepoint", 3, 3).unwrap_err();
         assert!(matches!(
             e,
-            crate::Error::NoSuchVolume {
+            Error::NoSuchVolume {
                 option: "timepoint",
                 index: 3,
                 len: 3
