@@ -65,7 +65,15 @@ fn extension(path: &Path) -> String {
 fn write(data: Dataset, output: &Path, show: bool) -> Result<(), CmdError> {
     let ext = extension(output);
     match data {
-        Dataset::Grid(g) if ext.ends_with(".vtet") => write_mesh(&grid_to_tets(&g)?, output, show),
+        Dataset::Grid(g) if ext.ends_with(".vtet") => {
+            if g.color().is_some() {
+                eprintln!(
+                    "note: the colour is not kept: a tet mesh holds one scalar per vertex, the \
+                     luminance"
+                );
+            }
+            write_mesh(&grid_to_tets(&g)?, output, show)
+        }
         Dataset::Grid(g) => write_grid(&g, output, &ext, show),
         Dataset::Mesh(m) if ext.ends_with(".vtet") => write_mesh(&m, output, show),
         Dataset::Mesh(_) => Err(format!(

@@ -111,10 +111,19 @@ pub fn convert(
     let Dataset::Grid(grid) = data else {
         return Err(format!("{}: only grids can be written as OME-Zarr", input.display()).into());
     };
+    for n in grid.notes() {
+        eprintln!("note: {}", crate::messages::sanitize(n));
+    }
     if !grid.is_axis_aligned() {
         eprintln!(
             "note: the grid's direction ({}) is not kept: OME-Zarr levels are axis-aligned",
             grid.orientation_code()
+        );
+    }
+    if grid.color().is_some() {
+        eprintln!(
+            "note: the colour is not kept: the store holds one scalar per voxel, the \
+             luminance (--component N writes one channel)"
         );
     }
     let unit = match format {
