@@ -248,9 +248,47 @@ def by_sitk(work: Path):
     return out
 
 
+def by_pydicom(work: Path):
+    """pydicom's own images transcoded by pydicom and its encoders (pylibjpeg-rle, pyjpegls,
+    pylibjpeg-openjpeg), as a PACS archives them: RLE, JPEG-LS lossless and near-lossless,
+    JPEG 2000 lossless and lossy, deflated data sets."""
+    import pydicom
+    from pydicom import uid
+
+    d = work / "pydicom"
+    d.mkdir(parents=True, exist_ok=True)
+    out = []
+    pyd = site("pydicom") / "data" / "test_files"
+    store = site("data_store") / "data"
+    sources = [pyd / "CT_small.dcm", pyd / "MR_small.dcm", store / "emri_small.dcm", store / "SC_rgb.dcm", store / "SC_rgb_16bit.dcm"]
+    syntaxes = [
+        ("rle", uid.RLELossless, {}),
+        ("jls", uid.JPEGLSLossless, {}),
+        ("jlsnear2", uid.JPEGLSNearLossless, {"jls_error": 2}),
+        ("j2k", uid.JPEG2000Lossless, {}),
+        ("j2kcr10", uid.JPEG2000, {"j2k_cr": [10]}),
+    ]
+    for src in sources:
+        for tag, ts, kw in syntaxes:
+            ds = pydicom.dcmread(src)
+            try:
+                ds.compress(ts, **kw)
+            except Exception:  # noqa: BLE001 - an encoder that refuses this image: no file
+                continue
+            p = d / f"{src.stem}_{tag}.dcm"
+            ds.save_as(p, enforce_file_format=True)
+            out.append((str(p), "dicom", "pydicom-transcoded", "in"))
+        ds = pydicom.dcmread(src)
+        ds.file_meta.TransferSyntaxUID = uid.DeflatedExplicitVRLittleEndian
+        p = d / f"{src.stem}_deflated.dcm"
+        ds.save_as(p, enforce_file_format=True)
+        out.append((str(p), "dicom", "pydicom-transcoded", "in"))
+    return out
+
+
 def corpus(work: Path):
     work.mkdir(parents=True, exist_ok=True)
     entries = shipped(work)
-    for gen in (by_nibabel, by_pynrrd, by_tifffile, by_sitk):
+    for gen in (by_nibabel, by_pynrrd, by_tifffile, by_sitk, by_pydicom):
         entries += gen(work)
     return entries

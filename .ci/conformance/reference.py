@@ -113,6 +113,7 @@ def _dicom_geometry(ds, frames: int):
 
 
 LOSSY = {
+    "1.2.840.10008.1.2.4.81": 0.0,  # JPEG-LS near-lossless: decoders agree exactly (NEAR bounds the loss)
     "1.2.840.10008.1.2.4.50": 3.0,  # JPEG baseline: decoders differ by rounding (IDCT)
     "1.2.840.10008.1.2.4.51": 3.0,
     "1.2.840.10008.1.2.4.91": 1.0,  # JPEG 2000 (lossy): OpenJPEG decodes identically
