@@ -109,6 +109,8 @@ pub struct Grid {
     extra_axes: Vec<ExtraAxis>,
     /// The voxels' colour, for an RGB grid (whose samples are then its luminance).
     color: Option<Arc<Rgb>>,
+    /// The unit of spacing and origin when the file says it is not the millimetre.
+    unit: Option<String>,
 }
 
 impl Grid {
@@ -138,6 +140,7 @@ impl Grid {
             notes: Vec::new(),
             extra_axes: Vec::new(),
             color: None,
+            unit: None,
         };
         grid.sanitize_and_range();
         Ok(grid)
@@ -173,6 +176,20 @@ impl Grid {
     pub fn with_extra_axis(mut self, axis: ExtraAxis) -> Self {
         self.extra_axes.push(axis);
         self
+    }
+
+    /// This grid with its spacing and origin in `unit` (a symbol: `µm`, `nm`, `cm`, `m`; `mm`
+    /// is the default and is not recorded), as microscopy files give them. Measurements and
+    /// writers carry it.
+    pub fn with_unit(mut self, unit: &str) -> Self {
+        self.unit = (unit != "mm").then(|| unit.to_string());
+        self
+    }
+
+    /// The unit of spacing, origin and every world distance: `"mm"` (the default, the
+    /// patient coordinates of DICOM, NIfTI and NRRD) unless the file says otherwise.
+    pub fn unit(&self) -> &str {
+        self.unit.as_deref().unwrap_or("mm")
     }
 
     /// The axes beyond x, y, z of the file this grid comes from (the colour channels of an

@@ -33,6 +33,35 @@ pub fn format_bytes_apart(a: u64, b: u64) -> (String, String) {
         .unwrap_or_else(|| (with(a, 3), with(b, 3)))
 }
 
+/// The symbol of a length unit as files name it (`micrometer`, `micron`, `um`, `µm`,
+/// `millimeter`, `mm`, ...: OME-NGFF, ImageJ, NRRD `space units`), `None` when it is not a
+/// length unit Volux knows.
+pub fn length_symbol(name: &str) -> Option<&'static str> {
+    let n = name.trim().trim_matches('"').to_ascii_lowercase();
+    Some(match n.as_str() {
+        "nm" | "nanometer" | "nanometre" => "nm",
+        "um" | "µm" | "μm" | "\\u00b5m" | "micrometer" | "micrometre" | "micron" | "microns" => {
+            "µm"
+        }
+        "mm" | "millimeter" | "millimetre" => "mm",
+        "cm" | "centimeter" | "centimetre" => "cm",
+        "m" | "meter" | "metre" => "m",
+        _ => return None,
+    })
+}
+
+/// The OME-NGFF name of a length symbol (`µm` -> `micrometer`).
+pub fn length_name(symbol: &str) -> Option<&'static str> {
+    Some(match symbol {
+        "nm" => "nanometer",
+        "µm" => "micrometer",
+        "mm" => "millimeter",
+        "cm" => "centimeter",
+        "m" => "meter",
+        _ => return None,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::{format_bytes, format_bytes_apart};

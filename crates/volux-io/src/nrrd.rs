@@ -587,11 +587,16 @@ pub fn write(grid: &Grid, path: &Path) -> Result<(), WriteError> {
         ),
         None => (grid.scalar_type(), 3, format!("{x} {y} {z}"), "", ""),
     };
+    // Millimetres are NRRD's patient space unit; any other unit is said.
+    let units = match grid.unit() {
+        "mm" => String::new(),
+        u => format!("space units: \"{u}\" \"{u}\" \"{u}\"\n"),
+    };
     let header = format!(
         "NRRD0004\n# written by Volux\ntype: {}\ndimension: {dimension}\n\
          space: left-posterior-superior\nsizes: {sizes}\n{kinds}\
-         space directions: {none}{} {} {}\nspace origin: ({ox},{oy},{oz})\nendian: little\n\
-         encoding: raw\n\n",
+         space directions: {none}{} {} {}\nspace origin: ({ox},{oy},{oz})\n{units}\
+         endian: little\nencoding: raw\n\n",
         type_name(ty),
         dirs[0],
         dirs[1],

@@ -4,8 +4,8 @@
 //! `[x, y, z]`, `dtype` (`uint8`, `uint16`, `int16`, `float32`; `int8`, `uint32`, `int32` and
 //! `float64` are accepted and converted to `float32` with a note), `endianness` (`little` or
 //! `big`, default little), `compression` (`gzip`, `none`, or absent: gzip when the name ends in `.gz`), `spacing`, optional
-//! `origin`, `direction` (the LPS directions of the index axes, three columns) and
-//! `value_range`. Data is x fastest, then y, then z. The sidecar is parsed with
+//! `origin`, `direction` (the LPS directions of the index axes, three columns), `unit` (of
+//! spacing and origin: `mm` when absent, `µm` for microscopy) and `value_range`. Data is x fastest, then y, then z. The sidecar is parsed with
 //! `serde_json`; gzip data goes through `flate2` ([`crate::util::open_maybe_gz`]).
 //!
 //! Uncompressed little-endian data of a native type is memory-mapped
@@ -404,6 +404,9 @@ struct Sidecar {
     /// --json` prints them; absent: the identity.
     #[serde(default)]
     direction: Option<[[f64; 3]; 3]>,
+    /// The unit of spacing and origin (`mm` when absent).
+    #[serde(default)]
+    unit: Option<String>,
     #[serde(default)]
     value_range: Option<[f64; 2]>,
 }
@@ -567,6 +570,15 @@ pub fn read(path: &Path) -> Result<Grid> {
         data,
         notes,
     )?;
+    if let Some(u) = &car.unit {
+        let symbol = volux_core::units::length_symbol(u).ok_or_else(|| {
+            header_err(
+                &sidecar,
+                format!("unit '{u}' is not a length unit (mm, µm, nm, cm, m)"),
+            )
+        })?;
+        grid = grid.with_unit(symbol);
+    }
     if let Some([i, j, k]) = car.direction {
         let d = glam::DMat3::from_cols(i.into(), j.into(), k.into());
         grid = grid
@@ -667,6 +679,7 @@ fn sidecar_json(grid: &Grid, gzip: bool) -> serde_json::Value {
         "spacing": grid.spacing().to_array(),
         "origin": grid.origin().to_array(),
         "space": "LPS",
+        "unit": grid.unit(),
         "direction": [d.x_axis.to_array(), d.y_axis.to_array(), d.z_axis.to_array()],
         "value_range": grid.range(),
     })

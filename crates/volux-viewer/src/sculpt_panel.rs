@@ -181,11 +181,12 @@ impl PlanePose {
 
 fn measurements(app: &mut ViewerApp, ui: &mut egui::Ui) {
     let lines = app.sculpt.as_ref().map_or(Vec::new(), |s| s.measurements());
+    let unit = crate::sculpt_tools::unit_of(app);
     for (i, line) in lines.iter().enumerate() {
         ui.label(format!(
             "measurement {}: {} ({} points)",
             i + 1,
-            crate::sculpt_tools::length_text(line),
+            crate::sculpt_tools::length_text(line, &unit),
             line.len()
         ));
     }

@@ -163,9 +163,11 @@ fn voi_outline(app: &ViewerApp, painter: &egui::Painter, project: &dyn Fn(DVec3)
     }
 }
 
-/// The measured polylines with their lengths in millimetres (sec. 6.2).
+/// The measured polylines with their lengths in the grid's unit, millimetres for medical
+/// data (sec. 6.2).
 fn measurements(app: &ViewerApp, painter: &egui::Painter, project: &dyn Fn(DVec3) -> Option<Pos2>) {
     let Some(sculpt) = &app.sculpt else { return };
+    let unit = unit_of(app);
     let colour = Color32::from_rgb(250, 230, 80);
     for line in sculpt.measurements() {
         let pts: Vec<Pos2> = line.iter().filter_map(|p| project(*p)).collect();
@@ -177,7 +179,7 @@ fn measurements(app: &ViewerApp, painter: &egui::Painter, project: &dyn Fn(DVec3
             painter.text(
                 *last + egui::vec2(8.0, -8.0),
                 Align2::LEFT_BOTTOM,
-                length_text(&line),
+                length_text(&line, &unit),
                 FontId::proportional(14.0),
                 colour,
             );
@@ -185,9 +187,15 @@ fn measurements(app: &ViewerApp, painter: &egui::Painter, project: &dyn Fn(DVec3
     }
 }
 
-/// A polyline's length as the overlay and the panel show it.
-pub fn length_text(line: &[DVec3]) -> String {
-    format!("{:.2} mm", polyline_length(line))
+/// A polyline's length as the overlay and the panel show it, in the grid's unit.
+pub fn length_text(line: &[DVec3], unit: &str) -> String {
+    format!("{:.2} {unit}", polyline_length(line))
+}
+
+/// The loaded grid's unit of length (`mm` unless the file says otherwise).
+pub fn unit_of(app: &ViewerApp) -> String {
+    app.sculpt_grid()
+        .map_or_else(|| "mm".to_string(), |g| g.unit().to_string())
 }
 
 /// The labelling seeds, in their colours.

@@ -38,6 +38,8 @@ fn grid_json(g: &Grid, format: Format) -> serde_json::Value {
         "dims": g.dims(),
         "spacing": g.spacing().to_array(),
         "origin": g.origin().to_array(),
+        // The unit of spacing, origin and bounds (mm unless the file says otherwise).
+        "units": g.unit(),
         // LPS world (DICOM/ITK); the letters each index axis points towards, and the
         // direction matrix's columns (the world directions of i, j, k).
         "orientation": g.orientation_code(),

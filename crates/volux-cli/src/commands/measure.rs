@@ -1,7 +1,8 @@
 //! `volux measure`: distance on the visible surface (seed `004` sec. 6.2). Each `--point`
 //! pixel is picked where the opacity along its ray reaches 0.5 (after the clip planes and
 //! the mask), and the polyline through the points is measured in world units: millimetres
-//! from the data's spacing, not texture space (the seed's sec. 4.5.1 flaw).
+//! from the data's spacing (or the unit the file gives, micrometres for microscopy), not
+//! texture space (the seed's sec. 4.5.1 flaw).
 //! `volux render --measure` measures the same way in the scene it renders and draws the
 //! points and the polyline on the picture ([`Drawn`]).
 use glam::DVec3;
@@ -32,17 +33,22 @@ pub fn run(args: &MeasureArgs, given: &[String], show: bool) -> Result<(), CmdEr
         points.push(bench.pick(*pixel, &what)?.world);
     }
     let length = polyline_length(&points);
+    let unit = bench.grid.unit();
     if args.json {
         let xyz: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
-        println!("{}", json!({ "points": xyz, "length_mm": length }));
+        let mut v = json!({ "points": xyz, "length": length, "unit": unit });
+        if unit == "mm" {
+            v["length_mm"] = json!(length);
+        }
+        println!("{v}");
     } else {
-        print_text(&pixels, &points, length);
+        print_text(&pixels, &points, length, unit);
     }
     Ok(())
 }
 
 /// The points and the length as text.
-fn print_text(pixels: &[[f64; 2]], points: &[DVec3], length: f64) {
+fn print_text(pixels: &[[f64; 2]], points: &[DVec3], length: f64, unit: &str) {
     for (n, ([x, y], p)) in pixels.iter().zip(points).enumerate() {
         println!(
             "point {} at pixel ({x}, {y}): ({:.3}, {:.3}, {:.3})",
@@ -53,7 +59,7 @@ fn print_text(pixels: &[[f64; 2]], points: &[DVec3], length: f64) {
         );
     }
     println!(
-        "length: {length:.3} mm ({} segment{})",
+        "length: {length:.3} {unit} ({} segment{})",
         points.len() - 1,
         if points.len() == 2 { "" } else { "s" }
     );
@@ -68,6 +74,8 @@ pub struct Drawn {
     points: Vec<DVec3>,
     /// The polyline's length, world units.
     length: f64,
+    /// The grid's unit of length (`mm`, `µm`).
+    unit: String,
 }
 
 /// The line's width, the discs' radius (pixels) and their colour (linear RGB: a warm
@@ -111,6 +119,7 @@ impl Drawn {
             pixels,
             points,
             length,
+            unit: grid.unit().to_string(),
         }))
     }
 
@@ -121,6 +130,6 @@ impl Drawn {
 
     /// Prints the points and the length on stdout, as `volux measure` does.
     pub fn print(&self) {
-        print_text(&self.pixels, &self.points, self.length);
+        print_text(&self.pixels, &self.points, self.length, &self.unit);
     }
 }

@@ -127,6 +127,7 @@ pub fn convert(
         );
     }
     let unit = match format {
+        _ if grid.unit() != "mm" => volux_core::units::length_name(grid.unit()).map(String::from),
         Format::Dicom | Format::Nifti | Format::Nrrd | Format::MetaImage => {
             Some("millimeter".to_string())
         }

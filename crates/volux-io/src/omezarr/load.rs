@@ -120,6 +120,18 @@ pub fn load_level(path: &Path, opts: &ZarrOptions) -> Result<Grid> {
             store.unit_words()
         ));
     }
+    // One known length unit on every spatial axis: measurements and writers carry it.
+    let symbols: Vec<_> = store
+        .units
+        .iter()
+        .flatten()
+        .map(|u| volux_core::units::length_symbol(u))
+        .collect();
+    if let [Some(first), rest @ ..] = symbols.as_slice() {
+        if rest.iter().all(|s| s == &Some(*first)) {
+            grid = grid.with_unit(first);
+        }
+    }
     for n in &store.notes {
         grid = grid.with_note(n.clone());
     }
