@@ -118,9 +118,12 @@ pub fn convert(
         );
     }
     let unit = match format {
-        Format::Dicom | Format::Nifti | Format::Nrrd | Format::MetaImage => {
-            Some("millimeter".to_string())
-        }
+        Format::Dicom
+        | Format::Nifti
+        | Format::Analyze
+        | Format::Mgh
+        | Format::Nrrd
+        | Format::MetaImage => Some("millimeter".to_string()),
         Format::OmeZarr => store_options(load)
             .ok()
             .and_then(|o| omezarr::open_store(input, &o).ok())
