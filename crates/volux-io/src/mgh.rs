@@ -220,7 +220,7 @@ fn placement(path: &Path, hdr: &Header, dims: [usize; 3]) -> Result<([f64; 3], [
         ReadError::new(
             path,
             ErrorKind::Unsupported(format!(
-                "an MGH vox2ras that is not an orthogonal grid (Mdc rows times delta: {why})"
+                "an MGH vox2ras (Mdc rows times delta) that is not an orthogonal grid: {why}"
             )),
         )
     };
