@@ -312,9 +312,12 @@ fn truncate(s: &str) -> String {
     s.chars().take(60).collect()
 }
 
+/// A 4-D file's axis that is not spatial (its index among the header's axes) and its role.
+type ExtraAxis = (usize, Role);
+
 /// The spatial axes (indices into the header's axes) and, for a 4-D file, the one that is not
 /// with what it holds (`None` when it has a single entry: the file is one volume).
-fn spatial_axes(path: &Path, h: &Header) -> Result<(Vec<usize>, Option<(usize, Role)>)> {
+fn spatial_axes(path: &Path, h: &Header) -> Result<(Vec<usize>, Option<ExtraAxis>)> {
     let dim = h
         .dimension
         .ok_or_else(|| header_err(path, "no 'dimension' field"))?;

@@ -1296,8 +1296,8 @@ fn nrrd_colour_kinds() {
         nrrd::write(&g, &out).unwrap();
         let back = nrrd::read(&out, Default::default()).unwrap();
         let b = back.color().expect("colour written back");
-        for k in 0..3 {
-            assert_eq!(b.channels()[k].get_f32(0), f32::from(px[0][k]));
+        for (channel, &want) in b.channels().iter().zip(&px[0]) {
+            assert_eq!(channel.get_f32(0), f32::from(want));
         }
         let blue = nrrd::read(&p, choice(0, Some(2))).unwrap();
         assert!(blue.color().is_none());
