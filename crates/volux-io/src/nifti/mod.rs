@@ -12,12 +12,12 @@
 //! `bitpix` (cast from `i16` to `usize`) rather than from the datatype; it reserves the whole
 //! announced data size before checking what the file holds; and it cannot memory-map.
 //!
-//! - Dims: `dim[0]` 3, 2 (z = 1), or 4 to 7. A file with several volumes along dim[4] (a time
-//!   series: fMRI, ASL, perfusion; DWI) or dim[5] (vector and tensor components) is read one
-//!   3-D volume at a time: [`VolumeChoice::timepoint`] along dim[4], [`VolumeChoice::component`]
-//!   along dim[5] (default 0), the volume `(t, c)` lying at `c * dim[4] + t` volumes from
+//! - Dims: `dim[0]` 3, 2 (z = 1), or 4 to 7. A file with several volumes along `dim[4]` (a time
+//!   series: fMRI, ASL, perfusion; DWI) or `dim[5]` (vector and tensor components) is read one
+//!   3-D volume at a time: [`VolumeChoice::timepoint`] along `dim[4]`, [`VolumeChoice::component`]
+//!   along `dim[5]` (default 0), the volume `(t, c)` lying at `c * dim[4] + t` volumes from
 //!   `vox_offset` (`volumes.rs`; the grid records the axes and what the header says they mean).
-//!   dim[6] or dim[7] above 1 is [`ErrorKind::Unsupported`]; 1-D too; 0 or > 7 is a header
+//!   `dim[6]` or `dim[7]` above 1 is [`ErrorKind::Unsupported`]; 1-D too; 0 or > 7 is a header
 //!   error.
 //! - Types: uint8, int16, uint16 and float32 are kept natively (uncompressed little-endian data
 //!   is memory-mapped, the chosen volume at its own offset); int8, int32, uint32, int64,

@@ -1,5 +1,5 @@
 //! Which 3-D volume of a 4-D or 5-D NIfTI file is read (`nifti1.h`, "DATA DIMENSIONALITY":
-//! dim[4] is time, or another list of volumes when the intent says so, and dim[5] holds the
+//! `dim[4]` is time, or another list of volumes when the intent says so, and `dim[5]` holds the
 //! several values per voxel of an intent such as `NIFTI_INTENT_VECTOR`), and what the axes
 //! along which it was chosen mean (`xyzt_units`, `pixdim[4]`, `intent_code`, and an FSL
 //! `.bval` file beside the image for diffusion series).
@@ -17,7 +17,7 @@ const MAX_BVAL_BYTES: u64 = 1 << 20;
 /// The volume chosen: its place among the file's volumes, and the axes it was chosen along.
 #[derive(Debug)]
 pub(super) struct Pick {
-    /// The volume's index in the file: `component * dim[4] + timepoint` (dim[4] varies
+    /// The volume's index in the file: `component * dim[4] + timepoint` (`dim[4]` varies
     /// fastest after x, y, z).
     pub index: u64,
     /// How many 3-D volumes the file holds (`dim[4] * dim[5]`).
@@ -88,8 +88,8 @@ fn too_many(path: &Path, what: &str) -> ReadError {
     crate::util::header_err(path, format!("{what} is too large"))
 }
 
-/// The axis along dim[4]: b-values from an FSL `.bval` beside the image (a diffusion
-/// series), else time when the intent is none or a time series (or describes dim[5]) and
+/// The axis along `dim[4]`: b-values from an FSL `.bval` beside the image (a diffusion
+/// series), else time when the intent is none or a time series (or describes `dim[5]`) and
 /// the units do not say otherwise (step `pixdim[4]` in the time unit of `xyzt_units`), else a
 /// list of volumes (a statistic or label intent: a list of maps; a spectral unit).
 fn volume_axis(
@@ -136,7 +136,7 @@ fn volume_axis(
     }
 }
 
-/// The unit of dim[4] in `xyzt_units` (bits 3 to 5), and whether it is a time (the others are
+/// The unit of `dim[4]` in `xyzt_units` (bits 3 to 5), and whether it is a time (the others are
 /// spectral: Hz, ppm, rad/s).
 fn time_unit(xyzt_units: i32) -> Option<(&'static str, bool)> {
     Some(match xyzt_units & 0x38 {
