@@ -173,8 +173,8 @@ fn pair_header(path: &Path) -> Option<Format> {
 /// Why a `.mnc` file is not read, by its magic bytes: MINC-2 is HDF5, MINC-1 netCDF.
 fn minc_message(head: &[u8]) -> String {
     if head.starts_with(b"\x89HDF\r\n\x1a\n") {
-        "MINC-2 (HDF5) is not read: no maintained pure-Rust HDF5 reader builds without the HDF5 \
-         C library (convert with mnc2nii or nibabel)"
+        "MINC-2 (HDF5) is not read: Volux has no HDF5 reader (the hdf5 crates need the HDF5 C \
+         library; the pure-Rust ones are too young to trust); convert with mnc2nii or nibabel"
             .into()
     } else if head.starts_with(b"CDF") {
         "MINC-1 (netCDF) is not read (convert with mnc2nii or nibabel)".into()

@@ -30,7 +30,8 @@
 //! Files holding several volumes (a time series, vector components, colour channels) are read
 //! one 3-D volume at a time, the one a [`VolumeChoice`] names; the grid records the axis it was
 //! chosen along ([`volux_core::volume_axes::ExtraAxis`]). `.mnc` files are refused by name
-//! (MINC-2 is HDF5, for which no maintained pure-Rust reader exists; MINC-1 is netCDF).
+//! (MINC-2 is HDF5: the `hdf5` crates need the HDF5 C library, built with cmake, and the
+//! pure-Rust readers are young; MINC-1 is netCDF).
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
