@@ -141,7 +141,16 @@ def by_nibabel(work: Path):
     for dt in ("int16", "float32", "uint8"):
         img = nib.AnalyzeImage(_pattern(dt), np.diag([-2.0, 2.0, 3.0, 1.0]))
         save(img, f"analyze_{dt}.img")
-    for dt in ("uint8", "int16", "int32", "float32"):
+    # SPM's variant: the origin voxel in the originator field (set through nibabel's SPM2
+    # header; saving an Spm2AnalyzeImage would also write a .mat, which needs scipy).
+    save(nib.AnalyzeImage(_pattern("int16"), np.diag([-2.0, 2.0, 3.0, 1.0])), "analyze_spm_origin.img")
+    spm_hdr = d / "analyze_spm_origin.hdr"
+    with open(spm_hdr, "rb") as f:
+        hdr = nib.Spm2AnalyzeHeader.from_fileobj(f)
+    hdr["origin"][:3] = [3, 4, 2]
+    with open(spm_hdr, "r+b") as f:
+        hdr.write_to(f)
+    for dt in ("uint8", "int16", "uint16", "int32", "float32"):
         img = nib.MGHImage(_pattern(dt), oblique)
         save(img, f"mgh_{dt}.mgz")
     save(nib.MGHImage(_pattern("float32"), oblique), "mgh_float32.mgh")
@@ -236,7 +245,7 @@ def by_sitk(work: Path):
         img.SetDirection(direction)
         return img
 
-    for dt in ("uint8", "int8", "int16", "uint16", "int32", "uint32", "float32", "float64"):
+    for dt in ("uint8", "int8", "int16", "uint16", "int32", "uint32", "int64", "uint64", "float32", "float64"):
         save(image(dt), f"{dt}.mha")
     save(image("int16"), "compressed.mha", compress=True)
     save(image("int16"), "detached.mhd")

@@ -118,7 +118,7 @@ fn ok(out: &Output) -> String {
 
 /// The values of a `u8` NRRD, checked to have the grid's dims, spacing and origin.
 fn read_u8(path: &Path) -> Vec<u8> {
-    let g = volux_io::nrrd::read(path).unwrap();
+    let g = volux_io::nrrd::read(path, Default::default()).unwrap();
     assert_eq!(g.dims(), DIMS);
     assert!((g.spacing() - DVec3::from(SPACING)).length() < 1e-9);
     assert!((g.origin() - DVec3::from(ORIGIN)).length() < 1e-9);

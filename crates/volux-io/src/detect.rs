@@ -21,6 +21,10 @@ pub enum Format {
     MetaImage,
     /// NIfTI-1 or NIfTI-2.
     Nifti,
+    /// Analyze 7.5 (and SPM's variant): a `.hdr` + `.img` pair without a NIfTI magic.
+    Analyze,
+    /// FreeSurfer MGH (`.mgh`) and its gzip-compressed form (`.mgz`).
+    Mgh,
     /// VolVis SLC.
     Slc,
     /// DICOM (a folder of slices or one multi-frame file).
@@ -51,6 +55,8 @@ impl Format {
             Format::Nrrd => "NRRD",
             Format::MetaImage => "MetaImage",
             Format::Nifti => "NIfTI",
+            Format::Analyze => "Analyze 7.5",
+            Format::Mgh => "FreeSurfer MGH",
             Format::Slc => "SLC",
             Format::Dicom => "DICOM",
             Format::VtkLegacy => "VTK legacy",
@@ -121,6 +127,62 @@ pub fn is_tiff_magic(head: &[u8]) -> bool {
         .any(|m| head.starts_with(*m))
 }
 
+/// Whether `head` starts an Analyze 7.5 header: `sizeof_hdr` 348 in either byte order and no
+/// NIfTI-1 magic at byte 344.
+pub fn is_analyze_header(head: &[u8]) -> bool {
+    let Some(&[a, b, c, d]) = head.get(..4) else {
+        return false;
+    };
+    let size = [a, b, c, d];
+    let sized = i32::from_le_bytes(size) == 348 || i32::from_be_bytes(size) == 348;
+    let magic = head.get(344..348);
+    sized && head.len() >= 348 && magic != Some(b"n+1\0") && magic != Some(b"ni1\0")
+}
+
+/// The format of the pair whose image file is `path` (`x.img`, `x.img.gz`), told by the
+/// header beside it (`x.hdr`): NIfTI by its magic, else Analyze 7.5; `None` without one.
+fn pair_header(path: &Path) -> Option<Format> {
+    let name = path.file_name()?.to_string_lossy().into_owned();
+    let lower = name.to_ascii_lowercase();
+    let stem_len = [".img.gz", ".img"]
+        .iter()
+        .find(|s| lower.ends_with(*s))
+        .map(|s| name.len() - s.len())?;
+    let hdr = path.with_file_name(format!("{}.hdr", name.get(..stem_len)?));
+    let mut head = Vec::with_capacity(348);
+    crate::util::open_regular(&hdr)
+        .ok()?
+        .take(348)
+        .read_to_end(&mut head)
+        .ok()?;
+    let nifti1 = head
+        .get(344..348)
+        .is_some_and(|m| m == b"ni1\0" || m == b"n+1\0");
+    let nifti2 = head
+        .get(4..8)
+        .is_some_and(|m| m == b"ni2\0" || m == b"n+2\0");
+    if nifti1 || nifti2 {
+        Some(Format::Nifti)
+    } else if is_analyze_header(&head) {
+        Some(Format::Analyze)
+    } else {
+        None
+    }
+}
+
+/// Why a `.mnc` file is not read, by its magic bytes: MINC-2 is HDF5, MINC-1 netCDF.
+fn minc_message(head: &[u8]) -> String {
+    if head.starts_with(b"\x89HDF\r\n\x1a\n") {
+        "MINC-2 (HDF5) is not read: Volux has no HDF5 reader (the hdf5 crates need the HDF5 C \
+         library; the pure-Rust ones are too young to trust); convert with mnc2nii or nibabel"
+            .into()
+    } else if head.starts_with(b"CDF") {
+        "MINC-1 (netCDF) is not read (convert with mnc2nii or nibabel)".into()
+    } else {
+        "a .mnc file that is neither MINC-2 (HDF5) nor MINC-1 (netCDF)".into()
+    }
+}
+
 /// Detects the format of `path` (a file, or a folder of DICOM slices). Only regular files
 /// are opened to sniff their magic bytes: a FIFO, a device or a socket is refused by type
 /// ([`ErrorKind::NotRegular`]).
@@ -153,6 +215,12 @@ pub fn detect(path: &Path) -> Result<Format> {
     let head = &head[..n];
     let (name, _gz) = stem_without_gz(path);
     let ext = |e: &str| name.ends_with(e);
+    // The image file of a pair holds data only: its header beside it tells the format.
+    if ext(".img") {
+        if let Some(format) = pair_header(path) {
+            return Ok(format);
+        }
+    }
     // Magic bytes.
     if head.starts_with(b"NRRD") {
         return Ok(Format::Nrrd);
@@ -175,6 +243,15 @@ pub fn detect(path: &Path) -> Result<Format> {
     }
     if head.len() >= 8 && (&head[4..8] == b"n+2\0" || &head[4..8] == b"ni2\0") {
         return Ok(Format::Nifti);
+    }
+    if ext(".hdr") && is_analyze_header(head) {
+        return Ok(Format::Analyze);
+    }
+    if ext(".mnc") {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Unsupported(minc_message(head)),
+        ));
     }
     // A `.raw` file is headerless: its first bytes are data, whatever they spell.
     if crate::slc::is_slc(head) && !ext(".raw") {
@@ -202,6 +279,8 @@ pub fn detect(path: &Path) -> Result<Format> {
         Format::MetaImage
     } else if ext(".nii") {
         Format::Nifti
+    } else if ext(".mgh") || ext(".mgz") {
+        Format::Mgh
     } else if ext(".slc") {
         Format::Slc
     } else if ext(".dcm") {

@@ -4,16 +4,18 @@ use std::path::Path;
 use crate::dataset::{Dataset, LoadOptions};
 use crate::detect::{detect, Format};
 use crate::error::Result;
-use crate::{dicom, metaimage, nifti, nrrd, off, plot3d, raw, slc, vtet, vtk_legacy, vtk_xml};
+use crate::{dicom, metaimage, mgh, nifti, nrrd, off, plot3d, raw, slc, vtet, vtk_legacy, vtk_xml};
 
 /// Loads any supported file or DICOM folder.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<(Dataset, Format)> {
     let format = detect(path)?;
     let dataset = match format {
         Format::RawJson => Dataset::Grid(raw::read(path)?),
-        Format::Nrrd => Dataset::Grid(nrrd::read(path)?),
-        Format::MetaImage => Dataset::Grid(metaimage::read(path)?),
-        Format::Nifti => Dataset::Grid(nifti::read(path)?),
+        Format::Nrrd => Dataset::Grid(nrrd::read(path, opts.choice())?),
+        Format::MetaImage => Dataset::Grid(metaimage::read(path, opts.choice())?),
+        Format::Nifti => Dataset::Grid(nifti::read(path, opts.choice())?),
+        Format::Analyze => Dataset::Grid(nifti::read_analyze(path, opts.choice())?),
+        Format::Mgh => Dataset::Grid(mgh::read(path, opts.choice())?),
         Format::Slc => Dataset::Grid(slc::read(path)?),
         Format::Dicom => Dataset::Grid(dicom::read(path, opts.series_uid.as_deref())?),
         Format::VtkLegacy => vtk_legacy::read(path, opts.array.as_deref())?,

@@ -1,14 +1,20 @@
 //! MetaImage (ITK / VTK), `.mhd` with a separate data file or `.mha` with the data after the
 //! header, following the MetaIO documentation (<https://itk.org/Wiki/ITK/MetaIO/Documentation>).
 //!
-//! Read: `ObjectType = Image`, `NDims` (3; 2 is one slice with z = 1), `DimSize`,
-//! `ElementType` (`MET_UCHAR`, `MET_CHAR`, `MET_USHORT`, `MET_SHORT`, `MET_UINT`, `MET_INT`,
-//! `MET_FLOAT`, `MET_DOUBLE`; the types a [`volux_core::Grid`] does not hold are converted to
-//! `f32` with a note), `ElementSpacing` (or `ElementSize`), `Offset` / `Origin` / `Position`,
+//! Read: `ObjectType = Image`, `NDims` (3; 2 is one slice with z = 1; 4 is a series of
+//! volumes, `timepoint` chooses, recorded as a time axis whose step is the 4th
+//! `ElementSpacing`), `DimSize`, `ElementType` (`MET_UCHAR`, `MET_CHAR`, `MET_USHORT`,
+//! `MET_SHORT`, `MET_UINT`, `MET_INT`, `MET_ULONG`, `MET_LONG` (4 bytes, MetaIO's
+//! `MET_ValueTypeSize`), `MET_ULONG_LONG`, `MET_LONG_LONG`, `MET_FLOAT`, `MET_DOUBLE`; the
+//! types a [`volux_core::Grid`] does not hold are converted to `f32` with a note),
+//! `ElementSpacing` (or `ElementSize`), `Offset` / `Origin` / `Position`,
 //! `BinaryDataByteOrderMSB` / `ElementByteOrderMSB`, `BinaryData = False` (ASCII values),
 //! `CompressedData = True` (a zlib stream, decoded with `flate2`), `CompressedDataSize`,
 //! `HeaderSize` (bytes skipped in the data file; -1 = the data ends the file),
-//! `ElementNumberOfChannels` (must be 1) and `ElementDataFile` (`LOCAL` or a file name relative
+//! `ElementNumberOfChannels` (interleaved per voxel: 3 or 4 channels of uint8 or uint16 are
+//! colour, as ITK writes RGB and RGBA pixels, kept as [`volux_core::color::Rgb`] with alpha
+//! dropped, or the one channel `component` asks for; any other number, or other types, are
+//! vector components, `component` choosing, default 0) and `ElementDataFile` (`LOCAL` or a file name relative
 //! to the header's folder; it must be the last header line). `TransformMatrix` (or
 //! `Rotation` / `Orientation`) is the direction matrix as ITK writes it, axis by axis (the first
 //! `NDims` values are the world direction of the first axis), in ITK's LPS world, as `Offset`;
@@ -25,6 +31,7 @@ use glam::{DMat3, DVec3};
 use volux_core::orientation::validate_direction;
 use volux_core::Grid;
 
+use crate::dataset::VolumeChoice;
 use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
@@ -33,6 +40,7 @@ use crate::raw::{self, Decoded, ElemType};
 use crate::util::{
     check_inflatable, header_err, io_error, open_regular, read_exact_checked, regular_metadata,
 };
+use crate::volumes::{Layout4, Place, Role};
 
 /// The header fields Volux uses (keys lowercased).
 struct Header {
@@ -106,7 +114,10 @@ fn element_type(path: &Path, h: &Header) -> Result<ElemType> {
         "MET_SHORT" => ElemType::I16,
         "MET_USHORT" => ElemType::U16,
         "MET_INT" => ElemType::I32,
-        "MET_UINT" => ElemType::U32,
+        "MET_UINT" | "MET_ULONG" => ElemType::U32,
+        "MET_LONG" => ElemType::I32,
+        "MET_LONG_LONG" => ElemType::I64,
+        "MET_ULONG_LONG" => ElemType::U64,
         "MET_FLOAT" => ElemType::F32,
         "MET_DOUBLE" => ElemType::F64,
         _ => {
@@ -118,8 +129,8 @@ fn element_type(path: &Path, h: &Header) -> Result<ElemType> {
     })
 }
 
-/// Checks ObjectType, channels and NDims; returns NDims.
-fn check_kind(path: &Path, h: &Header) -> Result<usize> {
+/// Checks ObjectType, channels and NDims; returns NDims and the channels per voxel.
+fn check_kind(path: &Path, h: &Header) -> Result<(usize, usize)> {
     if let Some(o) = h.get(&["objecttype"]) {
         if !o.eq_ignore_ascii_case("image") {
             return Err(ReadError::new(
@@ -132,23 +143,29 @@ fn check_kind(path: &Path, h: &Header) -> Result<usize> {
         .numbers(path, &["elementnumberofchannels"])?
         .and_then(|v| v.first().copied())
         .unwrap_or(1);
-    if channels != 1 {
-        return Err(ReadError::new(
-            path,
-            ErrorKind::Unsupported(format!("{channels} channels per voxel (only 1)")),
-        ));
-    }
+    let channels = usize::try_from(channels)
+        .ok()
+        .filter(|&c| (1..=1 << 16).contains(&c))
+        .ok_or_else(|| header_err(path, format!("ElementNumberOfChannels = {channels}")))?;
     let ndims = h
         .numbers::<usize>(path, &["ndims"])?
         .and_then(|v| v.first().copied())
         .ok_or_else(|| header_err(path, "no NDims"))?;
-    if !(1..=3).contains(&ndims) {
+    if !(1..=4).contains(&ndims) {
         return Err(ReadError::new(
             path,
-            ErrorKind::Unsupported(format!("NDims = {ndims} (1 to 3)")),
+            ErrorKind::Unsupported(format!("NDims = {ndims} (1 to 4)")),
         ));
     }
-    Ok(ndims)
+    if ndims == 4 && channels > 1 {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Unsupported(format!(
+                "NDims = 4 with {channels} channels per voxel (a 5-D image)"
+            )),
+        ));
+    }
+    Ok((ndims, channels))
 }
 
 /// Pads or checks a per-axis list to 3 values.
@@ -171,7 +188,10 @@ fn per_axis(path: &Path, key: &str, v: Option<Vec<f64>>, n: usize, pad: f64) -> 
 /// Geometry: dims, voxel count, spacing, origin, notes.
 struct Geometry {
     dims: [usize; 3],
+    /// Values in the file (every volume, every channel).
     count: u64,
+    /// A 4-D file (or one with several channels): the layout and what the extra axis holds.
+    four: Option<(Layout4, Role)>,
     spacing: [f64; 3],
     origin: [f64; 3],
     direction: DMat3,
@@ -182,19 +202,20 @@ struct Geometry {
 /// direction is `v[n a .. n a + n]` (ITK's `MetaImageIO` order); a 2-D image's third axis is
 /// the normal of the other two.
 fn direction_of(v: &[f64], n: usize) -> std::result::Result<DMat3, String> {
-    if !(2..=3).contains(&n) || v.len() != n * n {
+    if !(2..=4).contains(&n) || v.len() != n * n {
         return Err(format!("{} values for NDims = {n}", v.len()));
     }
+    // NDims 4: the spatial 3x3 block of the 4x4 matrix (the 4th axis is not spatial).
     let axis = |a: usize| {
         let c = &v[n * a..n * a + n];
-        DVec3::new(c[0], c[1], c.get(2).copied().unwrap_or(0.0))
+        DVec3::new(c[0], c[1], if n > 2 { c[2] } else { 0.0 })
     };
     let (x, y) = (axis(0), axis(1));
-    let z = if n == 3 { axis(2) } else { x.cross(y) };
+    let z = if n >= 3 { axis(2) } else { x.cross(y) };
     validate_direction(DMat3::from_cols(x, y, z)).map_err(|e| e.to_string())
 }
 
-fn geometry(path: &Path, h: &Header, n: usize) -> Result<Geometry> {
+fn geometry(path: &Path, h: &Header, n: usize, channels: usize, ty: ElemType) -> Result<Geometry> {
     let sizes: Vec<i64> = h
         .numbers(path, &["dimsize"])?
         .ok_or_else(|| header_err(path, "no DimSize"))?;
@@ -205,13 +226,41 @@ fn geometry(path: &Path, h: &Header, n: usize) -> Result<Geometry> {
         ));
     }
     let mut dims = [1i64; 3];
-    dims[..n].copy_from_slice(&sizes);
+    let spatial = n.min(3);
+    dims[..spatial].copy_from_slice(&sizes[..spatial]);
     let (dims, count) =
         volux_core::limits::checked_dims(dims).map_err(|e| ReadError::new(path, e))?;
-    let sp = h.numbers(path, &["elementspacing", "elementsize"])?;
-    let spacing = per_axis(path, "ElementSpacing", sp, n, 1.0)?.map(f64::abs);
+    let sp: Option<Vec<f64>> = h.numbers(path, &["elementspacing", "elementsize"])?;
+    let step = sp.as_ref().and_then(|v| v.get(3).copied());
+    let spacing = per_axis(path, "ElementSpacing", sp, spatial, 1.0)?.map(f64::abs);
     let or = h.numbers(path, &["offset", "origin", "position"])?;
-    let origin = per_axis(path, "Offset", or, n, 0.0)?;
+    let origin = per_axis(path, "Offset", or, spatial, 0.0)?;
+    let four = if n == 4 && sizes[3] > 1 {
+        let len = usize::try_from(sizes[3]).map_err(|_| header_err(path, "DimSize is negative"))?;
+        let meaning = match step {
+            Some(s) if s.is_finite() && s > 0.0 => format!("step {s}"),
+            _ => String::new(),
+        };
+        let sizes = [dims[0], dims[1], dims[2], len];
+        Some((Layout4 { sizes, extra: 3 }, Role::Time(meaning)))
+    } else if channels > 1 {
+        let colour = (3..=4).contains(&channels) && matches!(ty, ElemType::U8 | ElemType::U16);
+        let role = if colour {
+            Role::Colour
+        } else {
+            Role::Component(String::new())
+        };
+        let sizes = [channels, dims[0], dims[1], dims[2]];
+        Some((Layout4 { sizes, extra: 0 }, role))
+    } else {
+        None
+    };
+    let count = match &four {
+        Some((l, _)) => count
+            .checked_mul(l.sizes[l.extra] as u64)
+            .ok_or_else(|| header_err(path, "the value count overflows"))?,
+        None => count,
+    };
     let mut notes = Vec::new();
     let m: Option<Vec<f64>> = h.numbers(path, &["transformmatrix", "rotation", "orientation"])?;
     let direction = match m.map(|v| direction_of(&v, n)).transpose() {
@@ -226,6 +275,7 @@ fn geometry(path: &Path, h: &Header, n: usize) -> Result<Geometry> {
     Ok(Geometry {
         dims,
         count,
+        four,
         spacing,
         origin,
         direction,
@@ -342,17 +392,22 @@ fn read_data(file: &Path, s: &Storage, start: u64, count: u64) -> Result<Decoded
     raw::read_stream(file, z, s.ty, s.little_endian, count)
 }
 
-/// Reads a MetaImage file (`.mhd` header with a data file, or `.mha` with local data).
-pub fn read(path: &Path) -> Result<Grid> {
+/// Reads a MetaImage file (`.mhd` header with a data file, or `.mha` with local data): the
+/// volume (or channel) of `choice` when it holds several.
+pub fn read(path: &Path, choice: VolumeChoice) -> Result<Grid> {
     let (h, header_end) = read_header(path)?;
-    let n = check_kind(path, &h)?;
-    let g = geometry(path, &h, n)?;
+    let (n, channels) = check_kind(path, &h)?;
     let s = storage(path, &h)?;
+    let g = geometry(path, &h, n, channels, s.ty)?;
     let (file, start) = data_location(path, &h, header_end)?;
     let data = read_data(&file, &s, start, g.count)?;
-    raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)?
-        .with_direction(g.direction)
-        .map_err(|e| ReadError::new(&file, e))
+    let place = Place {
+        spacing: g.spacing,
+        origin: g.origin,
+        direction: g.direction,
+    };
+    let four = g.four.as_ref().map(|(l, r)| (*l, r));
+    crate::volumes::grid(&file, g.dims, place, data, g.notes, four, choice)
 }
 
 #[cfg(test)]
@@ -379,14 +434,22 @@ mod tests {
         for zlib in [false, true] {
             let mhd = d.join(format!("z{zlib}.mhd"));
             std::fs::write(&mhd, header([2, 2, 2], zlib, "zero.raw")).unwrap();
-            assert_refused(read(&mhd), "zero.raw", "(a character device)");
+            assert_refused(
+                read(&mhd, Default::default()),
+                "zero.raw",
+                "(a character device)",
+            );
         }
         let mhd = d.join("l.mhd");
         std::fs::write(&mhd, header([2, 2, 2], false, "l.raw")).unwrap();
         link_loop(d, "l.raw");
-        assert_refused(read(&mhd), "l.raw", "loop of symbolic links");
+        assert_refused(
+            read(&mhd, Default::default()),
+            "l.raw",
+            "loop of symbolic links",
+        );
         if let Some(f) = fifo(d, "f.mha") {
-            assert_refused(read(&f), "f.mha", "(a FIFO)");
+            assert_refused(read(&f, Default::default()), "f.mha", "(a FIFO)");
         }
     }
 
@@ -398,7 +461,7 @@ mod tests {
         let mut bytes = header([16, 16, 4], true, "LOCAL").into_bytes();
         bytes.extend(zlib(&vec![0u8; 64 << 20]));
         std::fs::write(&p, bytes).unwrap();
-        let e = read(&p).unwrap_err().to_string();
+        let e = read(&p, Default::default()).unwrap_err().to_string();
         assert!(
             e.contains("bomb.mha") && e.contains("more than the 1024 bytes"),
             "{e}"
@@ -407,7 +470,7 @@ mod tests {
         let mut bytes = header([2048, 2048, 1536], true, "LOCAL").into_bytes();
         bytes.extend(zlib(&[0u8; 1000]));
         std::fs::write(&p, bytes).unwrap();
-        let e = read(&p).unwrap_err();
+        let e = read(&p, Default::default()).unwrap_err();
         crate::util::hostile::assert_undeliverable(&e, 6442450944);
     }
 }

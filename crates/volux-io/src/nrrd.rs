@@ -1,20 +1,31 @@
 //! NRRD, following the teem specification (<http://teem.sourceforge.net/nrrd/format.html>).
 //!
 //! Read: magic `NRRD000X`; fields `type` (every NRRD name of int8, uint8, int16, uint16,
-//! int32, uint32, float, double; the types a [`volux_core::Grid`] does not hold are converted
-//! to `f32` with a note), `dimension` (3; 2 is a single slice with z = 1; 4 when one axis has
-//! size 1), `sizes`, `spacings` or `space directions` (spacing = length of each direction,
+//! int32, uint32, int64, uint64, float, double; the types a [`volux_core::Grid`] does not hold
+//! are converted to `f32` with a note), `dimension` (3; 2 is a single slice with z = 1; 4 with
+//! one axis that is not spatial, see below), `sizes`, `kinds`, `spacings` or `space directions` (spacing = length of each direction,
 //! direction = the unit vectors), `space` (`left-posterior-superior`/`LPS`,
 //! `right-anterior-superior`/`RAS`, `left-anterior-superior`/`LAS`: turned into Volux's LPS
 //! world by negating the axes that differ; any other space is taken as it is), `space origin`,
-//! `endian`, `encoding` (`raw`, `gzip`/`gz`, `ascii`/`text`/`txt`), `data file` (detached
+//! `endian`, `encoding` (`raw`, `gzip`/`gz`, `bzip2`/`bz2`, `ascii`/`text`/`txt`), `data file` (detached
 //! `.nhdr` header, path relative to the header's folder), `line skip` and `byte skip` (-1 = the
 //! data ends the file). Comments (`#`) and key/value lines (`:=`) are ignored. Attached data
 //! follows the blank line after the header. The data section must match the header exactly.
 //!
+//! 4-D: the axis that is not spatial is the one whose `kinds` entry is not `domain` or
+//! `space`, else the one whose `space directions` entry is `none`, else an axis of size 1 at
+//! either end. Its kind says what it holds: `RGB-color`, `RGBA-color`, `3-color`, `4-color`
+//! (3 or 4 entries) are colour ([`volux_core::color::Rgb`], alpha dropped with a note; or the
+//! one channel `component` asks for); `time` is a time series (`timepoint`, the step from
+//! `spacings`); `list` on the first (fastest) axis, and vector, tensor and other per-voxel
+//! kinds (`vector`, `covariant-vector`, `normal`, `point`, `N-vector`, `quaternion`,
+//! `complex`, `*-matrix`, ...), are components (`component`, default 0); any other axis is a
+//! list of volumes (`timepoint`). The grid records the axis it was chosen along
+//! ([`volux_core::volume_axes::ExtraAxis`]).
+//!
 //! No NRRD crate is used: the crates.io `nrrd` crates are unmaintained and do not share our
-//! size checks or memory-mapping; the header is a few lines of text and gzip goes through
-//! `flate2`. [`write()`] writes attached, raw, little-endian files.
+//! size checks or memory-mapping; the header is a few lines of text, gzip goes through
+//! `flate2` and bzip2 through the `bzip2` crate (its pure-Rust `libbz2-rs-sys` backend). [`write()`] writes attached, raw, little-endian files.
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
@@ -22,6 +33,7 @@ use glam::{DMat3, DVec3};
 use volux_core::orientation::split_scaled_axes;
 use volux_core::{Grid, ScalarType};
 
+use crate::dataset::VolumeChoice;
 use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
@@ -30,6 +42,7 @@ use crate::raw::{self, Decoded, ElemType};
 use crate::util::{
     check_inflatable, header_err, io_error, open_regular, read_exact_checked, regular_metadata,
 };
+use crate::volumes::{Layout4, Place, Role};
 
 /// Largest header read, in bytes.
 pub(crate) const MAX_HEADER_BYTES: u64 = 1 << 20;
@@ -77,6 +90,7 @@ pub(crate) fn header_lines(
 enum Encoding {
     Raw,
     Gzip,
+    Bzip2,
     Ascii,
 }
 
@@ -86,6 +100,8 @@ struct Header {
     ty: Option<ElemType>,
     dimension: Option<usize>,
     sizes: Vec<i64>,
+    /// `kinds`, lowercased (empty when absent).
+    kinds: Vec<String>,
     spacings: Vec<f64>,
     directions: Vec<Option<Vec<f64>>>,
     origin: Option<Vec<f64>>,
@@ -110,6 +126,16 @@ fn parse_type(path: &Path, name: &str) -> Result<ElemType> {
         "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => ElemType::U16,
         "int" | "signed int" | "int32" | "int32_t" => ElemType::I32,
         "uint" | "unsigned int" | "uint32" | "uint32_t" => ElemType::U32,
+        "longlong"
+        | "long long"
+        | "long long int"
+        | "signed long long"
+        | "signed long long int"
+        | "int64"
+        | "int64_t" => ElemType::I64,
+        "ulonglong" | "unsigned long long" | "unsigned long long int" | "uint64" | "uint64_t" => {
+            ElemType::U64
+        }
         "float" => ElemType::F32,
         "double" => ElemType::F64,
         _ => {
@@ -182,7 +208,22 @@ fn apply_field(path: &Path, h: &mut Header, field: &str, value: &str) -> Result<
         "type" => h.ty = Some(parse_type(path, value)?),
         "dimension" => h.dimension = Some(parse_num(path, field, value)?),
         "sizes" => h.sizes = parse_list(path, field, value)?,
-        "spacings" => h.spacings = parse_list(path, field, value)?,
+        "spacings" => {
+            // `nan` marks an axis without spacing (a time or vector axis).
+            h.spacings = value
+                .split_whitespace()
+                .map(|v| match v.to_ascii_lowercase().as_str() {
+                    "nan" => Ok(f64::NAN),
+                    _ => parse_num(path, field, v),
+                })
+                .collect::<Result<_>>()?
+        }
+        "kinds" => {
+            h.kinds = value
+                .split_whitespace()
+                .map(str::to_ascii_lowercase)
+                .collect()
+        }
         "space directions" => {
             h.directions = vector_tokens(value)
                 .iter()
@@ -216,11 +257,14 @@ fn parse_encoding(path: &Path, value: &str) -> Result<Encoding> {
     Ok(match value.to_ascii_lowercase().as_str() {
         "raw" => Encoding::Raw,
         "gzip" | "gz" => Encoding::Gzip,
+        "bzip2" | "bz2" => Encoding::Bzip2,
         "ascii" | "text" | "txt" => Encoding::Ascii,
         other => {
             return Err(ReadError::new(
                 path,
-                ErrorKind::Unsupported(format!("NRRD encoding '{other}' (raw, gzip, ascii)")),
+                ErrorKind::Unsupported(format!(
+                    "NRRD encoding '{other}' (raw, gzip, bzip2, ascii)"
+                )),
             ))
         }
     })
@@ -268,8 +312,12 @@ fn truncate(s: &str) -> String {
     s.chars().take(60).collect()
 }
 
-/// The three spatial axes: indices into the header axes.
-fn spatial_axes(path: &Path, h: &Header) -> Result<Vec<usize>> {
+/// A 4-D file's axis that is not spatial (its index among the header's axes) and its role.
+type ExtraAxis = (usize, Role);
+
+/// The spatial axes (indices into the header's axes) and, for a 4-D file, the one that is not
+/// with what it holds (`None` when it has a single entry: the file is one volume).
+fn spatial_axes(path: &Path, h: &Header) -> Result<(Vec<usize>, Option<ExtraAxis>)> {
     let dim = h
         .dimension
         .ok_or_else(|| header_err(path, "no 'dimension' field"))?;
@@ -280,20 +328,76 @@ fn spatial_axes(path: &Path, h: &Header) -> Result<Vec<usize>> {
         ));
     }
     match dim {
-        1..=3 => Ok((0..dim).collect()),
-        4 if h.sizes.first() == Some(&1) => Ok(vec![1, 2, 3]),
-        4 if h.sizes.last() == Some(&1) => Ok(vec![0, 1, 2]),
-        4 => Err(ReadError::new(
-            path,
-            ErrorKind::Unsupported(format!(
-                "4-D NRRD with sizes {:?}: only one value per voxel is read",
-                h.sizes
-            )),
-        )),
+        1..=3 => Ok(((0..dim).collect(), None)),
+        4 => {
+            let extra = extra_axis(h).ok_or_else(|| {
+                ReadError::new(
+                    path,
+                    ErrorKind::Unsupported(format!(
+                        "4-D NRRD with sizes {:?}: no axis is marked as not spatial (by \
+                         'kinds' or a 'none' space direction)",
+                        h.sizes
+                    )),
+                )
+            })?;
+            let axes = (0..4).filter(|&a| a != extra).collect();
+            if h.sizes[extra] == 1 {
+                return Ok((axes, None));
+            }
+            Ok((axes, Some((extra, role(h, extra)))))
+        }
         _ => Err(ReadError::new(
             path,
             ErrorKind::Unsupported(format!("NRRD dimension {dim} (1 to 4)")),
         )),
+    }
+}
+
+/// The axis of a 4-D file that is not spatial: the one whose kind is not `domain` or `space`,
+/// else the one whose space direction is `none`, else a size-1 axis at either end.
+fn extra_axis(h: &Header) -> Option<usize> {
+    let only = |v: Vec<usize>| (v.len() == 1).then(|| v[0]);
+    if h.kinds.len() == 4 {
+        let spatial = |k: &str| matches!(k, "domain" | "space");
+        if let Some(a) = only((0..4).filter(|&a| !spatial(&h.kinds[a])).collect()) {
+            return Some(a);
+        }
+    }
+    if h.directions.len() == 4 {
+        if let Some(a) = only((0..4).filter(|&a| h.directions[a].is_none()).collect()) {
+            return Some(a);
+        }
+    }
+    match (h.sizes.first(), h.sizes.last()) {
+        (Some(1), _) => Some(0),
+        (_, Some(1)) => Some(3),
+        _ => None,
+    }
+}
+
+/// What the non-spatial axis `a` holds, by its kind (see the module docs).
+fn role(h: &Header, a: usize) -> Role {
+    let kind = h.kinds.get(a).map(String::as_str).unwrap_or("");
+    let size = h.sizes[a];
+    let named = |k: &str| {
+        if k.is_empty() || k == "???" || k == "none" {
+            String::new()
+        } else {
+            format!("kind {k}")
+        }
+    };
+    match kind {
+        "rgb-color" | "rgba-color" | "3-color" | "4-color" if (3..=4).contains(&size) => {
+            Role::Colour
+        }
+        "time" => Role::Time(match h.spacings.get(a) {
+            Some(s) if s.is_finite() && *s > 0.0 => format!("step {s}"),
+            _ => String::new(),
+        }),
+        "list" if a == 0 => Role::Component("kind list".into()),
+        "list" | "domain" | "space" | "stub" => Role::Volume(named(kind)),
+        "" | "???" | "none" if a != 0 => Role::Volume(String::new()),
+        k => Role::Component(named(k)),
     }
 }
 
@@ -313,7 +417,10 @@ fn space_signs(value: &str) -> Option<[f64; 3]> {
 /// Geometry of the grid: dims, spacing, origin, direction and notes.
 struct Geometry {
     dims: [usize; 3],
+    /// Values in the file: the 3-D volume's, times the entries of a 4th axis.
     count: u64,
+    /// A 4-D file's layout and what its extra axis holds.
+    four: Option<(Layout4, Role)>,
     spacing: [f64; 3],
     origin: [f64; 3],
     direction: DMat3,
@@ -321,7 +428,7 @@ struct Geometry {
 }
 
 fn geometry(path: &Path, h: &Header) -> Result<Geometry> {
-    let axes = spatial_axes(path, h)?;
+    let (axes, extra) = spatial_axes(path, h)?;
     let mut dims = [1i64; 3];
     let mut spacing = [1.0f64; 3];
     let mut notes = Vec::new();
@@ -347,6 +454,27 @@ fn geometry(path: &Path, h: &Header) -> Result<Geometry> {
     }
     let (dims, count) =
         volux_core::limits::checked_dims(dims).map_err(|e| ReadError::new(path, e))?;
+    let four = match extra {
+        Some((a, role)) => {
+            let n = usize::try_from(h.sizes[a])
+                .ok()
+                .filter(|&n| n > 0)
+                .ok_or_else(|| header_err(path, format!("axis {a} has size {}", h.sizes[a])))?;
+            let mut sizes = [0usize; 4];
+            for (k, &s) in axes.iter().enumerate() {
+                sizes[s] = dims[k];
+            }
+            sizes[a] = n;
+            Some((Layout4 { sizes, extra: a }, role))
+        }
+        None => None,
+    };
+    let count = match &four {
+        Some((l, _)) => count
+            .checked_mul(l.sizes[l.extra] as u64)
+            .ok_or_else(|| header_err(path, "the value count overflows"))?,
+        None => count,
+    };
     let mut origin = [0.0; 3];
     for (o, v) in origin.iter_mut().zip(h.origin.iter().flatten()) {
         *o = *v;
@@ -357,6 +485,7 @@ fn geometry(path: &Path, h: &Header) -> Result<Geometry> {
     Ok(Geometry {
         dims,
         count,
+        four,
         spacing,
         origin,
         direction,
@@ -464,6 +593,12 @@ fn read_data(
             check_inflatable(file, compressed, need.saturating_add(skip))?;
             read_gzip(file, reader, skip, ty, le, count)
         }
+        Encoding::Bzip2 => {
+            // bzip2 has no useful bound on its expansion; memory still grows only with what
+            // the stream delivers, up to the declared size ([`raw::read_stream`]).
+            let skip = h.byte_skip as u64;
+            read_bzip2(file, reader, skip, ty, le, count)
+        }
         Encoding::Ascii => read_ascii(file, reader, pos, ty, count),
     }
 }
@@ -521,6 +656,30 @@ fn read_gzip(
     raw::read_stream(file, gz, ty, le, count)
 }
 
+/// Bzip2 data; `skip` bytes of the decompressed stream are skipped first.
+fn read_bzip2(
+    file: &Path,
+    reader: impl Read,
+    skip: u64,
+    ty: ElemType,
+    le: bool,
+    count: u64,
+) -> Result<Decoded> {
+    let mut bz = bzip2::read::MultiBzDecoder::new(reader);
+    let skipped = std::io::copy(&mut (&mut bz).take(skip), &mut std::io::sink())
+        .map_err(|e| ReadError::new(file, e))?;
+    if skipped < skip {
+        return Err(ReadError::new(
+            file,
+            ErrorKind::Truncated {
+                expected: skip,
+                found: skipped,
+            },
+        ));
+    }
+    raw::read_stream(file, bz, ty, le, count)
+}
+
 /// ASCII data: the rest of the file from `pos`.
 fn read_ascii(
     file: &Path,
@@ -536,15 +695,20 @@ fn read_ascii(
     raw::parse_ascii(file, text, ty, count)
 }
 
-/// Reads an NRRD file (`.nrrd` with attached data, or a `.nhdr` detached header).
-pub fn read(path: &Path) -> Result<Grid> {
+/// Reads an NRRD file (`.nrrd` with attached data, or a `.nhdr` detached header): the volume
+/// of `choice` when a 4th axis holds several.
+pub fn read(path: &Path, choice: VolumeChoice) -> Result<Grid> {
     let (h, attached_at) = read_header(path)?;
     let mut g = geometry(path, &h)?;
     let (file, start) = data_location(path, &h, attached_at)?;
     let data = read_data(&file, &h, start, g.count, &mut g.notes)?;
-    raw::make_grid(&file, g.dims, g.spacing, g.origin, data, g.notes)?
-        .with_direction(g.direction)
-        .map_err(|e| ReadError::new(&file, e))
+    let place = Place {
+        spacing: g.spacing,
+        origin: g.origin,
+        direction: g.direction,
+    };
+    let four = g.four.as_ref().map(|(l, r)| (*l, r));
+    crate::volumes::grid(&file, g.dims, place, data, g.notes, four, choice)
 }
 
 /// The NRRD type name of a grid type.
@@ -645,21 +809,41 @@ mod tests {
         let d = dir.path();
         if let Some(f) = fifo(d, "t.nrrd") {
             // `volux info` on this blocked forever.
-            assert_refused(read(&f), "t.nrrd", "not a regular file (a FIFO)");
+            assert_refused(
+                read(&f, Default::default()),
+                "t.nrrd",
+                "not a regular file (a FIFO)",
+            );
             assert_refused(crate::load(&f, &Default::default()), "t.nrrd", "(a FIFO)");
         }
         let nhdr = d.join("z.nhdr");
         std::fs::write(&nhdr, header([2, 2, 2], "raw", Some("zero.raw"))).unwrap();
         zero_link(d, "zero.raw");
-        assert_refused(read(&nhdr), "zero.raw", "(a character device)");
+        assert_refused(
+            read(&nhdr, Default::default()),
+            "zero.raw",
+            "(a character device)",
+        );
         let nhdr = d.join("zg.nhdr");
         std::fs::write(&nhdr, header([2, 2, 2], "gzip", Some("zero.raw"))).unwrap();
-        assert_refused(read(&nhdr), "zero.raw", "(a character device)");
+        assert_refused(
+            read(&nhdr, Default::default()),
+            "zero.raw",
+            "(a character device)",
+        );
         let nhdr = d.join("l.nhdr");
         std::fs::write(&nhdr, header([2, 2, 2], "raw", Some("l.raw"))).unwrap();
         link_loop(d, "l.raw");
-        assert_refused(read(&nhdr), "l.raw", "loop of symbolic links");
-        assert_refused(read(&link_loop(d, "h.nrrd")), "h.nrrd", "loop");
+        assert_refused(
+            read(&nhdr, Default::default()),
+            "l.raw",
+            "loop of symbolic links",
+        );
+        assert_refused(
+            read(&link_loop(d, "h.nrrd"), Default::default()),
+            "h.nrrd",
+            "loop",
+        );
     }
 
     #[test]
@@ -671,7 +855,7 @@ mod tests {
         let mut bytes = header([16, 16, 4], "gzip", None).into_bytes();
         bytes.extend(gzip(&vec![0u8; 64 << 20]));
         std::fs::write(&p, bytes).unwrap();
-        let e = read(&p).unwrap_err().to_string();
+        let e = read(&p, Default::default()).unwrap_err().to_string();
         assert!(
             e.contains("bomb.nrrd") && e.contains("more than the 1024 bytes"),
             "{e}"
@@ -681,7 +865,7 @@ mod tests {
         let mut bytes = header([2048, 2048, 1536], "gzip", None).into_bytes();
         bytes.extend(gzip(&[0u8; 1000]));
         std::fs::write(&p, bytes).unwrap();
-        let e = read(&p).unwrap_err();
+        let e = read(&p, Default::default()).unwrap_err();
         crate::util::hostile::assert_undeliverable(&e, 6442450944);
     }
 }

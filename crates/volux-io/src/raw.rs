@@ -44,6 +44,8 @@ pub(crate) enum ElemType {
     U16,
     I32,
     U32,
+    I64,
+    U64,
     F32,
     F64,
 }
@@ -55,7 +57,7 @@ impl ElemType {
             ElemType::I8 | ElemType::U8 => 1,
             ElemType::I16 | ElemType::U16 => 2,
             ElemType::I32 | ElemType::U32 | ElemType::F32 => 4,
-            ElemType::F64 => 8,
+            ElemType::I64 | ElemType::U64 | ElemType::F64 => 8,
         }
     }
 
@@ -79,6 +81,8 @@ impl ElemType {
             ElemType::U16 => "uint16",
             ElemType::I32 => "int32",
             ElemType::U32 => "uint32",
+            ElemType::I64 => "int64",
+            ElemType::U64 => "uint64",
             ElemType::F32 => "float32",
             ElemType::F64 => "float64",
         }
@@ -93,6 +97,8 @@ impl ElemType {
             "uint16" | "u16" => ElemType::U16,
             "int32" | "i32" => ElemType::I32,
             "uint32" | "u32" => ElemType::U32,
+            "int64" | "i64" => ElemType::I64,
+            "uint64" | "u64" => ElemType::U64,
             "float32" | "f32" | "float" => ElemType::F32,
             "float64" | "f64" | "double" => ElemType::F64,
             _ => return None,
@@ -103,7 +109,9 @@ impl ElemType {
     fn conversion_note(self) -> Option<String> {
         let why = match self {
             ElemType::I8 => "exact",
-            ElemType::I32 | ElemType::U32 => "integers above 2^24 lose precision",
+            ElemType::I32 | ElemType::U32 | ElemType::I64 | ElemType::U64 => {
+                "integers above 2^24 lose precision"
+            }
             ElemType::F64 => "precision reduced",
             _ => return None,
         };
@@ -146,6 +154,9 @@ fn convert_to_f32(ty: ElemType, bytes: &[u8], le: bool) -> Vec<f32> {
                 ElemType::I8 => b0 as i8 as f32,
                 ElemType::I32 => i32::from_le_bytes(w) as f32,
                 ElemType::U32 => u32::from_le_bytes(w) as f32,
+                // Straight to float32 (one rounding, as numpy's cast).
+                ElemType::I64 => i64::from_le_bytes(b) as f32,
+                ElemType::U64 => u64::from_le_bytes(b) as f32,
                 ElemType::F64 => f64::from_le_bytes(b) as f32,
                 _ => f32::from_le_bytes(w),
             }
@@ -333,6 +344,17 @@ fn parse_float_tokens<'a>(
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
         let tok = tokens.next().ok_or_else(|| ascii_short(path, n, i))?;
+        if matches!(ty, ElemType::I64 | ElemType::U64) {
+            // 64-bit integers parsed whole, so that one rounding makes them float32.
+            let v = tok
+                .parse::<i64>()
+                .map(|v| v as f32)
+                .or_else(|_| tok.parse::<u64>().map(|v| v as f32));
+            if let Ok(v) = v {
+                out.push(v);
+                continue;
+            }
+        }
         let v: f64 = tok.parse().map_err(|_| {
             ReadError::new(
                 path,
@@ -465,7 +487,7 @@ fn layout(sidecar: &Path, car: &Sidecar) -> Result<Layout> {
         ReadError::new(
             sidecar,
             ErrorKind::Unsupported(format!(
-                "dtype '{dtype}' (known: uint8, uint16, int16, float32, int8, uint32, int32, float64)"
+                "dtype '{dtype}' (known: uint8, uint16, int16, float32, int8, uint32, int32, int64, uint64, float64)"
             )),
         )
     })?;

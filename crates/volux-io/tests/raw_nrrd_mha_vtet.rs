@@ -128,7 +128,7 @@ proptest! {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("v.nrrd");
         nrrd::write(&g, &p).unwrap();
-        let r = nrrd::read(&p).unwrap();
+        let r = nrrd::read(&p, Default::default()).unwrap();
         prop_assert_eq!(r.dims(), g.dims());
         prop_assert_eq!(r.spacing(), g.spacing());
         prop_assert_eq!(r.origin(), g.origin());
@@ -446,7 +446,7 @@ fn nrrd_encodings_and_endianness() {
     ];
     for (name, fields, data) in cases {
         let p = nrrd_file(d, name, &format!("{NRRD_I16_HEAD}{fields}\n"), &data);
-        let g = nrrd::read(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let g = nrrd::read(&p, Default::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(g.dims(), [3, 2, 2], "{name}");
         assert_eq!(g.spacing().to_array(), [0.5, 0.25, 2.0], "{name}");
         assert_eq!(g.scalar_type(), ScalarType::I16, "{name}");
@@ -469,7 +469,7 @@ fn nrrd_detached_with_skips_and_directions() {
         space directions: (0,2,0) (-1.5, 0, 0) (0,0,3)\nspace origin: (10,-20,30.5)\n\
         endian: little\nencoding: raw\ndata file: data/v.bin\nline skip: 2\nbyte skip: 4\n";
     let p = nrrd_file(d, "v.nhdr", head, b"");
-    let g = nrrd::read(&p).unwrap();
+    let g = nrrd::read(&p, Default::default()).unwrap();
     assert_eq!(g.spacing().to_array(), [2.0, 1.5, 3.0]);
     assert_eq!(g.origin().to_array(), [10.0, -20.0, 30.5]);
     // i runs along +y (P), j along -x (R), k along +z (S).
@@ -483,12 +483,12 @@ fn nrrd_detached_with_skips_and_directions() {
     assert_eq!(values(&g)[0], -1024.0);
     // The same directions in RAS space: x and y negated into LPS.
     let ras = head.replace("left-posterior-superior", "RAS");
-    let g = nrrd::read(&nrrd_file(d, "ras.nhdr", &ras, b"")).unwrap();
+    let g = nrrd::read(&nrrd_file(d, "ras.nhdr", &ras, b""), Default::default()).unwrap();
     assert_eq!(g.orientation_code(), "ALS");
     assert_eq!(g.origin().to_array(), [-10.0, 20.0, 30.5]);
     // A sheared frame is noted and read axis-aligned.
     let shear = head.replace("(-1.5, 0, 0)", "(-1.5, 1, 0)");
-    let g = nrrd::read(&nrrd_file(d, "shear.nhdr", &shear, b"")).unwrap();
+    let g = nrrd::read(&nrrd_file(d, "shear.nhdr", &shear, b""), Default::default()).unwrap();
     assert!(g.is_axis_aligned());
     assert!(
         g.notes().iter().any(|n| n.contains("not orthogonal")),
@@ -496,17 +496,20 @@ fn nrrd_detached_with_skips_and_directions() {
         g.notes()
     );
     // Written and read back, the placement survives.
-    let g = nrrd::read(&p).unwrap();
+    let g = nrrd::read(&p, Default::default()).unwrap();
     let out = d.join("w.nrrd");
     nrrd::write(&g, &out).unwrap();
-    let back = nrrd::read(&out).unwrap();
+    let back = nrrd::read(&out, Default::default()).unwrap();
     assert_eq!(back.direction(), g.direction());
     assert_eq!(back.origin(), g.origin());
     assert_eq!(back.spacing(), g.spacing());
     // byte skip -1: the data ends the file.
     let head2 = head.replace("line skip: 2\nbyte skip: 4", "byte skip: -1");
     let p = nrrd_file(d, "v2.nhdr", &head2, b"");
-    assert_eq!(values(&nrrd::read(&p).unwrap())[11], 8.0);
+    assert_eq!(
+        values(&nrrd::read(&p, Default::default()).unwrap())[11],
+        8.0
+    );
 }
 
 #[test]
@@ -514,20 +517,34 @@ fn nrrd_2d_4d_and_wide_types() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let h2 = "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 2 3\nencoding: raw\n\n";
-    let g = nrrd::read(&nrrd_file(d, "a.nrrd", h2, &[1, 2, 3, 4, 5, 6])).unwrap();
+    let g = nrrd::read(
+        &nrrd_file(d, "a.nrrd", h2, &[1, 2, 3, 4, 5, 6]),
+        Default::default(),
+    )
+    .unwrap();
     assert_eq!(g.dims(), [2, 3, 1]);
     let h4 = "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 1 2 3 1\n\
         space directions: none (1,0,0) (0,1,0) (0,0,1)\nencoding: raw\n\n";
-    let g = nrrd::read(&nrrd_file(d, "b.nrrd", h4, &[1, 2, 3, 4, 5, 6])).unwrap();
+    let g = nrrd::read(
+        &nrrd_file(d, "b.nrrd", h4, &[1, 2, 3, 4, 5, 6]),
+        Default::default(),
+    )
+    .unwrap();
     assert_eq!(g.dims(), [2, 3, 1]);
     let h4bad = h4
         .replace("sizes: 1 2 3 1", "sizes: 2 2 3 1")
         .replace("none ", "");
-    let r = nrrd::read(&nrrd_file(d, "c.nrrd", &h4bad, &[0; 12]));
+    let r = nrrd::read(
+        &nrrd_file(d, "c.nrrd", &h4bad, &[0; 12]),
+        Default::default(),
+    );
     assert!(r.is_ok(), "a trailing size-1 axis is fine too: {r:?}");
     let h4multi = "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 3 2 3 2\nencoding: raw\n\n";
     assert_kind(
-        nrrd::read(&nrrd_file(d, "m.nrrd", h4multi, &[0; 36])),
+        nrrd::read(
+            &nrrd_file(d, "m.nrrd", h4multi, &[0; 36]),
+            Default::default(),
+        ),
         is_unsupported,
     );
     let wide: [(&str, Vec<u8>); 4] = [
@@ -551,7 +568,7 @@ fn nrrd_2d_4d_and_wide_types() {
     for (ty, bytes) in wide {
         let h =
             format!("NRRD0004\ntype: {ty}\ndimension: 1\nsizes: 2\nendian: big\nencoding: raw\n\n");
-        let g = nrrd::read(&nrrd_file(d, "w.nrrd", &h, &bytes)).unwrap();
+        let g = nrrd::read(&nrrd_file(d, "w.nrrd", &h, &bytes), Default::default()).unwrap();
         assert_eq!(g.scalar_type(), ScalarType::F32);
         assert!(!g.notes().is_empty(), "{ty}");
         let v = values(&g);
@@ -572,7 +589,9 @@ fn nrrd_malformed() {
         )
     };
     let data = le_i16(&I16_VALS);
-    let f = |name: &str, h: &str, data: &[u8]| nrrd::read(&nrrd_file(d, name, h, data));
+    let f = |name: &str, h: &str, data: &[u8]| {
+        nrrd::read(&nrrd_file(d, name, h, data), Default::default())
+    };
     assert_kind(
         f("t.nrrd", &head("3 2 2", "short"), &data[..23]),
         is_truncated,
@@ -605,8 +624,11 @@ fn nrrd_malformed() {
         f("b.nrrd", "\u{0}\u{1}NRRD0004\ntype: short\n\n", &data),
         is_header,
     );
+    // Data that is not bzip2 where the header says bzip2: refused.
     let bz = head("3 2 2", "short").replace("raw", "bzip2");
-    assert_kind(f("bz.nrrd", &bz, &data), is_unsupported);
+    assert!(f("bz.nrrd", &bz, &data).is_err());
+    let lz = head("3 2 2", "short").replace("raw", "lzma");
+    assert_kind(f("lz.nrrd", &lz, &data), is_unsupported);
     let ascii = head("3 2 2", "short").replace("raw", "ascii");
     assert_kind(f("a.nrrd", &ascii, b"1 2 3"), is_truncated);
     assert_kind(f("a2.nrrd", &ascii, b"1 2 3 4 5 6 7 8 9 10 11 x"), |k| {
@@ -616,7 +638,10 @@ fn nrrd_malformed() {
     let mut bin = b"NRRD0004\ntype: short\n".to_vec();
     bin.extend_from_slice(&[0xff, 0xfe, b'\n', b'\n']);
     std::fs::write(d.join("bin.nrrd"), bin).unwrap();
-    assert_kind(nrrd::read(&d.join("bin.nrrd")), is_header);
+    assert_kind(
+        nrrd::read(&d.join("bin.nrrd"), Default::default()),
+        is_header,
+    );
     // NaN floats are noted and replaced by volux-core.
     let nan = le_f32(&[1.0, f32::NAN, 2.0, 5.0]);
     let g = f("nan.nrrd", &head("2 2 1", "float"), &nan).unwrap();
@@ -675,7 +700,7 @@ fn metaimage_variants() {
     ];
     for (name, extra, data) in cases {
         let p = mha(d, name, &format!("{MHA_I16}{extra}"), "LOCAL", &data);
-        let g = metaimage::read(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let g = metaimage::read(&p, Default::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(g.dims(), [3, 2, 2], "{name}");
         assert_eq!(g.spacing().to_array(), [0.5, 0.25, 2.0], "{name}");
         assert_eq!(g.origin().to_array(), [1.0, 2.0, 3.0], "{name}");
@@ -692,7 +717,10 @@ fn metaimage_variants() {
         "v.raw",
         b"",
     );
-    assert_eq!(values(&metaimage::read(&p).unwrap()), want);
+    assert_eq!(
+        values(&metaimage::read(&p, Default::default()).unwrap()),
+        want
+    );
 }
 
 #[test]
@@ -701,7 +729,11 @@ fn metaimage_2d_wide_types_and_aliases() {
     let d = dir.path();
     let h =
         "NDims = 2\nDimSize = 2 2\nElementType = MET_UCHAR\nElementSize = 3 4\nPosition = 5 6\n";
-    let g = metaimage::read(&mha(d, "a.mha", h, "LOCAL", &[1, 2, 3, 4])).unwrap();
+    let g = metaimage::read(
+        &mha(d, "a.mha", h, "LOCAL", &[1, 2, 3, 4]),
+        Default::default(),
+    )
+    .unwrap();
     assert_eq!(g.dims(), [2, 2, 1]);
     assert_eq!(g.spacing().to_array(), [3.0, 4.0, 1.0]);
     assert_eq!(g.origin().to_array(), [5.0, 6.0, 0.0]);
@@ -728,33 +760,49 @@ fn metaimage_2d_wide_types_and_aliases() {
     ];
     for (ty, bytes, want) in wide {
         let h = format!("NDims = 1\nDimSize = 2\nElementType = {ty}\n");
-        let g = metaimage::read(&mha(d, "w.mha", &h, "LOCAL", &bytes)).unwrap();
+        let g = metaimage::read(&mha(d, "w.mha", &h, "LOCAL", &bytes), Default::default()).unwrap();
         assert_eq!(values(&g), want, "{ty}");
         assert!(g.notes().iter().any(|n| n.contains("converted")), "{ty}");
     }
     // Axis by axis, as ITK writes it: i along +y (P), j along +x (L), k along +z (S).
     let rot = format!("{MHA_I16}TransformMatrix = 0 1 0 1 0 0 0 0 1\n");
-    let g = metaimage::read(&mha(d, "r.mha", &rot, "LOCAL", &le_i16(&I16_VALS))).unwrap();
+    let g = metaimage::read(
+        &mha(d, "r.mha", &rot, "LOCAL", &le_i16(&I16_VALS)),
+        Default::default(),
+    )
+    .unwrap();
     assert_eq!(g.orientation_code(), "PLS");
     assert_eq!(g.origin().to_array(), [1.0, 2.0, 3.0]);
     assert!(g.notes().is_empty(), "{:?}", g.notes());
     // Oblique: 30 degrees about z.
     let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
     let obl = format!("{MHA_I16}TransformMatrix = {c} {s} 0 {} {c} 0 0 0 1\n", -s);
-    let g = metaimage::read(&mha(d, "o.mha", &obl, "LOCAL", &le_i16(&I16_VALS))).unwrap();
+    let g = metaimage::read(
+        &mha(d, "o.mha", &obl, "LOCAL", &le_i16(&I16_VALS)),
+        Default::default(),
+    )
+    .unwrap();
     let m = g.direction();
     assert!((m.x_axis - glam::DVec3::new(c, s, 0.0)).length() < 1e-12);
     assert!((m.y_axis - glam::DVec3::new(-s, c, 0.0)).length() < 1e-12);
     // Sheared: noted, read axis-aligned.
     let bad = format!("{MHA_I16}TransformMatrix = 1 0 0 0.5 1 0 0 0 1\n");
-    let g = metaimage::read(&mha(d, "b.mha", &bad, "LOCAL", &le_i16(&I16_VALS))).unwrap();
+    let g = metaimage::read(
+        &mha(d, "b.mha", &bad, "LOCAL", &le_i16(&I16_VALS)),
+        Default::default(),
+    )
+    .unwrap();
     assert!(g.is_axis_aligned());
     assert!(g
         .notes()
         .iter()
         .any(|n| n.contains("TransformMatrix is not usable")));
     let id = format!("{MHA_I16}TransformMatrix = 1 0 0 0 1 0 0 0 1\n");
-    let g = metaimage::read(&mha(d, "i.mha", &id, "LOCAL", &le_i16(&I16_VALS))).unwrap();
+    let g = metaimage::read(
+        &mha(d, "i.mha", &id, "LOCAL", &le_i16(&I16_VALS)),
+        Default::default(),
+    )
+    .unwrap();
     assert!(g.notes().is_empty());
 }
 
@@ -764,7 +812,7 @@ fn metaimage_malformed() {
     let d = dir.path();
     let data = le_i16(&I16_VALS);
     let f = |name: &str, fields: &str, data: &[u8]| {
-        metaimage::read(&mha(d, name, fields, "LOCAL", data))
+        metaimage::read(&mha(d, name, fields, "LOCAL", data), Default::default())
     };
     let head = |dims: &str, ty: &str| format!("NDims = 3\nDimSize = {dims}\nElementType = {ty}\n");
     assert_kind(
@@ -800,29 +848,32 @@ fn metaimage_malformed() {
         "{}ElementNumberOfChannels = 3\n",
         head("3 2 2", "MET_SHORT")
     );
-    assert_kind(f("c.mha", &ch, &data), is_unsupported);
+    // Three channels need three times the data.
+    assert_kind(f("c.mha", &ch, &data), is_truncated);
+    let ch0 = ch.replace("= 3\n", "= 0\n");
+    assert_kind(f("c0.mha", &ch0, &data), is_header);
     let ob = format!("ObjectType = Mesh\n{}", head("3 2 2", "MET_SHORT"));
     assert_kind(f("ob.mha", &ob, &data), is_unsupported);
-    let list = metaimage::read(&mha(
-        d,
-        "list.mhd",
-        &head("3 2 2", "MET_SHORT"),
-        "LIST",
-        b"",
-    ));
+    let list = metaimage::read(
+        &mha(d, "list.mhd", &head("3 2 2", "MET_SHORT"), "LIST", b""),
+        Default::default(),
+    );
     assert_kind(list, is_unsupported);
-    let missing = metaimage::read(&mha(
-        d,
-        "m.mhd",
-        &head("3 2 2", "MET_SHORT"),
-        "nope.raw",
-        b"",
-    ));
+    let missing = metaimage::read(
+        &mha(d, "m.mhd", &head("3 2 2", "MET_SHORT"), "nope.raw", b""),
+        Default::default(),
+    );
     assert_kind(missing, |k| matches!(k, ErrorKind::Io(_)));
     std::fs::write(d.join("garbage.mha"), b"\x00\x01\xff\xfe garbage \n\x00").unwrap();
-    assert_kind(metaimage::read(&d.join("garbage.mha")), is_header);
+    assert_kind(
+        metaimage::read(&d.join("garbage.mha"), Default::default()),
+        is_header,
+    );
     std::fs::write(d.join("noend.mha"), b"NDims = 3\nDimSize = 1 1 1\n").unwrap();
-    assert_kind(metaimage::read(&d.join("noend.mha")), is_header);
+    assert_kind(
+        metaimage::read(&d.join("noend.mha"), Default::default()),
+        is_header,
+    );
     let g = f(
         "nan.mha",
         &head("2 2 1", "MET_FLOAT"),
@@ -1021,4 +1072,313 @@ fn vtet_malformed() {
         is_header,
     );
     assert_kind(f("s.vtet", b"VOLU"), is_header);
+}
+
+// ---------- several volumes, colour, bzip2 and 64-bit types (NRRD, MetaImage) ----------
+
+fn choice(timepoint: usize, component: Option<usize>) -> volux_io::VolumeChoice {
+    volux_io::VolumeChoice {
+        timepoint,
+        component,
+    }
+}
+
+fn describe(g: &Grid) -> Vec<String> {
+    g.extra_axes().iter().map(|a| a.describe()).collect()
+}
+
+/// bzip2-encoded data (pynrrd's `encoding: bzip2`) reads as the raw data does; int64 and
+/// uint64 become float32 in one rounding with a note.
+#[test]
+fn nrrd_bzip2_and_64_bit_types() {
+    use std::io::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let head = |ty: &str, enc: &str| {
+        format!(
+            "NRRD0004\ntype: {ty}\ndimension: 3\nsizes: 2 2 1\nendian: little\nencoding: {enc}\n\n"
+        )
+    };
+    let bz = |data: &[u8]| {
+        let mut e = bzip2::write::BzEncoder::new(Vec::new(), bzip2::Compression::fast());
+        e.write_all(data).unwrap();
+        e.finish().unwrap()
+    };
+    let v = [-7i16, 300, 12, -32768];
+    let g = nrrd::read(
+        &nrrd_file(d, "b.nrrd", &head("short", "bzip2"), &bz(&le_i16(&v))),
+        Default::default(),
+    )
+    .unwrap();
+    assert_eq!(values(&g), v.map(f32::from).to_vec());
+    assert_eq!(g.scalar_type(), ScalarType::I16);
+    // A stream holding more than the header declares is a mismatch, as for gzip.
+    let long = bz(&le_i16(&[1, 2, 3, 4, 5]));
+    assert_kind(
+        nrrd::read(
+            &nrrd_file(d, "b2.nrrd", &head("short", "bz2"), &long),
+            Default::default(),
+        ),
+        is_mismatch,
+    );
+    let big = (1i64 << 40) + 1;
+    let i64s: Vec<u8> = [big, -3, i64::MAX, 0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    for ty in ["int64", "longlong", "signed long long int"] {
+        let g = nrrd::read(
+            &nrrd_file(d, "i.nrrd", &head(ty, "raw"), &i64s),
+            Default::default(),
+        )
+        .unwrap();
+        assert_eq!(
+            values(&g),
+            vec![big as f32, -3.0, i64::MAX as f32, 0.0],
+            "{ty}"
+        );
+        assert!(g
+            .notes()
+            .iter()
+            .any(|n| n.starts_with("converted from int64 to float32")));
+    }
+    let u64s: Vec<u8> = [u64::MAX, 1, 2, 3]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let g = nrrd::read(
+        &nrrd_file(d, "u.nrrd", &head("uint64", "gzip"), &gzip(&u64s)),
+        Default::default(),
+    )
+    .unwrap();
+    assert_eq!(values(&g), vec![u64::MAX as f32, 1.0, 2.0, 3.0]);
+    assert!(g.notes().iter().any(|n| n.contains("uint64 to float32")));
+    let g = nrrd::read(
+        &nrrd_file(
+            d,
+            "a.nrrd",
+            &head("int64", "ascii"),
+            b"1099511627777 -3 4 5",
+        ),
+        Default::default(),
+    )
+    .unwrap();
+    assert_eq!(values(&g)[0], big as f32);
+}
+
+/// A 4-D NRRD as pynrrd writes one: the non-spatial axis found by its kind (or its `none`
+/// space direction), time chosen by `timepoint` (its step from `spacings`), vector components
+/// by `component`, a list on the first axis as components and elsewhere as volumes; the
+/// geometry of the spatial axes is kept.
+#[test]
+fn nrrd_4d_time_vector_and_list_axes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // value = 1000 a + flat index of the spatial voxel, with `a` the entry on the extra axis.
+    let vol = |a: i16| -> Vec<i16> { (0..12).map(|i| 1000 * a + i).collect() };
+    let time: Vec<i16> = (0..3).flat_map(vol).collect();
+    let h =
+        "NRRD0004\ntype: short\ndimension: 4\nsizes: 3 2 2 3\nkinds: domain domain domain time\n\
+        spacings: NaN NaN NaN 2.5\nspace: left-posterior-superior\n\
+        space directions: (0.5,0,0) (0,0.25,0) (0,0,2) none\nspace origin: (1,2,3)\n\
+        endian: little\nencoding: raw\n\n";
+    let p = nrrd_file(d, "t.nrrd", h, &le_i16(&time));
+    for t in 0..3 {
+        let g = nrrd::read(&p, choice(t, None)).unwrap();
+        assert_eq!(
+            values(&g),
+            vol(t as i16)
+                .iter()
+                .map(|&v| f32::from(v))
+                .collect::<Vec<_>>()
+        );
+        assert_eq!(
+            describe(&g),
+            vec![format!("time: 3 volumes (timepoint {t} read), step 2.5")]
+        );
+        assert_eq!(g.dims(), [3, 2, 2]);
+        assert_eq!(g.spacing().to_array(), [0.5, 0.25, 2.0]);
+        assert_eq!(g.origin().to_array(), [1.0, 2.0, 3.0]);
+    }
+    assert!(nrrd::read(&p, choice(3, None))
+        .unwrap_err()
+        .to_string()
+        .contains("timepoint 3 does not exist"));
+    // Vector components first (interleaved), found by a `none` direction when kinds are absent.
+    let inter: Vec<i16> = (0..12)
+        .flat_map(|i| (0..3).map(move |c| 1000 * c + i))
+        .collect();
+    let hv = "NRRD0004\ntype: short\ndimension: 4\nsizes: 3 3 2 2\n\
+        space directions: none (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n";
+    let p = nrrd_file(d, "v.nrrd", hv, &le_i16(&inter));
+    let g = nrrd::read(&p, Default::default()).unwrap();
+    assert_eq!(
+        values(&g),
+        vol(0).iter().map(|&v| f32::from(v)).collect::<Vec<_>>()
+    );
+    assert_eq!(
+        describe(&g),
+        vec!["components: 3 components (component 0 read)".to_string()]
+    );
+    let hv = hv.replace(
+        "sizes:",
+        "kinds: covariant-vector domain domain domain\nsizes:",
+    );
+    let g = nrrd::read(
+        &nrrd_file(d, "cv.nrrd", &hv, &le_i16(&inter)),
+        choice(0, Some(2)),
+    )
+    .unwrap();
+    assert_eq!(
+        values(&g),
+        vol(2).iter().map(|&v| f32::from(v)).collect::<Vec<_>>()
+    );
+    assert_eq!(
+        describe(&g),
+        vec!["components: 3 components (component 2 read), kind covariant-vector".to_string()]
+    );
+    // list: first axis = components, last axis = volumes.
+    let hl = hv.replace("covariant-vector", "list");
+    let g = nrrd::read(
+        &nrrd_file(d, "l0.nrrd", &hl, &le_i16(&inter)),
+        choice(0, Some(1)),
+    )
+    .unwrap();
+    assert_eq!(values(&g)[1], 1001.0);
+    let hl3 = h.replace(" time\n", " list\n");
+    let g = nrrd::read(
+        &nrrd_file(d, "l3.nrrd", &hl3, &le_i16(&time)),
+        choice(2, None),
+    )
+    .unwrap();
+    assert_eq!(
+        describe(&g),
+        vec!["volumes: 3 volumes (timepoint 2 read), kind list".to_string()]
+    );
+    assert_eq!(values(&g)[0], 2000.0);
+    // Through `load`: a component asked of a time series is refused, not ignored.
+    let opts = LoadOptions {
+        component: Some(1),
+        ..Default::default()
+    };
+    let e = load(&d.join("t.nrrd"), &opts).unwrap_err().to_string();
+    assert!(e.contains("component 1 does not exist"), "{e}");
+}
+
+/// RGB-color and RGBA-color axes are colour (written back as colour by the NRRD writer); a
+/// channel can be read as a scalar; alpha is dropped with a note.
+#[test]
+fn nrrd_colour_kinds() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let px: [[u8; 4]; 2] = [[255, 0, 10, 128], [0, 200, 30, 255]];
+    for (kind, n) in [("RGB-color", 3), ("RGBA-color", 4)] {
+        let data: Vec<u8> = px.iter().flat_map(|p| p[..n].to_vec()).collect();
+        let h = format!(
+            "NRRD0004\ntype: uchar\ndimension: 4\nsizes: {n} 2 1 1\nkinds: {kind} domain domain domain\n\
+             encoding: raw\n\n"
+        );
+        let p = nrrd_file(d, &format!("{kind}.nrrd"), &h, &data);
+        let g = nrrd::read(&p, Default::default()).unwrap();
+        let c = g.color().expect("colour");
+        assert_eq!(c.channels()[1].get_f32(1), 200.0);
+        assert_eq!(
+            describe(&g),
+            vec!["colour: 3 channels (all kept)".to_string()]
+        );
+        assert_eq!(
+            g.notes()
+                .iter()
+                .any(|n| n.contains("alpha channel was dropped")),
+            n == 4
+        );
+        let out = d.join(format!("{kind}-out.nrrd"));
+        nrrd::write(&g, &out).unwrap();
+        let back = nrrd::read(&out, Default::default()).unwrap();
+        let b = back.color().expect("colour written back");
+        for (channel, &want) in b.channels().iter().zip(&px[0]) {
+            assert_eq!(channel.get_f32(0), f32::from(want));
+        }
+        let blue = nrrd::read(&p, choice(0, Some(2))).unwrap();
+        assert!(blue.color().is_none());
+        assert_eq!(values(&blue), vec![10.0, 30.0]);
+    }
+}
+
+/// MetaImage: three uchar channels (SimpleITK's RGB) are colour, other channel counts or
+/// types are components, NDims 4 is a time series (step from the 4th spacing), and
+/// MET_LONG (4 bytes), MET_LONG_LONG and MET_ULONG_LONG are converted with notes.
+#[test]
+fn metaimage_channels_4d_and_long_types() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rgb = "ObjectType = Image\nNDims = 3\nDimSize = 2 1 1\nElementNumberOfChannels = 3\n\
+        ElementType = MET_UCHAR\n";
+    let g = metaimage::read(
+        &mha(d, "rgb.mha", rgb, "LOCAL", &[255, 0, 10, 0, 200, 30]),
+        Default::default(),
+    )
+    .unwrap();
+    assert_eq!(g.color().expect("colour").channels()[2].get_f32(1), 30.0);
+    let g = metaimage::read(&d.join("rgb.mha"), choice(0, Some(1))).unwrap();
+    assert_eq!(values(&g), vec![0.0, 200.0]);
+    let vec2 = "ObjectType = Image\nNDims = 3\nDimSize = 2 1 1\nElementNumberOfChannels = 2\n\
+        ElementType = MET_FLOAT\n";
+    let g = metaimage::read(
+        &mha(d, "v.mha", vec2, "LOCAL", &le_f32(&[1.0, -1.0, 2.0, -2.0])),
+        choice(0, Some(1)),
+    )
+    .unwrap();
+    assert_eq!(values(&g), vec![-1.0, -2.0]);
+    assert_eq!(
+        describe(&g),
+        vec!["components: 2 components (component 1 read)".to_string()]
+    );
+    let four = "ObjectType = Image\nNDims = 4\nDimSize = 2 1 1 3\nElementType = MET_SHORT\n\
+        ElementSpacing = 0.5 0.5 2 1.5\nOffset = 1 2 3 0\n\
+        TransformMatrix = 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n";
+    let p = mha(d, "4d.mha", four, "LOCAL", &le_i16(&[1, 2, 3, 4, 5, 6]));
+    let g = metaimage::read(&p, choice(2, None)).unwrap();
+    assert_eq!(values(&g), vec![5.0, 6.0]);
+    assert_eq!(
+        describe(&g),
+        vec!["time: 3 volumes (timepoint 2 read), step 1.5".to_string()]
+    );
+    assert_eq!(g.spacing().to_array(), [0.5, 0.5, 2.0]);
+    assert_eq!(g.origin().to_array(), [1.0, 2.0, 3.0]);
+    let long = |ty: &str, bytes: Vec<u8>| {
+        let h = format!("ObjectType = Image\nNDims = 3\nDimSize = 2 1 1\nElementType = {ty}\n");
+        metaimage::read(&mha(d, "l.mha", &h, "LOCAL", &bytes), Default::default()).unwrap()
+    };
+    let g = long(
+        "MET_LONG",
+        [-4i32, 1 << 30]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect(),
+    );
+    assert_eq!(values(&g), vec![-4.0, (1 << 30) as f32]);
+    assert!(g
+        .notes()
+        .iter()
+        .any(|n| n.starts_with("converted from int32")));
+    let big = (1i64 << 40) + 1;
+    let g = long(
+        "MET_LONG_LONG",
+        [big, -1].iter().flat_map(|v| v.to_le_bytes()).collect(),
+    );
+    assert_eq!(values(&g), vec![big as f32, -1.0]);
+    assert!(g
+        .notes()
+        .iter()
+        .any(|n| n.starts_with("converted from int64")));
+    let g = long(
+        "MET_ULONG_LONG",
+        [u64::MAX, 9].iter().flat_map(|v| v.to_le_bytes()).collect(),
+    );
+    assert_eq!(values(&g), vec![u64::MAX as f32, 9.0]);
+    assert!(g
+        .notes()
+        .iter()
+        .any(|n| n.starts_with("converted from uint64")));
 }

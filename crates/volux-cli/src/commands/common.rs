@@ -38,8 +38,16 @@ fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError>
     let volumes = stack
         || matches!(
             format,
-            Format::Nifti | Format::Nrrd | Format::MetaImage | Format::Dicom
+            Format::Nifti
+                | Format::Analyze
+                | Format::Mgh
+                | Format::Nrrd
+                | Format::MetaImage
+                | Format::Dicom
         );
+    // Of those, the formats with vector components or colour channels (not MGH: its frames
+    // are volumes).
+    let components = volumes && !zarr && format != Format::Mgh;
     let misplaced = [
         (
             "q-variable",
@@ -76,13 +84,14 @@ fn check_reader_options(args: &LoadArgs, format: Format) -> Result<(), CmdError>
             "timepoint",
             args.timepoint.is_some(),
             volumes,
-            "files holding several volumes (NIfTI, NRRD, MetaImage, DICOM, OME-Zarr, TIFF)",
+            "files holding several volumes (NIfTI, Analyze, MGH, NRRD, MetaImage, DICOM, OME-Zarr, \
+             TIFF)",
         ),
         (
             "component",
             args.component.is_some(),
-            volumes && !zarr,
-            "vector and colour volumes (NIfTI, NRRD, MetaImage, DICOM, TIFF)",
+            components,
+            "vector and colour volumes (NIfTI, Analyze, NRRD, MetaImage, DICOM, TIFF)",
         ),
     ];
     match misplaced.iter().find(|(_, given, fits, _)| *given && !fits) {

@@ -128,9 +128,12 @@ pub fn convert(
     }
     let unit = match format {
         _ if grid.unit() != "mm" => volux_core::units::length_name(grid.unit()).map(String::from),
-        Format::Dicom | Format::Nifti | Format::Nrrd | Format::MetaImage => {
-            Some("millimeter".to_string())
-        }
+        Format::Dicom
+        | Format::Nifti
+        | Format::Analyze
+        | Format::Mgh
+        | Format::Nrrd
+        | Format::MetaImage => Some("millimeter".to_string()),
         Format::OmeZarr => store_options(load)
             .ok()
             .and_then(|o| omezarr::open_store(input, &o).ok())

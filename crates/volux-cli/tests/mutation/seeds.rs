@@ -113,6 +113,7 @@ pub fn all() -> Vec<Seed> {
     v.extend(nrrd_seeds());
     v.extend(metaimage_seeds());
     v.extend(nifti_seeds());
+    v.extend(several_volume_seeds());
     v.extend(vtk_legacy_seeds());
     v.extend(vtk_xml_seeds());
     v.extend([
@@ -380,6 +381,105 @@ fn nifti_seeds() -> Vec<Seed> {
         Seed::grid(
             "nii.gz",
             vec![InputFile::new("t.nii.gz", gzip(&nii), Layout::Binary(352)).gzipped()],
+        ),
+    ]
+}
+
+// ------------------------------------------------------- several volumes, Analyze, MGH
+
+/// The grid's values twice, the second time plus 1000 (two volumes of a series), int16.
+fn two_volumes(big: bool) -> Vec<u8> {
+    let second: Vec<u8> = values()
+        .iter()
+        .flat_map(|&v| {
+            let v = v as i16 + 1000;
+            if big {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            }
+        })
+        .collect();
+    [i16s(big), second].concat()
+}
+
+/// A 4-D NIfTI-1 time series (2 volumes, TR 2 s), an Analyze 7.5 pair (big-endian, SPM
+/// originator), an MGZ with two frames, a 4-D NRRD with a time axis and an RGB MetaImage.
+fn several_volume_seeds() -> Vec<Seed> {
+    let mut fmri = nifti_header();
+    fmri[40..42].copy_from_slice(&4i16.to_le_bytes());
+    fmri[48..50].copy_from_slice(&2i16.to_le_bytes()); // dim[4]
+    fmri[92..96].copy_from_slice(&2f32.to_le_bytes()); // pixdim[4]
+    fmri[123] = 2 | 8; // mm, s
+    let fmri = [fmri, two_volumes(false)].concat();
+    let mut analyze = vec![0u8; 348];
+    let mut put = |at: usize, b: &[u8]| {
+        let mut b = b.to_vec();
+        b.reverse();
+        analyze[at..at + b.len()].copy_from_slice(&b);
+    };
+    put(0, &348i32.to_le_bytes());
+    for (i, d) in [3i16, 6, 5, 4, 1, 1, 1, 1].iter().enumerate() {
+        put(40 + 2 * i, &d.to_le_bytes());
+    }
+    put(70, &4i16.to_le_bytes());
+    put(72, &16i16.to_le_bytes());
+    for (i, p) in [0f32, 1.0, 0.5, 2.0].iter().enumerate() {
+        put(76 + 4 * i, &p.to_le_bytes());
+    }
+    for (i, o) in [3i16, 3, 2].iter().enumerate() {
+        put(253 + 2 * i, &o.to_le_bytes());
+    }
+    let mut mgh = Vec::new();
+    for v in [1i32, 6, 5, 4, 2, 4, 0] {
+        mgh.extend(v.to_be_bytes());
+    }
+    mgh.extend(1i16.to_be_bytes());
+    let mdc = [
+        1f32, 0.5, 2.0, -1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0, 1.0, 2.0, 3.0,
+    ];
+    for v in mdc {
+        mgh.extend(v.to_be_bytes());
+    }
+    mgh.resize(284, 0);
+    mgh.extend(two_volumes(true));
+    mgh.extend(2000f32.to_be_bytes());
+    let nrrd4 = "NRRD0004\n# seed\ntype: short\ndimension: 4\nsizes: 6 5 4 2\n\
+        kinds: domain domain domain time\nspacings: 1 0.5 2 2\nendian: little\nencoding: raw\n\n";
+    let rgb_head = "ObjectType = Image\nNDims = 3\nDimSize = 6 5 4\nElementNumberOfChannels = 3\n\
+        ElementType = MET_UCHAR\nElementSpacing = 1 0.5 2\nElementDataFile = LOCAL\n";
+    let rgb: Vec<u8> = u8s().iter().flat_map(|&v| [v, 255 - v, v / 2]).collect();
+    vec![
+        Seed::grid(
+            "nii-4d.gz",
+            vec![InputFile::new("t.nii.gz", gzip(&fmri), Layout::Binary(352)).gzipped()],
+        ),
+        Seed::grid(
+            "analyze",
+            vec![
+                InputFile::new("t.hdr", analyze, Layout::Binary(348)),
+                InputFile::new("t.img", i16s(true), Layout::Binary(0)),
+            ],
+        ),
+        Seed::grid(
+            "mgz",
+            vec![InputFile::new("t.mgz", gzip(&mgh), Layout::Binary(284)).gzipped()],
+        ),
+        Seed::grid(
+            "nrrd-4d",
+            vec![InputFile::new(
+                "t.nrrd",
+                with_header(nrrd4, &two_volumes(false)),
+                Layout::Text(nrrd4.len()),
+            )],
+        ),
+        Seed::grid(
+            "mha-rgb",
+            vec![InputFile::new(
+                "t.mha",
+                with_header(rgb_head, &rgb),
+                Layout::Text(rgb_head.len()),
+            )],
         ),
     ]
 }

@@ -7,6 +7,12 @@
 //! (`pixdim[0]`, -1 or 1), spacing from `pixdim`, origin `qoffset`. Otherwise (method 1) the
 //! grid is axis-aligned at the origin. NIfTI world coordinates are RAS; x and y are negated
 //! to give LPS ([`volux_core::orientation::ras_to_lps`]).
+//!
+//! Analyze 7.5 has no orientation field: [`analyze_placement`] places it as SPM and nibabel's
+//! `Spm99AnalyzeHeader.get_origin_affine` do (nibabel reads every Analyze pair as SPM2's):
+//! x flipped (the radiological storage Analyze files were written in), spacing `pixdim`,
+//! and the origin at SPM's `originator` voxel (1-based) when it lies within the image's
+//! reach, else at the image's centre.
 use glam::{DMat3, DVec3};
 use volux_core::orientation::{ras_to_lps, split_scaled_axes, validate_direction};
 
@@ -124,4 +130,62 @@ fn quaternion_matrix([b, c, d]: [f64; 3]) -> Result<DMat3, String> {
             a * a + d * d - c * c - b * b,
         ),
     ))
+}
+
+/// The placement nibabel gives an Analyze 7.5 image (`Spm99AnalyzeHeader.get_origin_affine`):
+/// the RAS affine `diag(-sx, sy, sz)` (x flipped; `sx..sz` are `pixdim[1..=3]` with their
+/// signs, zero or non-finite ones 1 as `spacing` says), translated so that the origin voxel
+/// `o` lies at 0: `o` is SPM's `originator` minus 1 when one of its three first values is
+/// non-zero and each lies strictly between `-dim` and `2 dim`, else `(dim - 1) / 2`. A note
+/// says which.
+pub(super) fn analyze_placement(
+    hdr: &Header,
+    spacing: [f64; 3],
+    notes: &mut Vec<String>,
+) -> Placement {
+    let sign = |p: f64| if p < 0.0 { -1.0 } else { 1.0 };
+    let mut zooms: [f64; 3] = std::array::from_fn(|i| spacing[i] * sign(hdr.pixdim[i]));
+    zooms[0] = -zooms[0];
+    let dims = hdr.dims.map(|d| d as f64);
+    let orig = [0, 1, 2].map(|i| f64::from(hdr.originator[i]));
+    let spm = orig.iter().any(|&o| o != 0.0)
+        && (0..3).all(|i| orig[i] > -dims[i] && orig[i] < 2.0 * dims[i]);
+    let (voxel, where_) = if spm {
+        (
+            orig.map(|o| o - 1.0),
+            format!(
+                "origin at SPM's originator voxel ({}, {}, {})",
+                orig[0], orig[1], orig[2]
+            ),
+        )
+    } else {
+        (
+            dims.map(|d| (d - 1.0) / 2.0),
+            "origin at the image's centre (no SPM originator)".to_string(),
+        )
+    };
+    notes.push(format!(
+        "Analyze 7.5 has no orientation: placed as SPM and nibabel do, x flipped \
+         (radiological storage, right to left), {where_}"
+    ));
+    let cols = [0, 1, 2].map(|i| {
+        let mut c = DVec3::ZERO;
+        c[i] = zooms[i];
+        ras_to_lps(c)
+    });
+    let origin = ras_to_lps(DVec3::from(std::array::from_fn::<f64, 3, _>(|i| {
+        -voxel[i] * zooms[i]
+    })));
+    match split_scaled_axes(DMat3::from_cols(cols[0], cols[1], cols[2])) {
+        Ok((spacing, direction)) => Placement {
+            spacing,
+            origin: origin.to_array(),
+            direction,
+        },
+        Err(_) => Placement {
+            spacing,
+            origin: [0.0; 3],
+            direction: DMat3::IDENTITY,
+        },
+    }
 }

@@ -1,5 +1,6 @@
-//! The NIfTI header, version 1 (348 bytes) or 2 (540 bytes): byte order, version, dims,
-//! datatype, scaling, geometry, validated the same way for both.
+//! The NIfTI header, version 1 (348 bytes) or 2 (540 bytes), or the Analyze 7.5 header NIfTI-1
+//! grew from (348 bytes, no magic): byte order, version, dims, datatype, scaling, geometry,
+//! validated the same way for all three.
 use std::path::Path;
 
 use crate::error::ErrorKind;
@@ -21,8 +22,14 @@ pub(super) enum Dtype {
     U16,
     I32,
     U32,
+    I64,
+    U64,
     F32,
     F64,
+    /// `DT_RGB24`: three uint8 per voxel, interleaved (R, G, B).
+    Rgb24,
+    /// `DT_RGBA32`: four uint8 per voxel, interleaved (R, G, B, A).
+    Rgba32,
 }
 
 impl Dtype {
@@ -37,6 +44,10 @@ impl Dtype {
             256 => Dtype::I8,
             512 => Dtype::U16,
             768 => Dtype::U32,
+            1024 => Dtype::I64,
+            1280 => Dtype::U64,
+            128 => Dtype::Rgb24,
+            2304 => Dtype::Rgba32,
             _ => return None,
         })
     }
@@ -45,8 +56,17 @@ impl Dtype {
         match self {
             Dtype::U8 | Dtype::I8 => 1,
             Dtype::I16 | Dtype::U16 => 2,
-            Dtype::I32 | Dtype::U32 | Dtype::F32 => 4,
-            Dtype::F64 => 8,
+            Dtype::Rgb24 => 3,
+            Dtype::I32 | Dtype::U32 | Dtype::F32 | Dtype::Rgba32 => 4,
+            Dtype::F64 | Dtype::I64 | Dtype::U64 => 8,
+        }
+    }
+    /// The colour channels per voxel of `DT_RGB24` (3) and `DT_RGBA32` (4); `None` otherwise.
+    pub(super) fn channels(self) -> Option<usize> {
+        match self {
+            Dtype::Rgb24 => Some(3),
+            Dtype::Rgba32 => Some(4),
+            _ => None,
         }
     }
     /// The NIfTI name of the type.
@@ -58,8 +78,12 @@ impl Dtype {
             Dtype::U16 => "uint16",
             Dtype::I32 => "int32",
             Dtype::U32 => "uint32",
+            Dtype::I64 => "int64",
+            Dtype::U64 => "uint64",
             Dtype::F32 => "float32",
             Dtype::F64 => "float64",
+            Dtype::Rgb24 => "rgb24",
+            Dtype::Rgba32 => "rgba32",
         }
     }
 }
@@ -69,13 +93,9 @@ fn unsupported_dtype_name(code: i16) -> &'static str {
     match code {
         1 => "binary",
         32 => "complex64",
-        128 => "rgb24",
-        1024 => "int64",
-        1280 => "uint64",
         1536 => "float128",
         1792 => "complex128",
         2048 => "complex256",
-        2304 => "rgba32",
         _ => "unknown",
     }
 }
@@ -87,13 +107,26 @@ pub(super) enum Version {
     One,
     /// NIfTI-2, 540 bytes.
     Two,
+    /// Analyze 7.5 (and SPM's variant of it), 348 bytes without a NIfTI magic: always a
+    /// `.hdr` + `.img` pair.
+    Analyze,
+}
+
+/// Which kind of header the caller expects: the format detection has told NIfTI (a magic) from
+/// Analyze (none) already, and a NIfTI file whose magic is damaged is not read as Analyze.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Flavour {
+    /// NIfTI-1 or NIfTI-2.
+    Nifti,
+    /// Analyze 7.5.
+    Analyze,
 }
 
 impl Version {
     /// The header's size in bytes.
     pub(super) fn header_bytes(self) -> usize {
         match self {
-            Version::One => NIFTI1_BYTES,
+            Version::One | Version::Analyze => NIFTI1_BYTES,
             Version::Two => NIFTI2_BYTES,
         }
     }
@@ -107,6 +140,7 @@ impl Version {
         match self {
             Version::One => "NIfTI-1",
             Version::Two => "NIfTI-2",
+            Version::Analyze => "Analyze 7.5",
         }
     }
 }
@@ -122,12 +156,28 @@ pub(super) struct Header {
     pub dim0: i64,
     /// `dim[1..=3]` folded to three dims (`dim[0]` 2 gives z = 1).
     pub dims: [i64; 3],
+    /// `dim[4]` when `dim[0]` reaches 4, else 1: volumes along time (or another list).
+    pub volumes: i64,
+    /// `dim[5]` when `dim[0]` reaches 5, else 1: values per voxel (vectors, tensors).
+    pub components: i64,
     pub dtype: Dtype,
     /// The first `dim[i]` past `dim[0]` that is above 1, as `(i, dim[i])`: the data may hold
     /// more than the dims declare (a time series written with `dim[0]` 3, say).
     pub unused_dim: Option<(usize, i64)>,
     /// `pixdim[1..=3]`.
     pub pixdim: [f64; 3],
+    /// `pixdim[4]`: the step between volumes along `dim[4]` (the repetition time of fMRI).
+    pub step: f64,
+    /// `intent_code` (0 for Analyze, whose field at that place is unused).
+    pub intent_code: i32,
+    /// `xyzt_units`.
+    pub xyzt_units: i32,
+    /// `cal_max`, `cal_min`.
+    pub cal: [f64; 2],
+    /// Analyze: `glmax`, `glmin`.
+    pub gl: [i32; 2],
+    /// Analyze: SPM's `originator` (origin voxel, 1-based).
+    pub originator: [i16; 5],
     pub vox_offset: f64,
     pub scl_slope: f64,
     pub scl_inter: f64,
@@ -145,9 +195,19 @@ pub(super) struct Header {
 }
 
 /// Parses the header at the start of `raw` (the first bytes of `path`, up to 540): NIfTI-1 or
-/// NIfTI-2 by `sizeof_hdr`.
-pub(super) fn parse(path: &Path, raw: &[u8]) -> Result<Header> {
+/// NIfTI-2 by `sizeof_hdr`, or Analyze 7.5 when `flavour` says so.
+pub(super) fn parse(path: &Path, raw: &[u8], flavour: Flavour) -> Result<Header> {
     let (le, version) = byte_order(path, raw)?;
+    let version = match (flavour, version) {
+        (Flavour::Analyze, Version::One) => Version::Analyze,
+        (Flavour::Analyze, _) => {
+            return Err(header_err(
+                path,
+                "sizeof_hdr is 540 (a NIfTI-2 header), not the 348 of an Analyze 7.5 header",
+            ))
+        }
+        (Flavour::Nifti, v) => v,
+    };
     let need = version.header_bytes();
     if raw.len() < need {
         return Err(ReadError::new(
@@ -160,21 +220,30 @@ pub(super) fn parse(path: &Path, raw: &[u8]) -> Result<Header> {
     }
     let f = Fields::new(raw, le);
     let r = match version {
-        Version::One => f.nifti1(),
+        Version::One | Version::Analyze => f.nifti1(),
         Version::Two => f.nifti2(),
     };
     let single_file = check_magic(path, version, &r)?;
-    let dims = fold_dims(path, &r.dim)?;
+    let (dims, volumes, components) = fold_dims(path, &r.dim)?;
     let dtype = datatype(path, r.datatype)?;
     check_bitpix(path, dtype, r.datatype, r.bitpix)?;
+    let analyze = version == Version::Analyze;
     Ok(Header {
         version,
         le,
         dim0: r.dim[0],
         dims,
+        volumes,
+        components,
         dtype,
         unused_dim: unused_dim(&r.dim),
         pixdim: [r.pixdim[1], r.pixdim[2], r.pixdim[3]],
+        step: r.pixdim[4],
+        intent_code: if analyze { 0 } else { r.intent_code },
+        xyzt_units: if analyze { 0 } else { r.xyzt_units },
+        cal: r.cal,
+        gl: r.gl,
+        originator: r.originator,
         vox_offset: r.vox_offset,
         scl_slope: r.scl_slope,
         scl_inter: r.scl_inter,
@@ -206,7 +275,7 @@ fn datatype(path: &Path, code: i16) -> Result<Dtype> {
             path,
             ErrorKind::Unsupported(format!(
                 "NIfTI datatype code {code} ({}); Volux reads uint8, int8, int16, uint16, int32, \
-                 uint32, float32 and float64",
+                 uint32, int64, uint64, float32, float64, rgb24 and rgba32",
                 unsupported_dtype_name(code)
             )),
         )
@@ -280,10 +349,20 @@ fn check_magic(path: &Path, version: Version, r: &RawFields) -> Result<bool> {
     let single = match (version, &r.magic) {
         (Version::One, b"n+1\0") | (Version::Two, b"n+2\0") => true,
         (Version::One, b"ni1\0") | (Version::Two, b"ni2\0") => false,
+        (Version::Analyze, b"n+1\0" | b"ni1\0") => {
+            return Err(header_err(
+                path,
+                "the header has a NIfTI-1 magic: it is a NIfTI file, not Analyze 7.5",
+            ))
+        }
+        (Version::Analyze, _) => false,
         (v, m) => {
             let want = match v {
-                Version::One => "\"n+1\" or \"ni1\" (ANALYZE 7.5 files are not read)",
                 Version::Two => "\"n+2\" or \"ni2\"",
+                _ => {
+                    "\"n+1\" or \"ni1\" (an Analyze 7.5 header, without a magic, is read from \
+                     a .hdr beside its .img)"
+                }
             };
             return Err(ReadError::new(
                 path,
@@ -309,9 +388,9 @@ fn check_magic(path: &Path, version: Version, r: &RawFields) -> Result<bool> {
     Ok(single)
 }
 
-/// Folds `dim[0..8]` to x, y, z: `dim[0]` 2 gives z = 1, 3 is a volume, 4 to 7 are accepted
-/// when every extra dimension is 1.
-fn fold_dims(path: &Path, dim: &[i64; 8]) -> Result<[i64; 3]> {
+/// Folds `dim[0..8]` to x, y, z (`dim[0]` 2 gives z = 1) and the volumes along `dim[4]` and
+/// `dim[5]` (1 when `dim[0]` stops before them); `dim[6]` and `dim[7]` must be 1.
+fn fold_dims(path: &Path, dim: &[i64; 8]) -> Result<([i64; 3], i64, i64)> {
     let n = dim[0];
     if !(1..=7).contains(&n) {
         return Err(header_err(
@@ -319,28 +398,34 @@ fn fold_dims(path: &Path, dim: &[i64; 8]) -> Result<[i64; 3]> {
             format!("dim[0] is {n}, expected 1 to 7 dimensions"),
         ));
     }
-    let d = |i: usize| dim[i];
+    let d = |i: usize| if (i as i64) <= n { dim[i] } else { 1 };
     match n {
         1 => Err(ReadError::new(
             path,
             ErrorKind::Unsupported("a 1-D NIfTI image (dim[0] = 1)".into()),
         )),
-        2 => Ok([d(1), d(2), 1]),
-        3 => Ok([d(1), d(2), d(3)]),
+        2 => Ok(([d(1), d(2), 1], 1, 1)),
         _ => {
-            let extra = &dim[4..=n as usize];
-            if extra.iter().all(|&v| v == 1) {
-                Ok([d(1), d(2), d(3)])
-            } else {
-                Err(ReadError::new(
+            if let Some(i) = (6..=n as usize).find(|&i| dim[i] != 1) {
+                return Err(ReadError::new(
                     path,
                     ErrorKind::Unsupported(format!(
-                        "a {n}-D NIfTI image with dims {:?}: Volux reads one 3-D volume (dims 4 \
-                         and up must be 1)",
-                        &dim[1..=n as usize]
+                        "a {n}-D NIfTI image with dims {:?}: Volux reads volumes along dim[4] \
+                         (time) and dim[5] (components), and dim[{i}] is {}",
+                        &dim[1..=n as usize],
+                        dim[i]
                     )),
-                ))
+                ));
             }
+            for i in 4..=5 {
+                if d(i) < 1 {
+                    return Err(header_err(
+                        path,
+                        format!("dim[{i}] is {}, expected at least 1", d(i)),
+                    ));
+                }
+            }
+            Ok(([d(1), d(2), d(3)], d(4), d(5)))
         }
     }
 }

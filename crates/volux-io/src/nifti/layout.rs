@@ -2,7 +2,9 @@
 //! 540 bytes (`nifti2.h`, <https://nifti.nimh.nih.gov/nifti-2>). NIfTI-2 holds the same fields
 //! widened (`dim` as int64, `pixdim`, scaling and geometry as float64, the form codes as
 //! int32) in another order, with its magic at byte 4. Both are read into one [`RawFields`]
-//! (NIfTI-1's values widened exactly), which `header.rs` validates the same way.
+//! (NIfTI-1's values widened exactly), which `header.rs` validates the same way. An Analyze
+//! 7.5 header (Mayo Clinic's `dbh.h`, the 348 bytes NIfTI-1 grew from) has the same offsets
+//! for the fields both hold; its `glmax`/`glmin` and `originator` (SPM's origin) are read too.
 
 /// Size of a NIfTI-1 header.
 pub(super) const NIFTI1_BYTES: usize = 348;
@@ -31,6 +33,17 @@ pub(super) struct RawFields {
     /// NIfTI-2's magic bytes 4 to 7 (`\r\n\x1a\n`, to catch a file mangled by a text-mode
     /// transfer); `None` for NIfTI-1.
     pub signature: Option<[u8; 4]>,
+    /// `intent_code`: what the values (and `dim[5]`) mean.
+    pub intent_code: i32,
+    /// `xyzt_units`: the spatial (bits 0-2) and temporal (bits 3-5) units.
+    pub xyzt_units: i32,
+    /// `cal_max`, `cal_min`: the display range (Analyze: SPM2's scaling fallback).
+    pub cal: [f64; 2],
+    /// Analyze 7.5 only (`dsr.dime`, NIfTI-1's `glmax`/`glmin`): the raw data range.
+    pub gl: [i32; 2],
+    /// Analyze 7.5 only (`dsr.hist.originator`, as SPM uses it): five int16, the first three
+    /// the 1-based voxel at the origin.
+    pub originator: [i16; 5],
 }
 
 /// Little/big-endian field access on header bytes. Callers pass slices at least as long as the
@@ -62,6 +75,9 @@ impl<'a> Fields<'a> {
             out.copy_from_slice(s);
         }
         out
+    }
+    fn u8(&self, at: usize) -> u8 {
+        self.b.get(at).copied().unwrap_or(0)
     }
     fn i16(&self, at: usize) -> i16 {
         i16::from_le_bytes(self.bytes(at))
@@ -102,6 +118,11 @@ impl<'a> Fields<'a> {
             srow: [self.f32s(280), self.f32s(296), self.f32s(312)],
             magic: self.raw(344),
             signature: None,
+            intent_code: i32::from(self.i16(68)),
+            xyzt_units: i32::from(self.u8(123)),
+            cal: [self.f32(124), self.f32(128)],
+            gl: [self.i32(140), self.i32(144)],
+            originator: std::array::from_fn(|i| self.i16(253 + 2 * i)),
         }
     }
 
@@ -124,6 +145,11 @@ impl<'a> Fields<'a> {
             srow: [self.f64s(400), self.f64s(432), self.f64s(464)],
             magic: self.raw(4),
             signature: Some(self.raw(8)),
+            intent_code: self.i32(504),
+            xyzt_units: self.i32(500),
+            cal: [self.f64(192), self.f64(200)],
+            gl: [0, 0],
+            originator: [0; 5],
         }
     }
 }

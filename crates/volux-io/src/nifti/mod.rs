@@ -12,10 +12,20 @@
 //! `bitpix` (cast from `i16` to `usize`) rather than from the datatype; it reserves the whole
 //! announced data size before checking what the file holds; and it cannot memory-map.
 //!
-//! - Dims: `dim[0]` 3, 2 (z = 1), or 4 to 7 with every extra dimension 1; others are
-//!   [`ErrorKind::Unsupported`] (1-D, time series) or a header error (0, > 7).
+//! - Dims: `dim[0]` 3, 2 (z = 1), or 4 to 7. A file with several volumes along `dim[4]` (a time
+//!   series: fMRI, ASL, perfusion; DWI) or `dim[5]` (vector and tensor components) is read one
+//!   3-D volume at a time: [`VolumeChoice::timepoint`] along `dim[4]`, [`VolumeChoice::component`]
+//!   along `dim[5]` (default 0), the volume `(t, c)` lying at `c * dim[4] + t` volumes from
+//!   `vox_offset` (`volumes.rs`; the grid records the axes and what the header says they mean).
+//!   `dim[6]` or `dim[7]` above 1 is [`ErrorKind::Unsupported`]; 1-D too; 0 or > 7 is a header
+//!   error.
 //! - Types: uint8, int16, uint16 and float32 are kept natively (uncompressed little-endian data
-//!   is memory-mapped); int8, int32, uint32 and float64 are converted to float32 with a note.
+//!   is memory-mapped, the chosen volume at its own offset); int8, int32, uint32, int64,
+//!   uint64 and float64 are converted to float32 with a note. RGB24 and RGBA32 are colour
+//!   ([`volux_core::color::Rgb`]; alpha dropped with a note), or the one channel `component`
+//!   asks for.
+//! - Analyze 7.5 pairs ([`read_analyze`]): the same 348-byte layout without a magic; SPM's
+//!   scaling and nibabel's placement (`affine.rs`, `values.rs`).
 //! - `scl_slope` / `scl_inter` are applied when the slope is non-zero and not (1, 0); the values
 //!   then become float32, with a note.
 //! - Placement (LPS world, see [`volux_core::orientation`]): the sform when `sform_code > 0`
@@ -35,6 +45,7 @@ use std::path::{Path, PathBuf};
 
 use volux_core::{Buffer, Grid, Samples, ScalarType};
 
+use crate::dataset::VolumeChoice;
 use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
@@ -46,49 +57,116 @@ mod affine;
 mod header;
 mod layout;
 mod values;
+mod volumes;
 
-use header::{show, Header, Version, MAX_HEADER_BYTES};
+use header::{show, Flavour, Header, Version, MAX_HEADER_BYTES};
 
-/// Reads a NIfTI-1 or NIfTI-2 `.nii`, `.nii.gz` or `.hdr` (with its `.img`) file.
-pub fn read(path: &Path) -> Result<Grid> {
+/// Reads a NIfTI-1 or NIfTI-2 `.nii`, `.nii.gz`, or `.hdr` + `.img` pair (either file of the
+/// pair may be named): the volume of `choice` when the file holds several.
+pub fn read(path: &Path, choice: VolumeChoice) -> Result<Grid> {
+    read_flavour(path, choice, Flavour::Nifti)
+}
+
+/// Reads an Analyze 7.5 (or SPM) `.hdr` + `.img` pair (either file may be named), placed as
+/// nibabel places it (`affine.rs`): x flipped, origin from SPM's `originator` or the centre.
+pub fn read_analyze(path: &Path, choice: VolumeChoice) -> Result<Grid> {
+    read_flavour(path, choice, Flavour::Analyze)
+}
+
+fn read_flavour(path: &Path, choice: VolumeChoice, flavour: Flavour) -> Result<Grid> {
+    let header_path = header_file(path);
     let mut raw = Vec::with_capacity(MAX_HEADER_BYTES);
-    open_maybe_gz(path)?
+    open_maybe_gz(&header_path)?
         .take(MAX_HEADER_BYTES as u64)
         .read_to_end(&mut raw)
-        .map_err(|e| io_error(path, e))?;
-    let hdr = header::parse(path, &raw)?;
+        .map_err(|e| io_error(&header_path, e))?;
+    let hdr = header::parse(&header_path, &raw, flavour)?;
     let mut notes = Vec::new();
     if hdr.version == Version::Two {
         notes.push("NIfTI-2 header (540 bytes, 64-bit dims)".to_string());
     }
     let (dims, count) =
         volux_core::limits::checked_dims(hdr.dims).map_err(|e| ReadError::new(path, e))?;
-    let (data_path, offset) = data_location(path, &hdr, &mut notes)?;
+    let (data_path, offset) = data_location(&header_path, &hdr, &mut notes)?;
+    let pick = volumes::pick(&header_path, &hdr, choice, &mut notes)?;
     let bytes = count
         .checked_mul(hdr.dtype.size() as u64)
         .ok_or_else(|| header_err(path, "the data size overflows"))?;
-    let scaling = values::scaling(&hdr, &mut notes);
+    let total = bytes
+        .checked_mul(pick.count)
+        .filter(|&t| t < u64::MAX - offset)
+        .ok_or_else(|| header_err(path, "the data size overflows"))?;
     let span = Span {
-        offset,
+        start: offset,
+        offset: offset + pick.index * bytes,
         bytes,
         count,
+        end: offset + total,
+        last: pick.index + 1 == pick.count,
     };
-    let (samples, surplus) = load_samples(&data_path, &hdr, span, scaling, &mut notes)?;
-    notes.extend(surplus_note(&hdr, dims, bytes, surplus));
-    let place = affine::placement(&hdr, spacing(&hdr, &mut notes), &mut notes);
-    let grid = Grid::new(dims, place.spacing, place.origin, samples)
-        .and_then(|g| g.with_direction(place.direction))
-        .map_err(|e| ReadError::new(path, e))?;
+    let scaling = match (hdr.dtype.channels(), hdr.version) {
+        (Some(_), _) => None,
+        (None, Version::Analyze) => values::analyze_scaling(&hdr, &mut notes),
+        (None, _) => values::scaling(&hdr, &mut notes),
+    };
+    let (voxels, surplus) = load_voxels(&data_path, &hdr, span, scaling, pick.channel, &mut notes)?;
+    notes.extend(surplus_note(&hdr, dims, total, surplus));
+    let spacing = spacing(&hdr, &mut notes);
+    let place = match hdr.version {
+        Version::Analyze => affine::analyze_placement(&hdr, spacing, &mut notes),
+        _ => affine::placement(&hdr, spacing, &mut notes),
+    };
+    let grid = match voxels {
+        Voxels::Scalar(samples) => Grid::new(dims, place.spacing, place.origin, samples),
+        Voxels::Colour(rgb) => {
+            if hdr.dtype.channels() == Some(4) {
+                notes.push("rgba32: the alpha channel was dropped (--component 3 reads it)".into());
+            }
+            Grid::from_rgb(dims, place.spacing, place.origin, rgb)
+        }
+    }
+    .and_then(|g| g.with_direction(place.direction))
+    .map_err(|e| ReadError::new(path, e))?;
+    let grid = pick.axes.into_iter().fold(grid, Grid::with_extra_axis);
     Ok(notes.into_iter().fold(grid, Grid::with_note))
 }
 
-/// Where the voxels lie in the (decompressed) data file: `bytes` bytes holding `count` values
-/// from byte `offset`.
+/// The header of a pair: `x.hdr` (or `x.hdr.gz`) for `x.img` / `x.img.gz` when it exists;
+/// any other path is its own header.
+fn header_file(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let lower = name.to_ascii_lowercase();
+    let Some(stem_len) = [".img.gz", ".img"]
+        .iter()
+        .find(|s| lower.ends_with(*s))
+        .map(|s| name.len() - s.len())
+    else {
+        return path.to_path_buf();
+    };
+    let stem = name.get(..stem_len).unwrap_or(&name);
+    [format!("{stem}.hdr"), format!("{stem}.hdr.gz")]
+        .iter()
+        .map(|c| path.with_file_name(c))
+        .find(|p| p.exists())
+        .unwrap_or_else(|| path.to_path_buf())
+}
+
+/// Where the chosen volume lies in the (decompressed) data file: `bytes` bytes holding `count`
+/// values from byte `offset`; the data of all volumes ends at `end`.
 #[derive(Clone, Copy, Debug)]
 struct Span {
+    /// Where the first volume starts.
+    start: u64,
     offset: u64,
     bytes: u64,
     count: u64,
+    end: u64,
+    /// Whether the chosen volume is the file's last (a gzip stream is probed for more data
+    /// only then, so that reading the first volume of a long series inflates only it).
+    last: bool,
 }
 
 /// What the data file holds past the voxels the dims declare.
@@ -102,32 +180,67 @@ enum Surplus {
     Some,
 }
 
-/// The voxels of `path` (memory-mapped when possible) and what the file holds after them.
-fn load_samples(
+/// The voxels read: scalar samples, or colour.
+enum Voxels {
+    Scalar(Samples),
+    Colour(volux_core::color::Rgb),
+}
+
+/// The voxels of `span` (memory-mapped when possible) and what the file holds after the data.
+fn load_voxels(
     path: &Path,
     hdr: &Header,
     span: Span,
     scaling: Option<(f64, f64)>,
+    channel: Option<usize>,
     notes: &mut Vec<String>,
-) -> Result<(Samples, Surplus)> {
-    if is_gzip(path)? {
-        let (data, surplus) = read_gz(path, span, notes)?;
-        return Ok((values::decode(path, hdr, &data, scaling, notes)?, surplus));
+) -> Result<(Voxels, Surplus)> {
+    let gzip = is_gzip(path)?;
+    if let Some(k) = hdr.dtype.channels() {
+        let (data, surplus) = read_bytes(path, gzip, span, notes)?;
+        let voxels = match values::decode_colour(path, &data, k, channel)? {
+            values::Colour::Rgb(rgb) => Voxels::Colour(rgb),
+            values::Colour::Channel(s) => Voxels::Scalar(s),
+        };
+        return Ok((voxels, surplus));
     }
-    let surplus = check_length(path, span.offset, span.bytes)?;
-    if let (None, Some(ty)) = (scaling, mappable(hdr)) {
-        if let Some(samples) = map(path, ty, span)? {
-            return Ok((samples, surplus));
+    if !gzip {
+        let surplus = check_length(path, span)?;
+        if let (None, Some(ty)) = (scaling, mappable(hdr)) {
+            if let Some(samples) = map(path, ty, span)? {
+                return Ok((Voxels::Scalar(samples), surplus));
+            }
         }
     }
-    let data = read_plain(path, span.offset, span.bytes)?;
-    Ok((values::decode(path, hdr, &data, scaling, notes)?, surplus))
+    let (data, surplus) = read_bytes(path, gzip, span, notes)?;
+    let samples = values::decode(path, hdr, &data, scaling, notes)?;
+    Ok((Voxels::Scalar(samples), surplus))
+}
+
+/// The bytes of `span`, from a gzip stream or a plain file (whose length is checked first).
+fn read_bytes(
+    path: &Path,
+    gzip: bool,
+    span: Span,
+    notes: &mut Vec<String>,
+) -> Result<(Vec<u8>, Surplus)> {
+    if gzip {
+        return read_gz(path, span, notes);
+    }
+    let surplus = check_length(path, span)?;
+    Ok((read_plain(path, span.offset, span.bytes)?, surplus))
 }
 
 /// A note when the data holds more than the dims declare (the extra is not read).
-fn surplus_note(hdr: &Header, dims: [usize; 3], bytes: u64, surplus: Surplus) -> Option<String> {
+fn surplus_note(hdr: &Header, dims: [usize; 3], total: u64, surplus: Surplus) -> Option<String> {
     let [x, y, z] = dims;
-    let declared = format!("dims {x}x{y}x{z} of {} declare", hdr.dtype.name());
+    let mut shape = format!("{x}x{y}x{z}");
+    for n in [hdr.volumes, hdr.components] {
+        if n > 1 || hdr.components > 1 {
+            shape.push_str(&format!("x{n}"));
+        }
+    }
+    let declared = format!("dims {shape} of {} declare", hdr.dtype.name());
     let hint = match hdr.unused_dim {
         Some((i, d)) => format!(" (dim[0] is {} but dim[{i}] is {d})", hdr.dim0),
         None => String::new(),
@@ -135,10 +248,10 @@ fn surplus_note(hdr: &Header, dims: [usize; 3], bytes: u64, surplus: Surplus) ->
     match surplus {
         Surplus::None => None,
         Surplus::Bytes(n) => Some(format!(
-            "the data holds {n} bytes more than the {bytes} that {declared}{hint}; they were ignored"
+            "the data holds {n} bytes more than the {total} that {declared}{hint}; they were ignored"
         )),
         Surplus::Some => Some(format!(
-            "the data continues past the {bytes} bytes that {declared}{hint}; the rest was ignored"
+            "the data continues past the {total} bytes that {declared}{hint}; the rest was ignored"
         )),
     }
 }
@@ -157,7 +270,7 @@ fn data_location(path: &Path, hdr: &Header, notes: &mut Vec<String>) -> Result<(
     }
     let offset = v as u64;
     if !hdr.single_file {
-        return Ok((image_file(path)?, offset));
+        return Ok((image_file(path, hdr)?, offset));
     }
     let min = hdr.version.min_nii_offset();
     if offset < min {
@@ -171,7 +284,7 @@ fn data_location(path: &Path, hdr: &Header, notes: &mut Vec<String>) -> Result<(
 }
 
 /// The `.img` (or `.img.gz`) file next to a `.hdr` header of a `ni1` pair.
-fn image_file(path: &Path) -> Result<PathBuf> {
+fn image_file(path: &Path, hdr: &Header) -> Result<PathBuf> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -191,11 +304,22 @@ fn image_file(path: &Path) -> Result<PathBuf> {
             ReadError::new(
                 path,
                 ErrorKind::Invalid(format!(
-                    "magic \"ni1\" puts the voxels in a separate file, but neither {} nor {} exists",
-                    candidates[0], candidates[1]
+                    "{} puts the voxels in a separate file, but neither {} nor {} exists",
+                    pair_name(hdr),
+                    candidates[0],
+                    candidates[1]
                 )),
             )
         })
+}
+
+/// What kind of header pair `hdr` is, for messages.
+fn pair_name(hdr: &Header) -> &'static str {
+    match hdr.version {
+        Version::One => "this NIfTI-1 header (magic \"ni1\")",
+        Version::Two => "this NIfTI-2 header (magic \"ni2\")",
+        Version::Analyze => "an Analyze 7.5 header",
+    }
 }
 
 /// Whether the file starts with the gzip magic bytes.
@@ -236,20 +360,20 @@ fn map(path: &Path, ty: ScalarType, span: Span) -> Result<Option<Samples>> {
     })
 }
 
-/// An uncompressed file must hold `offset + bytes` bytes; returns what it holds beyond them.
-fn check_length(path: &Path, offset: u64, bytes: u64) -> Result<Surplus> {
+/// An uncompressed file must hold the data of every volume (to `span.end`); returns what it
+/// holds beyond.
+fn check_length(path: &Path, span: Span) -> Result<Surplus> {
     let len = regular_metadata(path)?.len();
-    let found = len.saturating_sub(offset);
-    if found < bytes {
+    if len < span.end {
         return Err(ReadError::new(
             path,
             ErrorKind::Truncated {
-                expected: bytes,
-                found,
+                expected: span.end - span.start,
+                found: len.saturating_sub(span.start),
             },
         ));
     }
-    Ok(match found - bytes {
+    Ok(match len - span.end {
         0 => Surplus::None,
         n => Surplus::Bytes(n),
     })
@@ -263,20 +387,52 @@ fn read_plain(path: &Path, offset: u64, bytes: u64) -> Result<Vec<u8>> {
     read_exact_checked(path, std::io::BufReader::new(f), bytes)
 }
 
-/// Reads the voxels of `span` from a gzip stream, then probes one more byte to tell whether
-/// the stream holds more than the dims declare (a stream that fails there is noted).
+/// Reads the voxels of `span` from a gzip stream (refused first when the compressed file
+/// cannot inflate to so many bytes), then, for the last volume, probes one more byte to tell
+/// whether the stream holds more than the dims declare (a stream that fails there is noted).
 fn read_gz(path: &Path, span: Span, notes: &mut Vec<String>) -> Result<(Vec<u8>, Surplus)> {
+    let compressed = regular_metadata(path)?.len();
+    let reach = span.offset.saturating_add(span.bytes);
+    let max = crate::util::max_inflated(compressed);
+    if reach > max {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Undeliverable {
+                declared: reach,
+                available: compressed,
+                max,
+                how: "deflate expands at most 1032:1",
+            },
+        ));
+    }
     let mut stream = open_maybe_gz(path)?;
-    let offset = span.offset;
-    let skipped = std::io::copy(&mut (&mut stream).take(offset), &mut std::io::sink())
-        .map_err(|e| ReadError::new(path, e))?;
-    if skipped < offset {
+    let mut skip = |n: u64| {
+        std::io::copy(&mut (&mut stream).take(n), &mut std::io::sink())
+            .map_err(|e| ReadError::new(path, e))
+    };
+    let start = span.start;
+    let skipped = skip(start)?;
+    if skipped < start {
         return Err(header_err(
             path,
-            format!("vox_offset {offset} is past the end of the data ({skipped} bytes)"),
+            format!("vox_offset {start} is past the end of the data ({skipped} bytes)"),
+        ));
+    }
+    let before = span.offset - start;
+    let skipped = skip(before)?;
+    if skipped < before {
+        return Err(ReadError::new(
+            path,
+            ErrorKind::Truncated {
+                expected: span.end - start,
+                found: skipped,
+            },
         ));
     }
     let data = read_exact_checked(path, &mut stream, span.bytes)?;
+    if !span.last {
+        return Ok((data, Surplus::None));
+    }
     let surplus = match stream.read(&mut [0u8; 1]) {
         Ok(0) => Surplus::None,
         Ok(_) => Surplus::Some,
