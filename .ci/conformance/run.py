@@ -42,28 +42,49 @@ import reference  # noqa: E402
 TIME_LIMIT = 60.0
 
 
+GNU_TIME = "/usr/bin/time"
+
+
 def run_measured(volux: str, path: str, out: Path, args: tuple):
     """Runs `volux convert`; returns (exit code or None on timeout, stderr, seconds, the
-    child's peak memory in MiB through os.wait4)."""
-    cmd = [volux, "convert", path, str(out), *args]
+    peak memory of volux in MiB).
+
+    The memory is what GNU time reports for the volux process it starts: a child forked by
+    this (large) Python process would report Python's own resident size as its peak, since
+    ru_maxrss survives exec. Without GNU time, the figure is os.wait4's, an upper bound."""
     t0 = time.monotonic()
-    with tempfile.TemporaryFile(mode="w+", errors="replace") as err_f:
-        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err_f)
+    with tempfile.TemporaryFile(mode="w+", errors="replace") as err_f, tempfile.NamedTemporaryFile(mode="r") as rss_f:
+        cmd = [volux, "convert", path, str(out), *args]
+        timed = os.path.exists(GNU_TIME)
+        if timed:
+            cmd = [GNU_TIME, "-f", "%M", "-o", rss_f.name, *cmd]
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err_f, start_new_session=True)
         deadline = t0 + TIME_LIMIT
         while True:
             pid, status, ru = os.wait4(proc.pid, os.WNOHANG)
             if pid:
                 break
             if time.monotonic() > deadline:
-                proc.kill()
+                os.killpg(proc.pid, 9)
                 os.wait4(proc.pid, 0)
                 err_f.seek(0)
                 return None, err_f.read(), TIME_LIMIT, 0.0
             time.sleep(0.005)
-        proc.returncode = os.waitstatus_to_exitcode(status)
+        code = os.waitstatus_to_exitcode(status)
         secs = time.monotonic() - t0
         err_f.seek(0)
-        return proc.returncode, err_f.read(), secs, ru.ru_maxrss / 1024.0
+        err = err_f.read()
+        rss = ru.ru_maxrss / 1024.0
+        if timed:
+            # GNU time appends "Command exited with non-zero status N" / "Command terminated
+            # by signal N" to its output file, and the figure last.
+            text = rss_f.read()
+            figures = [w for w in text.split() if w.isdigit()]
+            if figures:
+                rss = int(figures[-1]) / 1024.0
+            if "terminated by signal" in text:
+                code = -1
+        return code, err, secs, rss
 
 
 def read_volux_nrrd(path: Path):

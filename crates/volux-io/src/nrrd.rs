@@ -107,6 +107,8 @@ struct Header {
     origin: Option<Vec<f64>>,
     /// The signs that turn `space` coordinates into LPS (`None`: no anatomical space).
     space_to_lps: Option<[f64; 3]>,
+    /// `space units`, one per space axis (quotes removed).
+    space_units: Vec<String>,
     little_endian: Option<bool>,
     encoding: Option<Encoding>,
     data_file: Option<String>,
@@ -231,6 +233,14 @@ fn apply_field(path: &Path, h: &mut Header, field: &str, value: &str) -> Result<
                 .collect::<Result<_>>()?
         }
         "space origin" => h.origin = parse_vector(path, value)?,
+        "space units" => {
+            h.space_units = value
+                .split('"')
+                .map(str::trim)
+                .filter(|u| !u.is_empty())
+                .map(String::from)
+                .collect()
+        }
         "space" => h.space_to_lps = space_signs(value),
         "endian" => {
             h.little_endian = Some(match value.to_ascii_lowercase().as_str() {
@@ -708,7 +718,31 @@ pub fn read(path: &Path, choice: VolumeChoice) -> Result<Grid> {
         direction: g.direction,
     };
     let four = g.four.as_ref().map(|(l, r)| (*l, r));
-    crate::volumes::grid(&file, g.dims, place, data, g.notes, four, choice)
+    let grid = crate::volumes::grid(&file, g.dims, place, data, g.notes, four, choice)?;
+    space_unit(path, &h.space_units).map(|u| match u {
+        Some(u) => grid.with_unit(u),
+        None => grid,
+    })
+}
+
+/// The unit of `space units` when every axis gives the same length unit (`None`: absent,
+/// millimetres); units that differ or are not lengths are refused rather than read as mm.
+fn space_unit(path: &Path, units: &[String]) -> Result<Option<&'static str>> {
+    let symbols: Vec<_> = units
+        .iter()
+        .map(|u| volux_core::units::length_symbol(u))
+        .collect();
+    match symbols.as_slice() {
+        [] => Ok(None),
+        [Some(first), rest @ ..] if rest.iter().all(|s| s == &Some(*first)) => Ok(Some(first)),
+        _ => Err(header_err(
+            path,
+            format!(
+                "space units {units:?}: Volux reads one length unit for every axis (mm, µm, \
+                 nm, cm, m)"
+            ),
+        )),
+    }
 }
 
 /// The NRRD type name of a grid type.

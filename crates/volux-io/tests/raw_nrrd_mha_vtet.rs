@@ -1382,3 +1382,39 @@ fn metaimage_channels_4d_and_long_types() {
         .iter()
         .any(|n| n.starts_with("converted from uint64")));
 }
+
+/// A grid in micrometres (a microscope stack) keeps its unit through the raw sidecar and the
+/// NRRD `space units`; an NRRD whose axes mix units is refused rather than read as mm.
+#[test]
+fn the_unit_of_length_survives_raw_and_nrrd() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = Grid::new(
+        [3, 2, 2],
+        [0.2, 0.2, 1.5],
+        [0.0; 3],
+        Samples::U8(Buffer::owned((0..12).collect())),
+    )
+    .unwrap()
+    .with_unit("µm");
+    assert_eq!(g.unit(), "µm");
+    let r = dir.path().join("cells.raw");
+    raw::write(&g, &r).unwrap();
+    assert_eq!(raw::read(&r).unwrap().unit(), "µm");
+    let n = dir.path().join("cells.nrrd");
+    nrrd::write(&g, &n).unwrap();
+    let back = nrrd::read(&n, Default::default()).unwrap();
+    assert_eq!(back.unit(), "µm");
+    assert_eq!(values(&back), values(&g));
+    // Millimetres are the default and need no field.
+    let mm = Grid::new([1, 1, 1], [1.0; 3], [0.0; 3], Samples::U8(Buffer::owned(vec![1])))
+        .unwrap();
+    nrrd::write(&mm, &n).unwrap();
+    assert!(!std::fs::read_to_string(&n).unwrap().contains("space units"));
+    assert_eq!(nrrd::read(&n, Default::default()).unwrap().unit(), "mm");
+    let mixed = "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\n\
+                 sizes: 1 1 1\nspace directions: (1,0,0) (0,1,0) (0,0,1)\n\
+                 space units: \"mm\" \"mm\" \"um\"\nencoding: raw\n\n\x01";
+    std::fs::write(&n, mixed).unwrap();
+    let e = nrrd::read(&n, Default::default()).unwrap_err().to_string();
+    assert!(e.contains("space units"), "{e}");
+}
