@@ -1090,3 +1090,55 @@ fn random_corruptions_of_colour_and_codecs_never_panic() {
     }
     assert!(grids > 0);
 }
+
+#[test]
+fn ccitt_group4_bilevel_miniswhite() {
+    use fax::{encoder::Encoder, Color, VecWriter};
+    let (w, h) = (37usize, 9usize);
+    // Black where (x + y) % 5 == 0 or x > 30; fax data is MINISWHITE (black is 1).
+    let black = |x: usize, y: usize| (x + y) % 5 == 0 || x > 30;
+    let mut enc = Encoder::new(VecWriter::new());
+    for y in 0..h {
+        let line = (0..w).map(|x| {
+            if black(x, y) {
+                Color::Black
+            } else {
+                Color::White
+            }
+        });
+        enc.encode_line(line, w as u16).unwrap();
+    }
+    let data = enc.finish().unwrap().finish();
+    let bytes = fax::tiff::wrap(&data, w as u32, h as u32);
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "fax.tif", &bytes);
+    let g = read(&p, 0, 0).unwrap();
+    assert_eq!((g.dims(), g.scalar_type()), ([w, h, 1], ScalarType::U8));
+    for y in 0..h {
+        for x in 0..w {
+            // Inverted: white 1, black 0.
+            assert_eq!(
+                g.value(x, y, 0),
+                if black(x, y) { 0.0 } else { 1.0 },
+                "({x}, {y})"
+            );
+        }
+    }
+    let n = notes(&g);
+    assert!(
+        n.contains("CCITT Group 4 fax compression, 1-bit unsigned") && n.contains("1 - v"),
+        "{n}"
+    );
+}
+
+#[test]
+fn bigtiff_big_endian_miniswhite_and_palette_are_patched() {
+    // tifffile: BigTIFF, big-endian, MINISWHITE uint16 (v * 100) and palette (v % 256).
+    let g = read(&fixture("miniswhite_u16_be_bigtiff.tif"), 0, 0).unwrap();
+    check_values(&g, 0, 0, |v| 65535.0 - v * 100.0);
+    assert!(notes(&g).contains("MINISWHITE"), "{}", notes(&g));
+    let g = read_component(&fixture("palette_be_bigtiff.tif"), 0, 0, Some(2)).unwrap();
+    check_values(&g, 0, 0, |v| {
+        ((251 * (v as u64 % 256) + 14000) % 65536) as f64
+    });
+}

@@ -299,7 +299,7 @@ impl PageInfo {
             ),
             4 => (
                 encoded.saturating_mul(8 * 8192).saturating_add(1 << 16),
-                "CCITT Group 4: a bit codes at most a run of 8192 pixels",
+                "CCITT Group 4: one bit codes at most a line of 65535 pixels",
             ),
             _ => (encoded, "uncompressed"),
         }
