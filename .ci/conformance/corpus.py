@@ -225,6 +225,7 @@ def by_tifffile(work: Path):
     smooth_rgb = np.stack([smooth_c, 255 - smooth_c, smooth_c // 2 + 60], axis=-1).astype(np.uint8)
     save(smooth_rgb, "c_jpeg_rgb.tif", photometric="rgb", compression="jpeg")
     save(smooth_rgb, "c_jpeg_rgb_tiled.tif", photometric="rgb", compression="jpeg", tile=(16, 16))
+    save(rgb, "c_webp_lossless.tif", photometric="rgb", compression="webp", compressionargs={"lossless": True})
     save(rgb, "imagej_rgb.tif", imagej=True, photometric="rgb", metadata={"axes": "ZYXS"})
     save(rgb, "ome_rgb.ome.tif", photometric="rgb", metadata={"axes": "ZYXS"})
     save(zyx(_pattern("uint16")), "imagej.tif", imagej=True, resolution=(2.0, 2.0), metadata={"spacing": 3.0, "unit": "um", "axes": "ZYX"})

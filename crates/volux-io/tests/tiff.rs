@@ -988,6 +988,51 @@ fn tifffile_jpeg_within_the_lossy_tolerance() {
 }
 
 #[test]
+fn tifffile_webp_lossy_and_lossless() {
+    // Lossy: image-webp decodes as libwebp does here (measured: every sample equal); the
+    // JPEG tolerance is the bound the test holds it to.
+    let g = read(&fixture("webp_rgb.tif"), 0, 0).unwrap();
+    let want = tifffile_decoding("webp_rgb.tif");
+    let mut worst = 0.0f64;
+    for c in 0..3 {
+        for (i, v) in channel(&g, c).into_iter().enumerate() {
+            worst = worst.max((v - want[i * 3 + c]).abs());
+        }
+    }
+    assert!(worst <= 3.0, "webp_rgb: {worst}");
+    assert!(notes(&g).contains("WebP"), "{}", notes(&g));
+    // Lossless: exact.
+    let g = read(&fixture("webp_lossless.tif"), 0, 0).unwrap();
+    for c in 0..3 {
+        let want: Vec<f64> = fixture_values(0, 0)
+            .into_iter()
+            .map(|v| (v + 1000.0 * c as f64) % 256.0)
+            .collect();
+        assert_eq!(channel(&g, c), want, "channel {c}");
+    }
+}
+
+#[test]
+fn a_webp_frame_larger_than_its_strip_is_refused_before_decoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = std::fs::read(fixture("webp_lossless.tif")).unwrap();
+    // The VP8L header: 0x2f, then 14 bits of width - 1 and 14 of height - 1.
+    let at = bytes
+        .windows(4)
+        .position(|w| w == b"VP8L")
+        .expect("a lossless stream")
+        + 8;
+    assert_eq!(bytes[at], 0x2f);
+    bytes[at + 1..at + 5].copy_from_slice(&(0x3fffu32 | (0x3fff << 14)).to_le_bytes());
+    let p = write(dir.path(), "big_webp.tif", &bytes);
+    let e = read(&p, 0, 0).unwrap_err().to_string();
+    assert!(
+        e.contains("WebP strip 0 declares a 16384x16384 frame"),
+        "{e}"
+    );
+}
+
+#[test]
 fn lzma_and_other_codecs_are_refused_by_name() {
     let e = read(&fixture("lzma.tif"), 0, 0).unwrap_err();
     assert!(matches!(e.kind, ErrorKind::Unsupported(_)), "{e}");
@@ -999,7 +1044,7 @@ fn lzma_and_other_codecs_are_refused_by_name() {
     let at = tag_value_at(&bytes, 259);
     for (code, name) in [
         (34712u16, "JPEG 2000"),
-        (50001, "WebP"),
+        (50002, "JPEG XL"),
         (6, "old-style JPEG"),
         (40000, "unknown"),
     ] {
@@ -1061,6 +1106,8 @@ fn random_corruptions_of_colour_and_codecs_never_panic() {
         "uint64_bigtiff.tif",
         "bilevel.tif",
         "ome_rgb_t2.ome.tif",
+        "webp_rgb.tif",
+        "webp_lossless.tif",
     ] {
         let seed = std::fs::read(fixture(name)).unwrap();
         for k in 0..cases {
@@ -1096,7 +1143,7 @@ fn ccitt_group4_bilevel_miniswhite() {
     use fax::{encoder::Encoder, Color, VecWriter};
     let (w, h) = (37usize, 9usize);
     // Black where (x + y) % 5 == 0 or x > 30; fax data is MINISWHITE (black is 1).
-    let black = |x: usize, y: usize| (x + y) % 5 == 0 || x > 30;
+    let black = |x: usize, y: usize| (x + y).is_multiple_of(5) || x > 30;
     let mut enc = Encoder::new(VecWriter::new());
     for y in 0..h {
         let line = (0..w).map(|x| {

@@ -1,8 +1,9 @@
 //! TIFF stacks: multi-page TIFF (one page per z slice), ImageJ hyperstacks, single-file
 //! OME-TIFF, and folders of numbered single-page TIFF slices; read through the `tiff` crate
-//! (pure Rust: LZW, Deflate, PackBits, JPEG through zune-jpeg, CCITT Group 4 through `fax`;
-//! Zstandard through `zstd`, which builds the C zstd library with `cc`; BigTIFF, strips and
-//! tiles).
+//! (pure Rust: LZW, Deflate, PackBits, JPEG through zune-jpeg, WebP through image-webp, CCITT
+//! Group 4 through `fax`; Zstandard through `zstd`, which builds the C zstd library with `cc`;
+//! BigTIFF, strips and tiles). Other compressions are refused in one line naming their code
+//! and name.
 //!
 //! Which pages form the volume and its spacing come from the first page's
 //! `ImageDescription`:

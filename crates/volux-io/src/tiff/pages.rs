@@ -7,7 +7,7 @@
 //!   float (`SampleFormat` 1, 2, 3). MINISWHITE is inverted by Volux (the type's maximum minus
 //!   the value for unsigned samples, the negated value for signed and float ones, said in a
 //!   note);
-//! - RGB (2), 8/16 bits (any of the sample formats above), contiguous or planar
+//! - RGB (2), 8 to 64 bits (any of the sample formats above), contiguous or planar
 //!   (`PlanarConfiguration` 2), extra samples (alpha) ignored with a note;
 //! - PALETTE (3), 1 to 16-bit indices: each replaced by the `ColorMap`'s 16-bit red, green and
 //!   blue, as tifffile's `apply_colormap` does;
@@ -18,10 +18,10 @@
 //! exactly, 32 and 64-bit integers and `float64` become `float32` with a note saying how many
 //! values lost precision, `float16` becomes `float32` exactly. Strips or tiles; compressions
 //! ([`compression_name`]): none, LZW, Deflate (8 and 32946), PackBits, JPEG (7, with
-//! `JPEGTables`; zune-jpeg), Zstandard (50000), CCITT Group 4 (4); any other is refused by
-//! code and name. The declared volume is checked against the memory budget and against what
-//! the file's bytes can decode to before anything is allocated, and every JPEG strip's frame
-//! size against the strip's before it is decoded.
+//! `JPEGTables`; zune-jpeg), Zstandard (50000), WebP (50001, 8-bit RGB(A); image-webp), CCITT
+//! Group 4 (4); any other is refused by code and name. The declared volume is checked against the memory budget and against what
+//! the file's bytes can decode to before anything is allocated, and every JPEG or WebP
+//! strip's frame size against the strip's before it is decoded.
 use std::collections::HashSet;
 use std::path::Path;
 use std::sync::Arc;
@@ -38,7 +38,7 @@ use crate::error::{ErrorKind, ReadError, Result};
 use crate::util::{io_error, max_inflated, open_regular};
 
 use super::layout::Layout;
-use super::source::{jpeg_frame_size, Source};
+use super::source::{jpeg_frame_size, webp_frame_size, Source};
 
 /// A TIFF decoder over a buffered, patchable file ([`Source`]).
 pub type TiffDecoder = Decoder<Source>;
@@ -297,6 +297,10 @@ impl PageInfo {
                 encoded.saturating_mul(43_691).saturating_add(1 << 17),
                 "Zstandard: a 3-byte RLE block emits at most 128 KiB",
             ),
+            50001 => (
+                u64::MAX,
+                "WebP lossless can code a pixel in no bits: only the memory budget bounds it",
+            ),
             4 => (
                 encoded.saturating_mul(8 * 8192).saturating_add(1 << 16),
                 "CCITT Group 4: one bit codes at most a line of 65535 pixels",
@@ -345,11 +349,12 @@ pub fn compression_name(code: u16) -> &'static str {
 
 /// Whether Volux decodes compression `code`.
 pub fn decodes(code: u16) -> bool {
-    matches!(code, 1 | 4 | 5 | 7 | 8 | 32946 | 32773 | 50000)
+    matches!(code, 1 | 4 | 5 | 7 | 8 | 32946 | 32773 | 50000 | 50001)
 }
 
 /// The compressions decoded, in words, for refusals.
-const DECODED: &str = "uncompressed, LZW, Deflate, PackBits, JPEG, Zstandard and CCITT Group 4";
+const DECODED: &str =
+    "uncompressed, LZW, Deflate, PackBits, JPEG, Zstandard, WebP and CCITT Group 4";
 
 /// A tag of the current page as a number (rationals divided out), if present.
 pub fn tag_number(path: &Path, dec: &mut TiffDecoder, tag: Tag) -> Result<Option<f64>> {
@@ -393,6 +398,17 @@ pub fn description(path: &Path, dec: &mut TiffDecoder) -> Result<Option<String>>
             _ => None,
         })),
         _ => Ok(None),
+    }
+}
+
+/// The name of a photometric interpretation Volux reads.
+fn photometric_code_name(p: Photometric) -> &'static str {
+    match p {
+        Photometric::MinIsWhite => "MINISWHITE",
+        Photometric::MinIsBlack => "MINISBLACK",
+        Photometric::Rgb => "RGB",
+        Photometric::Palette => "palette",
+        Photometric::YCbCr => "YCbCr",
     }
 }
 
@@ -488,13 +504,7 @@ pub fn page_info(path: &Path, dec: &mut TiffDecoder, page: usize) -> Result<Page
     let rgb_alpha = photometric == Photometric::Rgb && colour_samples == 4;
     let extra = samples.saturating_sub(want as u64) as usize;
     if (colour_samples != want as u64 && !rgb_alpha) || (want == 1 && extra > 0) {
-        let what = match photometric {
-            Photometric::MinIsWhite => "MINISWHITE",
-            Photometric::MinIsBlack => "MINISBLACK",
-            Photometric::Rgb => "RGB",
-            Photometric::Palette => "palette",
-            Photometric::YCbCr => "YCbCr",
-        };
+        let what = photometric_code_name(photometric);
         return Err(unsupported(format!(
             "{samples} samples per pixel ({extra} extra) in a {what} page; Volux reads {want}{}",
             if want == 3 {
@@ -513,6 +523,14 @@ pub fn page_info(path: &Path, dec: &mut TiffDecoder, page: usize) -> Result<Page
         return Err(unsupported(format!(
             "JPEG-compressed {} samples; Volux reads 8-bit JPEG",
             stored.words()
+        )));
+    }
+    if compression == 50001 && (photometric != Photometric::Rgb || stored != Stored::U8 || planar) {
+        return Err(unsupported(format!(
+            "WebP compression of {} {} samples{}; WebP holds 8-bit RGB(A), contiguous",
+            stored.words(),
+            photometric_code_name(photometric),
+            if planar { " (planar)" } else { "" }
         )));
     }
     if compression == 4 && !matches!(stored, Stored::Bits(1)) {
@@ -774,8 +792,8 @@ impl Volume {
                 )),
             ));
         }
-        if info.compression == 7 {
-            check_jpeg_strips(path, dec, page, &info)?;
+        if matches!(info.compression, 7 | 50001) {
+            check_frames(path, dec, page, &info)?;
         }
         let patched = matches!(
             info.photometric,
@@ -954,6 +972,13 @@ impl Volume {
             notes.push(
                 "JPEG is lossy: the values are zune-jpeg's decoding, which may differ from \
                  other decoders' by rounding"
+                    .into(),
+            );
+        }
+        if info.compression == 50001 {
+            notes.push(
+                "WebP (lossy unless written lossless): the values are image-webp's decoding, \
+                 which may differ from libwebp's by rounding where lossy"
                     .into(),
             );
         }
@@ -1192,14 +1217,10 @@ fn convert(
     Some(inexact)
 }
 
-/// Refuses a JPEG strip or tile of the current page whose frame is larger than the strip,
-/// before the JPEG decoder allocates for it.
-fn check_jpeg_strips(
-    path: &Path,
-    dec: &mut TiffDecoder,
-    page: usize,
-    info: &PageInfo,
-) -> Result<()> {
+/// Refuses a JPEG or WebP strip or tile of the current page whose frame is larger than the
+/// strip, or whose frame size cannot be found, before the decoder allocates for it (zune-jpeg
+/// and image-webp allocate what the stream's header declares, up to 16384 x 16384 pixels).
+fn check_frames(path: &Path, dec: &mut TiffDecoder, page: usize, info: &PageInfo) -> Result<()> {
     let tiled = dec
         .find_tag(Tag::TileOffsets)
         .map_err(|e| tiff_err(path, e))?
@@ -1221,19 +1242,41 @@ fn check_jpeg_strips(
     };
     let offsets = tag_uints(path, dec, offsets)?.unwrap_or_default();
     let counts = tag_uints(path, dec, counts)?.unwrap_or_default();
+    let tables = if info.compression == 7 {
+        dec.find_tag_unsigned_vec::<u8>(Tag::JPEGTables)
+            .map_err(|e| tiff_err(path, e))?
+    } else {
+        None
+    };
     let what = if tiled { "tile" } else { "strip" };
+    let codec = compression_name(info.compression);
     for (i, (&off, &len)) in offsets.iter().zip(&counts).enumerate() {
-        let size = jpeg_frame_size(dec.inner(), off, len).map_err(|e| io_error(path, e))?;
-        if let Some((w, h)) = size {
-            if u64::from(w) > cw || u64::from(h) > ch {
-                return Err(ReadError::new(
-                    path,
-                    ErrorKind::Invalid(format!(
-                        "TIFF page {page}: JPEG {what} {i} declares a {w}x{h} frame, larger than \
-                         the {cw}x{ch} {what}"
-                    )),
-                ));
+        let io = |e| io_error(path, e);
+        let size = if info.compression == 7 {
+            let size = jpeg_frame_size(dec.inner(), off, len).map_err(io)?;
+            match (size, &tables) {
+                (None, Some(t)) => {
+                    jpeg_frame_size(&mut std::io::Cursor::new(t), 0, t.len() as u64).map_err(io)?
+                }
+                (size, _) => size,
             }
+        } else {
+            webp_frame_size(dec.inner(), off, len).map_err(io)?
+        };
+        let invalid = |m: String| {
+            ReadError::new(
+                path,
+                ErrorKind::Invalid(format!("TIFF page {page}: {codec} {what} {i} {m}")),
+            )
+        };
+        match size {
+            Some((w, h)) if u64::from(w) > cw || u64::from(h) > ch => {
+                return Err(invalid(format!(
+                    "declares a {w}x{h} frame, larger than the {cw}x{ch} {what}"
+                )))
+            }
+            Some(_) => {}
+            None => return Err(invalid("has no frame header (its size is unknown)".into())),
         }
     }
     Ok(())

@@ -157,28 +157,32 @@ impl Seek for Source {
 }
 
 /// The frame size (width, height) declared by the JPEG stream at `offset` (`len` bytes) of
-/// `file`: the first SOF marker's. `None` when the stream holds no frame header before its
-/// scan data, or ends first.
-pub fn jpeg_frame_size(file: &mut Source, offset: u64, len: u64) -> io::Result<Option<(u32, u32)>> {
-    let saved = file.pos;
-    let r = scan_sof(file, offset, len);
-    file.seek(SeekFrom::Start(saved))?;
-    r
+/// `r`: the first SOF marker's. `None` when the stream holds no frame header before its scan
+/// data, or ends first. The reader's position is restored.
+pub fn jpeg_frame_size<R: Read + Seek>(
+    r: &mut R,
+    offset: u64,
+    len: u64,
+) -> io::Result<Option<(u32, u32)>> {
+    let saved = r.stream_position()?;
+    let found = scan_sof(r, offset, len);
+    r.seek(SeekFrom::Start(saved))?;
+    found
 }
 
-fn scan_sof(file: &mut Source, offset: u64, len: u64) -> io::Result<Option<(u32, u32)>> {
+fn scan_sof<R: Read + Seek>(r: &mut R, offset: u64, len: u64) -> io::Result<Option<(u32, u32)>> {
     let end = offset.saturating_add(len);
     let mut at = offset;
-    file.seek(SeekFrom::Start(at))?;
+    r.seek(SeekFrom::Start(at))?;
     let mut b2 = [0u8; 2];
-    if read_up_to(file, &mut b2)? < 2 || b2 != [0xFF, 0xD8] {
+    if read_up_to(r, &mut b2)? < 2 || b2 != [0xFF, 0xD8] {
         return Ok(None);
     }
     at += 2;
     while at + 4 <= end {
-        file.seek(SeekFrom::Start(at))?;
+        r.seek(SeekFrom::Start(at))?;
         let mut m = [0u8; 4];
-        if read_up_to(file, &mut m)? < 4 || m[0] != 0xFF {
+        if read_up_to(r, &mut m)? < 4 || m[0] != 0xFF {
             return Ok(None);
         }
         let marker = m[1];
@@ -190,7 +194,7 @@ fn scan_sof(file: &mut Source, offset: u64, len: u64) -> io::Result<Option<(u32,
         let is_sof = matches!(marker, 0xC0..=0xCF) && !matches!(marker, 0xC4 | 0xC8 | 0xCC);
         if is_sof {
             let mut f = [0u8; 5];
-            if read_up_to(file, &mut f)? < 5 {
+            if read_up_to(r, &mut f)? < 5 {
                 return Ok(None);
             }
             let h = u32::from(u16::from_be_bytes([f[1], f[2]]));
@@ -203,4 +207,36 @@ fn scan_sof(file: &mut Source, offset: u64, len: u64) -> io::Result<Option<(u32,
         at += 2 + seg;
     }
     Ok(None)
+}
+
+/// The canvas size (width, height) declared by the WebP stream at `offset` (`len` bytes) of
+/// `r`: from its first chunk, `VP8 ` (lossy), `VP8L` (lossless) or `VP8X` (extended). `None`
+/// when it is not one of those. The reader's position is restored.
+pub fn webp_frame_size<R: Read + Seek>(
+    r: &mut R,
+    offset: u64,
+    len: u64,
+) -> io::Result<Option<(u32, u32)>> {
+    let saved = r.stream_position()?;
+    r.seek(SeekFrom::Start(offset))?;
+    let mut h = [0u8; 30];
+    let got = read_up_to(r, &mut h)?.min(len.min(30) as usize);
+    r.seek(SeekFrom::Start(saved))?;
+    if got < 30 || &h[..4] != b"RIFF" || &h[8..12] != b"WEBP" {
+        return Ok(None);
+    }
+    let d = &h[20..];
+    let le16 = |b: &[u8]| u32::from(u16::from_le_bytes([b[0], b[1]]));
+    let le24 = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], 0]);
+    Ok(match &h[12..16] {
+        b"VP8 " if d[3..6] == [0x9d, 0x01, 0x2a] => {
+            Some((le16(&d[6..]) & 0x3fff, le16(&d[8..]) & 0x3fff))
+        }
+        b"VP8L" if d[0] == 0x2f => {
+            let bits = u32::from_le_bytes([d[1], d[2], d[3], d[4]]);
+            Some(((bits & 0x3fff) + 1, ((bits >> 14) & 0x3fff) + 1))
+        }
+        b"VP8X" => Some((le24(&d[4..]) + 1, le24(&d[7..]) + 1)),
+        _ => None,
+    })
 }
