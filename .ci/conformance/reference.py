@@ -337,9 +337,16 @@ def tiff(path: str) -> Reference:
         raise NoReference(f"tifffile: {str(e).splitlines()[0]}") from e
     note = ""
     arr = np.asarray(arr)
+    if "S" in series_axes and not series_axes.endswith("S"):
+        # planar samples (PlanarConfiguration 2): tifffile puts S before Y and X
+        arr = np.moveaxis(arr, series_axes.index("S"), -1)
+        series_axes = series_axes.replace("S", "") + "S"
     if photometric == 0:  # MINISWHITE
-        top = np.iinfo(arr.dtype).max if arr.dtype.kind in "ui" else arr.max()
-        arr = (top - arr.astype(np.float64)) if arr.dtype.kind == "u" else -arr.astype(np.float64)
+        # unsigned (bilevel too, which tifffile returns as bool): the type's maximum minus
+        # the value, 2**BitsPerSample - 1 (1 for bilevel, 15 for 4-bit samples tifffile
+        # returns as uint8); signed and float: the negated value
+        unsigned = arr.dtype.kind in "bu"
+        arr = ((2.0**bits - 1) - arr.astype(np.float64)) if unsigned else -arr.astype(np.float64)
         note = "MINISWHITE"
     color = False
     if photometric == 3 and colormap is not None:  # PALETTE

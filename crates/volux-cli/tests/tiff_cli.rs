@@ -1,6 +1,8 @@
 //! TIFF stacks from the command line: `volux info` reports a stack's dims, spacing and
-//! compression; `--channel` / `--timepoint` choose in an ImageJ hyperstack, and an index out
-//! of range fails in one line. The files are volux-io's tifffile fixtures.
+//! compression; `--channel` / `--timepoint` choose in an ImageJ hyperstack (whose channel and
+//! time axes `info` lists), and an index out of range fails in one line; a colour TIFF
+//! converts to a colour NRRD, or one channel with `--component`; an unsupported compression
+//! is refused in one line. The files are volux-io's tifffile fixtures.
 mod common;
 
 use std::path::Path;
@@ -63,14 +65,31 @@ fn channel_and_timepoint_choose_in_a_hyperstack() {
         "imagej_hyperstack.tif",
     ]);
     assert_eq!(v["range"], serde_json::json!([7000.0, 7525.0]));
+    let texts: Vec<&str> = v["volumes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["text"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        texts,
+        [
+            "channels: 2 channels (channel 1 read)",
+            "time: 3 volumes (timepoint 2 read)"
+        ]
+    );
     for (args, expected) in [
         (
             &["info", "--channel", "9", "imagej_hyperstack.tif"][..],
-            "the file has 2 channels",
+            "channel 9 does not exist: the file holds 2 (0 to 1)",
         ),
         (
             &["info", "--timepoint", "3", "imagej_hyperstack.tif"][..],
-            "the file has 3 timepoints",
+            "timepoint 3 does not exist: the file holds 3 (0 to 2)",
+        ),
+        (
+            &["info", "--component", "1", "imagej_hyperstack.tif"][..],
+            "component 1 does not exist: the file holds 1 (0 to 0)",
         ),
     ] {
         let out = volux(args, dir);
@@ -79,4 +98,41 @@ fn channel_and_timepoint_choose_in_a_hyperstack() {
         assert!(err.contains(expected), "{args:?}: {err}");
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
     }
+}
+
+#[test]
+fn colour_converts_to_colour_or_one_channel() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    fixture("palette_u8.tif", dir);
+    let out = volux(&["convert", "palette_u8.tif", "rgb.nrrd"], dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("note: palette (photometric 3)"), "{err}");
+    let header = std::fs::read(dir.join("rgb.nrrd")).unwrap();
+    let header = String::from_utf8_lossy(&header[..200.min(header.len())]);
+    assert!(header.contains("RGB-color"), "{header}");
+    let v: serde_json::Value = serde_json::from_str(&ok(
+        &["info", "--json", "--component", "2", "palette_u8.tif"],
+        dir,
+    ))
+    .unwrap();
+    assert_eq!(
+        v["volumes"][0]["text"],
+        "colour: 3 channels (component 2 read)"
+    );
+    assert_eq!(v["dtype"], "uint16");
+}
+
+#[test]
+fn an_unsupported_compression_is_refused_in_one_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    fixture("lzma.tif", dir);
+    let out = volux(&["convert", "lzma.tif", "out.nrrd"], dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("compression 34925 (LZMA)"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!dir.join("out.nrrd").exists());
 }

@@ -23,14 +23,19 @@ pub enum AxisKind {
     /// Colour channels (RGB): the grid keeps the colour, or holds one channel chosen with
     /// `component`.
     Color,
+    /// Channels of a microscope image (fluorescence channels of an ImageJ hyperstack, an
+    /// OME-TIFF or an OME-Zarr image), each a volume of its own: chosen with `channel`.
+    Channel,
 }
 
 impl AxisKind {
-    /// The reader option that chooses along this axis (`"timepoint"` or `"component"`).
+    /// The reader option that chooses along this axis (`"timepoint"`, `"component"` or
+    /// `"channel"`).
     pub fn option(&self) -> &'static str {
         match self {
             AxisKind::Time | AxisKind::Volume => "timepoint",
             AxisKind::Component | AxisKind::Color => "component",
+            AxisKind::Channel => "channel",
         }
     }
 }
@@ -84,9 +89,10 @@ impl ExtraAxis {
             AxisKind::Volume => "volumes",
             AxisKind::Component => "components",
             AxisKind::Color => "colour",
+            AxisKind::Channel => "channels",
         };
         let what = match self.kind {
-            AxisKind::Color => format!("{} channels", self.len),
+            AxisKind::Color | AxisKind::Channel => format!("{} channels", self.len),
             AxisKind::Component => format!("{} components", self.len),
             _ => format!("{} volumes", self.len),
         };
@@ -140,6 +146,13 @@ mod tests {
             t.describe(),
             "time: 4 volumes (timepoint 0 read), step 2.5 s"
         );
+    }
+
+    #[test]
+    fn channels_are_chosen_with_channel() {
+        let c = ExtraAxis::new(AxisKind::Channel, 3, Some(2));
+        assert_eq!(c.kind.option(), "channel");
+        assert_eq!(c.describe(), "channels: 3 channels (channel 2 read)");
     }
 
     #[test]

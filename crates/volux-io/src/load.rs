@@ -28,9 +28,9 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<(Dataset, Format)> {
         Format::Off => Dataset::Mesh(off::read(path)?),
         Format::Vtet => Dataset::Mesh(vtet::read(path)?),
         Format::OmeZarr => Dataset::Grid(load_zarr(path, opts)?),
-        Format::Tiff => Dataset::Grid(crate::tiff::read(path, opts.channel, opts.timepoint)?),
+        Format::Tiff => Dataset::Grid(crate::tiff::read(path, opts.channel, opts.choice())?),
     };
-    if !matches!(format, Format::Tiff | Format::OmeZarr) {
+    if format != Format::OmeZarr {
         check_chosen(path, &dataset, opts)?;
     }
     Ok((dataset, format))
@@ -46,9 +46,10 @@ pub fn peek_dims(path: &Path) -> Option<[usize; 3]> {
     }
 }
 
-/// A timepoint or component asked for must be the one the reader chose: a reader that found
-/// no such axis in the file leaves no record of it, and the request is then an error rather
-/// than silently ignored (the file holds one volume, or one value per voxel).
+/// A timepoint, component or channel asked for must be the one the reader chose: a reader
+/// that found no such axis in the file leaves no record of it, and the request is then an
+/// error rather than silently ignored (the file holds one volume, one value per voxel, or one
+/// channel).
 fn check_chosen(path: &Path, dataset: &Dataset, opts: &LoadOptions) -> Result<()> {
     let axes = match dataset {
         Dataset::Grid(g) => g.extra_axes(),
@@ -57,6 +58,7 @@ fn check_chosen(path: &Path, dataset: &Dataset, opts: &LoadOptions) -> Result<()
     let asked = [
         ("timepoint", (opts.timepoint > 0).then_some(opts.timepoint)),
         ("component", opts.component.filter(|&c| c > 0)),
+        ("channel", (opts.channel > 0).then_some(opts.channel)),
     ];
     for (option, index) in asked {
         let Some(index) = index else { continue };

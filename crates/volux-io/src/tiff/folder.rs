@@ -2,19 +2,21 @@
 //! `slice_10.tif`), as ImageJ's "Image Sequence" and many microscopes write them: the files
 //! named `*.tif` / `*.tiff` (hidden files and other names ignored) in natural order (numbers
 //! compared as numbers, so `slice2` comes before `slice10`), one z slice each. All slices must
-//! agree on size and sample type; the first one's metadata gives the spacing.
+//! agree on size and samples (grayscale or colour, as [`super::pages`] reads them); the first
+//! one's metadata gives the spacing.
 use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
 
 use volux_core::Grid;
 
+use crate::dataset::VolumeChoice;
 use crate::detect::is_tiff_name;
 use crate::error::{ErrorKind, ReadError, Result};
 use crate::util::io_error;
 
 use super::imagej;
 use super::layout::{choose, plain_spacing, Layout};
-use super::pages::{self, grid, resolution, tag_number, Volume};
+use super::pages::{self, resolution, tag_number, Volume};
 
 /// Compares file names in natural order: runs of digits by their value, the rest
 /// case-insensitively.
@@ -64,10 +66,11 @@ pub fn slices(dir: &Path) -> Result<Vec<(PathBuf, u64)>> {
     Ok(out.into_iter().map(|(_, p, len)| (p, len)).collect())
 }
 
-/// Reads the folder `dir` of TIFF slices; it has one channel and one timepoint.
-pub fn read(dir: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
+/// Reads the folder `dir` of TIFF slices; it has one channel and one timepoint, and
+/// `choice.component` picks a colour channel of colour slices.
+pub fn read(dir: &Path, channel: usize, choice: VolumeChoice) -> Result<Grid> {
     choose(dir, "channel", channel, 1)?;
-    choose(dir, "timepoint", timepoint, 1)?;
+    choose(dir, "timepoint", choice.timepoint, 1)?;
     let files = slices(dir)?;
     let Some((first_path, _)) = files.first() else {
         return Err(ReadError::new(
@@ -77,6 +80,7 @@ pub fn read(dir: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
     };
     let (mut dec, _) = pages::open(first_path)?;
     let first = pages::page_info(first_path, &mut dec, 0)?;
+    let keep = super::keep(first_path, &first, choice.component)?;
     let res = resolution(first_path, &mut dec)?;
     let (spacing, spacing_note) = match pages::description(first_path, &mut dec)? {
         Some(d) if imagej::is_imagej(&d) => {
@@ -88,8 +92,8 @@ pub fn read(dir: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
         }
     };
     let encoded = files.iter().fold(0u64, |a, (_, l)| a.saturating_add(*l));
-    pages::check_volume(dir, &first, files.len(), encoded)?;
-    let mut volume = Volume::new(first, files.len());
+    pages::check_volume(dir, &first, keep, files.len(), encoded)?;
+    let mut volume = Volume::new(first, keep, files.len());
     for (z, (file, _)) in files.iter().enumerate() {
         let (mut dec, _) = pages::open(file)?;
         volume.read_page(file, &mut dec, 0, z)?;
@@ -109,9 +113,10 @@ pub fn read(dir: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
         spacing_note,
         flavour: "folder",
         notes: Vec::new(),
+        axes: Vec::new(),
     };
     let what = format!("TIFF folder: {} slices", files.len());
-    grid(dir, what, first, volume, layout)
+    volume.into_grid(dir, what, layout)
 }
 
 #[cfg(test)]

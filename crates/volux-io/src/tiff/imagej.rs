@@ -10,12 +10,15 @@
 //! hyperstack=true
 //! unit=micron      (also `\u00B5m`, `um`, `nm`, `mm`, ...)
 //! spacing=0.5      (z spacing, in `unit`)
+//! finterval=2.5    (time between frames, in `tunit`, default seconds)
 //! ```
 //!
 //! X and Y spacing are `1 / XResolution` and `1 / YResolution` (pixels per `unit`). ImageJ
 //! stores hyperstack pages in CZT order: channel fastest, then z, then time, so the page of
 //! (c, z, t) is `c + C * (z + Z * t)`.
 use std::path::Path;
+
+use volux_core::volume_axes::{AxisKind, ExtraAxis};
 
 use crate::error::{ErrorKind, ReadError, Result};
 
@@ -36,6 +39,10 @@ pub struct ImageJ {
     pub unit: Option<String>,
     /// `spacing=` (z, in `unit`).
     pub spacing: Option<f64>,
+    /// `finterval=` (time between frames, in `tunit`).
+    pub finterval: Option<f64>,
+    /// `tunit=` (default `sec`).
+    pub tunit: Option<String>,
 }
 
 /// Whether `desc` is an ImageJ description (it starts with `ImageJ=`).
@@ -66,6 +73,8 @@ pub fn parse(path: &Path, desc: &str) -> Result<ImageJ> {
             "slices" => ij.slices = Some(count(k, v)?),
             "frames" => ij.frames = Some(count(k, v)?),
             "unit" => ij.unit = Some(v.to_string()),
+            "tunit" => ij.tunit = Some(v.to_string()),
+            "finterval" => ij.finterval = v.parse::<f64>().ok().filter(|f| f.is_finite()),
             "spacing" => {
                 ij.spacing = Some(v.parse::<f64>().map_err(|_| {
                     ReadError::new(
@@ -118,11 +127,23 @@ impl ImageJ {
         }
         let ifds = (0..z).map(|k| channel + c * (k + z * timepoint)).collect();
         let mut notes = Vec::new();
+        let mut axes = Vec::new();
         if c > 1 || t > 1 {
             notes.push(format!(
                 "ImageJ hyperstack of {c} channel(s), {z} slice(s), {t} frame(s) (CZT order): \
                  channel {channel}, timepoint {timepoint} read"
             ));
+        }
+        if c > 1 {
+            axes.push(ExtraAxis::new(AxisKind::Channel, c, Some(channel)));
+        }
+        if t > 1 {
+            let mut time = ExtraAxis::new(AxisKind::Time, t, Some(timepoint));
+            if let Some(f) = self.finterval.filter(|&f| f > 0.0) {
+                let unit = self.tunit.as_deref().unwrap_or("sec");
+                time = time.with_meaning(format!("step {f} {unit}"));
+            }
+            axes.push(time);
         }
         let (spacing, spacing_note) = self.spacing(path, res)?;
         Ok(Layout {
@@ -131,6 +152,7 @@ impl ImageJ {
             spacing_note,
             flavour: "ImageJ",
             notes,
+            axes,
         })
     }
 
@@ -198,8 +220,21 @@ mod tests {
         let l = ij.layout(p, 30, 1, 2, [Some(4.0), Some(2.0)]).unwrap();
         assert_eq!(l.ifds, vec![21, 23, 25, 27, 29]);
         assert_eq!(l.spacing, [0.25, 0.5, 0.5]);
+        assert_eq!(l.axes.len(), 2);
+        assert_eq!(l.axes[0].kind, AxisKind::Channel);
+        assert_eq!((l.axes[1].len, l.axes[1].chosen), (3, Some(2)));
         let e = ij.layout(p, 30, 2, 0, [None, None]).unwrap_err();
-        assert!(e.to_string().contains("2 channels"), "{e}");
+        assert!(
+            matches!(
+                e.kind,
+                ErrorKind::Data(volux_core::Error::NoSuchVolume {
+                    option: "channel",
+                    index: 2,
+                    len: 2
+                })
+            ),
+            "{e}"
+        );
     }
 
     #[test]

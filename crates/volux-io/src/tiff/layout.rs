@@ -3,6 +3,8 @@
 //! unit conversions shared by the ImageJ, OME and plain-TIFF readers.
 use std::path::Path;
 
+use volux_core::volume_axes::ExtraAxis;
+
 use crate::error::{ErrorKind, ReadError, Result};
 
 /// The pages of the volume and its spacing, decided from the file's metadata.
@@ -18,6 +20,8 @@ pub struct Layout {
     pub flavour: &'static str,
     /// Further notes (channels and timepoints chosen, ...).
     pub notes: Vec<String>,
+    /// The file's axes beyond x, y, z (channels, time) and the index read along each.
+    pub axes: Vec<ExtraAxis>,
 }
 
 /// Micrometres per `unit` for the length units ImageJ and OME write (`micron`, `µm`, `um`,
@@ -52,21 +56,10 @@ pub fn positive(path: &Path, what: &str, v: f64) -> Result<f64> {
     }
 }
 
-/// The index chosen among `count` channels or timepoints, or an error naming how many exist.
-pub fn choose(path: &Path, what: &str, index: usize, count: usize) -> Result<usize> {
-    if index < count {
-        Ok(index)
-    } else {
-        let plural = if count == 1 { "" } else { "s" };
-        Err(ReadError::new(
-            path,
-            ErrorKind::Invalid(format!(
-                "--{what} {index} is out of range: the file has {count} {what}{plural} \
-                 (0..={})",
-                count.saturating_sub(1)
-            )),
-        ))
-    }
+/// The index chosen among `count` channels or timepoints (`option` is `"channel"` or
+/// `"timepoint"`), or [`volux_core::Error::NoSuchVolume`] naming how many there are.
+pub fn choose(path: &Path, option: &'static str, index: usize, count: usize) -> Result<usize> {
+    volux_core::volume_axes::choose(option, index, count).map_err(|e| ReadError::new(path, e))
 }
 
 /// Spacing from plain TIFF resolution tags (TIFF 6.0 section 8: `XResolution`,

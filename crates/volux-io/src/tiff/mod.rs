@@ -1,6 +1,9 @@
 //! TIFF stacks: multi-page TIFF (one page per z slice), ImageJ hyperstacks, single-file
 //! OME-TIFF, and folders of numbered single-page TIFF slices; read through the `tiff` crate
-//! (pure Rust: LZW, Deflate and PackBits without C libraries, BigTIFF too).
+//! (pure Rust: LZW, Deflate, PackBits, JPEG through zune-jpeg, WebP through image-webp, CCITT
+//! Group 4 through `fax`; Zstandard through `zstd`, which builds the C zstd library with `cc`;
+//! BigTIFF, strips and tiles). Other compressions are refused in one line naming their code
+//! and name.
 //!
 //! Which pages form the volume and its spacing come from the first page's
 //! `ImageDescription`:
@@ -12,16 +15,26 @@
 //!   (TIFF 6.0 section 8), z equal to x; without them spacing 1.
 //!
 //! `channel` and `timepoint` choose among an ImageJ hyperstack's or an OME-TIFF's channels
-//! and timepoints (an index out of range is an error saying how many there are). Samples are
-//! grayscale 8/16-bit unsigned, 16-bit signed or 32-bit float ([`pages`]); the volume is
+//! and timepoints (an index out of range is [`volux_core::Error::NoSuchVolume`]); the grid
+//! records the file's channel and time axes ([`ExtraAxis`] of kind
+//! [`AxisKind::Channel`] and [`AxisKind::Time`]).
+//!
+//! Samples ([`pages`]): grayscale of 1 to 64 bits (integers and floats; `int8` kept as
+//! `int16`, 32 and 64-bit integers and `float64` as `float32` with a note counting the values
+//! rounded), MINISWHITE inverted with a note, RGB (contiguous or planar) and PALETTE (through
+//! the 16-bit `ColorMap`) as colour grids ([`Grid::from_rgb`]; `VolumeChoice::component`
+//! picks one channel as a scalar grid instead), JPEG YCbCr converted to RGB. The volume is
 //! checked against the memory budget and against what the file can decode to before it is
 //! allocated, then filled page by page. The grid's notes say the flavour, page count,
-//! compression, sample type and where the spacing comes from.
+//! compression, sample type, where the spacing comes from, and every value transform applied.
 use std::path::Path;
 
 use ::tiff::tags::Tag;
+#[cfg(doc)]
+use volux_core::volume_axes::{AxisKind, ExtraAxis};
 use volux_core::Grid;
 
+use crate::dataset::VolumeChoice;
 use crate::error::{ErrorKind, ReadError, Result};
 
 pub mod folder;
@@ -29,30 +42,30 @@ pub mod imagej;
 pub mod layout;
 pub mod ome;
 pub mod pages;
+pub mod source;
 
 use layout::{choose, plain_spacing, Layout};
-use pages::{grid, resolution, tag_number, tiff_err, Volume};
+use pages::{resolution, tag_number, tiff_err, Keep, PageInfo, Volume};
 
 /// Reads a TIFF stack, an ImageJ hyperstack, an OME-TIFF, or (when `path` is a folder) a
-/// folder of numbered TIFF slices; `channel` and `timepoint` choose among several.
-pub fn read(path: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
+/// folder of numbered TIFF slices; `channel` and `choice.timepoint` choose among several,
+/// `choice.component` one colour channel of a colour image.
+pub fn read(path: &Path, channel: usize, choice: VolumeChoice) -> Result<Grid> {
+    let timepoint = choice.timepoint;
     if crate::util::data_metadata(path)?.is_dir() {
-        return folder::read(path, channel, timepoint);
+        return folder::read(path, channel, choice);
     }
     let (mut dec, len) = pages::open(path)?;
     let first = pages::page_info(path, &mut dec, 0)?;
+    let keep = keep(path, &first, choice.component)?;
     let desc = pages::description(path, &mut dec)?;
     let res = resolution(path, &mut dec)?;
     let unit = tag_number(path, &mut dec, Tag::ResolutionUnit)?;
     let n = pages::count_pages(path, &mut dec)?;
     let layout = match desc.as_deref() {
-        Some(d) if ome::is_ome(d) => ome::parse(path, d)?.layout(
-            path,
-            n,
-            (first.width, first.height, first.ty),
-            channel,
-            timepoint,
-        )?,
+        Some(d) if ome::is_ome(d) => {
+            ome::parse(path, d)?.layout(path, n, &first, channel, timepoint)?
+        }
         Some(d) if imagej::is_imagej(d) => {
             imagej::parse(path, d)?.layout(path, n, channel, timepoint, res)?
         }
@@ -66,6 +79,7 @@ pub fn read(path: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
                 spacing_note,
                 flavour: "plain",
                 notes: Vec::new(),
+                axes: Vec::new(),
             }
         }
     };
@@ -78,8 +92,8 @@ pub fn read(path: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
             )),
         ));
     }
-    pages::check_volume(path, &first, layout.ifds.len(), len)?;
-    let mut volume = Volume::new(first, layout.ifds.len());
+    pages::check_volume(path, &first, keep, layout.ifds.len(), len)?;
+    let mut volume = Volume::new(first, keep, layout.ifds.len());
     for (z, &ifd) in layout.ifds.iter().enumerate() {
         dec.seek_to_image(ifd).map_err(|e| tiff_err(path, e))?;
         volume.read_page(path, &mut dec, ifd, z)?;
@@ -90,5 +104,24 @@ pub fn read(path: &Path, channel: usize, timepoint: usize) -> Result<Grid> {
         _ => "TIFF",
     };
     let what = format!("{kind}: {n} pages");
-    grid(path, what, first, volume, layout)
+    volume.into_grid(path, what, layout)
+}
+
+/// What the grid keeps of pages like `first`: the gray sample, the colour, or the colour
+/// channel `component` (an index past the page's channels is
+/// [`volux_core::Error::NoSuchVolume`]).
+pub fn keep(path: &Path, first: &PageInfo, component: Option<usize>) -> Result<Keep> {
+    let channels = if first.is_color() { 3 } else { 1 };
+    Ok(match component {
+        Some(c) => {
+            let c = choose(path, "component", c, channels)?;
+            if first.is_color() {
+                Keep::Channel(c)
+            } else {
+                Keep::Gray
+            }
+        }
+        None if first.is_color() => Keep::Rgb,
+        None => Keep::Gray,
+    })
 }

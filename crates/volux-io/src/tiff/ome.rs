@@ -1,23 +1,26 @@
 //! OME-TIFF metadata: the OME-XML document (OME Data Model, schema 2016-06) in the first
 //! page's `ImageDescription`.
 //!
-//! From the first `<Image>`'s `<Pixels>`: `SizeX/Y/Z/C/T`, `Type` (`uint8`, `uint16`,
-//! `int16`, `float`), `DimensionOrder` (`XYZCT`, `XYCZT`, ...: the three letters after `XY`
+//! From the first `<Image>`'s `<Pixels>`: `SizeX/Y/Z/C/T`, `Type` (`int8`, `uint8`, `int16`,
+//! `uint16`, `int32`, `uint32`, `float`, `double`), `DimensionOrder` (`XYZCT`, `XYCZT`, ...: the three letters after `XY`
 //! run from fastest to slowest, so for `XYZCT` plane (z, c, t) is `z + Z * (c + C * t)`),
 //! `PhysicalSizeX/Y/Z` with `PhysicalSizeXUnit`... (default `µm`; converted to micrometres).
 //! `<TiffData IFD= FirstZ= FirstC= FirstT= PlaneCount=>` elements map planes to pages
 //! (without any, plane i is page i; `PlaneCount` defaults to 1 when `IFD` is given, else to
-//! all planes). Only single-file OME-TIFF is read: a `<UUID FileName=>` naming another file is
+//! all planes). RGB pages hold 3 of the `SizeC` samples each (`<Channel SamplesPerPixel="3">`):
+//! their planes are counted with `SizeC / 3` channels. `TimeIncrement` (with its unit, default
+//! seconds) gives the time axis its step. Only single-file OME-TIFF is read: a `<UUID FileName=>` naming another file is
 //! refused.
 use std::collections::HashMap;
 use std::path::Path;
 
-use volux_core::ScalarType;
+use volux_core::volume_axes::{AxisKind, ExtraAxis};
 
 use crate::error::{ErrorKind, ReadError, Result};
 use crate::vtk_xml::tree::{self, Elem};
 
 use super::layout::{choose, micrometres_per, positive, Layout};
+use super::pages::{PageInfo, Photometric, Stored};
 
 /// Whether `desc` is OME-XML (it starts with an XML declaration or `<OME`, and names `<OME`).
 pub fn is_ome(desc: &str) -> bool {
@@ -54,6 +57,8 @@ pub struct Pixels {
     pub tiff_data: Vec<[Option<usize>; 5]>,
     /// How many `<Image>`s the document holds.
     pub images: usize,
+    /// `TimeIncrement` and `TimeIncrementUnit` (default `s`).
+    pub time_increment: Option<(f64, String)>,
 }
 
 /// Parses the OME-XML `desc` of `path`.
@@ -141,6 +146,13 @@ pub fn parse(path: &Path, desc: &str) -> Result<Pixels> {
             num("PlaneCount")?,
         ]);
     }
+    let time_increment = attr("TimeIncrement")
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .map(|v| {
+            let unit = attr("TimeIncrementUnit").map_or("s".to_string(), Clone::clone);
+            (v, unit)
+        });
     Ok(Pixels {
         size,
         ty: attr("Type").cloned().unwrap_or_default(),
@@ -148,17 +160,18 @@ pub fn parse(path: &Path, desc: &str) -> Result<Pixels> {
         physical,
         tiff_data,
         images,
+        time_increment,
     })
 }
 
 impl Pixels {
-    /// The plane index of (z, c, t) in `DimensionOrder`.
-    fn plane(&self, zct: [usize; 3]) -> usize {
+    /// The plane index of (z, c, t) in `DimensionOrder`, with `sc` channel planes.
+    fn plane(&self, zct: [usize; 3], sc: usize) -> usize {
         let (mut index, mut stride) = (0, 1);
         for letter in self.order[2..].chars() {
             let (i, n) = match letter {
                 'Z' => (zct[0], self.size[2]),
-                'C' => (zct[1], self.size[3]),
+                'C' => (zct[1], sc),
                 _ => (zct[2], self.size[4]),
             };
             index = i.saturating_mul(stride).saturating_add(index);
@@ -169,13 +182,13 @@ impl Pixels {
 
     /// The page of every plane, from the `TiffData` elements (plane i on page i without
     /// them). The caller has checked that the planes are at most the pages.
-    fn pages(&self, planes: usize) -> HashMap<usize, usize> {
+    fn pages(&self, planes: usize, sc: usize) -> HashMap<usize, usize> {
         if self.tiff_data.is_empty() {
             return (0..planes).map(|p| (p, p)).collect();
         }
         let mut map = HashMap::new();
         for &[ifd, z, c, t, count] in &self.tiff_data {
-            let first = self.plane([z.unwrap_or(0), c.unwrap_or(0), t.unwrap_or(0)]);
+            let first = self.plane([z.unwrap_or(0), c.unwrap_or(0), t.unwrap_or(0)], sc);
             let count = count.unwrap_or(if ifd.is_some() { 1 } else { planes });
             let ifd = ifd.unwrap_or(0);
             for k in 0..count.min(planes.saturating_sub(first)) {
@@ -186,37 +199,54 @@ impl Pixels {
     }
 
     /// The pages of channel `channel` and timepoint `timepoint`, and the spacing, for a file
-    /// of `pages` pages whose first page is `width` x `height` of type `ty`.
+    /// of `pages` pages whose first page is `first`.
     pub fn layout(
         &self,
         path: &Path,
         pages: usize,
-        (width, height, ty): (usize, usize, ScalarType),
+        first: &PageInfo,
         channel: usize,
         timepoint: usize,
     ) -> Result<Layout> {
         let invalid =
             |m: String| ReadError::new(path, ErrorKind::Invalid(format!("OME-TIFF: {m}")));
-        let [sx, sy, sz, sc, st] = self.size;
+        let [sx, sy, sz, size_c, st] = self.size;
+        let (width, height) = (first.width, first.height);
         if (sx, sy) != (width, height) {
             return Err(invalid(format!(
                 "OME-XML says {sx}x{sy} pixels, the first page is {width}x{height}"
             )));
         }
         let expected = match self.ty.to_ascii_lowercase().as_str() {
-            "uint8" => Some(ScalarType::U8),
-            "uint16" => Some(ScalarType::U16),
-            "int16" => Some(ScalarType::I16),
-            "float" => Some(ScalarType::F32),
+            "int8" => Some(Stored::I8),
+            "uint8" => Some(Stored::U8),
+            "int16" => Some(Stored::I16),
+            "uint16" => Some(Stored::U16),
+            "int32" => Some(Stored::I32),
+            "uint32" => Some(Stored::U32),
+            "float" => Some(Stored::F32),
+            "double" => Some(Stored::F64),
             _ => None,
         };
-        if expected.is_some_and(|e| e != ty) {
+        if expected.is_some_and(|e| e != first.stored) {
             return Err(invalid(format!(
                 "OME-XML says Type=\"{}\", the pages hold {}",
                 self.ty,
-                ty.name()
+                first.stored.name()
             )));
         }
+        // An RGB page holds 3 of the SizeC samples.
+        let per_page = if matches!(first.photometric, Photometric::Rgb | Photometric::YCbCr) {
+            3
+        } else {
+            1
+        };
+        if size_c % per_page != 0 {
+            return Err(invalid(format!(
+                "OME-XML says SizeC=\"{size_c}\", but the pages hold {per_page} samples each"
+            )));
+        }
+        let sc = size_c / per_page;
         let channel = choose(path, "channel", channel, sc)?;
         let timepoint = choose(path, "timepoint", timepoint, st)?;
         let planes = sz.saturating_mul(sc).saturating_mul(st);
@@ -226,10 +256,10 @@ impl Pixels {
                  {pages} pages"
             )));
         }
-        let map = self.pages(planes);
+        let map = self.pages(planes, sc);
         let ifds = (0..sz)
             .map(|z| {
-                map.get(&self.plane([z, channel, timepoint]))
+                map.get(&self.plane([z, channel, timepoint], sc))
                     .copied()
                     .ok_or_else(|| {
                         invalid(format!(
@@ -253,6 +283,17 @@ impl Pixels {
                 self.images
             ));
         }
+        let mut axes = Vec::new();
+        if sc > 1 {
+            axes.push(ExtraAxis::new(AxisKind::Channel, sc, Some(channel)));
+        }
+        if st > 1 {
+            let mut time = ExtraAxis::new(AxisKind::Time, st, Some(timepoint));
+            if let Some((v, unit)) = &self.time_increment {
+                time = time.with_meaning(format!("step {v} {unit}"));
+            }
+            axes.push(time);
+        }
         let (spacing, spacing_note) = self.spacing(path)?;
         Ok(Layout {
             ifds,
@@ -260,6 +301,7 @@ impl Pixels {
             spacing_note,
             flavour: "OME",
             notes,
+            axes,
         })
     }
 
@@ -317,19 +359,67 @@ mod tests {
     const XML: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
 <OME xmlns="http://www.openmicroscopy.org/Schemas/OME/2016-06"><Image ID="Image:0"><Pixels ID="Pixels:0" DimensionOrder="XYCZT" Type="uint16" SizeX="4" SizeY="3" SizeZ="5" SizeC="2" SizeT="1" PhysicalSizeX="0.2" PhysicalSizeY="0.2" PhysicalSizeZ="1.5" PhysicalSizeZUnit="nm"><Channel ID="Channel:0:0"/><TiffData IFD="0" PlaneCount="10"/></Pixels></Image></OME>"#;
 
+    /// A 4 x 3 page of `stored` samples, grayscale or RGB.
+    fn page(stored: Stored, rgb: bool) -> PageInfo {
+        PageInfo {
+            width: 4,
+            height: 3,
+            stored,
+            photometric: if rgb {
+                Photometric::Rgb
+            } else {
+                Photometric::MinIsBlack
+            },
+            decoded_samples: if rgb { 3 } else { 1 },
+            extra: 0,
+            planar: false,
+            compression: 1,
+            colormap: None,
+        }
+    }
+
     #[test]
     fn dimension_order_picks_the_pages() {
         let p = Path::new("a.ome.tif");
         assert!(is_ome(XML));
         let px = parse(p, XML).unwrap();
         assert_eq!(px.size, [4, 3, 5, 2, 1]);
-        let l = px.layout(p, 10, (4, 3, ScalarType::U16), 1, 0).unwrap();
+        let gray = page(Stored::U16, false);
+        let l = px.layout(p, 10, &gray, 1, 0).unwrap();
         assert_eq!(l.ifds, vec![1, 3, 5, 7, 9]);
         assert!((l.spacing[2] - 0.0015).abs() < 1e-12);
-        let e = px.layout(p, 10, (4, 3, ScalarType::U16), 0, 1).unwrap_err();
-        assert!(e.to_string().contains("1 timepoint "), "{e}");
-        let e = px.layout(p, 9, (4, 3, ScalarType::U16), 0, 0).unwrap_err();
+        assert_eq!(l.axes, vec![ExtraAxis::new(AxisKind::Channel, 2, Some(1))]);
+        let e = px.layout(p, 10, &gray, 0, 1).unwrap_err();
+        assert!(e.to_string().contains("timepoint 1 does not exist"), "{e}");
+        let e = px.layout(p, 9, &gray, 0, 0).unwrap_err();
         assert!(e.to_string().contains("9 pages"), "{e}");
+        let e = px
+            .layout(p, 10, &page(Stored::F32, false), 0, 0)
+            .unwrap_err();
+        assert!(e.to_string().contains("float32"), "{e}");
+    }
+
+    #[test]
+    fn rgb_pages_hold_three_of_size_c() {
+        let p = Path::new("a.ome.tif");
+        let xml = XML
+            .replace(
+                "DimensionOrder=\"XYCZT\"",
+                "DimensionOrder=\"XYCZT\" TimeIncrement=\"2.5\"",
+            )
+            .replace("SizeC=\"2\" SizeT=\"1\"", "SizeC=\"3\" SizeT=\"2\"");
+        let px = parse(p, &xml).unwrap();
+        let l = px.layout(p, 10, &page(Stored::U16, true), 0, 1).unwrap();
+        assert_eq!(l.ifds, vec![5, 6, 7, 8, 9]);
+        assert_eq!(l.axes.len(), 1);
+        assert_eq!(
+            l.axes[0].describe(),
+            "time: 2 volumes (timepoint 1 read), step 2.5 s"
+        );
+        let e = px
+            .layout(p, 10, &page(Stored::U16, true), 1, 0)
+            .unwrap_err();
+        assert!(e.to_string().contains("channel 1 does not exist"), "{e}");
     }
 
     #[test]
