@@ -1406,8 +1406,13 @@ fn the_unit_of_length_survives_raw_and_nrrd() {
     assert_eq!(back.unit(), "µm");
     assert_eq!(values(&back), values(&g));
     // Millimetres are the default and need no field.
-    let mm = Grid::new([1, 1, 1], [1.0; 3], [0.0; 3], Samples::U8(Buffer::owned(vec![1])))
-        .unwrap();
+    let mm = Grid::new(
+        [1, 1, 1],
+        [1.0; 3],
+        [0.0; 3],
+        Samples::U8(Buffer::owned(vec![1])),
+    )
+    .unwrap();
     nrrd::write(&mm, &n).unwrap();
     assert!(!std::fs::read_to_string(&n).unwrap().contains("space units"));
     assert_eq!(nrrd::read(&n, Default::default()).unwrap().unit(), "mm");

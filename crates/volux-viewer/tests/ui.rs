@@ -805,3 +805,44 @@ fn tiff_stacks_and_compressed_dicom_open_with_their_channel() {
     };
     assert_eq!(app(&h).range(), g.range());
 }
+
+/// A 4-D file (an fMRI-like time series, here a 4-D NRRD) opens on its first volume; the
+/// volume picker reloads another one and keeps the view (camera, transfer function).
+#[test]
+fn the_volume_picker_shows_another_timepoint_and_keeps_the_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 6usize;
+    let mut bytes = format!(
+        "NRRD0004\ntype: uint8\ndimension: 4\nspace: left-posterior-superior\n\
+         sizes: {n} {n} {n} 3\nkinds: domain domain domain time\n\
+         space directions: (1,0,0) (0,1,0) (0,0,1) none\nspace origin: (0,0,0)\n\
+         encoding: raw\n\n"
+    )
+    .into_bytes();
+    // Volume t holds a ramp along x starting at 40 t.
+    for t in 0..3u8 {
+        for i in 0..n * n * n {
+            bytes.push(40 * t + (i % n) as u8);
+        }
+    }
+    let path = dir.path().join("series.nrrd");
+    std::fs::write(&path, bytes).unwrap();
+    let mut h = harness(Some(path));
+    loaded_with_frame(&mut h);
+    assert_eq!(app(&h).range(), [0.0, 5.0]);
+    let camera = app(&h).scene.view.camera;
+    let tf = app(&h).scene.appearance.tf.clone();
+    app_mut(&mut h).choose_volume("timepoint", Some(2));
+    step_until(&mut h, "timepoint 2", |a| {
+        !a.busy()
+            && a.data
+                .as_ref()
+                .is_some_and(|d| d.source.timepoint == Some(2))
+    });
+    assert_eq!(app(&h).range(), [80.0, 85.0]);
+    assert_eq!(app(&h).scene.view.camera, camera, "the view is kept");
+    assert_eq!(app(&h).scene.appearance.tf, tf, "the TF is kept");
+    // The picker lists the axis, its length and the volume shown.
+    h.run();
+    assert!(h.query_by_label_contains("time: 3 volumes").is_some());
+}
