@@ -9,9 +9,12 @@
 //!
 //! Sequences and items are walked into, so nested elements are checked too; encapsulated
 //! pixel data fragments are skipped. In implicit VR a defined-length value is walked into
-//! when it starts with an item tag (a sequence), else skipped. Deflated data sets, and the
-//! implicit-VR content of an undefined-length `UN` element, are not walked (the walk stops
-//! there without an error).
+//! when it starts with an item tag (a sequence), else skipped. The walk reads headers as the
+//! parser does: an unknown VR has the long (4-byte) length form, and the content of an
+//! undefined-length element other than pixel data (a `UN` sequence) is in the file's
+//! transfer syntax, so a `UN` sequence written in implicit VR (PS3.5 6.2.2), which the
+//! parser misreads, is refused here on the first length it would misread rather than after
+//! the parser has allocated it. Deflated data sets are not walked.
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -28,9 +31,12 @@ const PIXEL_DATA: (u16, u16) = (0x7FE0, 0x0010);
 /// Deflated Explicit VR Little Endian: the data set is a deflate stream.
 const DEFLATED: &str = "1.2.840.10008.1.2.1.99";
 
-/// Explicit VRs whose length is 4 bytes after 2 reserved bytes.
-const LONG_VRS: [&[u8; 2]; 13] = [
-    b"OB", b"OD", b"OF", b"OL", b"OV", b"OW", b"SQ", b"SV", b"UC", b"UN", b"UR", b"UT", b"UV",
+/// Explicit VRs whose length is 2 bytes (PS3.5 7.1.2, Table 7.1-2); every other VR, an
+/// unknown one included (read as `UN` by the parser), has 2 reserved bytes and a 4-byte
+/// length.
+const SHORT_VRS: [&[u8; 2]; 21] = [
+    b"AE", b"AS", b"AT", b"CS", b"DA", b"DS", b"DT", b"FL", b"FD", b"IS", b"LO", b"LT", b"PN",
+    b"SH", b"SL", b"SS", b"ST", b"TM", b"UI", b"UL", b"US",
 ];
 
 /// One element header.
@@ -121,7 +127,7 @@ impl Walker<'_> {
             return Ok(Some(Header { tag, vr: None, len }));
         }
         let vr = self.bytes::<2>()?;
-        let len = if LONG_VRS.contains(&&vr) {
+        let len = if !SHORT_VRS.contains(&&vr) {
             if self.left() < 6 {
                 return Ok(None);
             }
@@ -181,44 +187,28 @@ impl Walker<'_> {
         }
     }
 
-    /// Walks the element headers while `keep` accepts the next tag; `false` when the walk
-    /// had to stop early (content it cannot follow).
-    fn walk(&mut self, keep: impl Fn((u16, u16)) -> bool) -> Result<bool> {
-        loop {
-            let at = self.pos;
-            let Some(h) = self.header()? else {
-                return Ok(true);
-            };
-            if !keep(h.tag) {
-                self.r
-                    .seek(SeekFrom::Start(at))
-                    .map_err(|e| io_error(self.path, e))?;
-                self.pos = at;
-                return Ok(true);
-            }
-            if !self.step(&h)? {
-                return Ok(false);
-            }
+    /// Walks the element headers to the end of the file.
+    fn walk(&mut self) -> Result<()> {
+        while let Some(h) = self.header()? {
+            self.step(&h)?;
         }
+        Ok(())
     }
 
     /// Handles one header: checks its length and skips or enters its value.
-    fn step(&mut self, h: &Header) -> Result<bool> {
+    fn step(&mut self, h: &Header) -> Result<()> {
         if h.tag == (0xFFFE, 0xE0DD) {
             self.fragments = false;
         }
         if h.len == UNDEFINED {
-            if h.vr == Some(*b"UN") {
-                return Ok(false);
-            }
             self.fragments |= h.tag == PIXEL_DATA;
-            return Ok(true);
+            return Ok(());
         }
         self.check_len(h)?;
         if !self.is_sequence(h)? {
             self.skip(u64::from(h.len))?;
         }
-        Ok(true)
+        Ok(())
     }
 
     /// Reads the value of `h` (a short string) after checking its length.
@@ -281,7 +271,7 @@ pub(super) fn check(path: &Path) -> Result<()> {
     }
     w.explicit = ts != IMPLICIT_LE;
     w.little = ts != EXPLICIT_BE;
-    w.walk(|_| true).map(|_| ())
+    w.walk()
 }
 
 #[cfg(test)]
@@ -348,7 +338,9 @@ mod tests {
             "{msg}"
         );
         // The reader refuses it through the same check (the parser is never reached).
-        let e = super::super::read(&out, None).unwrap_err().to_string();
+        let e = super::super::read(&out, None, Default::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("declares 4294967280 bytes"), "{e}");
         // A pixel data element declaring 4 GB is a truncated file.
         let mut bytes = std::fs::read(&p).unwrap();
@@ -356,7 +348,7 @@ mod tests {
         bytes[at..at + 4].copy_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
         let out = dir.path().join("px.dcm");
         std::fs::write(&out, &bytes).unwrap();
-        let e = super::super::read(&out, None).unwrap_err();
+        let e = super::super::read(&out, None, Default::default()).unwrap_err();
         assert!(
             matches!(
                 e.kind,
@@ -375,14 +367,22 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let zero = zero_link(dir.path(), "z.dcm");
         assert_refused(
-            super::super::read(&zero, None),
+            super::super::read(&zero, None, Default::default()),
             "z.dcm",
             "(a character device)",
         );
         let looped = link_loop(dir.path(), "l.dcm");
-        assert_refused(super::super::read(&looped, None), "l.dcm", "loop");
+        assert_refused(
+            super::super::read(&looped, None, Default::default()),
+            "l.dcm",
+            "loop",
+        );
         if let Some(f) = fifo(dir.path(), "f.dcm") {
-            assert_refused(super::super::read(&f, None), "f.dcm", "(a FIFO)");
+            assert_refused(
+                super::super::read(&f, None, Default::default()),
+                "f.dcm",
+                "(a FIFO)",
+            );
         }
     }
 }
