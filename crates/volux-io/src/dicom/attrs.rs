@@ -8,6 +8,8 @@ use dicom_object::mem::InMemElement;
 use dicom_object::InMemDicomObject;
 use glam::DVec3;
 
+use super::volumes::VolumeKey;
+
 /// A DICOM data set (or sequence item).
 pub(super) type Obj = InMemDicomObject;
 
@@ -39,6 +41,17 @@ pub(super) fn string(obj: &Obj, tag: Tag) -> Option<String> {
     let s = elem(obj, tag)?.to_str().ok()?;
     let s = s.trim_matches(|c: char| c == '\0' || c.is_whitespace());
     (!s.is_empty()).then(|| s.to_string())
+}
+
+/// The value of a private attribute: element `element` (0x00..0xFF) of the block that
+/// `creator` reserved in `group` (PS3.5 7.8.1).
+pub(super) fn private<'a>(
+    obj: &'a Obj,
+    group: u16,
+    creator: &str,
+    element: u8,
+) -> Option<&'a InMemElement> {
+    obj.private_element(group, creator, element).ok()
 }
 
 /// The items of a sequence attribute.
@@ -110,6 +123,13 @@ pub(super) struct ImageInfo {
     pub spacing_between: Option<f64>,
     pub thickness: Option<f64>,
     pub rescale: (f64, f64),
+    /// PlanarConfiguration 1: each colour plane of a frame after the other (PS3.3
+    /// C.7.6.3.1.3); 0 (default): the samples of each pixel together.
+    pub planar: bool,
+    /// DoseGridScaling of an RT Dose (PS3.3 C.8.8.3): the factor giving Gy.
+    pub dose_scaling: Option<f64>,
+    /// What tells this image (its first frame) apart from others at the same position.
+    pub key: VolumeKey,
 }
 
 impl ImageInfo {
@@ -149,6 +169,9 @@ impl ImageInfo {
                 f64_1(o, tags::SLICE_THICKNESS).filter(|v| *v > 0.0)
             }),
             rescale: rescale(obj, frame0),
+            planar: int(obj, tags::PLANAR_CONFIGURATION) == Some(1),
+            dose_scaling: f64_1(obj, tags::DOSE_GRID_SCALING),
+            key: VolumeKey::of(obj, frame0),
         })
     }
 }
