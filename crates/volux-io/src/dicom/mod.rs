@@ -64,6 +64,7 @@ mod color;
 mod frames;
 mod geometry;
 mod image;
+mod jpeg_color;
 mod lut;
 mod pixels;
 mod ts;
@@ -252,7 +253,15 @@ fn pixel_bytes<'a>(
                 format!("BitsAllocated {} in compressed data", info.bits),
             )
         })?;
-        let b = codec::decode(path, obj, info, frames, frame)?;
+        let jpeg_color = (info.samples_per_pixel == 3 && ts::family(ts) == Some(ts::Family::Jpeg))
+            .then(|| jpeg_color::needs(obj, &info.photometric))
+            .transpose()
+            .map_err(|m| ReadError::new(path, ErrorKind::Unsupported(m)))?;
+        let mut b = codec::decode(path, obj, info, frames, frame)?;
+        if jpeg_color == Some(jpeg_color::Needs::YbrToRgb) {
+            color::ybr_to_rgb(&mut b);
+            notes.push(format!("{} converted to RGB", info.photometric));
+        }
         (std::borrow::Cow::Owned(b), fmt)
     };
     Ok((image::to_rgb(info, bytes, fmt, notes), fmt))
