@@ -265,6 +265,20 @@ fn b_values_at_the_same_positions_are_volumes() {
 }
 
 #[test]
+fn siemens_private_b_values_are_text() {
+    // Implicit VR: the private B_value (IS) is kept as bytes by the parser; "1000" is
+    // 1000, not its first byte 49.
+    let d = dir().join("siemens_dwi");
+    for (t, b) in [(0usize, 0.0f32), (1, 1000.0)] {
+        let g = volume(&d, t).unwrap();
+        assert_eq!(g.dims(), [4, 4, 2]);
+        assert_eq!(g.value(0, 0, 1), b / 10.0 + 10.0);
+        let a = &g.extra_axes()[0];
+        assert_eq!(a.values, vec![0.0, 1000.0]);
+    }
+}
+
+#[test]
 fn temporal_positions_are_a_time_axis() {
     let d = dir().join("temporal");
     for t in 0..3 {

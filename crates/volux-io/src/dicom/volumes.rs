@@ -19,7 +19,9 @@
 //! (module `geometry`).
 use std::collections::HashSet;
 
+use dicom_core::value::{PrimitiveValue, Value};
 use dicom_dictionary_std::tags;
+use dicom_object::mem::InMemElement;
 use glam::DVec3;
 use volux_core::volume_axes::{choose, AxisKind, ExtraAxis};
 
@@ -48,7 +50,11 @@ impl VolumeKey {
         let diffusion = tags::MR_DIFFUSION_SEQUENCE;
         let content = tags::FRAME_CONTENT_SEQUENCE;
         let b_value = grouped(obj, frame, diffusion, |o| f64_1(o, tags::DIFFUSION_B_VALUE))
-            .or_else(|| private(obj, 0x0019, SIEMENS_MR, 0x0C)?.to_float64().ok());
+            .or_else(|| {
+                private_numbers(private(obj, 0x0019, SIEMENS_MR, 0x0C)?, Binary::Text)?
+                    .first()
+                    .copied()
+            });
         let gradient = grouped(obj, frame, diffusion, |o| {
             items(o, tags::DIFFUSION_GRADIENT_DIRECTION_SEQUENCE)
                 .and_then(|i| i.first())
@@ -56,9 +62,7 @@ impl VolumeKey {
                 .or_else(|| vec3(o))
         })
         .or_else(|| {
-            let v = private(obj, 0x0019, SIEMENS_MR, 0x0E)?
-                .to_multi_float64()
-                .ok()?;
+            let v = private_numbers(private(obj, 0x0019, SIEMENS_MR, 0x0E)?, Binary::F64)?;
             match v.as_slice() {
                 [x, y, z] => Some([*x, *y, *z]),
                 _ => None,
@@ -76,6 +80,36 @@ impl VolumeKey {
             stack,
         }
     }
+}
+
+/// How a private value kept as bytes (an implicit-VR file's private element, whose VR no
+/// dictionary gives) is encoded: Siemens' `B_value` is IS text, its gradient direction FD.
+enum Binary {
+    Text,
+    F64,
+}
+
+/// The numbers of a private element: decoded as its VR says where the file gave one,
+/// else from its bytes as `binary` says (little endian: implicit VR is little endian).
+fn private_numbers(e: &InMemElement, binary: Binary) -> Option<Vec<f64>> {
+    let v: Vec<f64> = match (e.value(), binary) {
+        (Value::Primitive(PrimitiveValue::U8(b)), Binary::Text) => std::str::from_utf8(b)
+            .ok()?
+            .trim_matches(|c: char| c == '\0' || c.is_whitespace())
+            .split('\\')
+            .map(|t| t.trim().parse::<f64>().ok())
+            .collect::<Option<_>>()?,
+        (Value::Primitive(PrimitiveValue::U8(b)), Binary::F64) => {
+            if b.len() % 8 != 0 {
+                return None;
+            }
+            b.chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                .collect()
+        }
+        _ => e.to_multi_float64().ok()?,
+    };
+    (!v.is_empty() && v.iter().all(|x| x.is_finite())).then_some(v)
 }
 
 /// DiffusionGradientOrientation of a data set.
