@@ -16,19 +16,40 @@
 //!   SeriesInstanceUID and the requested series, else the one with the most slices, is loaded
 //!   (noted when there were several). Slices are ordered by ImagePositionPatient projected on
 //!   the slice normal (row x column direction cosines), or by InstanceNumber when positions
-//!   are missing (noted). Differing Rows / Columns / BitsAllocated, duplicate positions and
-//!   missing slices (a gap over 1.5 times the median gap) are [`ErrorKind::Invalid`].
+//!   are missing (noted). Differing Rows / Columns / BitsAllocated / SamplesPerPixel /
+//!   PhotometricInterpretation, duplicate positions and missing slices (a gap over 1.5 times
+//!   the median gap) are [`ErrorKind::Invalid`].
 //! - Multi-frame file: frames are the z slices; spacing, orientation, positions and rescale
 //!   come from the shared / per-frame functional groups (PixelMeasures, PlaneOrientation,
-//!   PlanePosition, PixelValueTransformation sequences), falling back to top-level attributes.
+//!   PlanePosition, PixelValueTransformation sequences), falling back to top-level attributes;
+//!   an RT Dose's frames are placed by its GridFrameOffsetVector (PS3.3 C.8.8.3.2, module
+//!   `frames`).
+//! - Several volumes at the same positions (module `volumes`): slices or frames told apart by
+//!   DiffusionBValue / gradient (standard or Siemens' private), TemporalPosition Index /
+//!   Identifier or StackID are volumes; [`VolumeChoice::timepoint`] picks one and the grid
+//!   records the axis (an [`volux_core::volume_axes::ExtraAxis`] of kind Time for temporal
+//!   positions, Volume with the b-values otherwise). Duplicate positions no key explains
+//!   remain an error.
 //! - Spacing: PixelSpacing is (row spacing = y, column spacing = x); z is the median gap of the
 //!   sorted positions, else SpacingBetweenSlices, else SliceThickness (noted).
-//! - Pixels: BitsAllocated 8 -> uint8, 16 -> uint16 / int16 (PixelRepresentation), 32 ->
-//!   float32 (noted; uncompressed only); SamplesPerPixel must be 1. Signed values are
-//!   sign-extended from BitsStored. RescaleSlope / RescaleIntercept (per slice or
-//!   frame) are applied: slope 1 with values that still fit int16 gives int16 (CT Hounsfield
-//!   units), anything else float32. The pixel data length is checked against
-//!   Rows x Columns x frames x bytes before use; a file that ends inside its pixel data is
+//! - Pixels (PS3.5 8, PS3.3 C.7.6.3): PixelData with BitsAllocated 1 (unpacked to uint8 0 / 1,
+//!   noted), 8 -> uint8, 16 -> uint16 / int16 (PixelRepresentation), 32 -> float32 (noted);
+//!   FloatPixelData (float32) and DoubleFloatPixelData (converted to float32, noted). Big-endian
+//!   files' samples are brought to little endian as pydicom reads them (module `pixels`).
+//!   Attributes stored as `UN` are decoded by the dictionary's VR (module `un`). Signed values
+//!   are sign-extended from BitsStored. The Modality LUT transformation (PS3.3 C.11.1) of each
+//!   slice or frame is applied (module `values`): RescaleSlope / RescaleIntercept (slope 1
+//!   with values that still fit int16 gives int16, CT Hounsfield units, anything else
+//!   float32) or the Modality LUT Sequence (its entries, noted); then an RT Dose's
+//!   DoseGridScaling (Gy, float32, noted).
+//! - Colour (module `color`): three samples a pixel (RGB, YBR_FULL and YBR_FULL_422 converted
+//!   to RGB as pydicom converts them, planar configuration 0 or 1; YBR_RCT / YBR_ICT come out
+//!   of the JPEG 2000 decoder as RGB, JPEG as module `jpeg_color` decides) and PALETTE COLOR
+//!   (the red, green and blue Palette Color LUTs, plain or segmented, module `lut`) give an
+//!   RGB grid ([`Grid::from_rgb`], its luminance as the scalar), or the one channel
+//!   [`VolumeChoice::component`] asks for (recorded as a Color axis).
+//! - Lengths: the pixel data length is checked against Rows x Columns x SamplesPerPixel x
+//!   frames x bytes before use; a file that ends inside its pixel data is
 //!   [`ErrorKind::Truncated`]. Compressed data: the decoded size is checked against the
 //!   memory budget before decoding, each frame's codestream header against Rows, Columns,
 //!   SamplesPerPixel and BitsAllocated (a mismatch is [`ErrorKind::Invalid`]: the decoders
@@ -437,6 +458,18 @@ fn check_slices(dir: &Path, slices: &[ImageInfo]) -> Result<()> {
                     first.bits,
                     first.samples_per_pixel,
                     first.frames
+                ),
+            ));
+        }
+        if s.photometric != first.photometric {
+            return Err(invalid(
+                dir,
+                format!(
+                    "{:?} has PhotometricInterpretation {} but {:?} has {}",
+                    name(s).unwrap_or_default(),
+                    s.photometric,
+                    name(first).unwrap_or_default(),
+                    first.photometric
                 ),
             ));
         }
