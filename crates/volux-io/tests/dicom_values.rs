@@ -343,3 +343,18 @@ fn un_sequence_is_refused_at_once() {
         "{msg}"
     );
 }
+
+#[test]
+fn implicit_data_set_under_an_explicit_transfer_syntax_is_named() {
+    let e = dicom::read(
+        &dir().join("SC_rgb_jpeg.dcm"),
+        None,
+        VolumeChoice::default(),
+    )
+    .unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("encoded in implicit VR") && msg.contains("(0008,0008)"),
+        "{msg}"
+    );
+}

@@ -271,7 +271,40 @@ pub(super) fn check(path: &Path) -> Result<()> {
     }
     w.explicit = ts != IMPLICIT_LE;
     w.little = ts != EXPLICIT_BE;
+    if w.explicit {
+        implicit_data_set(&mut w, &ts)?;
+    }
     w.walk()
+}
+
+/// An error when a data set whose transfer syntax says explicit VR starts with an element
+/// whose VR is not two capital letters but whose bytes read as an implicit-VR header: the
+/// writer encoded the data set in implicit VR (pydicom guesses so and reads it; the parser
+/// follows the transfer syntax and would misread every length).
+fn implicit_data_set(w: &mut Walker<'_>, ts: &str) -> Result<()> {
+    if w.left() < 8 {
+        return Ok(());
+    }
+    let at = w.pos;
+    let head = w.bytes::<8>()?;
+    w.r.seek(SeekFrom::Start(at))
+        .map_err(|e| io_error(w.path, e))?;
+    w.pos = at;
+    let vr_like = head[4].is_ascii_uppercase() && head[5].is_ascii_uppercase();
+    let len = u32::from_le_bytes([head[4], head[5], head[6], head[7]]);
+    if vr_like || !w.little || u64::from(len) > w.left() - 8 {
+        return Ok(());
+    }
+    Err(ReadError::new(
+        w.path,
+        ErrorKind::Invalid(format!(
+            "the data set is encoded in implicit VR, but its transfer syntax {ts} ({}) is an \
+             explicit-VR one (its first element ({:04X},{:04X}) has no VR)",
+            super::ts::ts_name(ts),
+            u16::from_le_bytes([head[0], head[1]]),
+            u16::from_le_bytes([head[2], head[3]])
+        )),
+    ))
 }
 
 #[cfg(test)]
