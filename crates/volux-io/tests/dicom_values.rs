@@ -358,3 +358,23 @@ fn implicit_data_set_under_an_explicit_transfer_syntax_is_named() {
         "{msg}"
     );
 }
+
+#[test]
+fn a_number_of_frames_that_is_no_number_is_refused() {
+    // pydicom's badVR.dcm: NumberOfFrames "1A" was read as one frame without a word.
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("bad.dcm");
+    let mut obj = dicom_object::open_file(dir().join("rtdose.dcm")).unwrap();
+    obj.put_str(
+        dicom_dictionary_std::tags::NUMBER_OF_FRAMES,
+        dicom_core::VR::IS,
+        "1A",
+    );
+    obj.write_to_file(&out).unwrap();
+    let e = dicom::read(&out, None, VolumeChoice::default()).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("NumberOfFrames \"1A\" is not a number"),
+        "{e}"
+    );
+}

@@ -194,6 +194,14 @@ fn read_file(path: &Path, mut notes: Vec<String>, choice: VolumeChoice) -> Resul
             format!("NumberOfFrames is {n}: a multi-frame image has at least one frame"),
         ));
     }
+    if info.frames_stated.is_none() {
+        if let Some(text) = attrs::string(&obj, tags::NUMBER_OF_FRAMES) {
+            return Err(invalid(
+                path,
+                format!("NumberOfFrames {text:?} is not a number"),
+            ));
+        }
+    }
     let frames = info.frames.max(1) as usize;
     // The pixel data must hold every frame before per-frame tables are built.
     let frame = frame_len(path, &info)?;
