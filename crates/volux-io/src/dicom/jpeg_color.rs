@@ -83,7 +83,7 @@ pub(super) fn needs(obj: &Obj, pi: &str) -> Result<Needs, String> {
     let Some(data) = first_fragment(obj) else {
         return Ok(Needs::Nothing);
     };
-    Ok(decide(&markers(data), pi)?)
+    decide(&markers(data), pi)
 }
 
 fn decide(m: &Markers, pi: &str) -> Result<Needs, String> {

@@ -81,7 +81,10 @@ fn le<const N: usize>(c: &[u8], little: bool) -> [u8; N] {
 
 /// The numbers of `bytes`, `N` bytes each; `None` when the length is not a multiple of `N`.
 fn nums<const N: usize, T>(bytes: &[u8], little: bool, f: impl Fn([u8; N]) -> T) -> Option<C<T>> {
-    (bytes.len() % N == 0).then(|| bytes.chunks_exact(N).map(|c| f(le(c, little))).collect())
+    bytes
+        .len()
+        .is_multiple_of(N)
+        .then(|| bytes.chunks_exact(N).map(|c| f(le(c, little))).collect())
 }
 
 /// The value of `bytes` read as `vr` (PS3.5 6.2); `None` when the length does not fit the VR.

@@ -58,7 +58,7 @@ impl VolumeKey {
         let gradient = grouped(obj, frame, diffusion, |o| {
             items(o, tags::DIFFUSION_GRADIENT_DIRECTION_SEQUENCE)
                 .and_then(|i| i.first())
-                .and_then(|g| vec3(g))
+                .and_then(vec3)
                 .or_else(|| vec3(o))
         })
         .or_else(|| {
