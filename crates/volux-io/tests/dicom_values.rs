@@ -147,6 +147,7 @@ fn colour_images_planar_ybr_rle_and_bit_depths() {
         "ybr_full",
         "ybr_full_422",
         "ybr_full_rle",
+        "ybr_full_j2k",
         "rgb_rle",
     ] {
         let g = same_as_pydicom(name);

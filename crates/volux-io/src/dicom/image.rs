@@ -66,8 +66,8 @@ pub(super) fn model(
 
 /// Brings the extracted samples of all frames of a colour image to interleaved RGB: planes
 /// interleaved (PlanarConfiguration 1, uncompressed data only: the decoders interleave),
-/// YBR_FULL_422 expanded (uncompressed), YBR_FULL converted (uncompressed and RLE; the JPEG
-/// and JPEG 2000 decoders give RGB).
+/// YBR_FULL_422 expanded (uncompressed), YBR_FULL converted (uncompressed, RLE and JPEG
+/// 2000, whose decoder gives only YBR_RCT / YBR_ICT as RGB; JPEG: module `jpeg_color`).
 pub(super) fn to_rgb<'a>(
     info: &ImageInfo,
     bytes: Cow<'a, [u8]>,
@@ -83,10 +83,13 @@ pub(super) fn to_rgb<'a>(
     if native && pi == "YBR_FULL_422" {
         bytes = Cow::Owned(color::expand_422(&bytes));
     } else if native && info.planar {
-        let frame = (info.rows * info.cols) as usize * 3 * fmt.size();
+        let frame = info.rows as usize * info.cols as usize * 3 * fmt.size();
         bytes = Cow::Owned(color::interleave(&bytes, frame, fmt.size()));
     }
-    if (native || info.transfer_syntax == super::ts::RLE) && pi.starts_with("YBR_FULL") {
+    // The JPEG 2000 decoder gives YBR_RCT / YBR_ICT as RGB; YBR_FULL it leaves, and pydicom
+    // converts it as it converts uncompressed YBR_FULL.
+    let j2k = super::ts::family(&info.transfer_syntax) == Some(super::ts::Family::Jpeg2000);
+    if (native || j2k || info.transfer_syntax == super::ts::RLE) && pi.starts_with("YBR_FULL") {
         color::ybr_to_rgb(bytes.to_mut());
         notes.push(format!("{pi} converted to RGB"));
     }

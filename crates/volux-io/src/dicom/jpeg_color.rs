@@ -29,6 +29,8 @@ struct Markers {
     ids: Vec<u8>,
     jfif: bool,
     adobe: Option<u8>,
+    /// A lossless frame (SOF3, 7, 11, 15), whose components jpeg-decoder never converts.
+    lossless: bool,
 }
 
 /// The markers before the first scan.
@@ -53,6 +55,7 @@ fn markers(data: &[u8]) -> Markers {
             0xE0 if body.starts_with(b"JFIF\0") => m.jfif = true,
             0xEE if body.starts_with(b"Adobe") => m.adobe = body.get(11).copied(),
             0xC0..=0xCF if !matches!(code, 0xC4 | 0xC8 | 0xCC) => {
+                m.lossless = matches!(code, 0xC3 | 0xC7 | 0xCB | 0xCF);
                 let n = usize::from(body.get(5).copied().unwrap_or(0));
                 m.ids = (0..n)
                     .filter_map(|c| body.get(6 + 3 * c).copied())
@@ -96,13 +99,14 @@ fn decide(m: &Markers, pi: &str) -> Result<Needs, String> {
     } else {
         matches!(pi, "YBR_FULL" | "YBR_FULL_422")
     };
-    // jpeg-decoder's (Decoder::determine_color_transform, 0.3).
-    let converts = match m.ids.as_slice() {
-        [1, 2, 3] => true,
-        [82, 71, 66] | [114, 103, 98] => false,
-        _ if m.jfif => true,
-        _ => m.adobe != Some(0),
-    };
+    // jpeg-decoder's (Decoder::determine_color_transform, 0.3; lossless frames as they are).
+    let converts = !m.lossless
+        && match m.ids.as_slice() {
+            [1, 2, 3] => true,
+            [82, 71, 66] | [114, 103, 98] => false,
+            _ if m.jfif => true,
+            _ => m.adobe != Some(0),
+        };
     match (converts, ybr) {
         (true, true) | (false, false) => Ok(Needs::Nothing),
         (false, true) => Ok(Needs::YbrToRgb),

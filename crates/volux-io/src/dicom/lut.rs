@@ -27,8 +27,9 @@ impl Lut {
     /// The entry for stored value `v`, clamped to the table's ends.
     #[inline]
     pub fn map(&self, v: i64) -> u16 {
-        let i = (v - self.first).clamp(0, self.entries.len() as i64 - 1);
-        self.entries[i as usize]
+        let last = self.entries.len().saturating_sub(1) as i64;
+        let i = v.saturating_sub(self.first).clamp(0, last);
+        self.entries.get(i as usize).copied().unwrap_or(0)
     }
 }
 

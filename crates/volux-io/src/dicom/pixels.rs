@@ -117,7 +117,14 @@ pub(super) fn check_format(info: &ImageInfo) -> Result<(), ErrorKind> {
              YBR_FULL and YBR_FULL_422 to RGB"
         )));
     }
-    if pi.starts_with("YBR") && native && info.bits != 8 {
+    if pi == "YBR_FULL_422" && native && info.cols % 2 == 1 {
+        return Err(ErrorKind::Invalid(format!(
+            "YBR_FULL_422 with an odd number of Columns ({}): two pixels of a row share their \
+             Cb and Cr (PS3.3 C.7.6.3.1.2)",
+            info.cols
+        )));
+    }
+    if matches!(pi, "YBR_FULL" | "YBR_FULL_422") && info.bits != 8 {
         return Err(ErrorKind::Unsupported(format!(
             "{pi} with BitsAllocated {}: YBR is converted to RGB for 8-bit samples only",
             info.bits

@@ -87,7 +87,7 @@ pub(super) fn assemble(
     let n = bytes.len() / fmt.size();
     let per = n / frames.len().max(1);
     let frame_of = |i: usize| &frames[(i / per.max(1)).min(frames.len().saturating_sub(1))];
-    if frames.iter().all(FrameValues::identity) {
+    if frames.is_empty() || frames.iter().all(FrameValues::identity) {
         return native(bytes, fmt, n, notes);
     }
     let luts: Vec<&Lut> = frames
