@@ -8,8 +8,6 @@ use dicom_object::mem::InMemElement;
 use dicom_object::InMemDicomObject;
 use glam::DVec3;
 
-use super::volumes::VolumeKey;
-
 /// A DICOM data set (or sequence item).
 pub(super) type Obj = InMemDicomObject;
 
@@ -97,6 +95,19 @@ pub(super) fn rescale(obj: &Obj, frame: Option<&Obj>) -> (f64, f64) {
     (slope.unwrap_or(1.0), inter.unwrap_or(0.0))
 }
 
+/// What tells a frame apart from others at the same position (module `volumes` reads it).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct VolumeKey {
+    /// TemporalPositionIndex or TemporalPositionIdentifier.
+    pub temporal: Option<i64>,
+    /// DiffusionBValue (s/mm²).
+    pub b_value: Option<f64>,
+    /// DiffusionGradientOrientation.
+    pub gradient: Option<[f64; 3]>,
+    /// StackID.
+    pub stack: Option<String>,
+}
+
 /// What the reader needs from one DICOM image file (of its first frame for multi-frame files).
 #[derive(Clone, Debug)]
 pub(super) struct ImageInfo {
@@ -133,8 +144,14 @@ pub(super) struct ImageInfo {
 }
 
 impl ImageInfo {
-    /// Summarises `obj`; `None` when it is not an image (no Rows / Columns), e.g. a DICOMDIR.
-    pub fn from_obj(path: PathBuf, transfer_syntax: String, obj: &Obj) -> Option<Self> {
+    /// Summarises `obj`, whose first frame `key` tells apart from others at its position;
+    /// `None` when it is not an image (no Rows / Columns), e.g. a DICOMDIR.
+    pub fn from_obj(
+        path: PathBuf,
+        transfer_syntax: String,
+        obj: &Obj,
+        key: VolumeKey,
+    ) -> Option<Self> {
         let u32_of = |tag| int(obj, tag).and_then(|v| u32::try_from(v).ok());
         let frame0 = frame_group(obj, 0);
         let measures = tags::PIXEL_MEASURES_SEQUENCE;
@@ -171,7 +188,7 @@ impl ImageInfo {
             rescale: rescale(obj, frame0),
             planar: int(obj, tags::PLANAR_CONFIGURATION) == Some(1),
             dose_scaling: f64_1(obj, tags::DOSE_GRID_SCALING),
-            key: VolumeKey::of(obj, frame0),
+            key,
         })
     }
 }

@@ -6,8 +6,8 @@
 use dicom_dictionary_std::tags;
 use glam::DVec3;
 
+use super::attrs::VolumeKey;
 use super::attrs::{self, f64s, frame_group, ImageInfo, Obj};
-use super::volumes::VolumeKey;
 
 /// One frame before it is read.
 #[derive(Clone, Debug)]
@@ -43,7 +43,7 @@ pub(super) fn of_file(
                     .and_then(|p| p.first())
                     .and_then(attrs::position),
                 rescale: attrs::rescale(obj, g),
-                key: VolumeKey::of(obj, g),
+                key: super::volumes::key(obj, g),
             }
         })
         .collect();

@@ -71,8 +71,8 @@ use dicom_dictionary_std::tags;
 use dicom_object::{DefaultDicomObject, OpenFileOptions};
 use volux_core::Grid;
 
+use crate::dataset::VolumeChoice;
 use crate::error::ErrorKind;
-use crate::VolumeChoice;
 
 use crate::error::ReadError;
 
@@ -135,7 +135,8 @@ fn scan(path: &Path) -> Result<Option<ImageInfo>> {
         .map_err(|e| parse_error(path, &e))?;
     let ts = obj.meta().transfer_syntax().to_string();
     un::resolve(&mut obj, ts != ts::EXPLICIT_BE);
-    Ok(ImageInfo::from_obj(path.to_path_buf(), ts, &obj))
+    let key = volumes::key(&obj, attrs::frame_group(&obj, 0));
+    Ok(ImageInfo::from_obj(path.to_path_buf(), ts, &obj, key))
 }
 
 /// Parses a whole file (with its pixel data), its element lengths checked first, its

@@ -25,60 +25,45 @@ use dicom_object::mem::InMemElement;
 use glam::DVec3;
 use volux_core::volume_axes::{choose, AxisKind, ExtraAxis};
 
-use super::attrs::{f64_1, f64s, grouped, int, items, private, string, Obj};
+use super::attrs::{f64_1, f64s, grouped, int, items, private, string, Obj, VolumeKey};
 
 /// The Siemens private block holding the diffusion attributes of classic MR images.
 const SIEMENS_MR: &str = "SIEMENS MR HEADER";
 
-/// What tells a frame apart from others at the same position.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub(super) struct VolumeKey {
-    /// TemporalPositionIndex or TemporalPositionIdentifier.
-    pub temporal: Option<i64>,
-    /// DiffusionBValue (s/mm²).
-    pub b_value: Option<f64>,
-    /// DiffusionGradientOrientation.
-    pub gradient: Option<[f64; 3]>,
-    /// StackID.
-    pub stack: Option<String>,
-}
-
-impl VolumeKey {
-    /// The key of a data set, `frame` being the per-frame functional group of an enhanced
-    /// multi-frame image (its shared group and top level are looked at too).
-    pub fn of(obj: &Obj, frame: Option<&Obj>) -> Self {
-        let diffusion = tags::MR_DIFFUSION_SEQUENCE;
-        let content = tags::FRAME_CONTENT_SEQUENCE;
-        let b_value = grouped(obj, frame, diffusion, |o| f64_1(o, tags::DIFFUSION_B_VALUE))
-            .or_else(|| {
-                private_numbers(private(obj, 0x0019, SIEMENS_MR, 0x0C)?, Binary::Text)?
-                    .first()
-                    .copied()
-            });
-        let gradient = grouped(obj, frame, diffusion, |o| {
-            items(o, tags::DIFFUSION_GRADIENT_DIRECTION_SEQUENCE)
-                .and_then(|i| i.first())
-                .and_then(vec3)
-                .or_else(|| vec3(o))
-        })
-        .or_else(|| {
-            let v = private_numbers(private(obj, 0x0019, SIEMENS_MR, 0x0E)?, Binary::F64)?;
-            match v.as_slice() {
-                [x, y, z] => Some([*x, *y, *z]),
-                _ => None,
-            }
+/// The key of a data set, `frame` being the per-frame functional group of an enhanced
+/// multi-frame image (its shared group and top level are looked at too).
+pub(super) fn key(obj: &Obj, frame: Option<&Obj>) -> VolumeKey {
+    let diffusion = tags::MR_DIFFUSION_SEQUENCE;
+    let content = tags::FRAME_CONTENT_SEQUENCE;
+    let b_value =
+        grouped(obj, frame, diffusion, |o| f64_1(o, tags::DIFFUSION_B_VALUE)).or_else(|| {
+            private_numbers(private(obj, 0x0019, SIEMENS_MR, 0x0C)?, Binary::Text)?
+                .first()
+                .copied()
         });
-        let temporal = grouped(obj, frame, content, |o| {
-            int(o, tags::TEMPORAL_POSITION_INDEX)
-        })
-        .or_else(|| int(obj, tags::TEMPORAL_POSITION_IDENTIFIER));
-        let stack = grouped(obj, frame, content, |o| string(o, tags::STACK_ID));
-        Self {
-            temporal,
-            b_value,
-            gradient,
-            stack,
+    let gradient = grouped(obj, frame, diffusion, |o| {
+        items(o, tags::DIFFUSION_GRADIENT_DIRECTION_SEQUENCE)
+            .and_then(|i| i.first())
+            .and_then(vec3)
+            .or_else(|| vec3(o))
+    })
+    .or_else(|| {
+        let v = private_numbers(private(obj, 0x0019, SIEMENS_MR, 0x0E)?, Binary::F64)?;
+        match v.as_slice() {
+            [x, y, z] => Some([*x, *y, *z]),
+            _ => None,
         }
+    });
+    let temporal = grouped(obj, frame, content, |o| {
+        int(o, tags::TEMPORAL_POSITION_INDEX)
+    })
+    .or_else(|| int(obj, tags::TEMPORAL_POSITION_IDENTIFIER));
+    let stack = grouped(obj, frame, content, |o| string(o, tags::STACK_ID));
+    VolumeKey {
+        temporal,
+        b_value,
+        gradient,
+        stack,
     }
 }
 
