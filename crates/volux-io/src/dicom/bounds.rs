@@ -11,10 +11,11 @@
 //! pixel data fragments are skipped. In implicit VR a defined-length value is walked into
 //! when it starts with an item tag (a sequence), else skipped. The walk reads headers as the
 //! parser does: an unknown VR has the long (4-byte) length form, and the content of an
-//! undefined-length element other than pixel data (a `UN` sequence) is in the file's
-//! transfer syntax, so a `UN` sequence written in implicit VR (PS3.5 6.2.2), which the
-//! parser misreads, is refused here on the first length it would misread rather than after
-//! the parser has allocated it. Deflated data sets are not walked.
+//! undefined-length element other than pixel data is in the file's transfer syntax. An
+//! undefined-length `UN` element of an explicit-VR file holds implicit-VR items (PS3.5
+//! 6.2.2), which the parser misreads as explicit VR: it is refused here, naming the element,
+//! rather than after the parser has allocated a misread length. Deflated data sets are not
+//! walked.
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -102,17 +103,48 @@ impl Walker<'_> {
         Ok(())
     }
 
-    /// The next 4 bytes without consuming them, if present.
-    fn peek4(&mut self) -> Result<Option<[u8; 4]>> {
-        if self.left() < 4 {
+    /// The next `N` bytes without consuming them, if present.
+    fn peek<const N: usize>(&mut self) -> Result<Option<[u8; N]>> {
+        if self.left() < N as u64 {
             return Ok(None);
         }
-        let b = self.bytes::<4>()?;
+        let b = self.bytes::<N>()?;
         self.r
-            .seek_relative(-4)
+            .seek_relative(-(N as i64))
             .map_err(|e| io_error(self.path, e))?;
-        self.pos -= 4;
+        self.pos -= N as u64;
         Ok(Some(b))
+    }
+
+    /// The next 4 bytes without consuming them, if present.
+    fn peek4(&mut self) -> Result<Option<[u8; 4]>> {
+        self.peek::<4>()
+    }
+
+    /// An error when the undefined-length `UN` element `h` of an explicit-VR data set holds
+    /// its items in implicit VR, as PS3.5 6.2.2 has them: the parser reads them in the file's
+    /// explicit VR, so every length after would be misread.
+    fn implicit_un_sequence(&mut self, h: &Header) -> Result<()> {
+        let Some(b) = self.peek::<14>()? else {
+            return Ok(());
+        };
+        let item = [0xFE, 0xFF, 0x00, 0xE0];
+        let item_len = u32::from_le_bytes([b[4], b[5], b[6], b[7]]);
+        if b[..4] != item || item_len == 0 || (b[8..10] == [0xFE, 0xFF]) {
+            return Ok(());
+        }
+        if b[12].is_ascii_uppercase() && b[13].is_ascii_uppercase() {
+            return Ok(());
+        }
+        Err(ReadError::new(
+            self.path,
+            ErrorKind::Unsupported(format!(
+                "element ({:04X},{:04X}) has VR UN and an undefined length, so its items are in \
+                 implicit VR (PS3.5 6.2.2), which the DICOM parser (dicom-rs) reads as explicit \
+                 VR",
+                h.tag.0, h.tag.1
+            )),
+        ))
     }
 
     /// The next element header; `None` where fewer bytes than a header are left (the parser
@@ -201,6 +233,9 @@ impl Walker<'_> {
             self.fragments = false;
         }
         if h.len == UNDEFINED {
+            if self.explicit && self.little && h.vr == Some(*b"UN") {
+                self.implicit_un_sequence(h)?;
+            }
             self.fragments |= h.tag == PIXEL_DATA;
             return Ok(());
         }
