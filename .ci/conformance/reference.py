@@ -140,6 +140,14 @@ def dicom(path: str) -> Reference:
     photometric = str(ds.get("PhotometricInterpretation", ""))
     expect_note = ""
     if photometric == "PALETTE COLOR":
+        if str(ds.file_meta.get("TransferSyntaxUID", "")) == "1.2.840.10008.1.2.2":
+            # pydicom 3.0's apply_color_lut reads the (non-segmented) LUT data's OW bytes as
+            # little-endian words whatever the byte order; a big-endian file's words are
+            # big-endian (PS3.5 7.3), so they are swapped here first.
+            for c in ("Red", "Green", "Blue"):
+                kw = f"{c}PaletteColorLookupTableData"
+                if kw in ds:
+                    ds[kw].value = np.frombuffer(ds[kw].value, ">u2").astype("<u2").tobytes()
         arr = apply_color_lut(arr, ds)
         spp = 3
         expect_note = "palette"

@@ -11,7 +11,8 @@
 //! `mutation_suite` runs 300 cases of a fixed seed; `mutation_long_run` (ignored) runs
 //! `VOLUX_MUTATION_CASES` cases (default 20000) of seed `VOLUX_MUTATION_SEED` and prints a
 //! summary. `VOLUX_MUTATION_ONLY=3,17` runs only those case indices (to reproduce one),
-//! `VOLUX_MUTATION_KEEP=DIR` keeps the inputs of failing cases in `DIR`.
+//! `VOLUX_MUTATION_KEEP=DIR` keeps the inputs of failing cases in `DIR`,
+//! `VOLUX_MUTATION_FORMATS=dicom,tiff` runs only the seeds whose format starts so.
 #[path = "mutation/runner.rs"]
 mod runner;
 #[path = "mutation/seeds.rs"]
@@ -321,7 +322,11 @@ fn summary(results: &[CaseResult], wall: Duration) -> String {
 /// Runs `count` cases of `base` (after checking the seeds), prints the summary, and fails
 /// listing the failures if there are any.
 fn run_and_check(base: u64, count: usize) {
-    let seeds = seeds::all();
+    let mut seeds = seeds::all();
+    // VOLUX_MUTATION_FORMATS=dicom,nrrd: only the seeds whose format starts so.
+    if let Ok(only) = std::env::var("VOLUX_MUTATION_FORMATS") {
+        seeds.retain(|s| only.split(',').any(|p| s.format.starts_with(p.trim())));
+    }
     check_seeds(&seeds);
     let start = Instant::now();
     let results = run_all(&seeds, base, &indices(count));

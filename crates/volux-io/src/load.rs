@@ -17,7 +17,11 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<(Dataset, Format)> {
         Format::Analyze => Dataset::Grid(nifti::read_analyze(path, opts.choice())?),
         Format::Mgh => Dataset::Grid(mgh::read(path, opts.choice())?),
         Format::Slc => Dataset::Grid(slc::read(path)?),
-        Format::Dicom => Dataset::Grid(dicom::read(path, opts.series_uid.as_deref())?),
+        Format::Dicom => Dataset::Grid(dicom::read(
+            path,
+            opts.series_uid.as_deref(),
+            opts.choice(),
+        )?),
         Format::VtkLegacy => vtk_legacy::read(path, opts.array.as_deref())?,
         Format::Vti | Format::Vtu => vtk_xml::read(path, opts.array.as_deref())?,
         Format::Plot3d => Dataset::Mesh(plot3d::read(

@@ -59,7 +59,7 @@ fn shared_series_folder() {
     };
     let side = sidecar(&series.join("series.json"));
     assert_eq!(side["files"].as_array().unwrap().len(), 3);
-    let g = dicom::read(&series, None).unwrap();
+    let g = dicom::read(&series, None, Default::default()).unwrap();
     assert_eq!(g.dims(), [512, 512, 3]);
     assert_eq!(g.scalar_type(), ScalarType::U16);
     let s = g.spacing();
@@ -70,7 +70,7 @@ fn shared_series_folder() {
     // Slice k of the volume is the file at z = -12 + 12 k (1-1 is at z = 12).
     let mut range = [f64::INFINITY, f64::NEG_INFINITY];
     for (k, f) in FILES.iter().rev().enumerate() {
-        let one = dicom::read(&series.join(f), None).unwrap();
+        let one = dicom::read(&series.join(f), None, Default::default()).unwrap();
         assert_eq!(one.dims(), [512, 512, 1]);
         assert_eq!(one.origin().z, -12.0 + 12.0 * k as f64);
         for i in (0..512 * 512).step_by(97) {
@@ -91,7 +91,7 @@ fn shared_multiframe() {
         return;
     };
     let side = sidecar(&emri.with_extension("dcm.json"));
-    let g = dicom::read(&emri, None).unwrap();
+    let g = dicom::read(&emri, None, Default::default()).unwrap();
     let (c, r, f) = (
         side["columns"].as_u64().unwrap() as usize,
         side["rows"].as_u64().unwrap() as usize,
@@ -121,7 +121,7 @@ fn folder_skips_non_dicom_files() {
     let dir = copy_series(&series);
     std::fs::copy(series.join("series.json"), dir.path().join("series.json")).unwrap();
     std::fs::write(dir.path().join("notes.txt"), "hello").unwrap();
-    let g = dicom::read(dir.path(), None).unwrap();
+    let g = dicom::read(dir.path(), None, Default::default()).unwrap();
     assert_eq!(g.dims(), [512, 512, 3]);
     assert!(
         g.notes().is_empty(),
@@ -132,7 +132,7 @@ fn folder_skips_non_dicom_files() {
     std::fs::create_dir(dir.path().join("sub")).unwrap();
     std::fs::write(dir.path().join("1-4.dcm"), b"").unwrap();
     std::fs::write(dir.path().join("1-5.dcm"), b"").unwrap();
-    let g = dicom::read(dir.path(), None).unwrap();
+    let g = dicom::read(dir.path(), None, Default::default()).unwrap();
     assert_eq!(g.dims(), [512, 512, 3]);
     assert!(
         g.notes()
@@ -154,7 +154,9 @@ fn frame_counts_that_disagree_with_the_data_are_refused_or_noted() {
         edit(&emri, &out, |o| {
             o.put_str(tags::NUMBER_OF_FRAMES, VR::IS, bad);
         });
-        let e = dicom::read(&out, None).unwrap_err().to_string();
+        let e = dicom::read(&out, None, Default::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains(&format!("NumberOfFrames is {bad}")), "{e}");
     }
     // No NumberOfFrames: one frame is read and the rest of the pixel data is said.
@@ -162,7 +164,7 @@ fn frame_counts_that_disagree_with_the_data_are_refused_or_noted() {
     edit(&emri, &out, |o| {
         o.remove_element(tags::NUMBER_OF_FRAMES);
     });
-    let g = dicom::read(&out, None).unwrap();
+    let g = dicom::read(&out, None, Default::default()).unwrap();
     assert_eq!(g.dims()[2], 1);
     assert!(
         g.notes()
@@ -176,7 +178,7 @@ fn frame_counts_that_disagree_with_the_data_are_refused_or_noted() {
     edit(&emri, &out, |o| {
         o.put_str(tags::NUMBER_OF_FRAMES, VR::IS, "2");
     });
-    let g = dicom::read(&out, None).unwrap();
+    let g = dicom::read(&out, None, Default::default()).unwrap();
     assert_eq!(g.dims()[2], 2);
     assert!(
         g.notes().iter().any(|n| n.contains("the rest is not read")),
@@ -203,7 +205,7 @@ fn sagittal_series_gets_its_direction_matrix() {
             );
         });
     }
-    let g = dicom::read(dir.path(), None).unwrap();
+    let g = dicom::read(dir.path(), None, Default::default()).unwrap();
     assert_eq!(g.orientation_code(), "PIR");
     let d = g.direction();
     assert_eq!(
@@ -228,7 +230,7 @@ fn uneven_gap_is_a_missing_slice() {
     let dir = copy_series(&series);
     let p = dir.path().join("1-1.dcm");
     edit(&p, &p, |o| set_z(o, 40.0));
-    let k = err_kind(dicom::read(dir.path(), None));
+    let k = err_kind(dicom::read(dir.path(), None, Default::default()));
     assert!(
         matches!(&k, ErrorKind::Invalid(m) if m.contains("missing")),
         "{k}"
@@ -243,7 +245,7 @@ fn duplicate_position() {
     let dir = copy_series(&series);
     let p = dir.path().join("1-1.dcm");
     edit(&p, &p, |o| set_z(o, 0.0));
-    let k = err_kind(dicom::read(dir.path(), None));
+    let k = err_kind(dicom::read(dir.path(), None, Default::default()));
     assert!(
         matches!(&k, ErrorKind::Invalid(m) if m.contains("same position")),
         "{k}"
@@ -263,7 +265,7 @@ fn missing_positions_fall_back_to_instance_number() {
             o.put_str(tags::INSTANCE_NUMBER, VR::IS, format!("{}", 3 - i));
         });
     }
-    let g = dicom::read(dir.path(), None).unwrap();
+    let g = dicom::read(dir.path(), None, Default::default()).unwrap();
     assert_eq!(g.dims(), [512, 512, 3]);
     assert!(g.notes().iter().any(|n| n.contains("InstanceNumber")));
     assert!(g.notes().iter().any(|n| n.contains("SpacingBetweenSlices")));
@@ -279,7 +281,7 @@ fn truncated_file() {
     let p = dir.path().join("1-2.dcm");
     let bytes = std::fs::read(&p).unwrap();
     std::fs::write(&p, &bytes[..bytes.len() - 200_000]).unwrap();
-    let k = err_kind(dicom::read(&p, None));
+    let k = err_kind(dicom::read(&p, None, Default::default()));
     assert!(
         matches!(
             k,
@@ -290,11 +292,11 @@ fn truncated_file() {
         ),
         "{k}"
     );
-    let k = err_kind(dicom::read(dir.path(), None));
+    let k = err_kind(dicom::read(dir.path(), None, Default::default()));
     assert!(matches!(k, ErrorKind::Truncated { .. }), "{k}");
     // Cut inside the header: a parse error, not a panic.
     std::fs::write(&p, &bytes[..700]).unwrap();
-    let k = err_kind(dicom::read(&p, None));
+    let k = err_kind(dicom::read(&p, None, Default::default()));
     assert!(
         matches!(k, ErrorKind::Invalid(_) | ErrorKind::Truncated { .. }),
         "{k}"
@@ -315,7 +317,7 @@ fn short_pixel_data_element() {
             dicom_core::PrimitiveValue::U16(vec![7u16; 1000].into()),
         ));
     });
-    let k = err_kind(dicom::read(&p, None));
+    let k = err_kind(dicom::read(&p, None, Default::default()));
     assert!(
         matches!(
             k,
@@ -342,7 +344,7 @@ fn different_rows() {
             dicom_core::PrimitiveValue::from(256u16),
         ));
     });
-    let k = err_kind(dicom::read(dir.path(), None));
+    let k = err_kind(dicom::read(dir.path(), None, Default::default()));
     assert!(
         matches!(&k, ErrorKind::Invalid(m) if m.contains("Rows")),
         "{k}"
@@ -352,25 +354,33 @@ fn different_rows() {
 #[test]
 fn no_dicom_files() {
     let dir = tempfile::tempdir().unwrap();
-    let k = err_kind(dicom::read(dir.path(), None));
+    let k = err_kind(dicom::read(dir.path(), None, Default::default()));
     assert!(
         matches!(&k, ErrorKind::Invalid(m) if m.contains("no DICOM")),
         "{k}"
     );
     std::fs::write(dir.path().join("a.txt"), "not dicom").unwrap();
-    let k = err_kind(dicom::read(dir.path(), None));
+    let k = err_kind(dicom::read(dir.path(), None, Default::default()));
     assert!(
         matches!(&k, ErrorKind::Invalid(m) if m.contains("no DICOM")),
         "{k}"
     );
     // A lone non-DICOM file, and garbage after a DICM marker.
-    let k = err_kind(dicom::read(&dir.path().join("a.txt"), None));
+    let k = err_kind(dicom::read(
+        &dir.path().join("a.txt"),
+        None,
+        Default::default(),
+    ));
     assert!(matches!(k, ErrorKind::Invalid(_)), "{k}");
     let mut junk = vec![0u8; 128];
     junk.extend_from_slice(b"DICM");
     junk.extend((0..5000u32).map(|i| (i * 7919 % 251) as u8));
     std::fs::write(dir.path().join("junk.dcm"), &junk).unwrap();
-    let k = err_kind(dicom::read(&dir.path().join("junk.dcm"), None));
+    let k = err_kind(dicom::read(
+        &dir.path().join("junk.dcm"),
+        None,
+        Default::default(),
+    ));
     assert!(
         matches!(k, ErrorKind::Invalid(_) | ErrorKind::Truncated { .. }),
         "{k}"
@@ -389,17 +399,17 @@ fn two_series() {
             o.put_str(tags::SERIES_INSTANCE_UID, VR::UI, "1.2.3.4");
         });
     }
-    let g = dicom::read(dir.path(), None).unwrap();
+    let g = dicom::read(dir.path(), None, Default::default()).unwrap();
     assert_eq!(g.dims(), [512, 512, 3]);
     assert!(
         g.notes().iter().any(|n| n.contains("2 series")),
         "{:?}",
         g.notes()
     );
-    let g = dicom::read(dir.path(), Some("1.2.3.4")).unwrap();
+    let g = dicom::read(dir.path(), Some("1.2.3.4"), Default::default()).unwrap();
     assert_eq!(g.dims(), [512, 512, 2]);
     assert_eq!(g.origin().z, 0.0);
-    let k = err_kind(dicom::read(dir.path(), Some("9.9")));
+    let k = err_kind(dicom::read(dir.path(), Some("9.9"), Default::default()));
     assert!(
         matches!(&k, ErrorKind::Invalid(m) if m.contains("1.2.3.4 (2 files)")),
         "{k}"
@@ -422,7 +432,7 @@ fn compressed_transfer_syntax_with_native_pixel_data_is_invalid() {
     let p = dir.path().join("rle.dcm");
     std::fs::write(&p, &bytes).unwrap();
     for path in [p.as_path(), dir.path()] {
-        let k = err_kind(dicom::read(path, None));
+        let k = err_kind(dicom::read(path, None, Default::default()));
         assert!(
             matches!(&k, ErrorKind::Invalid(m) if m.contains("1.2.840.10008.1.2.5")
                 && m.contains("RLE") && m.contains("not encapsulated")),
@@ -438,7 +448,7 @@ fn other_uncompressed_transfer_syntaxes() {
         return;
     };
     let src = series.join("1-1.dcm");
-    let want = dicom::read(&src, None).unwrap();
+    let want = dicom::read(&src, None, Default::default()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     for ts in ["1.2.840.10008.1.2", "1.2.840.10008.1.2.2"] {
         let p: PathBuf = dir.path().join(format!("{ts}.dcm"));
@@ -446,7 +456,7 @@ fn other_uncompressed_transfer_syntaxes() {
             o.meta_mut().transfer_syntax = ts.to_string();
             o.meta_mut().update_information_group_length();
         });
-        let g = dicom::read(&p, None).unwrap_or_else(|e| panic!("{ts}: {e}"));
+        let g = dicom::read(&p, None, Default::default()).unwrap_or_else(|e| panic!("{ts}: {e}"));
         assert_eq!(g.dims(), want.dims());
         assert_eq!(g.range(), want.range(), "{ts}");
         for i in (0..g.len()).step_by(101) {
@@ -461,7 +471,7 @@ fn rescale_to_i16_and_f32() {
         return;
     };
     let src = series.join("1-1.dcm");
-    let raw = dicom::read(&src, None).unwrap();
+    let raw = dicom::read(&src, None, Default::default()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let cases = [
         ("1", "-1024", ScalarType::I16),
@@ -474,7 +484,7 @@ fn rescale_to_i16_and_f32() {
             o.put_str(tags::RESCALE_SLOPE, VR::DS, slope);
             o.put_str(tags::RESCALE_INTERCEPT, VR::DS, inter);
         });
-        let g = dicom::read(&p, None).unwrap();
+        let g = dicom::read(&p, None, Default::default()).unwrap();
         assert_eq!(g.scalar_type(), ty, "{slope} {inter}");
         let (m, b): (f64, f64) = (slope.parse().unwrap(), inter.parse().unwrap());
         for i in (0..g.len()).step_by(89) {
@@ -495,6 +505,6 @@ fn lying_frame_count_is_truncated() {
     edit(&emri, &p, |o| {
         o.put_str(tags::NUMBER_OF_FRAMES, VR::IS, "2000000000");
     });
-    let k = err_kind(dicom::read(&p, None));
+    let k = err_kind(dicom::read(&p, None, Default::default()));
     assert!(matches!(k, ErrorKind::Truncated { .. }), "{k}");
 }

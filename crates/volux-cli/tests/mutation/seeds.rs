@@ -126,6 +126,7 @@ pub fn all() -> Vec<Seed> {
     ]);
     v.extend(dicom());
     v.extend(dicom_compressed());
+    v.extend(dicom_values());
     v.extend(tiff_seeds());
     v
 }
@@ -904,6 +905,62 @@ fn dicom_compressed() -> Vec<Seed> {
             let header = bytes
                 .windows(4)
                 .position(|w| w == [0xE0, 0x7F, 0x10, 0x00])
+                .unwrap_or(bytes.len() / 2);
+            Seed::grid(
+                format,
+                vec![InputFile::new(
+                    "t.dcm",
+                    bytes.to_vec(),
+                    Layout::Binary(header),
+                )],
+            )
+        })
+        .collect()
+}
+
+/// DICOM values, colour and volumes: volux-io's committed fixtures
+/// (`tests/fixtures/dicom_values`): palettes (big endian, segmented), planar RGB, YBR_FULL_422,
+/// RLE YBR_FULL, a big-endian 32-bit RT Dose, a Modality LUT, single bits, double floats,
+/// attributes stored as UN, an enhanced multi-frame of two b-values; the header is the bytes
+/// before the pixel data element.
+fn dicom_values() -> Vec<Seed> {
+    macro_rules! fixture {
+        ($name:literal) => {
+            include_bytes!(concat!(
+                "../../../volux-io/tests/fixtures/dicom_values/",
+                $name,
+                ".dcm"
+            ))
+        };
+    }
+    let files: [(&'static str, &[u8]); 11] = [
+        ("dicom-palette-be", fixture!("palette8_expb")),
+        ("dicom-palette-segmented", fixture!("palette_segmented")),
+        ("dicom-rgb-planar", fixture!("rgb8_planar1_2frame")),
+        ("dicom-ybr422", fixture!("ybr_full_422")),
+        ("dicom-ybr-rle", fixture!("ybr_full_rle")),
+        ("dicom-rtdose-be", fixture!("rtdose_expb")),
+        ("dicom-modality-lut", fixture!("mlut")),
+        ("dicom-bits1", fixture!("bits1_2frame")),
+        ("dicom-float64", fixture!("float64")),
+        ("dicom-un", fixture!("un_explicit")),
+        ("dicom-enhanced-dwi", fixture!("enhanced_dwi")),
+    ];
+    // PixelData, FloatPixelData, DoubleFloatPixelData, little or big endian.
+    let tags: [[u8; 4]; 6] = [
+        [0xE0, 0x7F, 0x10, 0x00],
+        [0xE0, 0x7F, 0x08, 0x00],
+        [0xE0, 0x7F, 0x09, 0x00],
+        [0x7F, 0xE0, 0x00, 0x10],
+        [0x7F, 0xE0, 0x00, 0x08],
+        [0x7F, 0xE0, 0x00, 0x09],
+    ];
+    files
+        .into_iter()
+        .map(|(format, bytes)| {
+            let header = bytes
+                .windows(4)
+                .position(|w| tags.iter().any(|t| w == t))
                 .unwrap_or(bytes.len() / 2);
             Seed::grid(
                 format,

@@ -41,6 +41,17 @@ pub(super) fn string(obj: &Obj, tag: Tag) -> Option<String> {
     (!s.is_empty()).then(|| s.to_string())
 }
 
+/// The value of a private attribute: element `element` (0x00..0xFF) of the block that
+/// `creator` reserved in `group` (PS3.5 7.8.1).
+pub(super) fn private<'a>(
+    obj: &'a Obj,
+    group: u16,
+    creator: &str,
+    element: u8,
+) -> Option<&'a InMemElement> {
+    obj.private_element(group, creator, element).ok()
+}
+
 /// The items of a sequence attribute.
 pub(super) fn items(obj: &Obj, tag: Tag) -> Option<&[Obj]> {
     elem(obj, tag)?.items()
@@ -84,6 +95,19 @@ pub(super) fn rescale(obj: &Obj, frame: Option<&Obj>) -> (f64, f64) {
     (slope.unwrap_or(1.0), inter.unwrap_or(0.0))
 }
 
+/// What tells a frame apart from others at the same position (module `volumes` reads it).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct VolumeKey {
+    /// TemporalPositionIndex or TemporalPositionIdentifier.
+    pub temporal: Option<i64>,
+    /// DiffusionBValue (s/mm²).
+    pub b_value: Option<f64>,
+    /// DiffusionGradientOrientation.
+    pub gradient: Option<[f64; 3]>,
+    /// StackID.
+    pub stack: Option<String>,
+}
+
 /// What the reader needs from one DICOM image file (of its first frame for multi-frame files).
 #[derive(Clone, Debug)]
 pub(super) struct ImageInfo {
@@ -110,11 +134,24 @@ pub(super) struct ImageInfo {
     pub spacing_between: Option<f64>,
     pub thickness: Option<f64>,
     pub rescale: (f64, f64),
+    /// PlanarConfiguration 1: each colour plane of a frame after the other (PS3.3
+    /// C.7.6.3.1.3); 0 (default): the samples of each pixel together.
+    pub planar: bool,
+    /// DoseGridScaling of an RT Dose (PS3.3 C.8.8.3): the factor giving Gy.
+    pub dose_scaling: Option<f64>,
+    /// What tells this image (its first frame) apart from others at the same position.
+    pub key: VolumeKey,
 }
 
 impl ImageInfo {
-    /// Summarises `obj`; `None` when it is not an image (no Rows / Columns), e.g. a DICOMDIR.
-    pub fn from_obj(path: PathBuf, transfer_syntax: String, obj: &Obj) -> Option<Self> {
+    /// Summarises `obj`, whose first frame `key` tells apart from others at its position;
+    /// `None` when it is not an image (no Rows / Columns), e.g. a DICOMDIR.
+    pub fn from_obj(
+        path: PathBuf,
+        transfer_syntax: String,
+        obj: &Obj,
+        key: VolumeKey,
+    ) -> Option<Self> {
         let u32_of = |tag| int(obj, tag).and_then(|v| u32::try_from(v).ok());
         let frame0 = frame_group(obj, 0);
         let measures = tags::PIXEL_MEASURES_SEQUENCE;
@@ -149,6 +186,9 @@ impl ImageInfo {
                 f64_1(o, tags::SLICE_THICKNESS).filter(|v| *v > 0.0)
             }),
             rescale: rescale(obj, frame0),
+            planar: int(obj, tags::PLANAR_CONFIGURATION) == Some(1),
+            dose_scaling: f64_1(obj, tags::DOSE_GRID_SCALING),
+            key,
         })
     }
 }

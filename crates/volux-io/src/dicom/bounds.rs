@@ -9,9 +9,13 @@
 //!
 //! Sequences and items are walked into, so nested elements are checked too; encapsulated
 //! pixel data fragments are skipped. In implicit VR a defined-length value is walked into
-//! when it starts with an item tag (a sequence), else skipped. Deflated data sets, and the
-//! implicit-VR content of an undefined-length `UN` element, are not walked (the walk stops
-//! there without an error).
+//! when it starts with an item tag (a sequence), else skipped. The walk reads headers as the
+//! parser does: an unknown VR has the long (4-byte) length form, and the content of an
+//! undefined-length element other than pixel data is in the file's transfer syntax. An
+//! undefined-length `UN` element of an explicit-VR file holds implicit-VR items (PS3.5
+//! 6.2.2), which the parser misreads as explicit VR: it is refused here, naming the element,
+//! rather than after the parser has allocated a misread length. Deflated data sets are not
+//! walked.
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -28,9 +32,12 @@ const PIXEL_DATA: (u16, u16) = (0x7FE0, 0x0010);
 /// Deflated Explicit VR Little Endian: the data set is a deflate stream.
 const DEFLATED: &str = "1.2.840.10008.1.2.1.99";
 
-/// Explicit VRs whose length is 4 bytes after 2 reserved bytes.
-const LONG_VRS: [&[u8; 2]; 13] = [
-    b"OB", b"OD", b"OF", b"OL", b"OV", b"OW", b"SQ", b"SV", b"UC", b"UN", b"UR", b"UT", b"UV",
+/// Explicit VRs whose length is 2 bytes (PS3.5 7.1.2, Table 7.1-2); every other VR, an
+/// unknown one included (read as `UN` by the parser), has 2 reserved bytes and a 4-byte
+/// length.
+const SHORT_VRS: [&[u8; 2]; 21] = [
+    b"AE", b"AS", b"AT", b"CS", b"DA", b"DS", b"DT", b"FL", b"FD", b"IS", b"LO", b"LT", b"PN",
+    b"SH", b"SL", b"SS", b"ST", b"TM", b"UI", b"UL", b"US",
 ];
 
 /// One element header.
@@ -96,17 +103,48 @@ impl Walker<'_> {
         Ok(())
     }
 
-    /// The next 4 bytes without consuming them, if present.
-    fn peek4(&mut self) -> Result<Option<[u8; 4]>> {
-        if self.left() < 4 {
+    /// The next `N` bytes without consuming them, if present.
+    fn peek<const N: usize>(&mut self) -> Result<Option<[u8; N]>> {
+        if self.left() < N as u64 {
             return Ok(None);
         }
-        let b = self.bytes::<4>()?;
+        let b = self.bytes::<N>()?;
         self.r
-            .seek_relative(-4)
+            .seek_relative(-(N as i64))
             .map_err(|e| io_error(self.path, e))?;
-        self.pos -= 4;
+        self.pos -= N as u64;
         Ok(Some(b))
+    }
+
+    /// The next 4 bytes without consuming them, if present.
+    fn peek4(&mut self) -> Result<Option<[u8; 4]>> {
+        self.peek::<4>()
+    }
+
+    /// An error when the undefined-length `UN` element `h` of an explicit-VR data set holds
+    /// its items in implicit VR, as PS3.5 6.2.2 has them: the parser reads them in the file's
+    /// explicit VR, so every length after would be misread.
+    fn implicit_un_sequence(&mut self, h: &Header) -> Result<()> {
+        let Some(b) = self.peek::<14>()? else {
+            return Ok(());
+        };
+        let item = [0xFE, 0xFF, 0x00, 0xE0];
+        let item_len = u32::from_le_bytes([b[4], b[5], b[6], b[7]]);
+        if b[..4] != item || item_len == 0 || (b[8..10] == [0xFE, 0xFF]) {
+            return Ok(());
+        }
+        if b[12].is_ascii_uppercase() && b[13].is_ascii_uppercase() {
+            return Ok(());
+        }
+        Err(ReadError::new(
+            self.path,
+            ErrorKind::Unsupported(format!(
+                "element ({:04X},{:04X}) has VR UN and an undefined length, so its items are in \
+                 implicit VR (PS3.5 6.2.2), which the DICOM parser (dicom-rs) reads as explicit \
+                 VR",
+                h.tag.0, h.tag.1
+            )),
+        ))
     }
 
     /// The next element header; `None` where fewer bytes than a header are left (the parser
@@ -121,7 +159,7 @@ impl Walker<'_> {
             return Ok(Some(Header { tag, vr: None, len }));
         }
         let vr = self.bytes::<2>()?;
-        let len = if LONG_VRS.contains(&&vr) {
+        let len = if !SHORT_VRS.contains(&&vr) {
             if self.left() < 6 {
                 return Ok(None);
             }
@@ -181,44 +219,31 @@ impl Walker<'_> {
         }
     }
 
-    /// Walks the element headers while `keep` accepts the next tag; `false` when the walk
-    /// had to stop early (content it cannot follow).
-    fn walk(&mut self, keep: impl Fn((u16, u16)) -> bool) -> Result<bool> {
-        loop {
-            let at = self.pos;
-            let Some(h) = self.header()? else {
-                return Ok(true);
-            };
-            if !keep(h.tag) {
-                self.r
-                    .seek(SeekFrom::Start(at))
-                    .map_err(|e| io_error(self.path, e))?;
-                self.pos = at;
-                return Ok(true);
-            }
-            if !self.step(&h)? {
-                return Ok(false);
-            }
+    /// Walks the element headers to the end of the file.
+    fn walk(&mut self) -> Result<()> {
+        while let Some(h) = self.header()? {
+            self.step(&h)?;
         }
+        Ok(())
     }
 
     /// Handles one header: checks its length and skips or enters its value.
-    fn step(&mut self, h: &Header) -> Result<bool> {
+    fn step(&mut self, h: &Header) -> Result<()> {
         if h.tag == (0xFFFE, 0xE0DD) {
             self.fragments = false;
         }
         if h.len == UNDEFINED {
-            if h.vr == Some(*b"UN") {
-                return Ok(false);
+            if self.explicit && self.little && h.vr == Some(*b"UN") {
+                self.implicit_un_sequence(h)?;
             }
             self.fragments |= h.tag == PIXEL_DATA;
-            return Ok(true);
+            return Ok(());
         }
         self.check_len(h)?;
         if !self.is_sequence(h)? {
             self.skip(u64::from(h.len))?;
         }
-        Ok(true)
+        Ok(())
     }
 
     /// Reads the value of `h` (a short string) after checking its length.
@@ -281,7 +306,40 @@ pub(super) fn check(path: &Path) -> Result<()> {
     }
     w.explicit = ts != IMPLICIT_LE;
     w.little = ts != EXPLICIT_BE;
-    w.walk(|_| true).map(|_| ())
+    if w.explicit {
+        implicit_data_set(&mut w, &ts)?;
+    }
+    w.walk()
+}
+
+/// An error when a data set whose transfer syntax says explicit VR starts with an element
+/// whose VR is not two capital letters but whose bytes read as an implicit-VR header: the
+/// writer encoded the data set in implicit VR (pydicom guesses so and reads it; the parser
+/// follows the transfer syntax and would misread every length).
+fn implicit_data_set(w: &mut Walker<'_>, ts: &str) -> Result<()> {
+    if w.left() < 8 {
+        return Ok(());
+    }
+    let at = w.pos;
+    let head = w.bytes::<8>()?;
+    w.r.seek(SeekFrom::Start(at))
+        .map_err(|e| io_error(w.path, e))?;
+    w.pos = at;
+    let vr_like = head[4].is_ascii_uppercase() && head[5].is_ascii_uppercase();
+    let len = u32::from_le_bytes([head[4], head[5], head[6], head[7]]);
+    if vr_like || !w.little || u64::from(len) > w.left() - 8 {
+        return Ok(());
+    }
+    Err(ReadError::new(
+        w.path,
+        ErrorKind::Invalid(format!(
+            "the data set is encoded in implicit VR, but its transfer syntax {ts} ({}) is an \
+             explicit-VR one (its first element ({:04X},{:04X}) has no VR)",
+            super::ts::ts_name(ts),
+            u16::from_le_bytes([head[0], head[1]]),
+            u16::from_le_bytes([head[2], head[3]])
+        )),
+    ))
 }
 
 #[cfg(test)]
@@ -348,7 +406,9 @@ mod tests {
             "{msg}"
         );
         // The reader refuses it through the same check (the parser is never reached).
-        let e = super::super::read(&out, None).unwrap_err().to_string();
+        let e = super::super::read(&out, None, Default::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("declares 4294967280 bytes"), "{e}");
         // A pixel data element declaring 4 GB is a truncated file.
         let mut bytes = std::fs::read(&p).unwrap();
@@ -356,7 +416,7 @@ mod tests {
         bytes[at..at + 4].copy_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
         let out = dir.path().join("px.dcm");
         std::fs::write(&out, &bytes).unwrap();
-        let e = super::super::read(&out, None).unwrap_err();
+        let e = super::super::read(&out, None, Default::default()).unwrap_err();
         assert!(
             matches!(
                 e.kind,
@@ -375,14 +435,22 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let zero = zero_link(dir.path(), "z.dcm");
         assert_refused(
-            super::super::read(&zero, None),
+            super::super::read(&zero, None, Default::default()),
             "z.dcm",
             "(a character device)",
         );
         let looped = link_loop(dir.path(), "l.dcm");
-        assert_refused(super::super::read(&looped, None), "l.dcm", "loop");
+        assert_refused(
+            super::super::read(&looped, None, Default::default()),
+            "l.dcm",
+            "loop",
+        );
         if let Some(f) = fifo(dir.path(), "f.dcm") {
-            assert_refused(super::super::read(&f, None), "f.dcm", "(a FIFO)");
+            assert_refused(
+                super::super::read(&f, None, Default::default()),
+                "f.dcm",
+                "(a FIFO)",
+            );
         }
     }
 }

@@ -414,6 +414,9 @@ mod tests {
             spacing_between: None,
             thickness: None,
             rescale: (1.0, 0.0),
+            planar: false,
+            dose_scaling: None,
+            key: Default::default(),
         }
     }
 

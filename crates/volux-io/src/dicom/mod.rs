@@ -16,19 +16,40 @@
 //!   SeriesInstanceUID and the requested series, else the one with the most slices, is loaded
 //!   (noted when there were several). Slices are ordered by ImagePositionPatient projected on
 //!   the slice normal (row x column direction cosines), or by InstanceNumber when positions
-//!   are missing (noted). Differing Rows / Columns / BitsAllocated, duplicate positions and
-//!   missing slices (a gap over 1.5 times the median gap) are [`ErrorKind::Invalid`].
+//!   are missing (noted). Differing Rows / Columns / BitsAllocated / SamplesPerPixel /
+//!   PhotometricInterpretation, duplicate positions and missing slices (a gap over 1.5 times
+//!   the median gap) are [`ErrorKind::Invalid`].
 //! - Multi-frame file: frames are the z slices; spacing, orientation, positions and rescale
 //!   come from the shared / per-frame functional groups (PixelMeasures, PlaneOrientation,
-//!   PlanePosition, PixelValueTransformation sequences), falling back to top-level attributes.
+//!   PlanePosition, PixelValueTransformation sequences), falling back to top-level attributes;
+//!   an RT Dose's frames are placed by its GridFrameOffsetVector (PS3.3 C.8.8.3.2, module
+//!   `frames`).
+//! - Several volumes at the same positions (module `volumes`): slices or frames told apart by
+//!   DiffusionBValue / gradient (standard or Siemens' private), TemporalPosition Index /
+//!   Identifier or StackID are volumes; [`VolumeChoice::timepoint`] picks one and the grid
+//!   records the axis (an [`volux_core::volume_axes::ExtraAxis`] of kind Time for temporal
+//!   positions, Volume with the b-values otherwise). Duplicate positions no key explains
+//!   remain an error.
 //! - Spacing: PixelSpacing is (row spacing = y, column spacing = x); z is the median gap of the
 //!   sorted positions, else SpacingBetweenSlices, else SliceThickness (noted).
-//! - Pixels: BitsAllocated 8 -> uint8, 16 -> uint16 / int16 (PixelRepresentation), 32 ->
-//!   float32 (noted; uncompressed only); SamplesPerPixel must be 1. Signed values are
-//!   sign-extended from BitsStored. RescaleSlope / RescaleIntercept (per slice or
-//!   frame) are applied: slope 1 with values that still fit int16 gives int16 (CT Hounsfield
-//!   units), anything else float32. The pixel data length is checked against
-//!   Rows x Columns x frames x bytes before use; a file that ends inside its pixel data is
+//! - Pixels (PS3.5 8, PS3.3 C.7.6.3): PixelData with BitsAllocated 1 (unpacked to uint8 0 / 1,
+//!   noted), 8 -> uint8, 16 -> uint16 / int16 (PixelRepresentation), 32 -> float32 (noted);
+//!   FloatPixelData (float32) and DoubleFloatPixelData (converted to float32, noted). Big-endian
+//!   files' samples are brought to little endian as pydicom reads them (module `pixels`).
+//!   Attributes stored as `UN` are decoded by the dictionary's VR (module `un`). Signed values
+//!   are sign-extended from BitsStored. The Modality LUT transformation (PS3.3 C.11.1) of each
+//!   slice or frame is applied (module `values`): RescaleSlope / RescaleIntercept (slope 1
+//!   with values that still fit int16 gives int16, CT Hounsfield units, anything else
+//!   float32) or the Modality LUT Sequence (its entries, noted); then an RT Dose's
+//!   DoseGridScaling (Gy, float32, noted).
+//! - Colour (module `color`): three samples a pixel (RGB, YBR_FULL and YBR_FULL_422 converted
+//!   to RGB as pydicom converts them, planar configuration 0 or 1; YBR_RCT / YBR_ICT come out
+//!   of the JPEG 2000 decoder as RGB, JPEG as module `jpeg_color` decides) and PALETTE COLOR
+//!   (the red, green and blue Palette Color LUTs, plain or segmented, module `lut`) give an
+//!   RGB grid ([`Grid::from_rgb`], its luminance as the scalar), or the one channel
+//!   [`VolumeChoice::component`] asks for (recorded as a Color axis).
+//! - Lengths: the pixel data length is checked against Rows x Columns x SamplesPerPixel x
+//!   frames x bytes before use; a file that ends inside its pixel data is
 //!   [`ErrorKind::Truncated`]. Compressed data: the decoded size is checked against the
 //!   memory budget before decoding, each frame's codestream header against Rows, Columns,
 //!   SamplesPerPixel and BitsAllocated (a mismatch is [`ErrorKind::Invalid`]: the decoders
@@ -50,6 +71,7 @@ use dicom_dictionary_std::tags;
 use dicom_object::{DefaultDicomObject, OpenFileOptions};
 use volux_core::Grid;
 
+use crate::dataset::VolumeChoice;
 use crate::error::ErrorKind;
 
 use crate::error::ReadError;
@@ -59,21 +81,30 @@ use crate::error::Result;
 mod attrs;
 mod bounds;
 mod codec;
+mod color;
+mod frames;
 mod geometry;
+mod image;
+mod jpeg_color;
+mod lut;
 mod pixels;
 mod ts;
+mod un;
+mod values;
+mod volumes;
 
 use attrs::ImageInfo;
 use geometry::{Stack, StackInput};
 
 /// Reads a DICOM folder (one series) or file. `series_uid` picks the series in a folder
-/// holding several (default: the one with the most slices).
-pub fn read(path: &Path, series_uid: Option<&str>) -> Result<Grid> {
+/// holding several (default: the one with the most slices); `choice` the volume of a series
+/// or file holding several at the same positions, and the channel of a colour image.
+pub fn read(path: &Path, series_uid: Option<&str>, choice: VolumeChoice) -> Result<Grid> {
     let meta = crate::util::data_metadata(path)?;
     if meta.is_dir() {
-        read_folder(path, series_uid)
+        read_folder(path, series_uid, choice)
     } else {
-        read_file(path, Vec::new())
+        read_file(path, Vec::new(), choice)
     }
 }
 
@@ -98,20 +129,26 @@ fn scan(path: &Path) -> Result<Option<ImageInfo>> {
         return Ok(None);
     }
     bounds::check(path)?;
-    let obj = OpenFileOptions::new()
+    let mut obj = OpenFileOptions::new()
         .read_until(tags::PIXEL_DATA)
         .open_file(path)
         .map_err(|e| parse_error(path, &e))?;
     let ts = obj.meta().transfer_syntax().to_string();
-    Ok(ImageInfo::from_obj(path.to_path_buf(), ts, &obj))
+    un::resolve(&mut obj, ts != ts::EXPLICIT_BE);
+    let key = volumes::key(&obj, attrs::frame_group(&obj, 0));
+    Ok(ImageInfo::from_obj(path.to_path_buf(), ts, &obj, key))
 }
 
-/// Parses a whole file (with its pixel data), its element lengths checked first.
+/// Parses a whole file (with its pixel data), its element lengths checked first, its
+/// standard attributes stored as `UN` decoded (module `un`).
 fn open_full(path: &Path) -> Result<DefaultDicomObject> {
     bounds::check(path)?;
-    OpenFileOptions::new()
+    let mut obj = OpenFileOptions::new()
         .open_file(path)
-        .map_err(|e| parse_error(path, &e))
+        .map_err(|e| parse_error(path, &e))?;
+    let big = obj.meta().transfer_syntax() == ts::EXPLICIT_BE;
+    un::resolve(&mut obj, !big);
+    Ok(obj)
 }
 
 /// Explains why `dicom-object` could not read `path`: a file ending inside its pixel data, a
@@ -140,8 +177,9 @@ fn meta_transfer_syntax(path: &Path) -> Option<String> {
     Some(meta.transfer_syntax().to_string())
 }
 
-/// Reads one file: a multi-frame volume or a single slice (z = 1).
-fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
+/// Reads one file: a multi-frame volume (or one volume of several, `choice.timepoint`) or a
+/// single slice (z = 1).
+fn read_file(path: &Path, mut notes: Vec<String>, choice: VolumeChoice) -> Result<Grid> {
     if !has_dicm(path)? {
         return Err(invalid(
             path,
@@ -157,25 +195,46 @@ fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
             format!("NumberOfFrames is {n}: a multi-frame image has at least one frame"),
         ));
     }
+    if info.frames_stated.is_none() {
+        if let Some(text) = attrs::string(&obj, tags::NUMBER_OF_FRAMES) {
+            return Err(invalid(
+                path,
+                format!("NumberOfFrames {text:?} is not a number"),
+            ));
+        }
+    }
     let frames = info.frames.max(1) as usize;
     // The pixel data must hold every frame before per-frame tables are built.
     let frame = frame_len(path, &info)?;
     let total = frame
         .checked_mul(frames as u64)
         .ok_or_else(|| invalid(path, "the pixel data size overflows"))?;
-    let bytes = pixel_bytes(path, &obj, &info, (frames, frame), &mut notes)?;
-    let (positions, rescale) = frame_geometry(&obj, &info, frames);
-    let labels = (1..=frames).map(|i| format!("frame {i}")).collect();
+    let (bytes, fmt) = pixel_bytes(path, &obj, &info, (frames, frame), &mut notes)?;
+    let described = frames::of_file(&obj, &info, frames, &mut notes);
+    let positions: Vec<_> = described.iter().map(|f| f.position).collect();
+    let keys: Vec<_> = described.iter().map(|f| f.key.clone()).collect();
+    let rank: Vec<usize> = (0..frames).collect();
+    let picked = volumes::pick(&keys, &positions, &rank, choice.timepoint)
+        .map_err(|e| ReadError::new(path, e))?;
+    let labels = picked
+        .frames
+        .iter()
+        .map(|i| format!("frame {}", i + 1))
+        .collect();
     let stack = order(
         path,
         &info,
-        (positions, labels),
-        vec![None; frames],
+        (
+            picked.frames.iter().map(|&i| positions[i]).collect(),
+            labels,
+        ),
+        vec![None; picked.frames.len()],
         "frame",
     )?;
+    let chosen: Vec<usize> = stack.order.iter().map(|&k| picked.frames[k]).collect();
     let mut data = Vec::new();
-    reserve(path, &mut data, total)?;
-    for &i in &stack.order {
+    reserve(path, &mut data, total.min(frame * chosen.len() as u64))?;
+    for &i in &chosen {
         let start = i as u64 * frame;
         data.extend_from_slice(
             bytes
@@ -183,55 +242,59 @@ fn read_file(path: &Path, mut notes: Vec<String>) -> Result<Grid> {
                 .unwrap_or(&[]),
         );
     }
-    let rescale: Vec<_> = stack.order.iter().map(|&i| rescale[i]).collect();
+    let rescale: Vec<_> = chosen.iter().map(|&i| described[i].rescale).collect();
+    let model = image::model(path, &obj, &info, &rescale)?;
+    notes.extend(picked.notes);
     notes.extend(stack.notes.iter().cloned());
-    build_grid(path, &info, &stack, &data, &rescale, notes)
+    image::build(
+        path,
+        &info,
+        &stack,
+        (&data, fmt),
+        &model,
+        choice.component,
+        picked.axis,
+        notes,
+    )
 }
 
-/// The stored values of `frames` frames of `frame` bytes each, little-endian: the PixelData
-/// itself for an uncompressed transfer syntax, else decoded (module `codec`), with a note
-/// naming the transfer syntax (once per syntax).
+/// The samples of `frames` frames of `frame` bytes each, little-endian, and their format:
+/// the pixel data itself for an uncompressed transfer syntax, else decoded (module `codec`),
+/// with a note naming the transfer syntax (once per syntax); colour brought to interleaved
+/// RGB (module `image`).
 fn pixel_bytes<'a>(
     path: &Path,
     obj: &'a DefaultDicomObject,
     info: &ImageInfo,
     (frames, frame): (usize, u64),
     notes: &mut Vec<String>,
-) -> Result<std::borrow::Cow<'a, [u8]>> {
+) -> Result<(std::borrow::Cow<'a, [u8]>, pixels::Fmt)> {
     let ts = info.transfer_syntax.as_str();
-    if ts::is_native(ts) {
-        let total = frame
-            .checked_mul(frames as u64)
-            .ok_or_else(|| invalid(path, "the pixel data size overflows"))?;
-        return pixels::le_bytes(path, obj, total, notes);
-    }
-    let note = ts::note(ts);
-    if !notes.contains(&note) {
-        notes.push(note);
-    }
-    codec::decode(path, obj, info, frames, frame).map(std::borrow::Cow::Owned)
-}
-
-/// Per-frame positions (PlanePositionSequence) and rescale of a multi-frame file; the
-/// top-level values for a single frame.
-fn frame_geometry(
-    obj: &DefaultDicomObject,
-    info: &ImageInfo,
-    frames: usize,
-) -> (Vec<Option<glam::DVec3>>, Vec<(f64, f64)>) {
-    if frames <= 1 {
-        return (vec![info.position], vec![info.rescale]);
-    }
-    (0..frames)
-        .map(|i| {
-            let g = attrs::frame_group(obj, i);
-            let pos = g
-                .and_then(|g| attrs::items(g, tags::PLANE_POSITION_SEQUENCE))
-                .and_then(|p| p.first())
-                .and_then(attrs::position);
-            (pos, attrs::rescale(obj, g))
-        })
-        .unzip()
+    let (bytes, fmt) = if ts::is_native(ts) {
+        pixels::native(path, obj, info, frames as u64, notes)?
+    } else {
+        let note = ts::note(ts);
+        if !notes.contains(&note) {
+            notes.push(note);
+        }
+        let fmt = pixels::Fmt::integer(info.bits, info.signed).ok_or_else(|| {
+            invalid(
+                path,
+                format!("BitsAllocated {} in compressed data", info.bits),
+            )
+        })?;
+        let jpeg_color = (info.samples_per_pixel == 3 && ts::family(ts) == Some(ts::Family::Jpeg))
+            .then(|| jpeg_color::needs(obj, &info.photometric))
+            .transpose()
+            .map_err(|m| ReadError::new(path, ErrorKind::Unsupported(m)))?;
+        let mut b = codec::decode(path, obj, info, frames, frame)?;
+        if jpeg_color == Some(jpeg_color::Needs::YbrToRgb) {
+            color::ybr_to_rgb(&mut b);
+            notes.push(format!("{} converted to RGB", info.photometric));
+        }
+        (std::borrow::Cow::Owned(b), fmt)
+    };
+    Ok((image::to_rgb(info, bytes, fmt, notes), fmt))
 }
 
 /// Orders slices or frames, mapping geometry errors to [`ErrorKind::Invalid`].
@@ -275,47 +338,6 @@ fn reserve(path: &Path, v: &mut Vec<u8>, bytes: u64) -> Result<()> {
     Ok(())
 }
 
-/// Builds the grid from ordered little-endian slice bytes.
-fn build_grid(
-    path: &Path,
-    info: &ImageInfo,
-    stack: &Stack,
-    data: &[u8],
-    rescale: &[(f64, f64)],
-    mut notes: Vec<String>,
-) -> Result<Grid> {
-    let err = |e| ReadError::new(path, e);
-    let dims = [
-        i64::from(info.cols),
-        i64::from(info.rows),
-        stack.order.len() as i64,
-    ];
-    let (dims, _) = volux_core::limits::checked_dims(dims).map_err(err)?;
-    let samples = pixels::assemble(
-        data,
-        (info.bits, info.bits_stored, info.signed),
-        rescale,
-        &mut notes,
-    )
-    .map_err(err)?;
-    let [row, col] = info.pixel_spacing.unwrap_or_else(|| {
-        notes.push("no PixelSpacing: an in-plane spacing of 1 was used".into());
-        [1.0, 1.0]
-    });
-    if info.photometric == "MONOCHROME1" {
-        notes.push("MONOCHROME1: low values are displayed bright; values kept as stored".into());
-    }
-    let grid = Grid::new(
-        dims,
-        [col, row, stack.z_spacing],
-        stack.origin.into(),
-        samples,
-    )
-    .and_then(|g| g.with_direction(stack.direction))
-    .map_err(err)?;
-    Ok(notes.into_iter().fold(grid, Grid::with_note))
-}
-
 /// A note naming the empty files and folders among a series' files, so that a damaged
 /// series is not read short without a word (other files, such as a JSON sidecar or a
 /// DICOMDIR, are skipped quietly).
@@ -348,7 +370,7 @@ fn skipped_note(skipped: &[&Path]) -> Option<String> {
 }
 
 /// Reads the DICOM images of a folder, groups them by series and loads one.
-fn read_folder(dir: &Path, series_uid: Option<&str>) -> Result<Grid> {
+fn read_folder(dir: &Path, series_uid: Option<&str>, choice: VolumeChoice) -> Result<Grid> {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| ReadError::new(dir, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -377,8 +399,8 @@ fn read_folder(dir: &Path, series_uid: Option<&str>) -> Result<Grid> {
     let (slices, mut notes) = select(dir, series, series_uid)?;
     notes.extend(skipped_note(&skipped));
     match slices.as_slice() {
-        [one] if one.frames > 1 => read_file(&one.path, notes),
-        _ => load_series(dir, &slices, notes),
+        [one] if one.frames > 1 => read_file(&one.path, notes, choice),
+        _ => load_series(dir, &slices, notes, choice),
     }
 }
 
@@ -425,23 +447,38 @@ fn check_slices(dir: &Path, slices: &[ImageInfo]) -> Result<()> {
     let name = |s: &ImageInfo| s.path.file_name().map(|n| n.to_string_lossy().into_owned());
     for s in slices {
         pixels::check_format(s).map_err(|k| ReadError::new(&s.path, k))?;
-        let shape = |s: &ImageInfo| (s.rows, s.cols, s.bits, s.signed);
+        let shape = |s: &ImageInfo| (s.rows, s.cols, s.bits, s.signed, s.samples_per_pixel);
         if shape(s) != shape(first) || s.frames > 1 {
             return Err(invalid(
                 dir,
                 format!(
-                    "slices differ: {:?} has Rows {} Columns {} BitsAllocated {} frames {} but \
-                     {:?} has Rows {} Columns {} BitsAllocated {} frames {}",
+                    "slices differ: {:?} has Rows {} Columns {} BitsAllocated {} \
+                     SamplesPerPixel {} frames {} but {:?} has Rows {} Columns {} \
+                     BitsAllocated {} SamplesPerPixel {} frames {}",
                     name(s).unwrap_or_default(),
                     s.rows,
                     s.cols,
                     s.bits,
+                    s.samples_per_pixel,
                     s.frames,
                     name(first).unwrap_or_default(),
                     first.rows,
                     first.cols,
                     first.bits,
+                    first.samples_per_pixel,
                     first.frames
+                ),
+            ));
+        }
+        if s.photometric != first.photometric {
+            return Err(invalid(
+                dir,
+                format!(
+                    "{:?} has PhotometricInterpretation {} but {:?} has {}",
+                    name(s).unwrap_or_default(),
+                    s.photometric,
+                    name(first).unwrap_or_default(),
+                    first.photometric
                 ),
             ));
         }
@@ -463,31 +500,83 @@ fn check_slices(dir: &Path, slices: &[ImageInfo]) -> Result<()> {
     Ok(())
 }
 
-/// Loads the slices of one series in position order.
-fn load_series(dir: &Path, slices: &[ImageInfo], mut notes: Vec<String>) -> Result<Grid> {
+/// Loads the slices of one series (of one of its volumes, `choice.timepoint`) in position
+/// order.
+fn load_series(
+    dir: &Path,
+    slices: &[ImageInfo],
+    mut notes: Vec<String>,
+    choice: VolumeChoice,
+) -> Result<Grid> {
     check_slices(dir, slices)?;
     let first = slices
         .first()
         .ok_or_else(|| invalid(dir, "the series has no slices"))?;
-    let positions = slices.iter().map(|s| s.position).collect();
-    let labels = slices
+    let positions: Vec<_> = slices.iter().map(|s| s.position).collect();
+    let keys: Vec<_> = slices.iter().map(|s| s.key.clone()).collect();
+    let mut rank: Vec<usize> = (0..slices.len()).collect();
+    rank.sort_by_key(|&i| (slices[i].instance.is_none(), slices[i].instance, i));
+    let picked = volumes::pick(&keys, &positions, &rank, choice.timepoint)
+        .map_err(|e| ReadError::new(dir, e))?;
+    let part: Vec<&ImageInfo> = picked.frames.iter().map(|&i| &slices[i]).collect();
+    let labels = part
         .iter()
         .map(|s| format!("{:?}", s.path.file_name().unwrap_or_default()))
         .collect();
-    let instances = slices.iter().map(|s| s.instance).collect();
-    let stack = order(dir, first, (positions, labels), instances, "slice")?;
+    let stack = order(
+        dir,
+        first,
+        (part.iter().map(|s| s.position).collect(), labels),
+        part.iter().map(|s| s.instance).collect(),
+        "slice",
+    )?;
     let frame = frame_len(dir, first)?;
     let total = frame
-        .checked_mul(slices.len() as u64)
+        .checked_mul(part.len() as u64)
         .ok_or_else(|| invalid(dir, "the series size overflows"))?;
     let mut data = Vec::new();
     reserve(dir, &mut data, total)?;
-    let mut rescale = Vec::with_capacity(slices.len());
-    for s in stack.order.iter().filter_map(|&i| slices.get(i)) {
+    let mut model: Option<image::Model> = None;
+    let mut values = Vec::with_capacity(part.len());
+    let mut format = None;
+    for s in stack.order.iter().filter_map(|&i| part.get(i)) {
         let obj = open_full(&s.path)?;
-        data.extend_from_slice(&pixel_bytes(&s.path, &obj, s, (1, frame), &mut notes)?);
-        rescale.push(attrs::rescale(&obj, None));
+        let (bytes, fmt) = pixel_bytes(&s.path, &obj, s, (1, frame), &mut notes)?;
+        if format.is_some_and(|f| f != fmt) {
+            return Err(invalid(
+                &s.path,
+                format!("its samples are {fmt:?} where the series' first slice's are {format:?}"),
+            ));
+        }
+        format = Some(fmt);
+        data.extend_from_slice(&bytes);
+        match image::model(&s.path, &obj, s, &[attrs::rescale(&obj, None)])? {
+            image::Model::Mono(v) => values.extend(v),
+            m => {
+                if let (Some(image::Model::Palette(a)), image::Model::Palette(b)) = (&model, &m) {
+                    if a != b {
+                        return Err(invalid(
+                            &s.path,
+                            "its Palette Color LUTs differ from the series' first slice's",
+                        ));
+                    }
+                }
+                model.get_or_insert(m);
+            }
+        }
     }
+    let model = model.unwrap_or(image::Model::Mono(values));
+    notes.extend(picked.notes);
     notes.extend(stack.notes.iter().cloned());
-    build_grid(dir, first, &stack, &data, &rescale, notes)
+    let fmt = format.unwrap_or(pixels::Fmt::U8);
+    image::build(
+        dir,
+        first,
+        &stack,
+        (&data, fmt),
+        &model,
+        choice.component,
+        picked.axis,
+        notes,
+    )
 }

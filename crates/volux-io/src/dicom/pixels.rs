@@ -1,12 +1,13 @@
-//! Pixel data of uncompressed transfer syntaxes (extraction, length checks) and the value
-//! path shared with the compressed ones (sign extension, rescaling).
+//! Pixel data of uncompressed transfer syntaxes: which element holds it (PixelData,
+//! FloatPixelData, DoubleFloatPixelData), its length checked against the header, its bytes
+//! in little-endian order whatever the transfer syntax, single-bit samples unpacked; and the
+//! sample format the value path (module `values`) and the colour path (module `color`) share.
 use std::borrow::Cow;
 use std::path::Path;
 
 use dicom_core::value::{PrimitiveValue, Value};
+use dicom_core::Tag;
 use dicom_dictionary_std::tags;
-use volux_core::grid::Scalar;
-use volux_core::{with_samples, Buffer, Samples, ScalarType};
 
 use super::attrs::{ImageInfo, Obj};
 use super::ts::{is_native, ts_name, unsupported, EXPLICIT_BE, IMPLICIT_LE};
@@ -14,22 +15,123 @@ use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
 
-/// Checks that the pixel format is one Volux decodes.
+/// The type of the samples after extraction (single-bit samples unpacked to bytes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Fmt {
+    /// Unsigned 8-bit (and unpacked single-bit).
+    U8,
+    /// Signed 8-bit.
+    I8,
+    /// Unsigned 16-bit.
+    U16,
+    /// Signed 16-bit.
+    I16,
+    /// Unsigned 32-bit.
+    U32,
+    /// Signed 32-bit.
+    I32,
+    /// FloatPixelData (OF).
+    F32,
+    /// DoubleFloatPixelData (OD).
+    F64,
+}
+
+impl Fmt {
+    /// Bytes per sample.
+    pub fn size(self) -> usize {
+        match self {
+            Fmt::U8 | Fmt::I8 => 1,
+            Fmt::U16 | Fmt::I16 => 2,
+            Fmt::U32 | Fmt::I32 | Fmt::F32 => 4,
+            Fmt::F64 => 8,
+        }
+    }
+
+    /// The integer format of BitsAllocated `bits` (1, 8, 16, 32) and PixelRepresentation.
+    pub fn integer(bits: u32, signed: bool) -> Option<Self> {
+        Some(match (bits, signed) {
+            (1, _) => Fmt::U8,
+            (8, false) => Fmt::U8,
+            (8, true) => Fmt::I8,
+            (16, false) => Fmt::U16,
+            (16, true) => Fmt::I16,
+            (32, false) => Fmt::U32,
+            (32, true) => Fmt::I32,
+            _ => return None,
+        })
+    }
+
+    /// Sample `i` of little-endian `b` as a number.
+    #[inline]
+    pub fn get(self, b: &[u8], i: usize) -> f64 {
+        let w = |n: usize| &b[i * n..i * n + n];
+        match self {
+            Fmt::U8 => f64::from(b[i]),
+            Fmt::I8 => f64::from(b[i] as i8),
+            Fmt::U16 => f64::from(u16::from_le_bytes([w(2)[0], w(2)[1]])),
+            Fmt::I16 => f64::from(i16::from_le_bytes([w(2)[0], w(2)[1]])),
+            Fmt::U32 => f64::from(u32::from_le_bytes(w(4).try_into().unwrap_or([0; 4]))),
+            Fmt::I32 => f64::from(i32::from_le_bytes(w(4).try_into().unwrap_or([0; 4]))),
+            Fmt::F32 => f64::from(f32::from_le_bytes(w(4).try_into().unwrap_or([0; 4]))),
+            Fmt::F64 => f64::from_le_bytes(w(8).try_into().unwrap_or([0; 8])),
+        }
+    }
+}
+
+/// The photometric interpretations read with three samples per pixel.
+const COLOR: [&str; 7] = [
+    "RGB",
+    "YBR_FULL",
+    "YBR_FULL_422",
+    "YBR_RCT",
+    "YBR_ICT",
+    "YBR_PARTIAL_420",
+    "YBR_PARTIAL_422",
+];
+
+/// Checks that the pixel format is one Volux decodes (PS3.3 C.7.6.3: SamplesPerPixel,
+/// PhotometricInterpretation, BitsAllocated).
 pub(super) fn check_format(info: &ImageInfo) -> Result<(), ErrorKind> {
     let ts = info.transfer_syntax.as_str();
-    if !is_native(ts) {
+    let native = is_native(ts);
+    if !native {
         if let Some(why) = unsupported(ts) {
             return Err(ErrorKind::Unsupported(why));
         }
     }
-    if info.samples_per_pixel != 1 {
+    let pi = info.photometric.as_str();
+    match info.samples_per_pixel {
+        1 if !COLOR.contains(&pi) => {}
+        3 if COLOR.contains(&pi) => {}
+        n => {
+            return Err(ErrorKind::Unsupported(format!(
+                "SamplesPerPixel {n} with PhotometricInterpretation {pi:?}: Volux reads one \
+                 sample (MONOCHROME1, MONOCHROME2, PALETTE COLOR) or three (RGB, YBR_FULL, \
+                 YBR_FULL_422, and YBR_RCT, YBR_ICT, YBR_PARTIAL in compressed data)"
+            )))
+        }
+    }
+    if native && pi.starts_with("YBR") && !matches!(pi, "YBR_FULL" | "YBR_FULL_422") {
         return Err(ErrorKind::Unsupported(format!(
-            "SamplesPerPixel {} ({}): Volux reads single-channel images",
-            info.samples_per_pixel, info.photometric
+            "PhotometricInterpretation {pi} in uncompressed pixel data: Volux converts \
+             YBR_FULL and YBR_FULL_422 to RGB"
         )));
     }
-    let bits: &[u32] = if is_native(ts) {
-        &[8, 16, 32]
+    if pi == "YBR_FULL_422" && native && info.cols % 2 == 1 {
+        return Err(ErrorKind::Invalid(format!(
+            "YBR_FULL_422 with an odd number of Columns ({}): two pixels of a row share their \
+             Cb and Cr (PS3.3 C.7.6.3.1.2)",
+            info.cols
+        )));
+    }
+    if matches!(pi, "YBR_FULL" | "YBR_FULL_422") && info.bits != 8 {
+        return Err(ErrorKind::Unsupported(format!(
+            "{pi} with BitsAllocated {}: YBR is converted to RGB for 8-bit samples only",
+            info.bits
+        )));
+    }
+    let bits: &[u32] = if native {
+        &[1, 8, 16, 32, 64]
     } else {
         &[8, 16]
     };
@@ -37,43 +139,101 @@ pub(super) fn check_format(info: &ImageInfo) -> Result<(), ErrorKind> {
         return Err(ErrorKind::Unsupported(format!(
             "BitsAllocated {}: Volux reads {} in transfer syntax {ts} ({})",
             info.bits,
-            if is_native(ts) {
-                "8, 16 and 32"
+            if native {
+                "1, 8, 16, 32 and 64 (DoubleFloatPixelData)"
             } else {
                 "8 and 16"
             },
             ts_name(ts)
         )));
     }
+    if info.bits == 1 && info.samples_per_pixel != 1 {
+        return Err(ErrorKind::Unsupported(
+            "BitsAllocated 1 with SamplesPerPixel 3".into(),
+        ));
+    }
     Ok(())
 }
 
-/// Bytes of one frame.
+/// Bytes of one frame once extracted: Rows x Columns x SamplesPerPixel samples of
+/// BitsAllocated / 8 bytes (one byte for single-bit samples, once unpacked).
 pub(super) fn frame_bytes(info: &ImageInfo) -> Option<u64> {
     u64::from(info.rows)
         .checked_mul(u64::from(info.cols))?
-        .checked_mul(u64::from(info.bits / 8))
+        .checked_mul(u64::from(info.samples_per_pixel))?
+        .checked_mul(u64::from((info.bits / 8).max(1)))
 }
 
-/// The PixelData of `obj` as a little-endian byte stream, exactly `expected` bytes long;
-/// a note in `notes` when the element holds more (Rows, Columns or NumberOfFrames smaller
-/// than the data: the header may be wrong).
-pub(super) fn le_bytes<'a>(
+/// Bytes `frames` frames take in uncompressed pixel data (PS3.5 8.1.1): single-bit samples
+/// packed eight to a byte across frame boundaries, YBR_FULL_422 with two samples a pixel
+/// (PS3.3 C.7.6.3.1.2).
+fn stored_bytes(info: &ImageInfo, frames: u64) -> Option<u64> {
+    let pixels = u64::from(info.rows)
+        .checked_mul(u64::from(info.cols))?
+        .checked_mul(frames)?;
+    match (info.bits, info.photometric.as_str()) {
+        (1, _) => Some(pixels.div_ceil(8)),
+        (_, "YBR_FULL_422") => pixels.checked_mul(2 * u64::from(info.bits / 8)),
+        (bits, _) => pixels
+            .checked_mul(u64::from(info.samples_per_pixel))?
+            .checked_mul(u64::from(bits / 8)),
+    }
+}
+
+/// The pixel element of `obj`: PixelData, FloatPixelData or DoubleFloatPixelData.
+fn element(obj: &Obj) -> Option<(Tag, &dicom_object::mem::InMemElement)> {
+    [
+        tags::PIXEL_DATA,
+        tags::FLOAT_PIXEL_DATA,
+        tags::DOUBLE_FLOAT_PIXEL_DATA,
+    ]
+    .into_iter()
+    .find_map(|t| Some((t, obj.element_opt(t).ok().flatten()?)))
+}
+
+/// The uncompressed pixel data of `frames` frames of `obj`, as little-endian samples (single
+/// bits unpacked to bytes of 0 or 1; YBR_FULL_422 still subsampled), and their format. A
+/// note in `notes` when the element holds more than the header describes.
+pub(super) fn native<'a>(
     path: &Path,
     obj: &'a Obj,
-    expected: u64,
+    info: &ImageInfo,
+    frames: u64,
     notes: &mut Vec<String>,
-) -> Result<Cow<'a, [u8]>> {
+) -> Result<(Cow<'a, [u8]>, Fmt)> {
     let err = |k: ErrorKind| ReadError::new(path, k);
-    let elem = obj
-        .element_opt(tags::PIXEL_DATA)
-        .ok()
-        .flatten()
-        .ok_or_else(|| {
-            err(ErrorKind::Invalid(
-                "no PixelData (7FE0,0010) element".into(),
-            ))
-        })?;
+    let invalid = |m: String| err(ErrorKind::Invalid(m));
+    let (tag, elem) = element(obj).ok_or_else(|| {
+        invalid(
+            "no pixel data: none of PixelData (7FE0,0010), FloatPixelData (7FE0,0008), \
+             DoubleFloatPixelData (7FE0,0009)"
+                .into(),
+        )
+    })?;
+    let fmt = match (tag, info.bits) {
+        (tags::FLOAT_PIXEL_DATA, 32) => Fmt::F32,
+        (tags::DOUBLE_FLOAT_PIXEL_DATA, 64) => Fmt::F64,
+        (tags::PIXEL_DATA, 64) => {
+            return Err(err(ErrorKind::Unsupported(
+                "BitsAllocated 64 in PixelData (7FE0,0010): 64-bit integer pixels".into(),
+            )))
+        }
+        (tags::PIXEL_DATA, b) => Fmt::integer(b, info.signed)
+            .ok_or_else(|| invalid(format!("BitsAllocated {b} in PixelData")))?,
+        (t, b) => {
+            return Err(invalid(format!(
+                "BitsAllocated {b} with {} ({:04X},{:04X}), which holds {}-bit floats",
+                if t == tags::FLOAT_PIXEL_DATA {
+                    "FloatPixelData"
+                } else {
+                    "DoubleFloatPixelData"
+                },
+                t.group(),
+                t.element(),
+                if t == tags::FLOAT_PIXEL_DATA { 32 } else { 64 }
+            )))
+        }
+    };
     let prim = match elem.value() {
         Value::Primitive(p) => p,
         _ => {
@@ -82,7 +242,16 @@ pub(super) fn le_bytes<'a>(
             )))
         }
     };
-    let bytes = to_le(prim);
+    let expected = stored_bytes(info, frames)
+        .ok_or_else(|| invalid("the pixel data size overflows".into()))?;
+    let big = info.transfer_syntax == EXPLICIT_BE;
+    let bytes = match prim {
+        // Single bits are read in the file's byte order (pydicom swaps only 8-bit OW words).
+        PrimitiveValue::U16(v) if big && info.bits == 1 => {
+            Cow::Owned(v.iter().flat_map(|x| x.to_be_bytes()).collect())
+        }
+        _ => to_le(prim, if info.bits == 1 { 1 } else { fmt.size() }, big),
+    };
     let found = bytes.len() as u64;
     if found < expected {
         return Err(err(ErrorKind::Truncated { expected, found }));
@@ -99,143 +268,64 @@ pub(super) fn le_bytes<'a>(
             )
         ));
     }
-    Ok(match bytes {
+    let bytes = match bytes {
         Cow::Borrowed(b) => Cow::Borrowed(b.get(..expected as usize).unwrap_or(b)),
         Cow::Owned(mut v) => {
             v.truncate(expected as usize);
             Cow::Owned(v)
         }
-    })
+    };
+    if info.bits == 1 {
+        let pixels = u64::from(info.rows) * u64::from(info.cols) * frames;
+        volux_core::limits::check_alloc("unpacked single-bit pixels", pixels, 1)
+            .map_err(|e| ReadError::new(path, e))?;
+        notes.push("single-bit pixels (BitsAllocated 1) unpacked to uint8 0 / 1".into());
+        return Ok((Cow::Owned(unpack_bits(&bytes, pixels as usize)), Fmt::U8));
+    }
+    if fmt == Fmt::F64 {
+        notes.push("DoubleFloatPixelData (float64) converted to float32".into());
+    }
+    Ok((bytes, fmt))
 }
 
-/// Raw bytes in little-endian order: OB values are the file bytes (8-bit data in any
-/// transfer syntax, or little-endian words), OW and wider values are native numbers decoded
-/// by the parser in the file's byte order.
-fn to_le(p: &PrimitiveValue) -> Cow<'_, [u8]> {
+/// Single-bit samples, the first in the least significant bit of the first byte (PS3.5
+/// 8.1.1), one byte (0 or 1) each.
+fn unpack_bits(bytes: &[u8], pixels: usize) -> Vec<u8> {
+    (0..pixels).map(|i| (bytes[i / 8] >> (i % 8)) & 1).collect()
+}
+
+/// Raw bytes in little-endian order, `size` bytes a sample. The parser decodes OW (and
+/// wider) values as numbers in the file's byte order and keeps OB values as the file's
+/// bytes; in Explicit VR Big Endian the samples of OB data, and 32-bit samples read as OW
+/// words, are big-endian numbers that are turned around here (pydicom reads them so). 8-bit
+/// samples in OW words come out as the words' little-endian bytes, as pydicom swaps them.
+fn to_le(p: &PrimitiveValue, size: usize, big: bool) -> Cow<'_, [u8]> {
     fn le<T: Copy, const N: usize>(v: &[T], f: impl Fn(T) -> [u8; N]) -> Cow<'static, [u8]> {
         Cow::Owned(v.iter().flat_map(|x| f(*x)).collect())
     }
     match p {
+        PrimitiveValue::U8(v) if big && size > 1 => Cow::Owned(
+            v.chunks(size)
+                .flat_map(|c| c.iter().rev().copied())
+                .collect(),
+        ),
         PrimitiveValue::U8(v) => Cow::Borrowed(&v[..]),
+        PrimitiveValue::U16(v) if big && size == 4 => Cow::Owned(
+            v.chunks(2)
+                .flat_map(|w| {
+                    (u32::from(w[0]) << 16 | u32::from(w.get(1).copied().unwrap_or(0)))
+                        .to_le_bytes()
+                })
+                .collect(),
+        ),
         PrimitiveValue::U16(v) => le(v, u16::to_le_bytes),
         PrimitiveValue::I16(v) => le(v, i16::to_le_bytes),
         PrimitiveValue::U32(v) => le(v, u32::to_le_bytes),
         PrimitiveValue::I32(v) => le(v, i32::to_le_bytes),
         PrimitiveValue::F32(v) => le(v, f32::to_le_bytes),
+        PrimitiveValue::F64(v) => le(v, f64::to_le_bytes),
         other => other.to_bytes().into_owned().into(),
     }
-}
-
-/// Signed 8- and 16-bit samples sign-extended from their `stored` low bits (BitsStored): the
-/// bits above the stored ones are not part of the value (a decoder may leave them 0, a
-/// writer may fill them with the sign). Unsigned and 32-bit samples are kept as they are.
-fn sign_extend(bytes: &[u8], bits: u32, stored: u32, signed: bool) -> Cow<'_, [u8]> {
-    if !signed || stored == 0 || stored >= bits || bits > 16 {
-        return Cow::Borrowed(bytes);
-    }
-    let shift = bits - stored;
-    Cow::Owned(if bits == 8 {
-        bytes
-            .iter()
-            .map(|&b| (((b << shift) as i8) >> shift) as u8)
-            .collect()
-    } else {
-        bytes
-            .chunks_exact(2)
-            .flat_map(|c| ((i16::from_le_bytes([c[0], c[1]]) << shift) >> shift).to_le_bytes())
-            .collect()
-    })
-}
-
-/// Turns the little-endian bytes of all slices (stored values, whatever the transfer
-/// syntax) into samples: signed values are sign-extended from `bits_stored`, then each
-/// slice's `(slope, intercept)` is applied: integers stay native when no rescale is needed,
-/// become int16 when slope is 1 and the shifted values fit (CT Hounsfield units), float32
-/// otherwise.
-pub(super) fn assemble(
-    bytes: &[u8],
-    (bits, bits_stored, signed): (u32, u32, bool),
-    rescale: &[(f64, f64)],
-    notes: &mut Vec<String>,
-) -> Result<Samples, volux_core::Error> {
-    let bytes = &*sign_extend(bytes, bits, bits_stored, signed);
-    let raw = match (bits, signed) {
-        (8, false) => Samples::from_bytes(ScalarType::U8, bytes, true)?,
-        (8, true) => {
-            notes.push("signed 8-bit pixels widened to int16".into());
-            Samples::I16(Buffer::owned(
-                bytes.iter().map(|&b| i16::from(b as i8)).collect(),
-            ))
-        }
-        (16, false) => Samples::from_bytes(ScalarType::U16, bytes, true)?,
-        (16, true) => Samples::from_bytes(ScalarType::I16, bytes, true)?,
-        _ => {
-            notes.push(format!(
-                "32-bit {} pixels converted to float32",
-                if signed { "signed" } else { "unsigned" }
-            ));
-            Samples::F32(Buffer::owned(
-                bytes
-                    .chunks_exact(4)
-                    .map(|c| {
-                        let a = [c[0], c[1], c[2], c[3]];
-                        if signed {
-                            i32::from_le_bytes(a) as f32
-                        } else {
-                            u32::from_le_bytes(a) as f32
-                        }
-                    })
-                    .collect(),
-            ))
-        }
-    };
-    if rescale.iter().all(|&r| r == (1.0, 0.0)) {
-        return Ok(raw);
-    }
-    let slice_len = raw.len() / rescale.len().max(1);
-    if let Some(s) = shifted_i16(&raw, rescale, slice_len) {
-        notes.push("RescaleIntercept applied; values stored as int16".into());
-        return Ok(s);
-    }
-    volux_core::limits::check_alloc("float32 pixels", raw.len() as u64, 4)?;
-    notes.push("RescaleSlope / RescaleIntercept applied; values stored as float32".into());
-    let out: Vec<f32> = with_samples!(&raw, |s| s
-        .chunks(slice_len.max(1))
-        .zip(rescale)
-        .flat_map(|(c, &(m, b))| c
-            .iter()
-            .map(move |v| (f64::from(v.to_f32()) * m + b) as f32))
-        .collect());
-    Ok(Samples::F32(Buffer::owned(out)))
-}
-
-/// Integer data with slope 1 and whole intercepts whose shifted values fit int16.
-fn shifted_i16(raw: &Samples, rescale: &[(f64, f64)], slice_len: usize) -> Option<Samples> {
-    if raw.scalar_type() == ScalarType::F32
-        || rescale.iter().any(|&(m, b)| m != 1.0 || b.fract() != 0.0)
-    {
-        return None;
-    }
-    let fits = |v: f64| (f64::from(i16::MIN)..=f64::from(i16::MAX)).contains(&v);
-    let ok = with_samples!(raw, |s| s.chunks(slice_len.max(1)).zip(rescale).all(
-        |(c, &(_, b))| {
-            let (lo, hi) = c
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-                    let v = f64::from(v.to_f32());
-                    (l.min(v), h.max(v))
-                });
-            c.is_empty() || (fits(lo + b) && fits(hi + b))
-        }
-    ));
-    ok.then(|| {
-        let out: Vec<i16> = with_samples!(raw, |s| s
-            .chunks(slice_len.max(1))
-            .zip(rescale)
-            .flat_map(|(c, &(_, b))| c.iter().map(move |v| (f64::from(v.to_f32()) + b) as i16))
-            .collect());
-        Samples::I16(Buffer::owned(out))
-    })
 }
 
 /// For a file the parser could not read: the declared and present bytes of its PixelData
@@ -275,37 +365,34 @@ pub(super) fn truncation(path: &Path, transfer_syntax: &str) -> Option<(u64, u64
 #[cfg(test)]
 mod tests {
     use super::*;
+    use dicom_core::value::C;
 
     #[test]
-    fn signed_values_are_sign_extended_from_bits_stored() {
-        // 12 bits stored: 0x0FFF is -1, 0x0800 is -2048, 0x07FF is 2047, whatever the bits
-        // above (0 from a decoder, the sign from a writer, junk).
-        let words: [u16; 5] = [0x0FFF, 0x0800, 0x07FF, 0xFFFF, 0xA001];
-        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-        let out = sign_extend(&bytes, 16, 12, true);
-        let v: Vec<i16> = out
-            .chunks_exact(2)
-            .map(|c| i16::from_le_bytes([c[0], c[1]]))
+    fn big_endian_words_become_little_endian_samples() {
+        // 32-bit samples read as OW words (big-endian file): 0x00010002 then 0xA0B0C0D0.
+        let ow = PrimitiveValue::U16(C::from_vec(vec![0x0001, 0x0002, 0xA0B0, 0xC0D0]));
+        let le32: Vec<u32> = to_le(&ow, 4, true)
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
             .collect();
-        assert_eq!(v, [-1, -2048, 2047, -1, 1]);
-        // 8-bit, 4 stored.
+        assert_eq!(le32, [0x0001_0002, 0xA0B0_C0D0]);
+        // Little endian: the words are already in order.
+        let le32: Vec<u32> = to_le(&ow, 4, false)
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert_eq!(le32, [0x0002_0001, 0xC0D0_A0B0]);
+        // 16-bit samples in OB bytes of a big-endian file.
+        let ob = PrimitiveValue::U8(C::from_vec(vec![0x01, 0x02, 0x03, 0x04]));
+        assert_eq!(&*to_le(&ob, 2, true), &[0x02, 0x01, 0x04, 0x03]);
+        assert_eq!(&*to_le(&ob, 1, true), &[0x01, 0x02, 0x03, 0x04]);
+    }
+
+    #[test]
+    fn single_bits_unpack_least_significant_first() {
         assert_eq!(
-            &*sign_extend(&[0x0F, 0x08, 0x07], 8, 4, true),
-            &[0xFF, 0xF8, 0x07]
+            unpack_bits(&[0b1000_0101, 0b0000_0010], 10),
+            [1, 0, 1, 0, 0, 0, 0, 1, 0, 1]
         );
-        // Unsigned, full-width or 32-bit data is kept as it is.
-        assert!(matches!(
-            sign_extend(&bytes, 16, 12, false),
-            Cow::Borrowed(_)
-        ));
-        assert!(matches!(
-            sign_extend(&bytes, 16, 16, true),
-            Cow::Borrowed(_)
-        ));
-        assert!(matches!(sign_extend(&bytes, 16, 0, true), Cow::Borrowed(_)));
-        assert!(matches!(
-            sign_extend(&bytes[..8], 32, 12, true),
-            Cow::Borrowed(_)
-        ));
     }
 }
