@@ -9,7 +9,7 @@ use volux_core::grid::Scalar;
 use volux_core::{with_samples, Buffer, Samples, ScalarType};
 
 use super::attrs::{ImageInfo, Obj};
-use super::ts::{is_native, ts_name, unsupported, EXPLICIT_BE, IMPLICIT_LE};
+use super::ts::{bits_read, is_native, ts_name, unsupported, EXPLICIT_BE, IMPLICIT_LE};
 use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
@@ -28,16 +28,12 @@ pub(super) fn check_format(info: &ImageInfo) -> Result<(), ErrorKind> {
             info.samples_per_pixel, info.photometric
         )));
     }
-    let bits: &[u32] = if is_native(ts) {
-        &[8, 16, 32]
-    } else {
-        &[8, 16]
-    };
+    let bits = bits_read(ts);
     if !bits.contains(&info.bits) {
         return Err(ErrorKind::Unsupported(format!(
             "BitsAllocated {}: Volux reads {} in transfer syntax {ts} ({})",
             info.bits,
-            if is_native(ts) {
+            if bits.len() == 3 {
                 "8, 16 and 32"
             } else {
                 "8 and 16"
