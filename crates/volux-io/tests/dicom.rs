@@ -701,13 +701,10 @@ fn a_series_splits_by_orientation_and_size() {
     has_note(
         &g,
         &[
-            "also holds 2 slices of 32 x 32, orientation PIR at -5.0000..0.0000 mm \
-             (loc2.dcm..loc1.dcm), a stack of another orientation or size: not loaded",
+            "also holds 2 stacks of another orientation or size, not loaded: 2 slices of \
+             32 x 32, orientation PIR at -5.0000..0.0000 mm (loc2.dcm..loc1.dcm); 1 slice of \
+             32 x 16, orientation LPS at 24.0000 mm (small.dcm)",
         ],
-    );
-    has_note(
-        &g,
-        &["also holds 1 slice of 32 x 16, orientation LPS at 24.0000 mm (small.dcm)"],
     );
     has_note(&g, &["1 file not loaded: sc.dcm", "SamplesPerPixel 3"]);
     // The smaller slice moved inside the stack.
@@ -804,4 +801,10 @@ fn dicomdir_is_followed() {
         matches!(&k, ErrorKind::Invalid(m) if m.contains("not a plain name")),
         "{k}"
     );
+    // Its folder: the DICOMDIR is set aside with a note, and the folder's own files are
+    // scanned (here none at the top: the slices are in subfolders).
+    std::fs::copy(fx("mr_native/1-1.dcm"), dir.path().join("flat.dcm")).unwrap();
+    let g = dicom::read(dir.path(), None).unwrap();
+    assert_eq!(g.dims(), [32, 32, 1]);
+    has_note(&g, &["the DICOMDIR cannot be followed", "not a plain name"]);
 }

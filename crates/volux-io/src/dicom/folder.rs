@@ -38,8 +38,10 @@ use crate::error::{ErrorKind, ReadError, Result};
 
 /// The Media Storage Directory SOP class (a DICOMDIR).
 const DICOMDIR_CLASS: &str = "1.2.840.10008.1.3.10";
-/// How many file names a note lists before "and N more".
+/// How many file names (or stacks) a note lists before "and N more".
 const NAMES: usize = 3;
+/// How many series the note on the other series lists.
+const SERIES_LISTED: usize = 5;
 /// Orientation cosines closer than this are the same orientation.
 const SAME_ORIENTATION: f64 = 1e-4;
 /// Positions closer than this (mm) along the normal are the same.
@@ -109,18 +111,33 @@ pub(super) fn read_folder(dir: &Path, series_uid: Option<&str>) -> Result<Grid> 
         .filter_map(|e| e.ok().map(|e| e.path()))
         .collect();
     entries.sort();
+    let mut notes = Vec::new();
     if let Some(dd) = entries.iter().find(|p| {
         p.is_file()
             && p.file_name()
                 .is_some_and(|n| n.eq_ignore_ascii_case("DICOMDIR"))
     }) {
-        return read_dicomdir(dd, series_uid);
+        // A DICOMDIR that cannot be followed does not hide the folder's own files.
+        match dicomdir_listing(dd) {
+            Ok((files, dd_notes)) => return read_files(dd, &files, series_uid, dd_notes),
+            Err(e) => notes.push(format!(
+                "the DICOMDIR cannot be followed ({}); the folder's files were scanned instead",
+                e.kind
+            )),
+        }
     }
-    read_files(dir, &entries, series_uid, Vec::new())
+    read_files(dir, &entries, series_uid, notes)
 }
 
 /// Reads the series a DICOMDIR references.
 pub(super) fn read_dicomdir(path: &Path, series_uid: Option<&str>) -> Result<Grid> {
+    let (files, notes) = dicomdir_listing(path)?;
+    read_files(path, &files, series_uid, notes)
+}
+
+/// The files a DICOMDIR references that exist, and the notes saying so; an error when it
+/// cannot be read or references no existing file.
+fn dicomdir_listing(path: &Path) -> Result<(Vec<PathBuf>, Vec<String>)> {
     let base = path.parent().unwrap_or(Path::new("."));
     let (files, missing) = dicomdir_files(path, base)?;
     let mut notes = vec![format!(
@@ -144,7 +161,7 @@ pub(super) fn read_dicomdir(path: &Path, series_uid: Option<&str>) -> Result<Gri
             ),
         ));
     }
-    read_files(path, &files, series_uid, notes)
+    Ok((files, notes))
 }
 
 /// The files a DICOMDIR's directory records reference (ReferencedFileID under `base`): those
@@ -397,8 +414,14 @@ fn read_files(
         });
     }
     let list = |with_names: bool| {
-        series
+        let shown = if with_names {
+            SERIES_LISTED
+        } else {
+            usize::MAX
+        };
+        let mut l = series
             .iter()
+            .take(shown)
             .map(|(k, v)| {
                 if with_names {
                     format!(
@@ -411,7 +434,11 @@ fn read_files(
                 }
             })
             .collect::<Vec<_>>()
-            .join(", ")
+            .join(", ");
+        if series.len() > shown {
+            l.push_str(&format!(" and {} more", series.len() - shown));
+        }
+        l
     };
     let usable = |v: &[Scanned]| v.iter().filter(|s| set_aside(s).is_none()).count();
     let chosen = match series_uid {
@@ -522,7 +549,8 @@ fn load_stack(
     let best = (0..stacks.len())
         .max_by_key(|&i| (stacks[i].len(), std::cmp::Reverse(i)))
         .unwrap_or(0);
-    let stack = stacks.swap_remove(best);
+    let stack = stacks.remove(best);
+    stacks.sort_by_key(|g| std::cmp::Reverse(g.len()));
     let first = stack[0];
     // Everything else of the series, and why.
     let mut left: Vec<(&Scanned, String)> = aside
@@ -558,10 +586,15 @@ fn load_stack(
     }
     check_holes(dir, uid, &stack, &left)?;
     check_gaps(dir, uid, &stack)?;
-    for other in &stacks {
+    if !stacks.is_empty() {
+        let mut d: Vec<String> = stacks.iter().take(NAMES).map(|g| describe(g)).collect();
+        if stacks.len() > NAMES {
+            d.push(format!("{} more", stacks.len() - NAMES));
+        }
         notes.push(format!(
-            "series {uid} also holds {}, a stack of another orientation or size: not loaded",
-            describe(other)
+            "series {uid} also holds {} of another orientation or size, not loaded: {}",
+            plural(stacks.len(), "stack"),
+            d.join("; ")
         ));
     }
     let aside_named: Vec<&(&Scanned, String)> = left
