@@ -404,7 +404,7 @@ fn check_jls(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
                         info.cols, info.rows, info.samples_per_pixel
                     )));
                 }
-                if !(2..=16).contains(&p) || (p <= 8) != (info.bits == 8) {
+                if !(2..=16).contains(&p) || p > info.bits {
                     return Err(Bad::Invalid(format!(
                         "the JPEG-LS precision is {p} bits, which does not fit BitsAllocated {}",
                         info.bits
@@ -810,7 +810,13 @@ mod tests {
         check_jls(&jls(12, 32, 16, 1, None, 0, 0), &i).unwrap();
         check_jls(&jls(16, 32, 16, 1, Some([4095, 0, 0, 0, 64]), 3, 0), &i).unwrap();
         assert!(msg(check_jls(&jls(12, 33, 16, 1, None, 0, 0), &i)).contains("16 x 33"));
-        assert!(msg(check_jls(&jls(8, 32, 16, 1, None, 0, 0), &i)).contains("precision"));
+        assert!(
+            msg(check_jls(&jls(12, 32, 16, 1, None, 0, 0), &info(32, 16, 8)))
+                .contains("precision is 12 bits")
+        );
+        assert!(msg(check_jls(&jls(17, 32, 16, 1, None, 0, 0), &i)).contains("precision"));
+        // 8 bits stored in 16 allocated: read as 16-bit samples.
+        check_jls(&jls(8, 32, 16, 1, None, 0, 0), &i).unwrap();
         // NEAR over MAXVAL / 2, a RESET under 3, MAXVAL over the precision: invalid.
         assert!(
             msg(check_jls(&jls(2, 32, 16, 1, None, 2, 0), &info(32, 16, 8))).contains("NEAR is 2")
