@@ -5,15 +5,18 @@
 //!   sample, most significant byte first), for 8-, 16- and 32-bit samples and any number of
 //!   samples per pixel, delivered interleaved (R G B R G B ...) and little-endian;
 //! - JPEG baseline (8-bit), extended (8-bit) and lossless (2..16-bit): `jpeg-decoder`,
-//!   through `dicom-pixeldata`;
+//!   through `dicom-pixeldata`; 12-bit extended (sequential DCT, Huffman, grey): module
+//!   `jpeg12`, Volux's own decoder;
 //! - JPEG-LS lossless and near-lossless: `pure_jpegls` (single-component streams; CharLS,
 //!   the C++ reference decoder that `dicom-pixeldata` offers, needs CMake to build);
 //! - JPEG 2000 and High-Throughput JPEG 2000 (Part 15): `openjp2`, the Rust port of
 //!   OpenJPEG (its `ht_dec` decodes HT code-blocks), through `dicom-pixeldata`.
 //!
-//! 12-bit lossy JPEG (DCT-based frames of 12-bit precision) is [`ErrorKind::Unsupported`]:
-//! `jpeg-decoder` and `zune-jpeg` decode 8-bit DCT frames only, and the one pure-Rust
-//! 12-bit decoder (`libjpeg-turbo-rs` 0.3) panics on damaged Huffman tables.
+//! 12-bit lossy JPEG has its own decoder because `jpeg-decoder` and `zune-jpeg` decode 8-bit
+//! DCT frames only, and the one pure-Rust 12-bit decoder found (`libjpeg-turbo-rs` 0.3)
+//! panics on damaged Huffman tables (64 of 3000 mutated frames: an index out of bounds in
+//! its Huffman table, an arithmetic overflow). 12-bit progressive, arithmetic-coded or colour
+//! frames, and DCT frames of other precisions, are [`ErrorKind::Unsupported`].
 //!
 //! The decoders size their output from Rows x Columns and copy what the codestream holds
 //! into it, trusting the two to agree (a JPEG or JPEG 2000 frame larger than Rows x Columns
@@ -98,13 +101,14 @@ pub(super) fn decode(
                 check_jls(&data, info).map_err(bad)?;
                 decoded = Cow::Owned(decode_jls(&data, info).map_err(cannot)?);
             }
+            Family::Jpeg if check_jpeg(&data, info).map_err(bad)? => {
+                let v = super::jpeg12::decode(&data, info.rows, info.cols).map_err(cannot)?;
+                decoded = Cow::Owned(v.iter().flat_map(|x| x.to_le_bytes()).collect());
+            }
             Family::Jpeg | Family::Jpeg2000 => {
-                if fam == Family::Jpeg {
-                    check_jpeg(&data, info)
-                } else {
-                    check_j2k(&data, info)
+                if fam == Family::Jpeg2000 {
+                    check_j2k(&data, info).map_err(bad)?;
                 }
-                .map_err(bad)?;
                 px = obj
                     .decode_pixel_data_frame(i as u32)
                     .map_err(|e| cannot(chain(&e)))?;
@@ -500,8 +504,9 @@ fn is_sof(m: u8) -> bool {
     matches!(m, 0xC0..=0xCF) && !matches!(m, 0xC4 | 0xC8 | 0xCC)
 }
 
-/// The JPEG frame header (SOF) against Rows, Columns, SamplesPerPixel and BitsAllocated.
-fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
+/// The JPEG frame header (SOF) against Rows, Columns, SamplesPerPixel and BitsAllocated;
+/// `true` for a 12-bit sequential DCT frame (decoded by module `jpeg12`, not `jpeg-decoder`).
+fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<bool, Bad> {
     if data.get(..2) != Some(&[0xFF, 0xD8][..]) {
         return Err("the data does not start with a JPEG SOI marker".into());
     }
@@ -546,12 +551,13 @@ fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
                 )));
             }
             // SOF3, 7, 11, 15 are lossless; the others DCT-based.
-            if !matches!(m, 0xC3 | 0xC7 | 0xCB | 0xCF) && p != 8 {
+            let twelve = p == 12 && matches!(m, 0xC0 | 0xC1);
+            if !matches!(m, 0xC3 | 0xC7 | 0xCB | 0xCF) && p != 8 && !twelve {
                 return Err(Bad::Unsupported(if p == 12 {
-                    "a 12-bit DCT-based (lossy) JPEG frame: jpeg-decoder and zune-jpeg decode \
-                     8-bit DCT frames only, and no robust pure-Rust 12-bit decoder exists \
-                     (libjpeg-turbo-rs 0.3 panics on damaged Huffman tables)"
-                        .to_string()
+                    format!(
+                        "a 12-bit progressive or arithmetic-coded JPEG frame (marker {m:02X}): \
+                         Volux decodes 12-bit sequential Huffman-coded frames"
+                    )
                 } else {
                     format!(
                         "a {p}-bit DCT-based (lossy) JPEG frame: the JPEG standard's DCT \
@@ -559,13 +565,18 @@ fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
                     )
                 }));
             }
+            if twelve && nf != 1 {
+                return Err(Bad::Unsupported(format!(
+                    "a 12-bit lossy JPEG frame of {nf} components: Volux decodes 12-bit grey"
+                )));
+            }
             if (p <= 8) != (info.bits == 8) || p > 16 {
                 return Err(Bad::Invalid(format!(
                     "the JPEG precision is {p} bits, which does not fit BitsAllocated {}",
                     info.bits
                 )));
             }
-            return Ok(());
+            return Ok(twelve);
         }
         if len < 2 {
             return Err(Bad::Invalid(format!(
@@ -654,9 +665,9 @@ mod tests {
         }
     }
 
-    fn msg(r: Result<(), Bad>) -> String {
+    fn msg<T>(r: Result<T, Bad>) -> String {
         match r {
-            Ok(()) => panic!("accepted"),
+            Ok(_) => panic!("accepted"),
             Err(Bad::Invalid(m)) => format!("invalid: {m}"),
             Err(Bad::Unsupported(m)) => format!("unsupported: {m}"),
         }
@@ -676,7 +687,7 @@ mod tests {
     #[test]
     fn jpeg_frame_header_against_the_dicom_header() {
         let i = info(32, 16, 16);
-        check_jpeg(&jpeg(0xC3, 12, 32, 16, 1), &i).unwrap();
+        assert!(!check_jpeg(&jpeg(0xC3, 12, 32, 16, 1), &i).unwrap());
         assert!(msg(check_jpeg(&jpeg(0xC3, 12, 33, 16, 1), &i)).contains("16 x 33"));
         assert!(msg(check_jpeg(&jpeg(0xC3, 12, 32, 16, 3), &i)).contains("3 components"));
         // 8-bit precision in 16-bit samples, 16-bit in 8-bit: refused.
@@ -684,9 +695,15 @@ mod tests {
         assert!(
             msg(check_jpeg(&jpeg(0xC3, 16, 32, 16, 1), &info(32, 16, 8))).contains("precision")
         );
-        // 12-bit DCT: unsupported (jpeg-decoder), not invalid.
-        assert!(msg(check_jpeg(&jpeg(0xC1, 12, 32, 16, 1), &i)).starts_with("unsupported"));
-        check_jpeg(&jpeg(0xC0, 8, 32, 16, 1), &info(32, 16, 8)).unwrap();
+        // 12-bit sequential DCT: Volux's own decoder; progressive 12-bit, 12-bit colour and
+        // 16-bit DCT: unsupported, not invalid.
+        assert!(check_jpeg(&jpeg(0xC1, 12, 32, 16, 1), &i).unwrap());
+        assert!(msg(check_jpeg(&jpeg(0xC2, 12, 32, 16, 1), &i)).starts_with("unsupported"));
+        assert!(msg(check_jpeg(&jpeg(0xC1, 16, 32, 16, 1), &i)).contains("16-bit DCT"));
+        let mut rgb = info(32, 16, 16);
+        rgb.samples_per_pixel = 3;
+        assert!(msg(check_jpeg(&jpeg(0xC1, 12, 32, 16, 3), &rgb)).contains("3 components"));
+        assert!(!check_jpeg(&jpeg(0xC0, 8, 32, 16, 1), &info(32, 16, 8)).unwrap());
         // Cut anywhere before the SOF's fields: a clear error.
         let full = jpeg(0xC3, 12, 32, 16, 1);
         for n in 0..full.len() - 4 {

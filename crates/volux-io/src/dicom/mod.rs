@@ -5,12 +5,13 @@
 //! explicit VR big endian, and deflated explicit VR little endian, inflated by `flate2` after
 //! a bounded inflation in module `bounds`) are read directly; compressed pixel data is decoded
 //! in module `codec`, with pure-Rust codecs only: RLE Lossless (Volux's own decoder, 8, 16
-//! and 32 bits), JPEG baseline (8-bit) and lossless (`jpeg-decoder`), JPEG-LS lossless and
+//! and 32 bits), JPEG baseline (8-bit) and lossless (`jpeg-decoder`), 12-bit lossy JPEG
+//! (Volux's own decoder, module `jpeg12`), JPEG-LS lossless and
 //! near-lossless (`pure_jpegls`, single-component), JPEG 2000 and High-Throughput JPEG 2000
 //! (`openjp2`, the Rust port of OpenJPEG). The grid of a compressed file gets a note naming
 //! its transfer syntax. No C or C++ codec is linked: CharLS (JPEG-LS through
-//! `dicom-pixeldata`'s `charls` feature) needs CMake to build. 12-bit lossy JPEG, multi-
-//! component JPEG-LS, JPEG XL, video, JPIP and the retired JPEG processes are
+//! `dicom-pixeldata`'s `charls` feature) needs CMake to build. 12-bit progressive or colour
+//! JPEG, multi-component JPEG-LS, JPEG XL, video, JPIP and the retired JPEG processes are
 //! [`ErrorKind::Unsupported`], one line naming the transfer syntax's UID and name and why.
 //! Decoding gives the stored values, which then take the same path as uncompressed ones
 //! (below).
@@ -68,6 +69,7 @@ mod bounds;
 mod codec;
 mod folder;
 mod geometry;
+mod jpeg12;
 mod pixels;
 mod ts;
 

@@ -93,7 +93,8 @@ pub(super) const HTJ2K: &str = "1.2.840.10008.1.2.4.203";
 pub(super) enum Family {
     /// RLE Lossless (decoded here, module `codec`).
     Rle,
-    /// JPEG (baseline, extended, lossless), through `jpeg-decoder`.
+    /// JPEG (baseline, extended, lossless), through `jpeg-decoder`; 12-bit lossy frames
+    /// through module `jpeg12`.
     Jpeg,
     /// JPEG-LS, through `pure_jpegls`.
     JpegLs,
@@ -128,8 +129,9 @@ pub(super) fn bits_read(ts: &str) -> &'static [u32] {
 }
 
 /// What Volux decodes, for the refusals.
-const DECODED: &str = "Volux decodes uncompressed and deflated, RLE, JPEG (8-bit lossy, \
-                       lossless), JPEG-LS, JPEG 2000 and High-Throughput JPEG 2000 pixel data";
+const DECODED: &str = "Volux decodes uncompressed and deflated, RLE, JPEG (8- and 12-bit \
+                       lossy, lossless), JPEG-LS, JPEG 2000 and High-Throughput JPEG 2000 pixel \
+                       data";
 
 /// Why a transfer syntax is not read; `None` for those that are. One line naming the
 /// syntax's UID and name.
@@ -164,6 +166,9 @@ pub(super) fn note(ts: &str) -> String {
         "DICOM transfer syntax {ts} ({}), decoded with {}",
         ts_name(ts),
         match family(ts) {
+            _ if ts == JPEG_EXTENDED => {
+                "dicom-pixeldata (8-bit frames) or Volux's 12-bit JPEG decoder (12-bit frames)"
+            }
             Some(Family::Rle) => "Volux's RLE decoder (PS3.5 Annex G)",
             Some(Family::JpegLs) => "pure_jpegls",
             _ => "dicom-pixeldata",
