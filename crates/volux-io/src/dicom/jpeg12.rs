@@ -260,6 +260,14 @@ pub(super) fn decode(data: &[u8], rows: u32, cols: u32) -> Result<Vec<u16>, Stri
                 if ns != 1 {
                     return Err(format!("a scan of {ns} components"));
                 }
+                let field = |i: usize| seg.get(i).copied().ok_or_else(short);
+                let (ss, se, a) = (field(3)?, field(4)?, field(5)?);
+                if (ss, se, a) != (0, 63, 0) {
+                    return Err(format!(
+                        "a scan of spectral selection {ss}..{se} and approximation {a:02X}: a \
+                         sequential scan has 0..63 and 00"
+                    ));
+                }
                 let dc = dc[usize::from(t >> 4) & 3]
                     .clone()
                     .ok_or("no DC Huffman table")?;
