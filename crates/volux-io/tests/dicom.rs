@@ -1,6 +1,9 @@
 //! DICOM reader tests on the shared series and multi-frame file, and on damaged copies of
 //! them (uneven gaps, duplicate positions, truncation, differing Rows, several series,
-//! compressed transfer syntax, implicit VR and big-endian re-encodings, rescale).
+//! compressed transfer syntax, implicit VR and big-endian re-encodings, rescale); then
+//! folders as exported, built from the committed fixtures (`fixtures/dicom_compressed`): a
+//! truncated slice, a non-DICOM file, junk after a DICM marker, a second series, an RGB
+//! secondary capture, localizers in another plane, a gap, a DICOMDIR.
 use std::path::{Path, PathBuf};
 
 use dicom_core::VR;
@@ -292,8 +295,15 @@ fn truncated_file() {
         ),
         "{k}"
     );
+    // In the folder, the cut slice lies inside the stack: refused, naming it and the two
+    // sub-series the series splits into.
     let k = err_kind(dicom::read(dir.path(), None, Default::default()));
-    assert!(matches!(k, ErrorKind::Truncated { .. }), "{k}");
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("\"1-2.dcm\" cannot be read: truncated")
+            && m.contains("splits into 1 slice of 512 x 512, orientation LPS at -12.0000 mm \
+                (1-3.dcm) and 1 slice of 512 x 512, orientation LPS at 12.0000 mm (1-1.dcm)")),
+        "{k}"
+    );
     // Cut inside the header: a parse error, not a panic.
     std::fs::write(&p, &bytes[..700]).unwrap();
     let k = err_kind(dicom::read(&p, None, Default::default()));
@@ -507,4 +517,305 @@ fn lying_frame_count_is_truncated() {
     });
     let k = err_kind(dicom::read(&p, None, Default::default()));
     assert!(matches!(k, ErrorKind::Truncated { .. }), "{k}");
+}
+
+// ---- folders as exported (committed fixtures) ----
+
+/// The committed fixtures of `fixtures/dicom_compressed`.
+fn fx(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/dicom_compressed")
+        .join(name)
+}
+
+/// A temp folder holding the three 32 x 32 MR slices (z = 12, 0, -12 mm) of `mr_native`.
+fn mr_folder() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for f in FILES {
+        std::fs::copy(fx("mr_native").join(f), dir.path().join(f)).unwrap();
+    }
+    dir
+}
+
+fn values(g: &volux_core::Grid) -> Vec<f32> {
+    (0..g.samples().len())
+        .map(|i| g.samples().get_f32(i))
+        .collect()
+}
+
+fn series_uid(p: &Path) -> String {
+    dicom_object::open_file(p)
+        .unwrap()
+        .element(tags::SERIES_INSTANCE_UID)
+        .unwrap()
+        .to_str()
+        .unwrap()
+        .trim_end_matches('\0')
+        .to_string()
+}
+
+/// A copy of `from` as `to` with `f` applied and a new SOPInstanceUID.
+fn variant(from: &Path, to: &Path, f: impl FnOnce(&mut dicom_object::DefaultDicomObject)) {
+    let n = to.file_name().unwrap().to_string_lossy().len();
+    edit(from, to, |o| {
+        o.put_str(tags::SOP_INSTANCE_UID, VR::UI, format!("1.2.826.0.1.9.{n}"));
+        f(o);
+    });
+}
+
+fn truncate(p: &Path, keep: usize) {
+    let b = std::fs::read(p).unwrap();
+    std::fs::write(p, &b[..b.len() - keep]).unwrap();
+}
+
+fn has_note(g: &volux_core::Grid, parts: &[&str]) {
+    assert!(
+        g.notes()
+            .iter()
+            .any(|n| parts.iter().all(|p| n.contains(p))),
+        "no note with {parts:?}: {:?}",
+        g.notes()
+    );
+}
+
+/// A truncated slice past the end of the stack, junk after a DICM marker, a text file, an
+/// RGB secondary capture and a second series: the MR stack is read as on its own, and each
+/// file set aside is named in a note (the text file passes quietly).
+#[test]
+fn folder_sets_aside_damaged_and_foreign_files() {
+    let dir = mr_folder();
+    let clean = dicom::read(dir.path(), None, Default::default()).unwrap();
+    assert!(clean.notes().is_empty(), "{:?}", clean.notes());
+    let d = dir.path();
+    std::fs::write(d.join("notes.txt"), "not DICOM").unwrap();
+    let mut junk = vec![0u8; 128];
+    junk.extend_from_slice(b"DICM");
+    junk.extend((0..3000u32).map(|i| (i * 7919 % 251) as u8));
+    std::fs::write(d.join("junk.dcm"), &junk).unwrap();
+    std::fs::copy(fx("rgb_sc.dcm"), d.join("rgb_sc.dcm")).unwrap();
+    for f in ["1-1.dcm", "1-2.dcm"] {
+        variant(&d.join(f), &d.join(format!("b{f}")), |o| {
+            o.put_str(tags::SERIES_INSTANCE_UID, VR::UI, "1.2.3.4");
+        });
+    }
+    variant(&d.join("1-1.dcm"), &d.join("late.dcm"), |o| set_z(o, 24.0));
+    truncate(&d.join("late.dcm"), 300);
+    let g = dicom::read(d, None, Default::default()).unwrap();
+    assert_eq!(g.dims(), [32, 32, 3]);
+    assert_eq!(values(&g), values(&clean));
+    has_note(
+        &g,
+        &[
+            "3 series in this folder",
+            "1.2.3.4 (2 files: b1-1.dcm, b1-2.dcm)",
+        ],
+    );
+    has_note(&g, &["rgb_sc.dcm", "the most readable files"]);
+    has_note(
+        &g,
+        &["skipped 1 file that cannot be read as DICOM: junk.dcm"],
+    );
+    has_note(&g, &["1 file not loaded: late.dcm", "truncated"]);
+    assert!(!g.notes().iter().any(|n| n.contains("notes.txt")));
+    // The other series, chosen by UID: read past the damaged files.
+    let b = dicom::read(d, Some("1.2.3.4"), Default::default()).unwrap();
+    assert_eq!(b.dims(), [32, 32, 2]);
+    // The RGB capture's series: read as colour.
+    let rgb = dicom::read(d, Some(&series_uid(&fx("rgb_sc.dcm"))), Default::default()).unwrap();
+    assert!(rgb.color().is_some(), "{:?}", rgb.notes());
+}
+
+/// `--series` selects a series when another one in the folder is broken (a truncated file
+/// whose header reads, and one whose header does not).
+#[test]
+fn series_option_selects_past_a_broken_series() {
+    let dir = mr_folder();
+    let d = dir.path();
+    for f in FILES {
+        variant(&d.join(f), &d.join(format!("b{f}")), |o| {
+            o.put_str(tags::SERIES_INSTANCE_UID, VR::UI, "1.2.3.4");
+        });
+        truncate(&d.join(format!("b{f}")), 100);
+    }
+    std::fs::write(d.join("bad.dcm"), {
+        let mut b = std::fs::read(d.join("1-1.dcm")).unwrap();
+        b.truncate(400);
+        b
+    })
+    .unwrap();
+    let uid = series_uid(&d.join("1-1.dcm"));
+    for choice in [Some(uid.as_str()), None] {
+        let g = dicom::read(d, choice, Default::default()).unwrap();
+        assert_eq!(g.dims(), [32, 32, 3], "{choice:?}");
+        has_note(&g, &["1.2.3.4 (3 files"]);
+    }
+    // The broken series itself: its first file's error.
+    let k = err_kind(dicom::read(d, Some("1.2.3.4"), Default::default()));
+    assert!(matches!(k, ErrorKind::Truncated { .. }), "{k}");
+}
+
+/// A slice missing from the middle (a gap of twice the spacing): refused, naming the two
+/// sub-series by position range and files.
+#[test]
+fn a_gap_splits_the_series() {
+    let dir = mr_folder();
+    let d = dir.path();
+    variant(&d.join("1-1.dcm"), &d.join("1-5.dcm"), |o| set_z(o, 36.0));
+    let k = err_kind(dicom::read(d, None, Default::default()));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("a slice is missing")
+            && m.contains("the gap of 24.0000 mm between \"1-1.dcm\" and \"1-5.dcm\"")
+            && m.contains("splits into 3 slices of 32 x 32, orientation LPS at \
+                -12.0000..12.0000 mm (1-3.dcm..1-1.dcm) and 1 slice of 32 x 32, orientation LPS \
+                at 36.0000 mm (1-5.dcm)")),
+        "{k}"
+    );
+}
+
+/// Localizers in another plane, a slice of other Rows past the stack, and an RGB capture,
+/// all in the same series: the axial stack is loaded, the rest named in notes; a slice of
+/// other Rows inside the stack is a hole, refused naming the field that differs.
+#[test]
+fn a_series_splits_by_orientation_and_size() {
+    let dir = mr_folder();
+    let d = dir.path();
+    let clean = dicom::read(d, None, Default::default()).unwrap();
+    let uid = series_uid(&d.join("1-1.dcm"));
+    for (i, f) in ["loc1.dcm", "loc2.dcm"].iter().enumerate() {
+        variant(&d.join("1-1.dcm"), &d.join(f), |o| {
+            o.put_str(tags::IMAGE_ORIENTATION_PATIENT, VR::DS, "0\\1\\0\\0\\0\\-1");
+            o.put_str(
+                tags::IMAGE_POSITION_PATIENT,
+                VR::DS,
+                format!("{}\\-250\\250", 5 * i),
+            );
+        });
+    }
+    variant(&d.join("1-1.dcm"), &d.join("small.dcm"), |o| {
+        set_z(o, 24.0);
+        o.put(dicom_core::DataElement::new(
+            tags::ROWS,
+            VR::US,
+            dicom_core::PrimitiveValue::from(16u16),
+        ));
+    });
+    variant(&fx("rgb_sc.dcm"), &d.join("sc.dcm"), |o| {
+        o.put_str(tags::SERIES_INSTANCE_UID, VR::UI, uid.clone());
+    });
+    let g = dicom::read(d, None, Default::default()).unwrap();
+    assert_eq!(g.dims(), [32, 32, 3]);
+    assert_eq!(values(&g), values(&clean));
+    has_note(
+        &g,
+        &[
+            "also holds 3 stacks of another orientation or size, not loaded: 2 slices of \
+             32 x 32, orientation PIR at -5.0000..0.0000 mm (loc2.dcm..loc1.dcm); 1 slice of \
+             16 x 16, no orientation (sc.dcm); 1 slice of 32 x 16, orientation LPS at \
+             24.0000 mm (small.dcm)",
+        ],
+    );
+    // The smaller slice moved inside the stack.
+    variant(&d.join("small.dcm"), &d.join("small.dcm"), |o| {
+        set_z(o, 6.0)
+    });
+    let k = err_kind(dicom::read(d, None, Default::default()));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("\"small.dcm\" has Rows 16 Columns 32")
+            && m.contains("where the stack's slices have Rows 32 Columns 32")
+            && m.contains("lies inside the stack at 6.0000 mm") && m.contains("splits into")),
+        "{k}"
+    );
+}
+
+/// A DICOMDIR (pydicom's FileSet over the MR slices, files in PT000000/ST000000/SE000000):
+/// opening the DICOMDIR or its folder reads the series it references; a referenced file
+/// that is missing is noted; a ReferencedFileID leaving the folder is refused.
+#[test]
+fn dicomdir_is_followed() {
+    let clean = dicom::read(&fx("mr_native"), None, Default::default()).unwrap();
+    for p in [fx("mr_dicomdir/DICOMDIR"), fx("mr_dicomdir")] {
+        let g = dicom::read(&p, None, Default::default()).unwrap();
+        assert_eq!(g.dims(), [32, 32, 3]);
+        assert_eq!(values(&g), values(&clean));
+        assert_eq!(g.origin(), clean.origin());
+        has_note(
+            &g,
+            &["read through the DICOMDIR \"DICOMDIR\" (3 files referenced)"],
+        );
+    }
+    let k = err_kind(dicom::read(
+        &fx("mr_dicomdir"),
+        Some("9.9"),
+        Default::default(),
+    ));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("series 9.9 is not in this folder")),
+        "{k}"
+    );
+    // A copy with one referenced file gone (the last slice), then with a hostile path.
+    let dir = tempfile::tempdir().unwrap();
+    let se = dir.path().join("PT000000/ST000000/SE000000");
+    std::fs::create_dir_all(&se).unwrap();
+    std::fs::copy(fx("mr_dicomdir/DICOMDIR"), dir.path().join("DICOMDIR")).unwrap();
+    for f in ["IM000000", "IM000001", "IM000002"] {
+        std::fs::copy(
+            fx("mr_dicomdir/PT000000/ST000000/SE000000").join(f),
+            se.join(f),
+        )
+        .unwrap();
+    }
+    let last = std::fs::read_dir(&se)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            let o = dicom_object::open_file(p).unwrap();
+            o.element(tags::IMAGE_POSITION_PATIENT)
+                .unwrap()
+                .to_multi_float64()
+                .unwrap()[2]
+                == 12.0
+        })
+        .unwrap();
+    std::fs::remove_file(&last).unwrap();
+    let g = dicom::read(dir.path(), None, Default::default()).unwrap();
+    assert_eq!(g.dims(), [32, 32, 2]);
+    has_note(
+        &g,
+        &["skipped 1 file the DICOMDIR references but the folder lacks"],
+    );
+    let dd = dir.path().join("DICOMDIR");
+    edit(&dd, &dd, |o| {
+        let mut seq = o
+            .element(tags::DIRECTORY_RECORD_SEQUENCE)
+            .unwrap()
+            .items()
+            .unwrap()
+            .to_vec();
+        for item in &mut seq {
+            if item
+                .element_opt(tags::REFERENCED_FILE_ID)
+                .ok()
+                .flatten()
+                .is_some()
+            {
+                item.put_str(tags::REFERENCED_FILE_ID, VR::CS, "..\\etc\\passwd");
+            }
+        }
+        o.put(dicom_core::DataElement::new(
+            tags::DIRECTORY_RECORD_SEQUENCE,
+            VR::SQ,
+            dicom_core::value::DataSetSequence::from(seq),
+        ));
+    });
+    let k = err_kind(dicom::read(&dd, None, Default::default()));
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("not a plain name")),
+        "{k}"
+    );
+    // Its folder: the DICOMDIR is set aside with a note, and the folder's own files are
+    // scanned (here none at the top: the slices are in subfolders).
+    std::fs::copy(fx("mr_native/1-1.dcm"), dir.path().join("flat.dcm")).unwrap();
+    let g = dicom::read(dir.path(), None, Default::default()).unwrap();
+    assert_eq!(g.dims(), [32, 32, 1]);
+    has_note(&g, &["the DICOMDIR cannot be followed", "not a plain name"]);
 }

@@ -62,8 +62,12 @@ fn rms_diff(a: &Grid, b: &Grid) -> f64 {
 }
 
 fn has_ts_note(g: &Grid, uid: &str, name: &str) {
-    let want = format!("DICOM transfer syntax {uid} ({name}), decoded with dicom-pixeldata");
-    assert!(g.notes().iter().any(|n| n == &want), "{:?}", g.notes());
+    let want = format!("DICOM transfer syntax {uid} ({name}), decoded with ");
+    assert!(
+        g.notes().iter().any(|n| n.starts_with(&want)),
+        "{:?}",
+        g.notes()
+    );
 }
 
 /// The lossless syntaxes give the original's voxels bit for bit, on a slice folder (3 MR
@@ -72,19 +76,40 @@ fn has_ts_note(g: &Grid, uid: &str, name: &str) {
 #[test]
 fn lossless_syntaxes_are_bit_exact() {
     let cases: &[(&str, &[&str])] = &[
-        ("mr_native", &["mr_rle", "mr_jpll70", "mr_j2k90"]),
+        (
+            "mr_native",
+            &["mr_rle", "mr_jpll70", "mr_j2k90", "mr_jls80"],
+        ),
         (
             "emri_native.dcm",
-            &["emri_rle.dcm", "emri_jpll70.dcm", "emri_j2k90.dcm"],
+            &[
+                "emri_rle.dcm",
+                "emri_jpll70.dcm",
+                "emri_j2k90.dcm",
+                "emri_jls80.dcm",
+                "emri_htj2k201.dcm",
+            ],
         ),
         (
             "u8_native.dcm",
-            &["u8_rle.dcm", "u8_jpll70.dcm", "u8_j2k90.dcm"],
+            &[
+                "u8_rle.dcm",
+                "u8_jpll70.dcm",
+                "u8_j2k90.dcm",
+                "u8_jls80.dcm",
+            ],
         ),
         (
             "signed_native.dcm",
-            &["signed_rle.dcm", "signed_jpll70.dcm", "signed_j2k90.dcm"],
+            &[
+                "signed_rle.dcm",
+                "signed_jpll70.dcm",
+                "signed_j2k90.dcm",
+                "signed_jls80.dcm",
+            ],
         ),
+        // 32-bit signed samples: four RLE byte planes per sample.
+        ("s32_native.dcm", &["s32_rle.dcm"]),
         (
             "signed16_native.dcm",
             &[
@@ -111,6 +136,11 @@ fn lossless_syntaxes_are_bit_exact() {
                 _ if e.contains("jpll70") => (
                     "1.2.840.10008.1.2.4.70",
                     "JPEG Lossless, first-order prediction",
+                ),
+                _ if e.contains("jls80") => ("1.2.840.10008.1.2.4.80", "JPEG-LS Lossless"),
+                _ if e.contains("htj2k201") => (
+                    "1.2.840.10008.1.2.4.201",
+                    "High-Throughput JPEG 2000 Lossless",
                 ),
                 _ => ("1.2.840.10008.1.2.4.90", "JPEG 2000 Lossless"),
             };
@@ -198,36 +228,181 @@ fn lossy_syntaxes_are_within_the_codec_error() {
     }
 }
 
-/// Lossy JPEG of 12-bit data (JPEG Extended, .51): `jpeg-decoder` decodes 8-bit DCT and
-/// 2..16-bit lossless JPEG only, so such a file is a typed [`ErrorKind::Unsupported`] naming
-/// the syntax, found from the frame header before decoding (GDCM writes this one with a
-/// 16-bit DCT frame header, outside the standard's 8 or 12), not a panic.
+/// Lossy JPEG of 12-bit data (JPEG Extended, .51, SOF1 written by libjpeg-turbo 3 through
+/// imagecodecs, quality 90), decoded by Volux's 12-bit decoder (`jpeg-decoder` and
+/// `zune-jpeg` decode 8-bit DCT frames only): within 1 of libjpeg's decode (its integer IDCT
+/// rounds differently) and near the original. GDCM's 16-bit DCT frame header (outside the
+/// standard's 8 or 12) stays a typed [`ErrorKind::Unsupported`] naming the syntax.
 #[test]
-fn jpeg_extended_12_bit_is_a_clear_error() {
+fn jpeg_extended_12_bit() {
+    let orig = grid("emri_native.dcm");
+    let g = grid("emri_jpeg51_12bit.dcm");
+    has_ts_note(&g, "1.2.840.10008.1.2.4.51", "JPEG Extended");
+    let (max, rms) = (max_diff(&orig, &g), rms_diff(&orig, &g));
+    eprintln!("emri_jpeg51_12bit: max {max}, rms {rms:.3}");
+    assert!(max > 0.0 && max <= 16.0 && rms < 4.0, "max {max} rms {rms}");
+    let libjpeg: Vec<u16> = std::fs::read(fixture("emri_jpeg51_12bit_libjpeg.u16"))
+        .unwrap()
+        .chunks_exact(2)
+        .map(|c| u16::from_le_bytes([c[0], c[1]]))
+        .collect();
+    let [nx, ny, nz] = g.dims();
+    assert_eq!(libjpeg.len(), nx * ny * nz);
+    let mut worst = 0f32;
+    for (n, &r) in libjpeg.iter().enumerate() {
+        let v = g.value(n % nx, n / nx % ny, n / (nx * ny));
+        worst = worst.max((v - f32::from(r)).abs());
+    }
+    eprintln!("emri_jpeg51_12bit vs libjpeg: max {worst}");
+    assert!(worst <= 1.0, "{worst}");
     let e = load(&fixture("emri_jpeg51.dcm")).unwrap_err();
     let msg = e.to_string();
-    eprintln!("{msg}");
     assert!(
         matches!(&e.kind, ErrorKind::Unsupported(m) if m.contains("1.2.840.10008.1.2.4.51")
-            && m.contains("JPEG Extended") && m.contains("16-bit")),
+            && m.contains("JPEG Extended") && m.contains("16-bit") && !m.contains('\n')),
         "{msg}"
     );
 }
 
-/// JPEG-LS has no pure-Rust decoder among dicom-pixeldata's features: a typed
-/// [`ErrorKind::Unsupported`] naming the syntax's UID and name, for a folder and a file.
+/// JPEG-LS near-lossless (.81, CharLS through pyjpegls, NEAR 3 on 16-bit and 2 on 8-bit
+/// data): within NEAR of the original, and bit for bit CharLS's own decode.
 #[test]
-fn jpeg_ls_is_unsupported_by_name() {
-    for p in [fixture("mr_jls80"), fixture("mr_jls80/1-1.dcm")] {
-        let e = load(&p).unwrap_err();
-        let msg = e.to_string();
-        assert!(
-            matches!(&e.kind, ErrorKind::Unsupported(m)
-                if m.contains("1.2.840.10008.1.2.4.80") && m.contains("JPEG-LS Lossless")
-                && m.contains("pure-Rust")),
-            "{msg}"
+fn jpeg_ls_near_lossless_is_within_near_and_matches_charls() {
+    for (native, encoded, charls, near) in [
+        (
+            "emri_native.dcm",
+            "emri_jls81.dcm",
+            "emri_jls81_charls.u16",
+            3.0,
+        ),
+        ("u8_native.dcm", "u8_jls81.dcm", "u8_jls81_charls.u8", 2.0),
+    ] {
+        let orig = grid(native);
+        let g = grid(encoded);
+        has_ts_note(
+            &g,
+            "1.2.840.10008.1.2.4.81",
+            "JPEG-LS Lossy (near-lossless)",
+        );
+        let d = max_diff(&orig, &g);
+        eprintln!("{encoded}: max |decoded - original| = {d}");
+        assert!(d <= near && d > 0.0, "{encoded}: {d}");
+        let bytes = std::fs::read(fixture(charls)).unwrap();
+        let reference: Vec<f32> = if charls.ends_with(".u8") {
+            bytes.iter().map(|&b| f32::from(b)).collect()
+        } else {
+            bytes
+                .chunks_exact(2)
+                .map(|c| f32::from(u16::from_le_bytes([c[0], c[1]])))
+                .collect()
+        };
+        let [nx, ny, nz] = g.dims();
+        assert_eq!(reference.len(), nx * ny * nz);
+        for (n, &r) in reference.iter().enumerate() {
+            assert_eq!(
+                g.value(n % nx, n / nx % ny, n / (nx * ny)),
+                r,
+                "{encoded} {n}"
+            );
+        }
+    }
+}
+
+/// High-Throughput JPEG 2000, lossy (.203, OpenJPH through imagecodecs, quantisation step
+/// 1e-4): bit for bit OpenJPEG's decode (pylibjpeg-openjpeg; openjp2 is its port), and
+/// within 16 of the original, RMS under 4 (OpenJPH's own decode: max 13, RMS 2.61).
+#[test]
+fn htj2k_lossy_matches_openjpeg() {
+    let orig = grid("emri_native.dcm");
+    let g = grid("emri_htj2k203.dcm");
+    has_ts_note(&g, "1.2.840.10008.1.2.4.203", "High-Throughput JPEG 2000");
+    let (max, rms) = (max_diff(&orig, &g), rms_diff(&orig, &g));
+    eprintln!("emri_htj2k203: max {max}, rms {rms:.3}");
+    assert!(max > 0.0 && max <= 16.0 && rms < 4.0, "max {max} rms {rms}");
+    let reference: Vec<u16> = std::fs::read(fixture("emri_htj2k203_openjpeg.u16"))
+        .unwrap()
+        .chunks_exact(2)
+        .map(|c| u16::from_le_bytes([c[0], c[1]]))
+        .collect();
+    let [nx, ny, nz] = g.dims();
+    assert_eq!(reference.len(), nx * ny * nz);
+    for (n, &r) in reference.iter().enumerate() {
+        assert_eq!(
+            g.value(n % nx, n / nx % ny, n / (nx * ny)),
+            f32::from(r),
+            "{n}"
         );
     }
+}
+
+/// Deflated Explicit VR Little Endian (pydicom's deflate of the native file): the same
+/// voxels and geometry as the original.
+#[test]
+fn deflated_data_set_reads_like_the_original() {
+    let orig = grid("emri_native.dcm");
+    let g = grid("emri_deflate.dcm");
+    assert_eq!(max_diff(&orig, &g), 0.0);
+}
+
+/// Byte offset where the deflated data set starts (after the file meta group).
+fn deflate_start(bytes: &[u8]) -> usize {
+    let mut at = 132;
+    while bytes[at..at + 2] == [0x02, 0x00] {
+        let vr = &bytes[at + 4..at + 6];
+        at += if [&b"OB"[..], b"UN", b"SQ", b"UT"].contains(&vr) {
+            12 + u32::from_le_bytes(bytes[at + 8..at + 12].try_into().unwrap()) as usize
+        } else {
+            8 + usize::from(u16::from_le_bytes([bytes[at + 6], bytes[at + 7]]))
+        };
+    }
+    at
+}
+
+/// Damaged deflated files: a corrupt deflate stream, one cut short, and an inflated data set
+/// with an element declaring more bytes than the inflated data holds (refused by the bounded
+/// walk before `dicom-object` would allocate them).
+#[test]
+fn damaged_deflated_files_are_refused() {
+    use std::io::{Read, Write};
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = std::fs::read(fixture("emri_deflate.dcm")).unwrap();
+    let start = deflate_start(&bytes);
+    let mut b = bytes.clone();
+    for x in &mut b[start..start + 16] {
+        *x = 0xFF;
+    }
+    let k = refused(dir.path(), "corrupt.dcm", &b);
+    assert!(
+        matches!(&k, ErrorKind::Invalid(m) if m.contains("cannot be inflated")),
+        "{k}"
+    );
+    refused(
+        dir.path(),
+        "cut.dcm",
+        &bytes[..start + (bytes.len() - start) / 2],
+    );
+    // Inflate, patch the PixelData length to 4 GB, deflate again.
+    let mut data = Vec::new();
+    flate2::read::DeflateDecoder::new(&bytes[start..])
+        .read_to_end(&mut data)
+        .unwrap();
+    let at = find(&data, &[0xE0, 0x7F, 0x10, 0x00]) + 8;
+    data[at..at + 4].copy_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
+    let mut enc = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::fast());
+    enc.write_all(&data).unwrap();
+    let mut b = bytes[..start].to_vec();
+    b.extend_from_slice(&enc.finish().unwrap());
+    let k = refused(dir.path(), "huge.dcm", &b);
+    assert!(
+        matches!(
+            k,
+            ErrorKind::Truncated {
+                expected: 4294967280,
+                ..
+            }
+        ),
+        "{k}"
+    );
 }
 
 // ---- hostile input ----
@@ -293,6 +468,11 @@ fn truncated_codestreams_are_refused() {
         "emri_j2k90.dcm",
         "u8_jpeg50.dcm",
         "mr_j2k91/1-1.dcm",
+        "emri_jls80.dcm",
+        "u8_jls81.dcm",
+        "emri_htj2k201.dcm",
+        "s32_rle.dcm",
+        "emri_jpeg51_12bit.dcm",
     ] {
         let bytes = std::fs::read(fixture(name)).unwrap();
         let short = name.replace('/', "_");
@@ -350,6 +530,11 @@ fn lying_rows_and_columns_are_refused() {
         "emri_j2k90.dcm",
         "u8_jpeg50.dcm",
         "u8_j2k90.dcm",
+        "emri_jls80.dcm",
+        "u8_jls81.dcm",
+        "emri_htj2k201.dcm",
+        "s32_rle.dcm",
+        "emri_jpeg51_12bit.dcm",
     ] {
         let bytes = std::fs::read(fixture(name)).unwrap();
         for (tag, v) in [(ROWS, 16), (COLS, 16), (ROWS, 64), (COLS, 31), (ROWS, 1)] {
@@ -416,4 +601,54 @@ fn damaged_rle_headers_are_refused() {
         matches!(&k, ErrorKind::Invalid(m) if m.contains("segment 2")),
         "{k}"
     );
+}
+
+/// Bytes of the first fragment changed at random (a fixed seed): JPEG-LS, HTJ2K and 32-bit
+/// RLE codestreams that decode to something or are refused, never a panic or a read past
+/// the grid.
+#[test]
+fn mutated_codestreams_never_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut seed = 0x5eed_u64;
+    let mut next = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 33) as usize
+    };
+    for name in [
+        "emri_jls80.dcm",
+        "emri_jls81.dcm",
+        "u8_jls81.dcm",
+        "emri_htj2k201.dcm",
+        "s32_rle.dcm",
+        "emri_jpeg51_12bit.dcm",
+    ] {
+        let bytes = std::fs::read(fixture(name)).unwrap();
+        let (start, len) = first_fragment(&bytes);
+        let (mut ok, mut err) = (0, 0);
+        for i in 0..120 {
+            let mut b = bytes.clone();
+            for _ in 0..1 + next() % 4 {
+                // Headers more often than entropy-coded data.
+                let at = start
+                    + if i % 2 == 0 {
+                        next() % 64.min(len)
+                    } else {
+                        next() % len
+                    };
+                b[at] = next() as u8;
+            }
+            let p = dir.path().join("m.dcm");
+            std::fs::write(&p, &b).unwrap();
+            match load(&p) {
+                Ok(g) => {
+                    assert_eq!(g.dims()[..2], [32, 32], "{name} mutant {i}");
+                    ok += 1;
+                }
+                Err(_) => err += 1,
+            }
+        }
+        eprintln!("{name}: 120 mutants, {ok} read, {err} refused");
+    }
 }

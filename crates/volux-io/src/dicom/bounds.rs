@@ -14,9 +14,14 @@
 //! undefined-length element other than pixel data is in the file's transfer syntax. An
 //! undefined-length `UN` element of an explicit-VR file holds implicit-VR items (PS3.5
 //! 6.2.2), which the parser misreads as explicit VR: it is refused here, naming the element,
-//! rather than after the parser has allocated a misread length. Deflated data sets are not
-//! walked.
-use std::io::{BufReader, Read, Seek, SeekFrom};
+//! rather than after the parser has allocated a misread length.
+//!
+//! A Deflated Explicit VR Little Endian file (1.2.840.10008.1.2.1.99) holds its data set as
+//! a raw deflate stream after the file meta group: it is inflated here, at most the memory
+//! budget's worth (a decompression bomb stops there with [`ErrorKind::Inflates`]), and the
+//! inflated data set is walked the same way, each length checked against the inflated size.
+//! `dicom-object` then inflates it again as it parses (through `flate2`, pure Rust).
+use std::io::{BufReader, Cursor, Read, Seek, SeekFrom};
 use std::path::Path;
 
 use super::ts::{EXPLICIT_BE, IMPLICIT_LE};
@@ -47,10 +52,12 @@ struct Header {
     len: u32,
 }
 
-/// A cursor over the file's element headers.
-struct Walker<'a> {
+/// A cursor over the file's element headers (or over an inflated data set).
+struct Walker<'a, R> {
     path: &'a Path,
-    r: BufReader<std::fs::File>,
+    r: R,
+    /// What the lengths are checked against, in messages: "the file".
+    place: &'static str,
     pos: u64,
     len: u64,
     explicit: bool,
@@ -59,7 +66,7 @@ struct Walker<'a> {
     fragments: bool,
 }
 
-impl Walker<'_> {
+impl<R: Read + Seek> Walker<'_, R> {
     /// Bytes left after the current position.
     fn left(&self) -> u64 {
         self.len.saturating_sub(self.pos)
@@ -194,8 +201,8 @@ impl Walker<'_> {
             self.path,
             ErrorKind::Invalid(format!(
                 "element ({:04X},{:04X}) declares {len} bytes, but only {left} bytes are left in \
-                 the file",
-                h.tag.0, h.tag.1
+                 {}",
+                h.tag.0, h.tag.1, self.place
             )),
         ))
     }
@@ -219,12 +226,22 @@ impl Walker<'_> {
         }
     }
 
-    /// Walks the element headers to the end of the file.
-    fn walk(&mut self) -> Result<()> {
-        while let Some(h) = self.header()? {
+    /// Walks the element headers to the end of the file, or to the first tag `keep` refuses.
+    fn walk(&mut self, keep: impl Fn((u16, u16)) -> bool) -> Result<()> {
+        loop {
+            let at = self.pos;
+            let Some(h) = self.header()? else {
+                return Ok(());
+            };
+            if !keep(h.tag) {
+                self.r
+                    .seek(SeekFrom::Start(at))
+                    .map_err(|e| io_error(self.path, e))?;
+                self.pos = at;
+                return Ok(());
+            }
             self.step(&h)?;
         }
-        Ok(())
     }
 
     /// Handles one header: checks its length and skips or enters its value.
@@ -262,7 +279,7 @@ impl Walker<'_> {
 }
 
 /// Walks the file meta group (explicit VR little endian) and returns the transfer syntax.
-fn meta_group(w: &mut Walker<'_>) -> Result<String> {
+fn meta_group<R: Read + Seek>(w: &mut Walker<'_, R>) -> Result<String> {
     let mut ts = String::new();
     while w.left() >= 8 {
         let at = w.pos;
@@ -285,11 +302,22 @@ fn meta_group(w: &mut Walker<'_>) -> Result<String> {
 /// Checks every element length of the DICOM file `path` (a regular file with the 128-byte
 /// preamble and `DICM`) against the bytes left in the file, before anything is allocated.
 pub(super) fn check(path: &Path) -> Result<()> {
+    check_with(path, false)
+}
+
+/// Checks the element lengths of the header of `path`, up to its PixelData element (whose
+/// value is not read when a file is scanned): a file cut inside its pixel data passes.
+pub(super) fn check_header(path: &Path) -> Result<()> {
+    check_with(path, true)
+}
+
+fn check_with(path: &Path, header_only: bool) -> Result<()> {
     let file = open_regular(path)?;
     let len = file_len(path, &file)?;
     let mut w = Walker {
         path,
         r: BufReader::new(file),
+        place: "the file",
         pos: 0,
         len,
         explicit: true,
@@ -302,21 +330,21 @@ pub(super) fn check(path: &Path) -> Result<()> {
     w.skip(132)?;
     let ts = meta_group(&mut w)?;
     if ts == DEFLATED {
-        return Ok(());
+        return check_deflated(path, w.r);
     }
     w.explicit = ts != IMPLICIT_LE;
     w.little = ts != EXPLICIT_BE;
     if w.explicit {
         implicit_data_set(&mut w, &ts)?;
     }
-    w.walk()
+    w.walk(|tag| !(header_only && tag == PIXEL_DATA))
 }
 
 /// An error when a data set whose transfer syntax says explicit VR starts with an element
 /// whose VR is not two capital letters but whose bytes read as an implicit-VR header: the
 /// writer encoded the data set in implicit VR (pydicom guesses so and reads it; the parser
 /// follows the transfer syntax and would misread every length).
-fn implicit_data_set(w: &mut Walker<'_>, ts: &str) -> Result<()> {
+fn implicit_data_set<R: Read + Seek>(w: &mut Walker<'_, R>, ts: &str) -> Result<()> {
     if w.left() < 8 {
         return Ok(());
     }
@@ -340,6 +368,39 @@ fn implicit_data_set(w: &mut Walker<'_>, ts: &str) -> Result<()> {
             u16::from_le_bytes([head[2], head[3]])
         )),
     ))
+}
+
+/// Inflates the data set that follows the file meta group (at most the memory budget) and
+/// walks its element headers (explicit VR little endian).
+fn check_deflated(path: &Path, rest: impl Read) -> Result<()> {
+    let limit = volux_core::limits::memory_limit();
+    let data = crate::util::read_to_limit(
+        path,
+        flate2::read::DeflateDecoder::new(rest),
+        limit,
+        "the deflated data set",
+        || "the memory budget".into(),
+    )
+    .map_err(|e| match e.kind {
+        ErrorKind::Io(io) => ReadError::new(
+            path,
+            ErrorKind::Invalid(format!(
+                "the deflated data set (transfer syntax {DEFLATED}) cannot be inflated: {io}"
+            )),
+        ),
+        _ => e,
+    })?;
+    let mut w = Walker {
+        path,
+        len: data.len() as u64,
+        r: Cursor::new(data),
+        place: "the inflated data set",
+        pos: 0,
+        explicit: true,
+        little: true,
+        fragments: false,
+    };
+    w.walk(|_| true)
 }
 
 #[cfg(test)]

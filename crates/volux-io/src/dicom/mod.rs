@@ -1,24 +1,32 @@
 //! DICOM (PS3.10 files with the 128-byte preamble and `DICM` marker): a folder of single-frame
-//! slices, one series picked by SeriesInstanceUID, or one file (enhanced multi-frame or a
-//! single slice). Parsing uses `dicom-object` 0.10 (a maintained, pure-Rust DICOM parser).
-//! Uncompressed transfer syntaxes (implicit and explicit VR little endian, explicit VR big
-//! endian) are read directly; compressed pixel data is decoded with `dicom-pixeldata` 0.10
-//! (module `codec`), whose pure-Rust codecs only are linked: RLE Lossless, JPEG baseline
-//! (8-bit) and lossless (`jpeg-decoder`), JPEG 2000 lossless and lossy (`openjp2`, the Rust
-//! port of OpenJPEG). The grid of a compressed file gets a note naming its transfer syntax.
-//! JPEG-LS (decoded by dicom-pixeldata only through CharLS, a C++ library), 12-bit lossy JPEG
-//! (which `jpeg-decoder` does not decode), deflate, High-Throughput JPEG 2000 and the others
-//! are [`ErrorKind::Unsupported`] naming the transfer syntax's UID and name. Decoding gives
-//! the stored values, which then take the same path as uncompressed ones (below).
+//! slices, one series picked by SeriesInstanceUID, a DICOMDIR, or one file (enhanced
+//! multi-frame or a single slice). Parsing uses `dicom-object` 0.10 (a maintained, pure-Rust
+//! DICOM parser). Uncompressed transfer syntaxes (implicit and explicit VR little endian,
+//! explicit VR big endian, and deflated explicit VR little endian, inflated by `flate2` after
+//! a bounded inflation in module `bounds`) are read directly; compressed pixel data is decoded
+//! in module `codec`, with pure-Rust codecs only: RLE Lossless (Volux's own decoder, 8, 16
+//! and 32 bits), JPEG baseline (8-bit) and lossless (`jpeg-decoder`), 12-bit lossy JPEG
+//! (Volux's own decoder, module `jpeg12`), JPEG-LS lossless and
+//! near-lossless (`pure_jpegls`, single-component), JPEG 2000 and High-Throughput JPEG 2000
+//! (`openjp2`, the Rust port of OpenJPEG). The grid of a compressed file gets a note naming
+//! its transfer syntax. No C or C++ codec is linked: CharLS (JPEG-LS through
+//! `dicom-pixeldata`'s `charls` feature) needs CMake to build. 12-bit progressive or colour
+//! JPEG, multi-component JPEG-LS, JPEG XL, video, JPIP and the retired JPEG processes are
+//! [`ErrorKind::Unsupported`], one line naming the transfer syntax's UID and name and why.
+//! Decoding gives the stored values, which then take the same path as uncompressed ones
+//! (below).
 //!
-//! - Folder: every file with the `DICM` marker is parsed (others, e.g. `series.json`, and
-//!   non-image DICOM files such as a DICOMDIR are skipped); slices are grouped by
-//!   SeriesInstanceUID and the requested series, else the one with the most slices, is loaded
-//!   (noted when there were several). Slices are ordered by ImagePositionPatient projected on
-//!   the slice normal (row x column direction cosines), or by InstanceNumber when positions
-//!   are missing (noted). Differing Rows / Columns / BitsAllocated / SamplesPerPixel /
-//!   PhotometricInterpretation, duplicate positions and missing slices (a gap over 1.5 times
-//!   the median gap) are [`ErrorKind::Invalid`].
+//! - Folder (module `folder`): every file with the `DICM` marker is scanned (others, e.g.
+//!   `series.json`, and non-image DICOM objects pass quietly; files that cannot be parsed
+//!   are skipped and named in a note); a DICOMDIR in the folder, or opened itself, is
+//!   followed to the files it references. Slices are grouped by SeriesInstanceUID and the
+//!   requested series, else the one with the most readable slices, is loaded (the others are
+//!   named in a note). A series is split into stacks by Rows / Columns / BitsAllocated /
+//!   SamplesPerPixel / PhotometricInterpretation / orientation: the largest is loaded, the others named in a note; a stack with a gap (a
+//!   missing or unreadable slice) is [`ErrorKind::Invalid`], naming the sub-series it splits
+//!   into. Slices are ordered by ImagePositionPatient projected on the slice normal (row x
+//!   column direction cosines), or by InstanceNumber when positions are missing (noted).
+//!   Duplicate positions are [`ErrorKind::Invalid`].
 //! - Multi-frame file: frames are the z slices; spacing, orientation, positions and rescale
 //!   come from the shared / per-frame functional groups (PixelMeasures, PlaneOrientation,
 //!   PlanePosition, PixelValueTransformation sequences), falling back to top-level attributes;
@@ -63,9 +71,8 @@
 //! the file (module `bounds`); Volux's own buffers are checked with `check_alloc`. Only regular
 //! files are opened ([`crate::util::open_regular`]); in a folder, anything else (a FIFO, a
 //! device, a link to one) is skipped.
-use std::collections::BTreeMap;
 use std::io::{Read, Seek, SeekFrom};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use dicom_dictionary_std::tags;
 use dicom_object::{DefaultDicomObject, OpenFileOptions};
@@ -82,9 +89,11 @@ mod attrs;
 mod bounds;
 mod codec;
 mod color;
+mod folder;
 mod frames;
 mod geometry;
 mod image;
+mod jpeg12;
 mod jpeg_color;
 mod lut;
 mod pixels;
@@ -102,7 +111,9 @@ use geometry::{Stack, StackInput};
 pub fn read(path: &Path, series_uid: Option<&str>, choice: VolumeChoice) -> Result<Grid> {
     let meta = crate::util::data_metadata(path)?;
     if meta.is_dir() {
-        read_folder(path, series_uid, choice)
+        folder::read_folder(path, series_uid, choice)
+    } else if folder::is_dicomdir(path) {
+        folder::read_dicomdir(path, series_uid, choice)
     } else {
         read_file(path, Vec::new(), choice)
     }
@@ -155,6 +166,9 @@ fn open_full(path: &Path) -> Result<DefaultDicomObject> {
 /// transfer syntax Volux does not read, or the parser's message.
 fn parse_error(path: &Path, e: &dyn std::error::Error) -> ReadError {
     if let Some(ts) = meta_transfer_syntax(path) {
+        if let Some(why) = ts::unsupported(&ts) {
+            return ReadError::new(path, ErrorKind::Unsupported(why));
+        }
         if let Some((expected, found)) = pixels::truncation(path, &ts) {
             return ReadError::new(path, ErrorKind::Truncated { expected, found });
         }
@@ -369,115 +383,66 @@ fn skipped_note(skipped: &[&Path]) -> Option<String> {
     }
 }
 
-/// Reads the DICOM images of a folder, groups them by series and loads one.
-fn read_folder(dir: &Path, series_uid: Option<&str>, choice: VolumeChoice) -> Result<Grid> {
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(|e| ReadError::new(dir, e))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
-    entries.sort();
-    let mut series: BTreeMap<String, Vec<ImageInfo>> = BTreeMap::new();
-    let mut skipped = Vec::new();
-    for p in &entries {
-        match scan(p)? {
-            Some(info) => series
-                .entry(info.series_uid.clone())
-                .or_default()
-                .push(info),
-            None => skipped.push(p.as_path()),
-        }
-    }
-    if series.is_empty() {
-        return Err(invalid(
-            dir,
-            format!(
-                "no DICOM image files in this folder ({} entries looked at)",
-                entries.len()
-            ),
-        ));
-    }
-    let (slices, mut notes) = select(dir, series, series_uid)?;
-    notes.extend(skipped_note(&skipped));
-    match slices.as_slice() {
-        [one] if one.frames > 1 => read_file(&one.path, notes, choice),
-        _ => load_series(dir, &slices, notes, choice),
-    }
-}
-
-/// Picks the requested series, else the one with the most slices.
-fn select(
-    dir: &Path,
-    mut series: BTreeMap<String, Vec<ImageInfo>>,
-    uid: Option<&str>,
-) -> Result<(Vec<ImageInfo>, Vec<String>)> {
-    let list = series
-        .iter()
-        .map(|(k, v)| format!("{k} ({} files)", v.len()))
-        .collect::<Vec<_>>()
-        .join(", ");
-    let chosen = match uid {
-        Some(u) => u.to_string(),
-        None => series
-            .iter()
-            .max_by_key(|(k, v)| (v.len(), std::cmp::Reverse((*k).clone())))
-            .map(|(k, _)| k.clone())
-            .unwrap_or_default(),
-    };
-    let Some(slices) = series.remove(&chosen) else {
-        return Err(invalid(
-            dir,
-            format!("series {chosen} is not in this folder; available: {list}"),
-        ));
-    };
-    let mut notes = Vec::new();
-    if uid.is_none() && !series.is_empty() {
-        notes.push(format!(
-            "{} series in this folder ({list}); loaded {chosen}, the one with the most files",
-            series.len() + 1
-        ));
-    }
-    Ok((slices, notes))
-}
-
-/// Checks that every slice matches the first: size, type, format, orientation.
+/// Checks that every slice matches the first: size, type, format, orientation (the folder
+/// module groups slices so; this guards the stack it hands over).
 fn check_slices(dir: &Path, slices: &[ImageInfo]) -> Result<()> {
     let Some(first) = slices.first() else {
         return Err(invalid(dir, "the series has no slices"));
     };
-    let name = |s: &ImageInfo| s.path.file_name().map(|n| n.to_string_lossy().into_owned());
+    let name = |s: &ImageInfo| {
+        s.path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
     for s in slices {
         pixels::check_format(s).map_err(|k| ReadError::new(&s.path, k))?;
-        let shape = |s: &ImageInfo| (s.rows, s.cols, s.bits, s.signed, s.samples_per_pixel);
-        if shape(s) != shape(first) || s.frames > 1 {
+        if s.frames > 1 {
             return Err(invalid(
                 dir,
                 format!(
-                    "slices differ: {:?} has Rows {} Columns {} BitsAllocated {} \
-                     SamplesPerPixel {} frames {} but {:?} has Rows {} Columns {} \
-                     BitsAllocated {} SamplesPerPixel {} frames {}",
-                    name(s).unwrap_or_default(),
-                    s.rows,
-                    s.cols,
-                    s.bits,
-                    s.samples_per_pixel,
+                    "{:?} is a multi-frame file ({} frames) among the single-frame slices of \
+                     {:?}",
+                    name(s),
                     s.frames,
-                    name(first).unwrap_or_default(),
-                    first.rows,
-                    first.cols,
-                    first.bits,
-                    first.samples_per_pixel,
-                    first.frames
+                    name(first)
                 ),
+            ));
+        }
+        let fields = [
+            ("Rows", s.rows, first.rows),
+            ("Columns", s.cols, first.cols),
+            ("BitsAllocated", s.bits, first.bits),
+            (
+                "PixelRepresentation",
+                u32::from(s.signed),
+                u32::from(first.signed),
+            ),
+            (
+                "SamplesPerPixel",
+                s.samples_per_pixel,
+                first.samples_per_pixel,
+            ),
+        ];
+        let differ: Vec<String> = fields
+            .iter()
+            .filter(|(_, a, b)| a != b)
+            .map(|(f, a, b)| format!("{f} {a} where {:?} has {b}", name(first)))
+            .collect();
+        if !differ.is_empty() {
+            return Err(invalid(
+                dir,
+                format!("slices differ: {:?} has {}", name(s), differ.join(", ")),
             ));
         }
         if s.photometric != first.photometric {
             return Err(invalid(
                 dir,
                 format!(
-                    "{:?} has PhotometricInterpretation {} but {:?} has {}",
-                    name(s).unwrap_or_default(),
+                    "slices differ: {:?} has PhotometricInterpretation {} where {:?} has {}",
+                    name(s),
                     s.photometric,
-                    name(first).unwrap_or_default(),
+                    name(first),
                     first.photometric
                 ),
             ));
@@ -491,8 +456,8 @@ fn check_slices(dir: &Path, slices: &[ImageInfo]) -> Result<()> {
                 dir,
                 format!(
                     "{:?} has a different ImageOrientationPatient than {:?}",
-                    name(s).unwrap_or_default(),
-                    name(first).unwrap_or_default()
+                    name(s),
+                    name(first)
                 ),
             ));
         }

@@ -10,7 +10,7 @@ use dicom_core::Tag;
 use dicom_dictionary_std::tags;
 
 use super::attrs::{ImageInfo, Obj};
-use super::ts::{is_native, ts_name, unsupported, EXPLICIT_BE, IMPLICIT_LE};
+use super::ts::{bits_read, is_native, ts_name, unsupported, EXPLICIT_BE, IMPLICIT_LE};
 use crate::error::ErrorKind;
 use crate::error::ReadError;
 use crate::error::Result;
@@ -130,17 +130,15 @@ pub(super) fn check_format(info: &ImageInfo) -> Result<(), ErrorKind> {
             info.bits
         )));
     }
-    let bits: &[u32] = if native {
-        &[1, 8, 16, 32, 64]
-    } else {
-        &[8, 16]
-    };
+    let bits = bits_read(ts);
     if !bits.contains(&info.bits) {
         return Err(ErrorKind::Unsupported(format!(
             "BitsAllocated {}: Volux reads {} in transfer syntax {ts} ({})",
             info.bits,
             if native {
                 "1, 8, 16, 32 and 64 (DoubleFloatPixelData)"
+            } else if bits.len() == 3 {
+                "8, 16 and 32"
             } else {
                 "8 and 16"
             },
