@@ -57,7 +57,8 @@ for mod, p in files.items():
     text = open(p).read()
     text = re.sub(r'//[^\n]*', '', text)
     text = re.sub(r'r#"(?:.|\n)*?"#', '""', text)
-    text = re.sub(r'"(?:[^"\\]|\\.)*"', '""', text)
+    # \\[\s\S]: an escaped newline (a string continued on the next line) stays in the string
+    text = re.sub(r'"(?:[^"\\]|\\[\s\S])*"', '""', text)
     # drop cfg(test) modules declared inline: crude, drop from '#[cfg(test)]\nmod tests {' to end
     m = re.search(r'#\[cfg\(test\)\]\s*mod\s+\w+\s*\{', text)
     if m: text = text[:m.start()]

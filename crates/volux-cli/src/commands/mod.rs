@@ -92,7 +92,12 @@ pub fn run(cli: Cli) -> Result<(), CmdError> {
                 convert::generate(kind, n, &output)
             }
         }
-        Command::Render(args) => render::run(&args, show),
+        // A session file replays a saved view (its own module, which renders through
+        // `render::render_on`); anything else is a render of a file.
+        Command::Render(args) => match &args.session {
+            Some(session) => session::run(&args, session, show),
+            None => render::run(&args, show),
+        },
         Command::Sculpt(args) => sculpt::run(&args, &cli.given, show),
         Command::Measure(args) => measure::run(&args, &cli.given, show),
         Command::Regions(args) => regions::run(&args, &cli.given, show),

@@ -17,11 +17,9 @@ use crate::cli::{Backend, RenderArgs};
 use crate::progress;
 use crate::settings::RenderPlan;
 
-/// Renders the file of `args` and writes the PNG (and the error map).
+/// Renders the file of `args` and writes the PNG (and the error map); a session file is
+/// rendered by `session::run` instead (the caller picks).
 pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
-    if let Some(session) = &args.session {
-        return super::session::run(args, session, show);
-    }
     if args.distributed {
         return super::distributed::run(args);
     }

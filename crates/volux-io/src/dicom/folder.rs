@@ -31,13 +31,10 @@ use std::path::{Path, PathBuf};
 use dicom_dictionary_std::tags;
 use dicom_object::OpenFileOptions;
 use glam::{DMat3, DVec3};
-use volux_core::Grid;
 
 use super::attrs::{self, ImageInfo};
-use super::{
-    bounds, has_dicm, invalid, load_series, parse_error, pixels, read_file, ts, un, volumes,
-};
-use crate::dataset::VolumeChoice;
+use super::files::{has_dicm, invalid, parse_error, skipped_note};
+use super::{bounds, pixels, ts, un, volumes};
 use crate::error::{ErrorKind, ReadError, Result};
 
 /// The Media Storage Directory SOP class (a DICOMDIR).
@@ -52,6 +49,18 @@ const SAME_ORIENTATION: f64 = 1e-4;
 const SAME_POSITION_MM: f64 = 1e-3;
 /// A gap larger than this many median gaps means a missing slice.
 const MISSING_GAP_RATIO: f64 = 1.5;
+
+/// What a folder or DICOMDIR reading chose to load, with the notes on what it set aside.
+pub(super) enum Picked {
+    /// One multi-frame file (an enhanced image).
+    File { path: PathBuf, notes: Vec<String> },
+    /// A stack of single-frame slices of one series (`dir`: the folder or DICOMDIR).
+    Slices {
+        dir: PathBuf,
+        slices: Vec<ImageInfo>,
+        notes: Vec<String>,
+    },
+}
 
 /// One DICOM file of a folder: its header summary when readable, and why it cannot be read
 /// when it cannot (a file cut inside its pixel data has both).
@@ -109,11 +118,7 @@ pub(super) fn is_dicomdir(path: &Path) -> bool {
 }
 
 /// Reads a folder: through its DICOMDIR when it has one, else its entries.
-pub(super) fn read_folder(
-    dir: &Path,
-    series_uid: Option<&str>,
-    choice: VolumeChoice,
-) -> Result<Grid> {
+pub(super) fn read_folder(dir: &Path, series_uid: Option<&str>) -> Result<Picked> {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| ReadError::new(dir, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -127,24 +132,20 @@ pub(super) fn read_folder(
     }) {
         // A DICOMDIR that cannot be followed does not hide the folder's own files.
         match dicomdir_listing(dd) {
-            Ok((files, dd_notes)) => return read_files(dd, &files, series_uid, dd_notes, choice),
+            Ok((files, dd_notes)) => return read_files(dd, &files, series_uid, dd_notes),
             Err(e) => notes.push(format!(
                 "the DICOMDIR cannot be followed ({}); the folder's files were scanned instead",
                 e.kind
             )),
         }
     }
-    read_files(dir, &entries, series_uid, notes, choice)
+    read_files(dir, &entries, series_uid, notes)
 }
 
 /// Reads the series a DICOMDIR references.
-pub(super) fn read_dicomdir(
-    path: &Path,
-    series_uid: Option<&str>,
-    choice: VolumeChoice,
-) -> Result<Grid> {
+pub(super) fn read_dicomdir(path: &Path, series_uid: Option<&str>) -> Result<Picked> {
     let (files, notes) = dicomdir_listing(path)?;
-    read_files(path, &files, series_uid, notes, choice)
+    read_files(path, &files, series_uid, notes)
 }
 
 /// The files a DICOMDIR references that exist, and the notes saying so; an error when it
@@ -373,8 +374,7 @@ fn read_files(
     files: &[PathBuf],
     series_uid: Option<&str>,
     mut notes: Vec<String>,
-    choice: VolumeChoice,
-) -> Result<Grid> {
+) -> Result<Picked> {
     let mut scanned = Vec::new();
     let mut quiet = Vec::new();
     for p in files {
@@ -495,9 +495,9 @@ fn read_files(
         });
     }
     notes.extend(broken_note);
-    notes.extend(super::skipped_note(&quiet));
+    notes.extend(skipped_note(&quiet));
     let members = series.remove(&chosen).unwrap_or_default();
-    load_stack(dir, &chosen, members, notes, choice)
+    load_stack(dir, &chosen, members, notes)
 }
 
 /// Splits the files of one series into stacks, loads the largest and notes the rest.
@@ -506,8 +506,7 @@ fn load_stack(
     uid: &str,
     members: Vec<Scanned>,
     mut notes: Vec<String>,
-    choice: VolumeChoice,
-) -> Result<Grid> {
+) -> Result<Picked> {
     let (good, aside): (Vec<&Scanned>, Vec<&Scanned>) =
         members.iter().partition(|s| set_aside(s).is_none());
     // A series of one multi-frame file (an enhanced image) is that file's frames.
@@ -537,7 +536,10 @@ fn load_stack(
                     names(rest)
                 ));
             }
-            return read_file(&m.path, notes, choice);
+            return Ok(Picked::File {
+                path: m.path.clone(),
+                notes,
+            });
         }
         // Nothing readable: the first file's own error (a colour image, a truncated file).
         let first = members.first();
@@ -633,7 +635,11 @@ fn load_stack(
         ));
     }
     let slices: Vec<ImageInfo> = stack.into_iter().cloned().collect();
-    load_series(dir, &slices, notes, choice)
+    Ok(Picked::Slices {
+        dir: dir.to_path_buf(),
+        slices,
+        notes,
+    })
 }
 
 /// A copy of an error kind (the kinds the scan records; an I/O error keeps its message).

@@ -71,7 +71,6 @@
 //! the file (module `bounds`); Volux's own buffers are checked with `check_alloc`. Only regular
 //! files are opened ([`crate::util::open_regular`]); in a folder, anything else (a FIFO, a
 //! device, a link to one) is skipped.
-use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
 use dicom_dictionary_std::tags;
@@ -89,6 +88,7 @@ mod attrs;
 mod bounds;
 mod codec;
 mod color;
+mod files;
 mod folder;
 mod frames;
 mod geometry;
@@ -103,6 +103,8 @@ mod values;
 mod volumes;
 
 use attrs::ImageInfo;
+use files::{has_dicm, invalid, parse_error};
+use folder::Picked;
 use geometry::{Stack, StackInput};
 
 /// Reads a DICOM folder (one series) or file. `series_uid` picks the series in a folder
@@ -110,28 +112,17 @@ use geometry::{Stack, StackInput};
 /// or file holding several at the same positions, and the channel of a colour image.
 pub fn read(path: &Path, series_uid: Option<&str>, choice: VolumeChoice) -> Result<Grid> {
     let meta = crate::util::data_metadata(path)?;
-    if meta.is_dir() {
-        folder::read_folder(path, series_uid, choice)
+    let picked = if meta.is_dir() {
+        folder::read_folder(path, series_uid)?
     } else if folder::is_dicomdir(path) {
-        folder::read_dicomdir(path, series_uid, choice)
+        folder::read_dicomdir(path, series_uid)?
     } else {
-        read_file(path, Vec::new(), choice)
+        return read_file(path, Vec::new(), choice);
+    };
+    match picked {
+        Picked::File { path, notes } => read_file(&path, notes, choice),
+        Picked::Slices { dir, slices, notes } => load_series(&dir, &slices, notes, choice),
     }
-}
-
-fn invalid(path: &Path, msg: impl Into<String>) -> ReadError {
-    ReadError::new(path, ErrorKind::Invalid(msg.into()))
-}
-
-/// Whether the file has the `DICM` marker after the 128-byte preamble.
-fn has_dicm(path: &Path) -> Result<bool> {
-    let mut head = [0u8; 132];
-    let f = crate::util::open_regular(path)?;
-    let n = f
-        .take(132)
-        .read(&mut head)
-        .map_err(|e| ReadError::new(path, e))?;
-    Ok(n == 132 && &head[128..] == b"DICM")
 }
 
 /// The header of one file of a folder: `None` when it is not a DICOM image.
@@ -160,35 +151,6 @@ fn open_full(path: &Path) -> Result<DefaultDicomObject> {
     let big = obj.meta().transfer_syntax() == ts::EXPLICIT_BE;
     un::resolve(&mut obj, !big);
     Ok(obj)
-}
-
-/// Explains why `dicom-object` could not read `path`: a file ending inside its pixel data, a
-/// transfer syntax Volux does not read, or the parser's message.
-fn parse_error(path: &Path, e: &dyn std::error::Error) -> ReadError {
-    if let Some(ts) = meta_transfer_syntax(path) {
-        if let Some(why) = ts::unsupported(&ts) {
-            return ReadError::new(path, ErrorKind::Unsupported(why));
-        }
-        if let Some((expected, found)) = pixels::truncation(path, &ts) {
-            return ReadError::new(path, ErrorKind::Truncated { expected, found });
-        }
-    }
-    let mut msg = e.to_string();
-    let mut src = e.source();
-    while let Some(s) = src {
-        msg.push_str(": ");
-        msg.push_str(&s.to_string());
-        src = s.source();
-    }
-    invalid(path, format!("cannot parse the DICOM file: {msg}"))
-}
-
-/// The transfer syntax from the file meta group, if readable.
-fn meta_transfer_syntax(path: &Path) -> Option<String> {
-    let mut f = std::io::BufReader::new(crate::util::open_regular(path).ok()?);
-    f.seek(SeekFrom::Start(128)).ok()?;
-    let meta = dicom_object::meta::FileMetaTable::from_reader(f).ok()?;
-    Some(meta.transfer_syntax().to_string())
 }
 
 /// Reads one file: a multi-frame volume (or one volume of several, `choice.timepoint`) or a
@@ -350,37 +312,6 @@ fn reserve(path: &Path, v: &mut Vec<u8>, bytes: u64) -> Result<()> {
     volux_core::limits::check_alloc("pixel data", bytes, 1).map_err(|e| ReadError::new(path, e))?;
     v.reserve_exact(bytes as usize);
     Ok(())
-}
-
-/// A note naming the empty files and folders among a series' files, so that a damaged
-/// series is not read short without a word (other files, such as a JSON sidecar or a
-/// DICOMDIR, are skipped quietly).
-fn skipped_note(skipped: &[&Path]) -> Option<String> {
-    let (mut empty, mut folders) = (0, 0);
-    for p in skipped {
-        match std::fs::metadata(p) {
-            Ok(m) if m.is_dir() => folders += 1,
-            Ok(m) if m.is_file() && m.len() == 0 => empty += 1,
-            _ => {}
-        }
-    }
-    let plural = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
-    match (empty, folders) {
-        (0, 0) => None,
-        (e, 0) => Some(format!(
-            "skipped {} among the series' files",
-            plural(e, "empty file")
-        )),
-        (0, f) => Some(format!(
-            "skipped {} among the series' files",
-            plural(f, "folder")
-        )),
-        (e, f) => Some(format!(
-            "skipped {} and {} among the series' files",
-            plural(e, "empty file"),
-            plural(f, "folder")
-        )),
-    }
 }
 
 /// Checks that every slice matches the first: size, type, format, orientation (the folder

@@ -80,7 +80,7 @@ pub fn read(dir: &Path, channel: usize, choice: VolumeChoice) -> Result<Grid> {
     };
     let (mut dec, _) = pages::open(first_path)?;
     let first = pages::page_info(first_path, &mut dec, 0)?;
-    let keep = super::keep(first_path, &first, choice.component)?;
+    let keep = pages::keep(first_path, &first, choice.component)?;
     let res = resolution(first_path, &mut dec)?;
     let (spacing, spacing_note) = match pages::description(first_path, &mut dec)? {
         Some(d) if imagej::is_imagej(&d) => {

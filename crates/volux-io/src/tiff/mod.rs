@@ -45,7 +45,7 @@ pub mod pages;
 pub mod source;
 
 use layout::{choose, plain_spacing, Layout};
-use pages::{resolution, tag_number, tiff_err, Keep, PageInfo, Volume};
+use pages::{resolution, tag_number, tiff_err, Volume};
 
 /// Reads a TIFF stack, an ImageJ hyperstack, an OME-TIFF, or (when `path` is a folder) a
 /// folder of numbered TIFF slices; `channel` and `choice.timepoint` choose among several,
@@ -57,7 +57,7 @@ pub fn read(path: &Path, channel: usize, choice: VolumeChoice) -> Result<Grid> {
     }
     let (mut dec, len) = pages::open(path)?;
     let first = pages::page_info(path, &mut dec, 0)?;
-    let keep = keep(path, &first, choice.component)?;
+    let keep = pages::keep(path, &first, choice.component)?;
     let desc = pages::description(path, &mut dec)?;
     let res = resolution(path, &mut dec)?;
     let unit = tag_number(path, &mut dec, Tag::ResolutionUnit)?;
@@ -105,23 +105,4 @@ pub fn read(path: &Path, channel: usize, choice: VolumeChoice) -> Result<Grid> {
     };
     let what = format!("{kind}: {n} pages");
     volume.into_grid(path, what, layout)
-}
-
-/// What the grid keeps of pages like `first`: the gray sample, the colour, or the colour
-/// channel `component` (an index past the page's channels is
-/// [`volux_core::Error::NoSuchVolume`]).
-pub fn keep(path: &Path, first: &PageInfo, component: Option<usize>) -> Result<Keep> {
-    let channels = if first.is_color() { 3 } else { 1 };
-    Ok(match component {
-        Some(c) => {
-            let c = choose(path, "component", c, channels)?;
-            if first.is_color() {
-                Keep::Channel(c)
-            } else {
-                Keep::Gray
-            }
-        }
-        None if first.is_color() => Keep::Rgb,
-        None => Keep::Gray,
-    })
 }

@@ -37,7 +37,7 @@ use volux_core::{Grid, ScalarType};
 use crate::error::{ErrorKind, ReadError, Result};
 use crate::util::{io_error, max_inflated, open_regular};
 
-use super::layout::Layout;
+use super::layout::{choose, Layout};
 use super::source::{jpeg_frame_size, webp_frame_size, Source};
 
 /// A TIFF decoder over a buffered, patchable file ([`Source`]).
@@ -1288,4 +1288,23 @@ pub fn resolution(path: &Path, dec: &mut TiffDecoder) -> Result<[Option<f64>; 2]
         tag_number(path, dec, Tag::XResolution)?,
         tag_number(path, dec, Tag::YResolution)?,
     ])
+}
+
+/// What the grid keeps of pages like `first`: the gray sample, the colour, or the colour
+/// channel `component` (an index past the page's channels is
+/// [`volux_core::Error::NoSuchVolume`]).
+pub fn keep(path: &Path, first: &PageInfo, component: Option<usize>) -> Result<Keep> {
+    let channels = if first.is_color() { 3 } else { 1 };
+    Ok(match component {
+        Some(c) => {
+            let c = choose(path, "component", c, channels)?;
+            if first.is_color() {
+                Keep::Channel(c)
+            } else {
+                Keep::Gray
+            }
+        }
+        None if first.is_color() => Keep::Rgb,
+        None => Keep::Gray,
+    })
 }
