@@ -120,6 +120,14 @@ LOSSY = {
     "1.2.840.10008.1.2.4.203": 1.0,  # HTJ2K
 }
 
+# The JPEG DCT processes, whose chroma upsampling ITU-T T.81 leaves to the decoder.
+JPEG_DCT = ("1.2.840.10008.1.2.4.50", "1.2.840.10008.1.2.4.51")
+# Colour JPEG with subsampled chroma (4:2:2, 4:2:0): decoders upsample as they choose, so the
+# tolerance is the reference decoders' own disagreement. On pydicom-data's
+# color3d_jpeg_baseline.dcm (YBR_FULL_422) libjpeg-turbo (Pillow) and pylibjpeg-libjpeg
+# differ by up to 5 at 840 of 110592000 samples.
+SUBSAMPLED_CHROMA_TOL = 6.0
+
 
 def dicom(path: str) -> Reference:
     import pydicom
@@ -183,10 +191,30 @@ def dicom(path: str) -> Reference:
     if color and spp == 4:
         raise NoReference("4 samples per pixel")
     affine, why = _dicom_geometry(ds, frames)
-    tol = LOSSY.get(str(ds.file_meta.get("TransferSyntaxUID", "")), 0.0)
+    tsuid = str(ds.file_meta.get("TransferSyntaxUID", ""))
+    tol = LOSSY.get(tsuid, 0.0)
+    if tol and color and tsuid in JPEG_DCT and _chroma_subsampled(ds):
+        tol = SUBSAMPLED_CHROMA_TOL
     if tol and int(ds.get("BitsStored", 8)) > 8:
         tol *= 2 ** (int(ds.BitsStored) - 8)
     return Reference(zyx_to_xyz(arr, color), affine, tol, (), why, expect_note)
+
+
+def _chroma_subsampled(ds) -> bool:
+    """Whether the first JPEG frame's SOF gives its components different sampling factors."""
+    from pydicom.encaps import generate_frames
+
+    try:
+        frame = next(generate_frames(ds.PixelData, number_of_frames=int(ds.get("NumberOfFrames", 1) or 1)))
+    except Exception:
+        return False
+    for marker in (b"\xff\xc0", b"\xff\xc1", b"\xff\xc2"):
+        i = frame.find(marker)
+        if i >= 0 and len(frame) > i + 10:
+            n = frame[i + 9]
+            factors = {frame[i + 11 + 3 * c] for c in range(n) if len(frame) > i + 11 + 3 * c}
+            return len(factors) > 1
+    return False
 
 
 # ------------------------------------------------------------------------------------ nibabel
