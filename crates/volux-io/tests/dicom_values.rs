@@ -379,3 +379,66 @@ fn a_number_of_frames_that_is_no_number_is_refused() {
         "{e}"
     );
 }
+
+/// Per-channel sums and a few pixels (index in row order, RGB) of pydicom's decode of `name`.
+fn colour_matches(
+    name: &str,
+    dims: [usize; 3],
+    sums: [i64; 3],
+    pixels: &[(usize, [u8; 3])],
+    tol: i64,
+) {
+    let g = read(name);
+    assert_eq!(g.dims(), dims, "{name}");
+    let rgb = g.color().unwrap_or_else(|| panic!("{name}: no colour"));
+    let n = g.len();
+    for (c, want) in sums.iter().enumerate() {
+        let got: i64 = (0..n).map(|i| rgb.channels()[c].get_f32(i) as i64).sum();
+        // Lossy frames: at most `tol` a sample apart, on average far less.
+        assert!(
+            (got - want).abs() <= tol * n as i64 / 100,
+            "{name}: channel {c} sums to {got}, pydicom's to {want}"
+        );
+    }
+    for (i, want) in pixels {
+        for c in 0..3 {
+            let got = rgb.channels()[c].get_f32(*i) as i64;
+            assert!(
+                (got - i64::from(want[c])).abs() <= tol,
+                "{name}: pixel {i} channel {c} is {got}, pydicom's {}",
+                want[c]
+            );
+        }
+    }
+}
+
+/// An RGB JPEG without an Adobe marker and with component identifiers 0, 1, 2: left to
+/// guess, jpeg-decoder converts it from YCbCr (pixels 110 off); decoded as coded, it is
+/// pydicom's picture (within the lossy tolerance of 3).
+#[test]
+fn rgb_jpeg_without_a_colour_marker_is_not_converted() {
+    colour_matches(
+        "SC_jpeg_no_color_transform",
+        [256, 256, 1],
+        [15989247, 15989317, 15988450],
+        &[
+            (7503, [150, 134, 134]),
+            (38917, [213, 196, 213]),
+            (7247, [182, 165, 169]),
+        ],
+        3,
+    );
+}
+
+/// A JPEG 2000 frame wrapped in a JP2 file (GDCM wrote such files): its codestream box is
+/// checked and decoded, exactly (lossless).
+#[test]
+fn jpeg_2000_in_a_jp2_wrapper_is_read() {
+    colour_matches(
+        "GDCMJ2K_TextGBR",
+        [400, 400, 1],
+        [19605686, 20227141, 19896396],
+        &[(36901, [255, 0, 0]), (16, [128, 128, 128])],
+        0,
+    );
+}

@@ -105,6 +105,9 @@ pub(super) fn decode(
                 let v = super::jpeg12::decode(&data, info.rows, info.cols).map_err(cannot)?;
                 decoded = Cow::Owned(v.iter().flat_map(|x| x.to_le_bytes()).collect());
             }
+            Family::Jpeg if info.samples_per_pixel == 3 && info.bits == 8 => {
+                decoded = Cow::Owned(decode_jpeg_components(&data).map_err(cannot)?);
+            }
             Family::Jpeg | Family::Jpeg2000 => {
                 if fam == Family::Jpeg2000 {
                     check_j2k(&data, info).map_err(bad)?;
@@ -130,6 +133,18 @@ pub(super) fn decode(
         out.extend_from_slice(got);
     }
     Ok(out)
+}
+
+/// An 8-bit colour JPEG frame's components as they are coded, interleaved, upsampled to full
+/// resolution but not colour-transformed: module `jpeg_color` decides, as pydicom does, whether
+/// they are YBR (`jpeg-decoder` would otherwise guess from the markers, PS3.5 8.2.1 leaving the
+/// colour space to the Photometric Interpretation).
+fn decode_jpeg_components(data: &[u8]) -> Result<Vec<u8>, String> {
+    let mut d = jpeg_decoder::Decoder::new(data);
+    // `RGB` interleaves the three components untouched; `None` (0.3.2) writes them plane
+    // after plane past its output and panics.
+    d.set_color_transform(jpeg_decoder::ColorTransform::RGB);
+    d.decode().map_err(|e| e.to_string())
 }
 
 /// Why a codestream header is refused.
@@ -587,9 +602,46 @@ fn check_jpeg(data: &[u8], info: &ImageInfo) -> Result<bool, Bad> {
     }
 }
 
+/// The JP2 signature box (ISO/IEC 15444-1 I.5.1).
+const JP2_SIGNATURE: [u8; 12] = [0, 0, 0, 12, b'j', b'P', b' ', b' ', 0x0D, 0x0A, 0x87, 0x0A];
+
+/// The contiguous codestream box (`jp2c`) of a JP2 file, walked box by box (each box length
+/// checked against the data); `None` when there is none.
+fn jp2_codestream(data: &[u8]) -> Option<&[u8]> {
+    let mut at = 0usize;
+    while at + 8 <= data.len() {
+        let len = u32::from_be_bytes(data[at..at + 4].try_into().ok()?) as usize;
+        let kind = &data[at + 4..at + 8];
+        let (head, len) = match len {
+            0 => (8, data.len() - at),
+            1 => {
+                let l = u64::from_be_bytes(data.get(at + 8..at + 16)?.try_into().ok()?);
+                (16, usize::try_from(l).ok()?)
+            }
+            l => (8, l),
+        };
+        if len < head || at.checked_add(len)? > data.len() {
+            return None;
+        }
+        if kind == b"jp2c" {
+            return Some(&data[at + head..at + len]);
+        }
+        at += len;
+    }
+    None
+}
+
 /// The JPEG 2000 image size (SIZ) against Rows, Columns, SamplesPerPixel and BitsAllocated.
-/// The DICOM JPEG 2000 transfer syntaxes carry a bare codestream (no JP2 boxes, PS3.5 A.4.4).
+/// The DICOM JPEG 2000 transfer syntaxes carry a bare codestream (PS3.5 A.4.4); some writers
+/// (older GDCM) wrap it in a JP2 file, whose codestream box is checked instead (the decoder
+/// reads either).
 fn check_j2k(data: &[u8], info: &ImageInfo) -> Result<(), Bad> {
+    if data.starts_with(&JP2_SIGNATURE) {
+        let Some(cs) = jp2_codestream(data) else {
+            return Err("the data is a JP2 file without a readable codestream box (jp2c)".into());
+        };
+        return check_j2k(cs, info);
+    }
     if data.get(..4) != Some(&[0xFF, 0x4F, 0xFF, 0x51][..]) {
         return Err(
             "the data does not start with a JPEG 2000 codestream (SOC then SIZ markers)".into(),
@@ -744,8 +796,17 @@ mod tests {
         for n in 0..full.len() {
             assert!(check_j2k(&full[..n], &i).is_err(), "{n}");
         }
-        // A JP2 file (boxes) instead of a bare codestream.
-        assert!(msg(check_j2k(b"\0\0\0\x0CjP  \r\n\x87\n", &i)).contains("codestream"));
+        // A JP2 file (boxes) without a codestream box, and one holding the codestream.
+        assert!(msg(check_j2k(b"\0\0\0\x0CjP  \r\n\x87\n", &i)).contains("jp2c"));
+        let cs = j2k(30, 20, 0, 11, 1);
+        let mut jp2 = JP2_SIGNATURE.to_vec();
+        jp2.extend_from_slice(&(8 + cs.len() as u32).to_be_bytes());
+        jp2.extend_from_slice(b"jp2c");
+        jp2.extend_from_slice(&cs);
+        check_j2k(&jp2, &i).unwrap();
+        // A box longer than the data.
+        jp2[12..16].copy_from_slice(&1000u32.to_be_bytes());
+        assert!(msg(check_j2k(&jp2, &i)).contains("jp2c"));
     }
 
     #[test]

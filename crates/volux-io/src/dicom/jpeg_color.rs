@@ -1,14 +1,13 @@
-//! The colour space of three-component JPEG frames: what `jpeg-decoder` does with them
-//! against what pydicom gives.
+//! The colour space of three-component JPEG frames, decided as pydicom decides it.
 //!
 //! pydicom decodes a JPEG frame's components as they are, takes the Photometric
 //! Interpretation (PS3.3 C.7.6.3.1.2) as their colour space, corrected by the codestream
 //! (component identifiers `R`, `G`, `B` mean RGB; a JFIF marker means YBR), and converts
-//! YBR_FULL and YBR_FULL_422 to RGB. `jpeg-decoder` decides by itself whether to convert
-//! from YCbCr (component identifiers 1, 2, 3, a JFIF marker, an Adobe APP14 transform flag,
-//! else YCbCr). Where the two disagree the decoder's output is either converted here (the
-//! decoder left YBR components) or refused (the decoder converted RGB components, which
-//! cannot be undone).
+//! YBR_FULL and YBR_FULL_422 to RGB. Volux does the same: 8-bit colour frames are decoded by
+//! `jpeg-decoder` with its own colour transform switched off (module `codec`; left alone it
+//! guesses from the component identifiers and markers, and would turn RGB components written
+//! without an Adobe marker into nonsense that cannot be undone), and the components are
+//! converted here when they are YBR. Lossless frames are never transformed by the decoder.
 use dicom_core::value::Value;
 use dicom_dictionary_std::tags;
 
@@ -17,9 +16,9 @@ use super::attrs::Obj;
 /// What the decoded frames need.
 #[derive(Debug, PartialEq, Eq)]
 pub(super) enum Needs {
-    /// They are RGB as pydicom gives them (converted or not by the decoder, as it should).
+    /// They are RGB as decoded.
     Nothing,
-    /// They are YBR_FULL components the decoder left: convert them.
+    /// They are YBR_FULL components: convert them to RGB.
     YbrToRgb,
 }
 
@@ -28,9 +27,6 @@ pub(super) enum Needs {
 struct Markers {
     ids: Vec<u8>,
     jfif: bool,
-    adobe: Option<u8>,
-    /// A lossless frame (SOF3, 7, 11, 15), whose components jpeg-decoder never converts.
-    lossless: bool,
 }
 
 /// The markers before the first scan.
@@ -53,9 +49,7 @@ fn markers(data: &[u8]) -> Markers {
             .unwrap_or(&[]);
         match code {
             0xE0 if body.starts_with(b"JFIF\0") => m.jfif = true,
-            0xEE if body.starts_with(b"Adobe") => m.adobe = body.get(11).copied(),
             0xC0..=0xCF if !matches!(code, 0xC4 | 0xC8 | 0xCC) => {
-                m.lossless = matches!(code, 0xC3 | 0xC7 | 0xCB | 0xCF);
                 let n = usize::from(body.get(5).copied().unwrap_or(0));
                 m.ids = (0..n)
                     .filter_map(|c| body.get(6 + 3 * c).copied())
@@ -99,33 +93,7 @@ fn decide(m: &Markers, pi: &str) -> Result<Needs, String> {
     } else {
         matches!(pi, "YBR_FULL" | "YBR_FULL_422")
     };
-    // jpeg-decoder's (Decoder::determine_color_transform, 0.3; lossless frames as they are).
-    let converts = !m.lossless
-        && match m.ids.as_slice() {
-            [1, 2, 3] => true,
-            [82, 71, 66] | [114, 103, 98] => false,
-            _ if m.jfif => true,
-            _ => m.adobe != Some(0),
-        };
-    match (converts, ybr) {
-        (true, true) | (false, false) => Ok(Needs::Nothing),
-        (false, true) => Ok(Needs::YbrToRgb),
-        (true, false) => Err(format!(
-            "JPEG colour: PhotometricInterpretation {pi} says the components are RGB, but the \
-             codestream (component identifiers {:?}, {}, {}) is one that jpeg-decoder converts \
-             from YCbCr, which cannot be undone",
-            m.ids,
-            if m.jfif {
-                "a JFIF marker"
-            } else {
-                "no JFIF marker"
-            },
-            match m.adobe {
-                Some(t) => format!("Adobe transform {t}"),
-                None => "no Adobe marker".into(),
-            }
-        )),
-    }
+    Ok(if ybr { Needs::YbrToRgb } else { Needs::Nothing })
 }
 
 #[cfg(test)]
@@ -143,27 +111,27 @@ mod tests {
     }
 
     #[test]
-    fn decoder_and_pydicom_colour_spaces() {
+    fn pydicom_colour_spaces() {
         let m = markers(&sof([0, 1, 2]));
         assert_eq!(m.ids, [0, 1, 2]);
-        // RGB components without a marker: jpeg-decoder would convert them.
-        assert!(decide(&m, "RGB").unwrap_err().contains("cannot be undone"));
-        assert_eq!(decide(&m, "YBR_FULL_422"), Ok(Needs::Nothing));
-        // An Adobe marker with transform 0: the decoder leaves the components.
+        // The Photometric Interpretation decides, unless the codestream says otherwise.
+        assert_eq!(decide(&m, "RGB"), Ok(Needs::Nothing));
+        assert_eq!(decide(&m, "YBR_FULL_422"), Ok(Needs::YbrToRgb));
         let mut adobe = vec![0xFF, 0xD8, 0xFF, 0xEE, 0x00, 0x0E];
         adobe.extend_from_slice(b"Adobe\0\x65\0\0\0\0\0");
         adobe.extend_from_slice(&sof([0, 1, 2])[2..]);
         let m = markers(&adobe);
-        assert_eq!(m.adobe, Some(0));
         assert_eq!(decide(&m, "RGB"), Ok(Needs::Nothing));
         assert_eq!(decide(&m, "YBR_FULL"), Ok(Needs::YbrToRgb));
+        // Identifiers R, G, B: RGB whatever the header says.
         assert_eq!(
             decide(&markers(&sof(*b"RGB")), "YBR_FULL"),
             Ok(Needs::Nothing)
         );
-        assert_eq!(
-            decide(&markers(&sof([1, 2, 3])), "YBR_FULL_422"),
-            Ok(Needs::Nothing)
-        );
+        // A JFIF marker: YBR even under an RGB Photometric Interpretation.
+        let mut jfif = vec![0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x07];
+        jfif.extend_from_slice(b"JFIF\0");
+        jfif.extend_from_slice(&sof([1, 2, 3])[2..]);
+        assert_eq!(decide(&markers(&jfif), "RGB"), Ok(Needs::YbrToRgb));
     }
 }
