@@ -6,7 +6,8 @@ use std::path::Path;
 mod common;
 use common::{png_pixels, volux};
 
-/// A 16^3 RGB NRRD: red voxels left of the middle, blue ones right of it.
+/// A 16^3 RGB NRRD: red voxels left of the middle, blue ones right of it, black slabs at the
+/// two x ends.
 fn rgb_nrrd(dir: &Path) {
     let n = 16usize;
     let mut bytes = format!(
@@ -16,9 +17,15 @@ fn rgb_nrrd(dir: &Path) {
          endian: little\nencoding: raw\n\n"
     )
     .into_bytes();
+    // Black (transparent: the opacity follows the luminance over its range) at the two
+    // x ends, so that red (luminance 72) and blue (70) both lie high in that range.
     for i in 0..n * n * n {
-        let red = i % n < n / 2;
-        bytes.extend(if red { [220, 20, 20] } else { [20, 40, 230] });
+        let x = i % n;
+        bytes.extend(match x {
+            _ if x < 2 || x >= n - 2 => [0, 0, 0],
+            _ if x < n / 2 => [230, 30, 30],
+            _ => [40, 60, 250],
+        });
     }
     std::fs::write(dir.join("rgb.nrrd"), bytes).unwrap();
 }
