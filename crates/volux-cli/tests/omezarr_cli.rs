@@ -130,8 +130,10 @@ fn bad_store_inputs_are_one_line_and_write_nothing() {
             "level 7 does not exist",
         ),
         (
+            // --channel now applies to every reader (TIFF, OME-Zarr, colour): a grey raw
+            // volume has only channel 0.
             &["info", "--channel", "1", "s.raw"],
-            "--channel applies to OME-Zarr",
+            "channel 1 does not exist: the file holds 1",
         ),
     ];
     for (args, expected) in cases {
