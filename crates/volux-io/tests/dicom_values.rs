@@ -401,12 +401,11 @@ fn colour_matches(
         );
     }
     for (i, want) in pixels {
-        for c in 0..3 {
+        for (c, &w) in want.iter().enumerate() {
             let got = rgb.channels()[c].get_f32(*i) as i64;
             assert!(
-                (got - i64::from(want[c])).abs() <= tol,
-                "{name}: pixel {i} channel {c} is {got}, pydicom's {}",
-                want[c]
+                (got - i64::from(w)).abs() <= tol,
+                "{name}: pixel {i} channel {c} is {got}, pydicom's {w}"
             );
         }
     }
