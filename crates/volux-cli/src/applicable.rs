@@ -45,13 +45,6 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
             .into());
         }
     }
-    if args.view_args.view.is_some() && args.given("up") {
-        return Err(
-            "--view sets the up direction (z; y for top and bottom); turn from a view \
-                    with --azimuth/--elevation, or give --up without --view"
-                .into(),
-        );
-    }
     for flag in ["opacity-scale", "no-early-termination"] {
         if args.mip && args.given(flag) {
             return Err(format!(

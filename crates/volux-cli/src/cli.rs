@@ -456,14 +456,17 @@ pub struct ViewArgs {
     /// Orbit elevation in degrees (default 0).
     #[arg(long, allow_hyphen_values = true)]
     pub elevation: Option<f64>,
-    /// A named view: front, back, left, right (the camera on -y, +y, -x, +x, z up), top,
-    /// bottom (on +z, -z, y up); --azimuth and --elevation turn from it. The world is LPS
-    /// (+x left, +y posterior, +z superior), scans placed by their orientation: front faces
-    /// the patient's face.
-    #[arg(long, value_enum)]
+    /// A named view, in the patient's terms (Slicer's convention: `left` puts the camera on
+    /// the patient's left and shows that side): left, right, anterior (front), posterior
+    /// (back) with superior up; superior (top), inferior (bottom) with anterior up, inferior
+    /// being the radiological axial view. Axis views for any data: +x, -x, +y, -y, +z, -z
+    /// (z up; y up for +-z). The world is LPS (+x left, +y posterior, +z superior), scans
+    /// placed by their orientation. --up turns the image about the view direction;
+    /// --azimuth and --elevation turn from the view.
+    #[arg(long, value_enum, allow_hyphen_values = true)]
     pub view: Option<ViewArg>,
-    /// Up direction X,Y,Z of the orbit camera (default 0,0,1; e.g. 0,0,-1 for scans stored
-    /// head down).
+    /// Up direction X,Y,Z of the camera (default 0,0,1, or the named view's up; e.g. 0,0,-1
+    /// for scans stored head down).
     #[arg(long, allow_hyphen_values = true)]
     pub up: Option<String>,
     /// What the camera frames: `visible` (what the transfer function and isosurfaces show,
@@ -513,21 +516,67 @@ impl RenderArgs {
     }
 }
 
-/// `volux render --view`.
+/// `volux render --view`: the patient's sides (LPS world: +x left, +y posterior, +z
+/// superior, Slicer's convention) and the axes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ViewArg {
-    /// The camera on -y, looking along +y, z up.
-    Front,
-    /// The camera on +y, looking along -y, z up.
-    Back,
-    /// The camera on -x, looking along +x, z up.
+    /// From the patient's left (camera on +x): shows the left side, superior up.
+    #[value(alias = "l")]
     Left,
-    /// The camera on +x, looking along -x, z up.
+    /// From the patient's right (camera on -x): shows the right side, superior up.
+    #[value(alias = "r")]
     Right,
-    /// The camera on +z, looking down, y up.
-    Top,
-    /// The camera on -z, looking up, y up.
-    Bottom,
+    /// From the front (camera on -y): the face, superior up.
+    #[value(alias = "front", alias = "a")]
+    Anterior,
+    /// From behind (camera on +y), superior up.
+    #[value(alias = "back", alias = "p")]
+    Posterior,
+    /// From above the head (camera on +z), anterior up.
+    #[value(alias = "top", alias = "s")]
+    Superior,
+    /// From the feet (camera on -z), anterior up: the radiological axial view (the
+    /// patient's left on the image's right).
+    #[value(alias = "bottom", alias = "i")]
+    Inferior,
+    /// Camera on +x, z up (axis views for data without a patient).
+    #[value(name = "+x")]
+    PlusX,
+    /// Camera on -x, z up.
+    #[value(name = "-x")]
+    MinusX,
+    /// Camera on +y, z up.
+    #[value(name = "+y")]
+    PlusY,
+    /// Camera on -y, z up.
+    #[value(name = "-y")]
+    MinusY,
+    /// Camera on +z, y up.
+    #[value(name = "+z")]
+    PlusZ,
+    /// Camera on -z, y up.
+    #[value(name = "-z")]
+    MinusZ,
+}
+
+impl From<ViewArg> for volux_core::NamedView {
+    fn from(v: ViewArg) -> Self {
+        use volux_core::NamedView as N;
+        match v {
+            ViewArg::Left => N::Left,
+            ViewArg::Right => N::Right,
+            ViewArg::Anterior => N::Anterior,
+            ViewArg::Posterior => N::Posterior,
+            ViewArg::Superior => N::Superior,
+            ViewArg::Inferior => N::Inferior,
+            ViewArg::PlusX => N::PlusX,
+            ViewArg::MinusX => N::MinusX,
+            ViewArg::PlusY => N::PlusY,
+            ViewArg::MinusY => N::MinusY,
+            ViewArg::PlusZ => N::PlusZ,
+            ViewArg::MinusZ => N::MinusZ,
+        }
+    }
 }
 
 /// `volux render --frame`.

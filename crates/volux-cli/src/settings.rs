@@ -4,8 +4,9 @@
 //! a string itself.
 use std::path::Path;
 
+use glam::DVec3;
 use volux_core::image::PngOptions;
-use volux_core::{transfer_import, Camera, CameraSpec, TransferFunction};
+use volux_core::{transfer_import, Camera, CameraSpec, NamedView, TransferFunction};
 use volux_io::Dataset;
 use volux_render::framing::{fit_to_box, visible_bounds};
 use volux_render::integrate::{AdaptiveParams, Integrator, SegmentRule, StepControl};
@@ -17,7 +18,7 @@ use volux_render::shading::{BlinnPhong, Light};
 
 use crate::cli::{
     ColorArg, ControllerArg, FrameArg, IntegratorArg, MethodArg, ReconstructionArg, RenderArgs,
-    SortArg, ViewArg,
+    SortArg,
 };
 use crate::commands::common::CmdError;
 use volux_core::voi::ClipPlane;
@@ -322,12 +323,15 @@ pub fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
         let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
         return Ok(CameraSpec::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?);
     }
-    let (azimuth, up) = match args.view_args.view {
-        None => (
-            None,
-            args.view_args.up.as_deref().map(parse_up).transpose()?,
-        ),
-        Some(v) => view_angles(v),
+    let up = args.view_args.up.as_deref().map(parse_up).transpose()?;
+    let (azimuth, elevation, up) = match args.view_args.view {
+        None => (None, None, up),
+        Some(v) => {
+            let o = NamedView::from(v)
+                .orbit(up.map(DVec3::from))
+                .map_err(|e| format!("--view: {e}"))?;
+            (Some(o.azimuth), Some(o.elevation), Some(o.up))
+        }
     };
     let turn = |a: Option<f64>, b: Option<f64>| match (a, b) {
         (None, None) => None,
@@ -343,26 +347,11 @@ pub fn camera_spec(args: &RenderArgs) -> Result<CameraSpec, CmdError> {
             .into(),
         ),
         azimuth: turn(azimuth, args.view_args.azimuth),
-        elevation: args.view_args.elevation,
+        elevation: turn(elevation, args.view_args.elevation),
         up,
         zoom: Some(args.view_args.zoom),
         ..Default::default()
     })
-}
-
-/// A named view as an orbit: the azimuth around the up axis, and that axis (z for the side
-/// views; y for top and bottom, where azimuth +-90 puts the camera on +-z).
-fn view_angles(view: ViewArg) -> (Option<f64>, Option<[f64; 3]>) {
-    let z = Some([0.0, 0.0, 1.0]);
-    let y = Some([0.0, 1.0, 0.0]);
-    match view {
-        ViewArg::Front => (Some(0.0), z),
-        ViewArg::Back => (Some(180.0), z),
-        ViewArg::Left => (Some(-90.0), z),
-        ViewArg::Right => (Some(90.0), z),
-        ViewArg::Top => (Some(90.0), y),
-        ViewArg::Bottom => (Some(-90.0), y),
-    }
 }
 
 /// Parses `--up X,Y,Z` (not zero).
@@ -517,39 +506,6 @@ mod tests {
     use super::*;
     use glam::DVec3;
     use volux_core::Aabb;
-
-    /// Each named view puts the camera on its axis, looking at the centre, with its up.
-    #[test]
-    fn named_views_sit_on_their_axes() {
-        let b = Aabb {
-            min: DVec3::splat(-1.0),
-            max: DVec3::splat(1.0),
-        };
-        let cases = [
-            (ViewArg::Front, -DVec3::Y, DVec3::Z),
-            (ViewArg::Back, DVec3::Y, DVec3::Z),
-            (ViewArg::Left, -DVec3::X, DVec3::Z),
-            (ViewArg::Right, DVec3::X, DVec3::Z),
-            (ViewArg::Top, DVec3::Z, DVec3::Y),
-            (ViewArg::Bottom, -DVec3::Z, DVec3::Y),
-        ];
-        for (view, side, up) in cases {
-            let (azimuth, pole) = view_angles(view);
-            let spec = CameraSpec {
-                azimuth,
-                up: pole,
-                ..Default::default()
-            };
-            let cam = spec.resolve(&b).unwrap();
-            let dir = (cam.eye - cam.target).normalize();
-            assert!((dir - side).length() < 1e-9, "{view:?}: eye towards {dir}");
-            assert!(
-                (cam.basis().1 - up).length() < 1e-9,
-                "{view:?}: up {}",
-                cam.basis().1
-            );
-        }
-    }
 
     #[test]
     fn up_and_layer_specs_parse_or_say_what_they_expect() {

@@ -258,40 +258,6 @@ fn bench_voi_suite_reports_cuts_and_clipped_frames() {
     }
 }
 
-/// A NIfTI-1 `.nii` of int16 `dims` (x, y, z, t) with `pixdim` (x, y, z, t), `xyzt_units`
-/// and an sform (`srow` rows), holding `data` (already little-endian).
-fn nifti1(dims: [i16; 4], pixdim: [f32; 4], xyzt: u8, srow: [[f32; 4]; 3], data: &[u8]) -> Vec<u8> {
-    let mut h = vec![0u8; 352];
-    let mut put = |at: usize, b: &[u8]| h[at..at + b.len()].copy_from_slice(b);
-    put(0, &348i32.to_le_bytes());
-    let dim0: i16 = if dims[3] > 1 { 4 } else { 3 };
-    for (i, d) in [dim0, dims[0], dims[1], dims[2], dims[3], 1, 1, 1]
-        .iter()
-        .enumerate()
-    {
-        put(40 + 2 * i, &d.to_le_bytes());
-    }
-    put(70, &4i16.to_le_bytes());
-    put(72, &16i16.to_le_bytes());
-    for (i, p) in [1.0f32, pixdim[0], pixdim[1], pixdim[2], pixdim[3]]
-        .iter()
-        .enumerate()
-    {
-        put(76 + 4 * i, &p.to_le_bytes());
-    }
-    put(108, &352f32.to_le_bytes());
-    put(123, &[xyzt]);
-    put(254, &1i16.to_le_bytes());
-    for (r, row) in srow.iter().enumerate() {
-        for (c, v) in row.iter().enumerate() {
-            put(280 + 16 * r + 4 * c, &v.to_le_bytes());
-        }
-    }
-    put(344, b"n+1\0");
-    h.extend_from_slice(data);
-    h
-}
-
 /// `volux info` lists a 4-D NIfTI's time axis as the header gives it (4 volumes, TR 2.5 s in
 /// `xyzt_units`), and `volux convert --timepoint 2` writes the third volume; a timepoint past
 /// the series is one line and no output.
@@ -308,7 +274,8 @@ fn info_and_convert_a_nifti_time_series() {
         [0.0, 2.0, 0.0, 4.0],
         [0.0, 0.0, 3.0, 5.0],
     ];
-    let bytes = nifti1([4, 3, 2, 4], [2.0, 2.0, 3.0, 2.5], 2 | 8, srow, &data);
+    let bytes =
+        volux_testkit::nifti::nifti1([4, 3, 2, 4], [2.0, 2.0, 3.0, 2.5], 2 | 8, srow, &data);
     std::fs::write(d.join("fmri.nii"), bytes).unwrap();
     let out = volux(&["info", "fmri.nii"], d);
     let text = String::from_utf8_lossy(&out.stdout);
@@ -371,7 +338,7 @@ fn oblique_nifti_keeps_its_geometry_through_raw_and_nrrd() {
     let srow: [[f32; 4]; 3] =
         std::array::from_fn(|i| [r[i][0] * sp[0], r[i][1] * sp[1], r[i][2] * sp[2], t[i]]);
     let data: Vec<u8> = (0..24i16).flat_map(i16::to_le_bytes).collect();
-    let nii = nifti1([4, 3, 2, 1], [0.9, 1.1, 2.5, 0.0], 2, srow, &data);
+    let nii = volux_testkit::nifti::nifti1([4, 3, 2, 1], [0.9, 1.1, 2.5, 0.0], 2, srow, &data);
     std::fs::write(d.join("obl.nii.gz"), volux_testkit::mutate::gzip(&nii)).unwrap();
     let load = |name: &str| match volux_io::load(&d.join(name), &Default::default()).unwrap() {
         (volux_io::Dataset::Grid(g), _) => g,
@@ -401,4 +368,86 @@ fn oblique_nifti_keeps_its_geometry_through_raw_and_nrrd() {
         }
         assert_eq!(back.position(3, 2, 1), src.position(3, 2, 1));
     }
+}
+
+/// A head as nibabel writes it (RAS sform, i towards the patient's right) with a red marker
+/// on the patient's left: `--view left` shows it, `--view right` hides it behind the head,
+/// and the radiological `--view inferior` puts it on the image's right (patient's left on
+/// the viewer's right, anterior up); `--up` turns a view about its direction.
+#[test]
+fn named_views_show_the_patients_named_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    volux_testkit::nifti::write_head_with_left_marker(&d.join("head.nii"));
+    std::fs::write(d.join("marker.json"), volux_testkit::nifti::MARKER_TF).unwrap();
+    // The head (0.1 of the range) is opaque grey, the marker (1.0) opaque red, and the
+    // values between them, where the marker meets the air, clear.
+    // Red pixels of a view: (count, mean column / width).
+    let red = |view: &[&str]| {
+        let name: String = view
+            .concat()
+            .chars()
+            .filter(char::is_ascii_alphanumeric)
+            .collect();
+        let out = format!("v{name}.png");
+        let mut args = vec![
+            "render",
+            "head.nii",
+            "--tf",
+            "marker.json",
+            "--size",
+            "64x64",
+        ];
+        args.extend_from_slice(view);
+        args.extend_from_slice(&["-o", &out]);
+        let run = volux(&args, d);
+        assert!(run.status.success(), "{view:?}: {}", stderr(&run));
+        let (w, _, px) = png_pixels(&d.join(&out));
+        let cols: Vec<f64> = px
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p[0] > 150 && p[1] < 80)
+            .map(|(i, _)| (i as u32 % w) as f64 / w as f64)
+            .collect();
+        (
+            cols.len(),
+            cols.iter().sum::<f64>() / cols.len().max(1) as f64,
+        )
+    };
+    let (left, _) = red(&["--view", "left"]);
+    let (right, _) = red(&["--view", "right"]);
+    assert!(
+        left > 20 && right == 0,
+        "red pixels: left {left}, right {right}"
+    );
+    let (count, column) = red(&["--view", "inferior"]);
+    assert!(
+        count > 5 && column > 0.6,
+        "inferior: {count} red at column {column}"
+    );
+    let (count, column) = red(&["--view", "superior"]);
+    assert!(
+        count > 5 && column < 0.4,
+        "superior: {count} red at column {column}"
+    );
+    // Anterior with the patient's left as up: the marker moves to the top.
+    let (count, _) = red(&["--view", "anterior", "--up", "1,0,0"]);
+    assert!(count > 5, "anterior, up left: {count}");
+    let run = volux(
+        &["render", "head.nii", "--view", "superior", "--up", "0,0,1"],
+        d,
+    );
+    assert!(!run.status.success());
+    assert!(
+        stderr(&run).contains("lies along the view"),
+        "{}",
+        stderr(&run)
+    );
+    // The axis names stay for data without a patient: -x is the right view's side.
+    assert_eq!(red(&["--view=-x"]).0, 0);
+    assert!(red(&["--view", "+x"]).0 > 20);
+}
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }

@@ -115,7 +115,7 @@ fn options_that_do_not_apply_are_refused_with_the_reason() {
         ),
         (
             &["grid.raw", "--view", "top", "--up", "0,0,1"],
-            "--view sets the up direction",
+            "lies along the view",
         ),
         (
             &["grid.raw", "--q-variable", "density"],

@@ -236,7 +236,7 @@ fn is_thin_in_z(b: &Aabb) -> bool {
 }
 
 /// A right/forward pair perpendicular to `up` (forward is +y for up = +z).
-fn orbit_basis(up: DVec3) -> (DVec3, DVec3) {
+pub(crate) fn orbit_basis(up: DVec3) -> (DVec3, DVec3) {
     let up = up.normalize();
     let guess = if up.y.abs() < 0.9 { DVec3::Y } else { DVec3::X };
     let fwd = (guess - up * guess.dot(up)).normalize();

@@ -18,6 +18,7 @@
 pub mod data;
 pub mod images;
 pub mod mutate;
+pub mod nifti;
 pub mod reference;
 pub mod rng;
 pub mod tf;

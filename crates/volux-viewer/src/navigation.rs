@@ -3,7 +3,7 @@
 //! reset, standard views, perspective/orthographic. Pure functions on [`Camera`], so the
 //! window, the tests and the benchmark's scripted orbit move the camera the same way.
 use glam::{DMat3, DVec3};
-use volux_core::{Aabb, Camera, Projection};
+use volux_core::{Aabb, Camera, NamedView, Projection};
 use volux_render::framing::fit_to_box;
 
 /// Degrees of orbit per pixel dragged.
@@ -111,70 +111,11 @@ pub fn toggle_projection(camera: &Camera) -> Camera {
     }
 }
 
-/// A standard view: the direction the camera looks from (a unit axis), and its up.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StandardView {
-    /// Looking from +x, -x, +y, -y, +z, -z towards the centre.
-    PlusX,
-    /// From -x.
-    MinusX,
-    /// From +y.
-    PlusY,
-    /// From -y.
-    MinusY,
-    /// From +z.
-    PlusZ,
-    /// From -z.
-    MinusZ,
-}
-
-impl StandardView {
-    /// Every view, in the order of the toolbar.
-    pub const ALL: [StandardView; 6] = [
-        Self::PlusX,
-        Self::MinusX,
-        Self::PlusY,
-        Self::MinusY,
-        Self::PlusZ,
-        Self::MinusZ,
-    ];
-
-    /// The side the eye sits on, and the up vector.
-    pub fn axes(self) -> (DVec3, DVec3) {
-        match self {
-            Self::PlusX => (DVec3::X, DVec3::Z),
-            Self::MinusX => (-DVec3::X, DVec3::Z),
-            Self::PlusY => (DVec3::Y, DVec3::Z),
-            Self::MinusY => (-DVec3::Y, DVec3::Z),
-            Self::PlusZ => (DVec3::Z, DVec3::Y),
-            Self::MinusZ => (-DVec3::Z, DVec3::Y),
-        }
-    }
-
-    /// The label: the axis for any data, and the anatomical side seen from for patient
-    /// data in LPS coordinates (DICOM: +x left, +y posterior, +z superior).
-    pub fn label(self, medical: bool) -> &'static str {
-        match (self, medical) {
-            (Self::PlusX, false) => "+X",
-            (Self::MinusX, false) => "-X",
-            (Self::PlusY, false) => "+Y",
-            (Self::MinusY, false) => "-Y",
-            (Self::PlusZ, false) => "+Z",
-            (Self::MinusZ, false) => "-Z",
-            (Self::PlusX, true) => "L",
-            (Self::MinusX, true) => "R",
-            (Self::PlusY, true) => "P",
-            (Self::MinusY, true) => "A",
-            (Self::PlusZ, true) => "S",
-            (Self::MinusZ, true) => "I",
-        }
-    }
-}
-
-/// The camera looking at the centre of `bounds` from the side `view` names, with the
+/// The camera looking at the centre of `bounds` from the side `view` names (the patient's
+/// sides for patient data: [`NamedView`] holds the table the CLI's `--view` uses too), with the
 /// projection of `like`, fitted to the image (aspect = width / height).
-pub fn standard_view(like: &Camera, view: StandardView, bounds: &Aabb, aspect: f64) -> Camera {
-    let (side, up) = view.axes();
+pub fn standard_view(like: &Camera, view: NamedView, bounds: &Aabb, aspect: f64) -> Camera {
+    let (side, up) = (view.side(), view.up());
     let centre = bounds.center();
     let radius = bounds.diagonal().max(1e-9);
     let camera = Camera {
@@ -268,12 +209,14 @@ mod tests {
     #[test]
     fn standard_views_sit_on_their_axes() {
         let c = home(&unit_box(), 1.0);
-        for v in StandardView::ALL {
+        for v in NamedView::ANATOMICAL.into_iter().chain(NamedView::AXES) {
             let s = standard_view(&c, v, &unit_box(), 1.0);
-            let (side, up) = v.axes();
-            assert!((s.eye - s.target).normalize().dot(side) > 0.999, "{v:?}");
-            assert_eq!(s.up, up);
+            assert!(
+                (s.eye - s.target).normalize().dot(v.side()) > 0.999,
+                "{v:?}"
+            );
+            assert_eq!(s.up, v.up());
         }
-        assert_eq!(StandardView::MinusY.label(true), "A");
+        assert_eq!(NamedView::Anterior.label(), "A");
     }
 }

@@ -8,10 +8,11 @@ use glam::DVec3;
 use volux_render::engine::{FrameStats, MethodStats};
 
 use crate::app::ViewerApp;
-use crate::navigation::{self, StandardView};
+use crate::navigation;
 use crate::render_service::Rendered;
 use crate::slices::{direction_name, Plane};
 use crate::{plane_handle, sculpt_tools};
+use volux_core::NamedView;
 
 /// Draws the 3D view in the central panel and applies the gestures to the camera.
 pub fn show(app: &mut ViewerApp, ctx: &egui::Context) {
@@ -40,12 +41,13 @@ fn toolbar(app: &mut ViewerApp, ui: &mut egui::Ui) {
         if ui.button("reset").clicked() {
             reset_camera(app);
         }
-        for v in StandardView::ALL {
-            if ui
-                .button(v.label(medical))
-                .on_hover_text("look from this side")
-                .clicked()
-            {
+        let views = if medical {
+            NamedView::ANATOMICAL
+        } else {
+            NamedView::AXES
+        };
+        for v in views {
+            if ui.button(v.label()).on_hover_text(view_hint(v)).clicked() {
                 if let Some(b) = app.volume().map(|v| v.bounds()) {
                     let aspect = app.view_size.0 as f64 / app.view_size.1.max(1) as f64;
                     app.scene.view.camera =
@@ -54,6 +56,19 @@ fn toolbar(app: &mut ViewerApp, ui: &mut egui::Ui) {
             }
         }
     });
+}
+
+/// The tooltip of a view button.
+fn view_hint(v: NamedView) -> &'static str {
+    match v {
+        NamedView::Left => "from the patient's left: shows the left side",
+        NamedView::Right => "from the patient's right: shows the right side",
+        NamedView::Anterior => "from the front",
+        NamedView::Posterior => "from behind",
+        NamedView::Superior => "from above the head, anterior up",
+        NamedView::Inferior => "from the feet, anterior up: the radiological axial view",
+        _ => "look from this side",
+    }
 }
 
 /// The home camera on the dataset.

@@ -846,3 +846,55 @@ fn the_volume_picker_shows_another_timepoint_and_keeps_the_view() {
     h.run();
     assert!(h.query_by_label_contains("time: 3 volumes").is_some());
 }
+
+/// The red pixels of the frame on screen (straight colour mostly red), and their mean
+/// column as a fraction of the width.
+fn red_pixels(h: &Harness<'static, App>) -> (usize, f64) {
+    let image = app(h).shown_image().expect("a frame on screen");
+    let mut cols = Vec::new();
+    for y in 0..image.height() {
+        for x in 0..image.width() {
+            let p = image.get(x, y);
+            if p[3] > 0.5 && p[0] / p[3] > 0.4 && p[1] < 0.4 * p[0] && p[2] < 0.4 * p[0] {
+                cols.push(x as f64 / image.width() as f64);
+            }
+        }
+    }
+    let mean = cols.iter().sum::<f64>() / cols.len().max(1) as f64;
+    (cols.len(), mean)
+}
+
+/// The view buttons of a patient scan are the patient's sides (Slicer's convention), the
+/// same views as the CLI's `--view`: L shows a marker on the patient's left of a NIfTI head
+/// stored as nibabel writes it, R hides it behind the head, and I (the radiological axial
+/// view) puts it on the image's right.
+#[test]
+fn the_view_buttons_show_the_patients_named_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let head = dir.path().join("head.nii");
+    volux_testkit::nifti::write_head_with_left_marker(&head);
+    let tf = dir.path().join("marker.json");
+    std::fs::write(&tf, volux_testkit::nifti::MARKER_TF).unwrap();
+    let mut h = harness(Some(head));
+    loaded_with_frame(&mut h);
+    app_mut(&mut h).load_tf(&tf).unwrap();
+    let shown = |h: &mut Harness<'static, App>, button: &str| {
+        h.get_by_label(button).click_accesskit();
+        h.step();
+        loaded_with_frame(h);
+        red_pixels(h)
+    };
+    let (left, _) = shown(&mut h, "L");
+    let (right, _) = shown(&mut h, "R");
+    assert!(left > 50 && right == 0, "red pixels: L {left}, R {right}");
+    let (count, column) = shown(&mut h, "I");
+    assert!(
+        count > 10 && column > 0.6,
+        "I: {count} red at column {column}"
+    );
+    let (count, column) = shown(&mut h, "S");
+    assert!(
+        count > 10 && column < 0.4,
+        "S: {count} red at column {column}"
+    );
+}

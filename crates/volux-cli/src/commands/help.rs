@@ -108,10 +108,23 @@ Fields (all optional):
   zoom         magnification (default 1; 2 shows the data twice as large).
 A file with only a few slices in z (a thin slab) and no angles is seen along z.
 
-Without --camera, `volux render` builds the orbit camera from --view front|back|left|right|
-top|bottom (front puts the camera on -y, facing the patient's face; top on +z with y up), --azimuth,
---elevation (degrees, turning from the view), --up X,Y,Z, --zoom and --orthographic, and
+Without --camera, `volux render` builds the orbit camera from --view, --azimuth,
+--elevation (degrees, turning from the view), --up X,Y,Z (turns the image about the view's
+direction), --zoom and --orthographic, and
 fits the framed box to the image. --frame visible (default) frames what the transfer
 function and isosurfaces show; --frame all the whole bounding box. A camera file is used as
 written: its missing fields fit the framed box.
+
+Named views speak of the patient, as 3D Slicer does: the view from the LEFT puts the camera
+on the patient's left and shows the patient's left side. The world is LPS millimetres (+x
+the patient's left, +y posterior, +z superior) and scans are placed by their orientation
+(NIfTI sform/qform, DICOM ImageOrientationPatient, NRRD space directions).
+  left, right            the camera on +x, -x; superior up.
+  anterior (front)       the camera on -y, facing the face; superior up.
+  posterior (back)       the camera on +y; superior up.
+  superior (top)         the camera above the head (+z); anterior up.
+  inferior (bottom)      the camera at the feet (-z); anterior up: the radiological axial
+                         view, the patient's left on the image's right.
+  +x -x +y -y +z -z      axis views for data without a patient: z up (y up for +z, -z).
+                         Write --view=-x (a value starting with '-').
 "#;
