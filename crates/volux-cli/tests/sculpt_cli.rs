@@ -338,6 +338,19 @@ fn bad_input_is_one_line_and_writes_nothing() {
         Samples::U8(Buffer::owned(vec![1; 64])),
     );
     volux_io::nrrd::write(&small.unwrap(), &d.join("small.nrrd")).unwrap();
+    // The grid's dims, but mirrored in x and y: a mask of the same scan stored RAS.
+    let g = grid();
+    let n = g.len();
+    let flipped = Grid::new(
+        g.dims(),
+        g.spacing().to_array(),
+        g.origin().to_array(),
+        Samples::U8(Buffer::owned(vec![1; n])),
+    )
+    .unwrap()
+    .with_direction(glam::DMat3::from_diagonal(DVec3::new(-1.0, -1.0, 1.0)))
+    .unwrap();
+    volux_io::nrrd::write(&flipped, &d.join("flipped.nrrd")).unwrap();
     ok(&run(
         "generate",
         &["tets-smooth", "--size", "200", "-o", "mesh.vtet"],
@@ -386,7 +399,7 @@ fn bad_input_is_one_line_and_writes_nothing() {
                 "ortho.json",
                 &[&["--mask", "small.nrrd", "--erase", "80,60,5"][..], &o].concat(),
             ),
-            "the mask is 4x4x4 voxels",
+            "does not lie on box.nrrd's voxels: dims 4x4x4, the volume's",
         ),
         (
             "sculpt",
@@ -426,7 +439,12 @@ fn bad_input_is_one_line_and_writes_nothing() {
         (
             "render",
             view("ortho.json", &["--mask", "small.nrrd", "-o", "out.png"]),
-            "the mask is 4x4x4 voxels",
+            "does not lie on box.nrrd's voxels: dims 4x4x4, the volume's",
+        ),
+        (
+            "render",
+            view("ortho.json", &["--mask", "flipped.nrrd", "-o", "out.png"]),
+            "does not lie on box.nrrd's voxels: direction",
         ),
         (
             "render",

@@ -29,6 +29,16 @@ pub enum Error {
         /// Values present.
         actual: u64,
     },
+    /// A grid (a mask, labels) that does not lie on another grid's lattice.
+    #[error("{what} {other}, the volume's {grid}")]
+    GeometryMismatch {
+        /// The property that differs: "dims", "spacing", "origin", "direction", "unit".
+        what: &'static str,
+        /// The volume's value.
+        grid: String,
+        /// The other grid's value.
+        other: String,
+    },
     /// A request for more memory than this machine can hold.
     #[error("{what} needs {bytes} bytes, more than the {limit} bytes this machine can hold")]
     TooLarge {

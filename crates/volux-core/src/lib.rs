@@ -39,6 +39,7 @@ pub mod bricked;
 pub mod camera;
 pub mod color;
 pub mod error;
+pub mod geometry_match;
 pub mod grid;
 pub mod heatmap;
 pub mod histogram;

@@ -112,23 +112,22 @@ pub fn write_u8_like(grid: &Grid, values: Vec<u8>, path: &Path) -> Result<(), Cm
     Ok(())
 }
 
-/// Reads a saved sculpt mask for `grid` (of `file`): any grid file of the same dims,
-/// non-zero voxels kept.
+/// Reads a saved sculpt mask for `grid` (of `file`): any grid file of the same geometry
+/// (dims, spacing, origin, direction, unit), non-zero voxels kept.
 pub fn read_mask(path: &Path, grid: &Grid, file: &Path) -> Result<SculptMask, CmdError> {
     let named = |e: &dyn std::fmt::Display| format!("--mask {}: {e}", path.display());
     let (data, _) = volux_io::load(path, &LoadOptions::default()).map_err(|e| named(&e))?;
     let Dataset::Grid(m) = data else {
         return Err(named(&"a mask is a grid; this is a tetrahedral mesh").into());
     };
-    if m.dims() != grid.dims() {
-        let [a, b, c] = m.dims();
-        let [x, y, z] = grid.dims();
-        return Err(named(&format!(
-            "the mask is {a}x{b}x{c} voxels but {} is {x}x{y}x{z}",
+    // A mask made on another lattice (another orientation, a resampled copy) would be
+    // applied by voxel index to the wrong place.
+    volux_core::geometry_match::check_same_geometry(grid, &m).map_err(|e| {
+        named(&format!(
+            "the mask does not lie on {}'s voxels: {e}",
             file.display()
         ))
-        .into());
-    }
+    })?;
     let s = m.samples();
     let values: Vec<u8> = (0..s.len())
         .map(|i| u8::from(s.get_f32(i) != 0.0))
