@@ -1,6 +1,28 @@
 //! `volux`: load, inspect, convert, generate and render volumes and tetrahedral meshes.
 #![forbid(unsafe_code)]
 
+/// `println!` that returns the write's `io::Result` instead of panicking: a closed pipe
+/// (`volux info F | head -1`) comes back as [`std::io::ErrorKind::BrokenPipe`] through `?`,
+/// and [`main`] ends quietly on it, as Unix tools do.
+macro_rules! outln {
+    () => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock())
+    }};
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)
+    }};
+}
+
+/// `print!` as [`outln!`] is `println!`.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($arg)*)
+    }};
+}
+
 mod applicable;
 mod cli;
 mod commands;
@@ -34,11 +56,19 @@ fn main() -> ExitCode {
     }
     match commands::run(args) {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader went away (`| head`): nothing more to say, as Unix tools end.
+        Err(e) if is_closed_pipe(e.as_ref()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("volux: error: {}", sanitize(&e.to_string()));
             ExitCode::FAILURE
         }
     }
+}
+
+/// Whether `e` is a write to a closed pipe.
+fn is_closed_pipe(e: &(dyn std::error::Error + 'static)) -> bool {
+    e.downcast_ref::<std::io::Error>()
+        .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
 }
 
 /// Parses the command line, noting which `render` options were given (not defaulted).

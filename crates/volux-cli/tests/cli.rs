@@ -451,3 +451,45 @@ fn named_views_show_the_patients_named_side() {
 fn stderr(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
+
+/// Every command that prints ends quietly when its reader has gone (`| head -1`): exit 0
+/// and nothing on stderr, as Unix tools do (it was a panic with exit 101).
+#[test]
+fn a_closed_pipe_ends_every_command_quietly() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = volux(&["generate", "sphere", "--size", "24", "-o", "s.raw"], d);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let commands: [&[&str]; 8] = [
+        &["info", "s.raw"],
+        &["info", "--json", "s.raw"],
+        &["tf", "show", "ct-bone"],
+        &["help", "tf"],
+        &["help", "camera"],
+        &["help"],
+        &[
+            "render", "s.raw", "--size", "24x24", "--stats", "--json", "-o", "s.png",
+        ],
+        &[
+            "measure", "s.raw", "--size", "48x48", "--point", "20,24", "--point", "28,24",
+        ],
+    ];
+    for args in commands {
+        // The reading end is closed before the command writes its first byte.
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_volux"))
+            .args(args)
+            .current_dir(d)
+            .stdout(writer)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success() && out.stderr.is_empty(),
+            "{args:?}: {:?} {}",
+            out.status,
+            stderr(&out)
+        );
+    }
+}

@@ -127,11 +127,11 @@ pub fn run(args: &Args, show: bool) -> Result<(), CmdError> {
             });
         }
     }
-    print_rows(&rows, args.json, seconds(&reference));
+    print_rows(&rows, args.json, seconds(&reference))?;
     Ok(())
 }
 
-fn print_rows(rows: &[Row], as_json: bool, reference_seconds: f64) {
+fn print_rows(rows: &[Row], as_json: bool, reference_seconds: f64) -> std::io::Result<()> {
     if as_json {
         let list: Vec<_> = rows
             .iter()
@@ -147,16 +147,24 @@ fn print_rows(rows: &[Row], as_json: bool, reference_seconds: f64) {
                 v
             })
             .collect();
-        println!("{}", serde_json::Value::Array(list));
-        return;
+        outln!("{}", serde_json::Value::Array(list))?;
+        return Ok(());
     }
-    println!("reference (f64, adaptive 1e-7, split at voxel boundaries): {reference_seconds:.2} s");
-    println!(
+    outln!("reference (f64, adaptive 1e-7, split at voxel boundaries): {reference_seconds:.2} s")?;
+    outln!(
         "{:<20} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>12} {:>9}",
-        "method", "param", "eps", "%R>eps", "%G>eps", "%B>eps", "%A>eps", "samples", "seconds"
-    );
+        "method",
+        "param",
+        "eps",
+        "%R>eps",
+        "%G>eps",
+        "%B>eps",
+        "%A>eps",
+        "samples",
+        "seconds"
+    )?;
     for r in rows {
-        println!(
+        outln!(
             "{:<20} {:>7} {:>7} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>12} {:>9.3}",
             r.method,
             format!(
@@ -171,6 +179,7 @@ fn print_rows(rows: &[Row], as_json: bool, reference_seconds: f64) {
             r.pct_over[3],
             r.samples,
             r.seconds
-        );
+        )?;
     }
+    Ok(())
 }

@@ -33,9 +33,9 @@ pub fn renderer(
 pub fn list_adapters(json: bool) -> Result<(), CmdError> {
     let adapters = gpu::adapters()?;
     if json {
-        println!("{}", serde_json::to_string(&adapters)?);
+        outln!("{}", serde_json::to_string(&adapters)?)?;
     } else if adapters.is_empty() {
-        println!("no GPU adapter (install a Vulkan driver, e.g. mesa-vulkan-drivers)");
+        outln!("no GPU adapter (install a Vulkan driver, e.g. mesa-vulkan-drivers)")?;
     } else {
         for (i, a) in adapters.iter().enumerate() {
             let first = if i == 0 {
@@ -43,7 +43,7 @@ pub fn list_adapters(json: bool) -> Result<(), CmdError> {
             } else {
                 ""
             };
-            println!("{i}: {a}{first}");
+            outln!("{i}: {a}{first}")?;
         }
     }
     Ok(())

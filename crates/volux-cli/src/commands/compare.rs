@@ -39,16 +39,16 @@ pub fn run(args: &Args<'_>) -> Result<(), CmdError> {
         write_diff(&a.rgba, &b.rgba, (a.width, a.height), args.diff_max, path)?;
     }
     if args.json {
-        println!(
+        outln!(
             "{}",
             serde_json::json!({
                 "width": a.width, "height": a.height, "rmse": c.rmse, "max_error": c.max_error,
                 "mean_error": c.mean_error, "threshold": args.threshold,
                 "pct_over": 100.0 * c.fraction_over,
             })
-        );
+        )?;
     } else {
-        println!(
+        outln!(
             "{}x{}: RMSE {:.3e}, max error {:.3e}, mean error {:.3e}, {:.2} % of pixels over {}",
             a.width,
             a.height,
@@ -57,7 +57,7 @@ pub fn run(args: &Args<'_>) -> Result<(), CmdError> {
             c.mean_error,
             100.0 * c.fraction_over,
             crate::numbers::human(args.threshold)
-        );
+        )?;
     }
     Ok(())
 }

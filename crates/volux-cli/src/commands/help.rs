@@ -16,7 +16,7 @@ pub fn run(topic: Option<&str>) -> Result<(), CmdError> {
         return Ok(());
     };
     if let Some((_, text)) = TOPICS.iter().find(|(name, _)| *name == topic) {
-        print!("{text}");
+        out!("{text}")?;
         return Ok(());
     }
     match cli.find_subcommand_mut(topic) {

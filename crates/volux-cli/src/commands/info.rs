@@ -21,9 +21,9 @@ pub fn run(path: &Path, as_json: bool, args: &LoadArgs, show: bool) -> Result<()
         _ => return Err("unsupported dataset kind".into()),
     };
     if as_json {
-        println!("{}", serde_json::to_string(&value)?);
+        outln!("{}", serde_json::to_string(&value)?)?;
     } else {
-        print_text(path, &value);
+        print_text(path, &value)?;
     }
     Ok(())
 }
@@ -124,9 +124,11 @@ const ORDER: [&str; 24] = [
 ];
 
 /// Prints a description for people, keys in [`ORDER`].
-pub(super) fn print_text(path: &Path, v: &serde_json::Value) {
-    println!("{}", path.display());
-    let Some(obj) = v.as_object() else { return };
+pub(super) fn print_text(path: &Path, v: &serde_json::Value) -> std::io::Result<()> {
+    outln!("{}", path.display())?;
+    let Some(obj) = v.as_object() else {
+        return Ok(());
+    };
     let rank = |k: &str| ORDER.iter().position(|o| *o == k).unwrap_or(ORDER.len());
     let mut keys: Vec<&String> = obj.keys().collect();
     keys.sort_by_key(|k| (rank(k), k.as_str()));
@@ -134,31 +136,32 @@ pub(super) fn print_text(path: &Path, v: &serde_json::Value) {
         let val = &obj[k.as_str()];
         match val {
             serde_json::Value::Array(a) if k == "levels" => {
-                println!("  {k:<15} {}", a.len());
+                outln!("  {k:<15} {}", a.len())?;
                 for l in a {
-                    println!("    {}", sanitize(l.as_str().unwrap_or_default()));
+                    outln!("    {}", sanitize(l.as_str().unwrap_or_default()))?;
                 }
             }
             serde_json::Value::Array(a) if k == "volumes" => {
                 for axis in a {
-                    println!(
+                    outln!(
                         "  {:<15} {}",
                         "volumes",
                         sanitize(axis["text"].as_str().unwrap_or_default())
-                    );
+                    )?;
                 }
             }
             serde_json::Value::Array(a) if k == "notes" => {
                 for n in a {
-                    println!("  note: {}", sanitize(n.as_str().unwrap_or_default()));
+                    outln!("  note: {}", sanitize(n.as_str().unwrap_or_default()))?;
                 }
             }
             _ if k == "memory_bytes" => {
-                println!("  {k:<15} {}", format_bytes(val.as_u64().unwrap_or(0)))
+                outln!("  {k:<15} {}", format_bytes(val.as_u64().unwrap_or(0)))?
             }
-            _ => println!("  {k:<15} {}", sanitize(&plain(val))),
+            _ => outln!("  {k:<15} {}", sanitize(&plain(val)))?,
         }
     }
+    Ok(())
 }
 
 /// A value for people: numbers rounded to five significant digits, lists and objects on

@@ -40,29 +40,35 @@ pub fn run(args: &MeasureArgs, given: &[String], show: bool) -> Result<(), CmdEr
         if unit == "mm" {
             v["length_mm"] = json!(length);
         }
-        println!("{v}");
+        outln!("{v}")?;
     } else {
-        print_text(&pixels, &points, length, unit);
+        print_text(&pixels, &points, length, unit)?;
     }
     Ok(())
 }
 
 /// The points and the length as text.
-fn print_text(pixels: &[[f64; 2]], points: &[DVec3], length: f64, unit: &str) {
+fn print_text(
+    pixels: &[[f64; 2]],
+    points: &[DVec3],
+    length: f64,
+    unit: &str,
+) -> std::io::Result<()> {
     for (n, ([x, y], p)) in pixels.iter().zip(points).enumerate() {
-        println!(
+        outln!(
             "point {} at pixel ({x}, {y}): ({:.3}, {:.3}, {:.3})",
             n + 1,
             p.x,
             p.y,
             p.z
-        );
+        )?;
     }
-    println!(
+    outln!(
         "length: {length:.3} {unit} ({} segment{})",
         points.len() - 1,
         if points.len() == 2 { "" } else { "s" }
-    );
+    )?;
+    Ok(())
 }
 
 /// A measurement of `volux render --measure`: the pixels given, the surface points picked
@@ -129,7 +135,7 @@ impl Drawn {
     }
 
     /// Prints the points and the length on stdout, as `volux measure` does.
-    pub fn print(&self) {
-        print_text(&self.pixels, &self.points, self.length, &self.unit);
+    pub fn print(&self) -> std::io::Result<()> {
+        print_text(&self.pixels, &self.points, self.length, &self.unit)
     }
 }

@@ -83,7 +83,7 @@ pub fn run(
         let mut frame_args = args.clone();
         frame_args.output = Some(path);
         frame_args.frame_index = Some(k);
-        report::frame(&frame_args, frame, frame_scene, volume);
+        report::frame(&frame_args, frame, frame_scene, volume)?;
         Ok(())
     })?;
     if args.no_write {

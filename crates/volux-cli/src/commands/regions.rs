@@ -46,9 +46,9 @@ pub fn run(args: &RegionsArgs, given: &[String], show: bool) -> Result<(), CmdEr
     let counts = count(&labels);
     bench.write_u8(labels, &args.output)?;
     for (label, n) in counts.iter().enumerate().skip(1).filter(|(_, n)| **n > 0) {
-        println!("label {label}: {n} voxels");
+        outln!("label {label}: {n} voxels")?;
     }
-    println!("unlabelled: {} voxels", counts[0]);
+    outln!("unlabelled: {} voxels", counts[0])?;
     eprintln!("wrote {}", args.output.display());
     Ok(())
 }

@@ -66,9 +66,9 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
         super::raw::write_raw(&frame.image, path)?;
     }
     if let Some(m) = &measured {
-        m.print();
+        m.print()?;
     }
-    report::frame(args, &frame, &scene, &volume);
+    report::frame(args, &frame, &scene, &volume)?;
     let note = if replaced {
         " (replaced the file there; name the output with -o)"
     } else {
@@ -194,11 +194,11 @@ pub fn demo(out: &Path, show: bool) -> Result<(), CmdError> {
     let abs = std::env::current_dir()
         .map(|d| d.join(out))
         .unwrap_or(out.to_path_buf());
-    println!(
+    outln!(
         "rendered Marschner-Lobb 128^3 at 512x512 in {:.0} ms; wrote {}",
         frame.stats.ms,
         abs.display()
-    );
+    )?;
     Ok(())
 }
 

@@ -11,7 +11,12 @@ use crate::cli::{value_name, RenderArgs};
 use crate::settings::tet_ray_rule;
 
 /// Reports `frame` as `args` asks.
-pub fn frame(args: &RenderArgs, frame: &Frame, scene: &Scene, volume: &Volume) {
+pub fn frame(
+    args: &RenderArgs,
+    frame: &Frame,
+    scene: &Scene,
+    volume: &Volume,
+) -> std::io::Result<()> {
     let zero_volume = match volume {
         Volume::Mesh(m) => m.report().degenerate,
         _ => 0,
@@ -21,12 +26,17 @@ pub fn frame(args: &RenderArgs, frame: &Frame, scene: &Scene, volume: &Volume) {
         MethodStats::GridRaycast(s) => grid(args, s, size, volume),
         MethodStats::ProjectedTetrahedra(s) => pt(args, s, zero_volume, size),
         MethodStats::TetRaycast(s) => tet_ray(args, s, frame, size),
-        _ => {}
+        _ => Ok(()),
     }
 }
 
 /// Grid ray casting.
-fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize), volume: &Volume) {
+fn grid(
+    args: &RenderArgs,
+    s: &RenderStats,
+    (w, h): (usize, usize),
+    volume: &Volume,
+) -> std::io::Result<()> {
     let rate = s.samples as f64 / s.seconds.max(1e-9);
     let cache = match volume {
         Volume::Bricked(b, _) => Some(b.cache_totals()),
@@ -53,8 +63,8 @@ fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize), volume: &Vol
                 "peak_resident_bytes": c.peak_bytes,
             });
         }
-        print_json(args, v);
-        return;
+        print_json(args, v)?;
+        return Ok(());
     }
     if args.stats {
         eprintln!(
@@ -77,11 +87,17 @@ fn grid(args: &RenderArgs, s: &RenderStats, (w, h): (usize, usize), volume: &Vol
             );
         }
     }
+    Ok(())
 }
 
 /// Projected Tetrahedra: the frame's stages add up to its time (`other`: set-up, caches);
 /// the violation count is a diagnostic, timed apart.
-fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)) {
+fn pt(
+    args: &RenderArgs,
+    s: &PtStats,
+    zero_volume: usize,
+    (w, h): (usize, usize),
+) -> std::io::Result<()> {
     let tets_per_s = s.tets as f64 / s.seconds.max(1e-9);
     let stages = [
         ("discard", s.discard_s),
@@ -118,11 +134,11 @@ fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)
         for (name, t) in stages {
             v[format!("{name}_ms")] = json!(t * 1e3);
         }
-        print_json(args, v);
-        return;
+        print_json(args, v)?;
+        return Ok(());
     }
     if !args.stats {
-        return;
+        return Ok(());
     }
     // Cells wholly outside a clip plane, named only when there are some.
     let culled = match s.culled {
@@ -174,10 +190,16 @@ fn pt(args: &RenderArgs, s: &PtStats, zero_volume: usize, (w, h): (usize, usize)
             s.diagnostics_s * 1e3
         );
     }
+    Ok(())
 }
 
 /// Tetrahedral ray casting.
-fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, usize)) {
+fn tet_ray(
+    args: &RenderArgs,
+    s: &TetRayStats,
+    frame: &Frame,
+    (w, h): (usize, usize),
+) -> std::io::Result<()> {
     let colour = tet_ray_rule(args).name();
     let mode = if args.mip { "mip" } else { colour };
     let errors = frame.error_map.as_deref().unwrap_or(&[]);
@@ -210,8 +232,8 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
             "isosurfaces": args.view_args.isos.len(),
             "mip": args.mip,
         });
-        print_json(args, v);
-        return;
+        print_json(args, v)?;
+        return Ok(());
     }
     if args.stats {
         eprintln!(
@@ -231,11 +253,12 @@ fn tet_ray(args: &RenderArgs, s: &TetRayStats, frame: &Frame, (w, h): (usize, us
             s.bytes_per_tet
         );
     }
+    Ok(())
 }
 
 /// Prints the stats object of a frame with what every method shares: the threads and the
 /// file written.
-fn print_json(args: &RenderArgs, mut v: serde_json::Value) {
+fn print_json(args: &RenderArgs, mut v: serde_json::Value) -> std::io::Result<()> {
     v["threads"] = json!(rayon::current_num_threads());
     v["output"] = if args.no_write {
         serde_json::Value::Null
@@ -246,7 +269,8 @@ fn print_json(args: &RenderArgs, mut v: serde_json::Value) {
         v["frame"] = json!(k);
         v["first"] = json!(k == 0);
     }
-    println!("{v}");
+    outln!("{v}")?;
+    Ok(())
 }
 
 /// The line prefix of a frame of an --orbit (`frame 3: `; the first says it builds the

@@ -235,9 +235,9 @@ pub fn info(path: &Path, as_json: bool, load: &LoadArgs) -> Result<(), CmdError>
         "notes": store.notes,
     });
     if as_json {
-        println!("{}", serde_json::to_string(&value)?);
+        outln!("{}", serde_json::to_string(&value)?)?;
     } else {
-        super::info::print_text(path, &value);
+        super::info::print_text(path, &value)?;
     }
     Ok(())
 }

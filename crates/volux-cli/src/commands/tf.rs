@@ -25,7 +25,7 @@ pub fn show(
         }
         None => unfitted(preset)?,
     };
-    println!("{}", tf.to_json());
+    outln!("{}", tf.to_json())?;
     Ok(())
 }
 

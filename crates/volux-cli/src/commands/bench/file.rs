@@ -93,9 +93,9 @@ pub fn run(
             "rate_unit": unit, "rate_per_s": per_s,
             "threads": rayon::current_num_threads(),
         });
-        println!("{v}");
+        outln!("{v}")?;
     } else {
-        println!(
+        outln!(
             "{} ({method}, {w}x{h}): first frame {first:.1} ms; warm frames median {median:.1} ms \
              (min {:.1}, max {:.1}, {} frames); {:.2} M {unit}/s",
             file.display(),
@@ -103,7 +103,7 @@ pub fn run(
             warm[warm.len() - 1],
             warm.len(),
             per_s / 1e6
-        );
+        )?;
     }
     Ok(())
 }

@@ -111,12 +111,12 @@ mod on_gpu {
             ));
         }
         if !as_json {
-            println!("\nGPU backend on {adapter}; frames per case: {frames} (median)");
+            outln!("\nGPU backend on {adapter}; frames per case: {frames} (median)")?;
         }
         let mut rows = Vec::new();
         rows.extend(pt_rows(&ctx, (quick, frames, only), sizes, as_json)?);
         if !as_json {
-            println!(
+            outln!(
                 "\n{:<20} {:>9} {:<22} {:>10} {:>12} {:>12} {:>10} {:>10}",
                 "dataset",
                 "size",
@@ -126,7 +126,7 @@ mod on_gpu {
                 "Msamples/s",
                 "upload ms",
                 "GPU MiB"
-            );
+            )?;
         }
         for (name, volume, tf) in &datasets {
             let Volume::Grid(grid) = volume else { continue };
@@ -138,12 +138,12 @@ mod on_gpu {
                     let mib = renderer.device_bytes() as f64 / (1 << 20) as f64;
                     let rate = samples as f64 / ms * 1e3;
                     if !as_json {
-                        println!(
+                        outln!(
                             "{name:<20} {:>9} {label:<22} {ms:>10.1} {samples:>12} {:>12.1} \
                              {upload_ms:>10.1} {mib:>10.1}",
                             format!("{w}x{h}"),
                             rate / 1e6,
-                        );
+                        )?;
                     }
                     rows.push(json!({
                         "suite": "gpu", "adapter": adapter, "dataset": name, "width": w,
@@ -169,10 +169,16 @@ mod on_gpu {
     ) -> Result<Vec<serde_json::Value>, CmdError> {
         let adapter = ctx.adapter().to_string();
         if !as_json {
-            println!(
+            outln!(
                 "{:<20} {:>9} {:<22} {:>10} {:>12} {:>12} {:>10}",
-                "mesh", "size", "case", "ms/frame", "tets", "Mtets/s", "upload ms"
-            );
+                "mesh",
+                "size",
+                "case",
+                "ms/frame",
+                "tets",
+                "Mtets/s",
+                "upload ms"
+            )?;
         }
         let mut rows = Vec::new();
         for (name, volume) in meshes(quick)? {
@@ -201,12 +207,12 @@ mod on_gpu {
                 let tets = mesh.tets().len();
                 let rate = tets as f64 / ms * 1e3;
                 if !as_json {
-                    println!(
+                    outln!(
                         "{name:<20} {:>9} {:<22} {ms:>10.1} {tets:>12} {:>12.1} {upload_ms:>10.1}",
                         format!("{w}x{h}"),
                         "pt psi",
                         rate / 1e6,
-                    );
+                    )?;
                 }
                 rows.push(json!({
                     "suite": "gpu", "adapter": adapter, "dataset": name, "width": w,
@@ -239,10 +245,17 @@ mod on_gpu {
         let mut pool =
             GpuPoolRenderer::new(ctx.clone(), source, options).map_err(RenderError::from)?;
         if !as_json {
-            println!(
+            outln!(
                 "\n{:<20} {:>9} {:<22} {:>10} {:>8} {:>8} {:>8} {:>8}",
-                "brick pool", "size", "case", "ms/frame", "slots", "bricks", "rounds", "uploads"
-            );
+                "brick pool",
+                "size",
+                "case",
+                "ms/frame",
+                "slots",
+                "bricks",
+                "rounds",
+                "uploads"
+            )?;
         }
         let mut rows = Vec::new();
         for &(w, h) in sizes {
@@ -256,7 +269,7 @@ mod on_gpu {
             let (ms, _) = time(&mut pool, &scene, frames)?;
             let st = pool.stats();
             if !as_json {
-                println!(
+                outln!(
                     "{name:<20} {:>9} {:<22} {ms:>10.1} {:>8} {:>8} {:>8} {:>8}",
                     format!("{w}x{h}"),
                     "riemann h=0.5 pool",
@@ -264,7 +277,7 @@ mod on_gpu {
                     st.bricks,
                     st.rounds,
                     st.uploads
-                );
+                )?;
             }
             rows.push(json!({
                 "suite": "gpu", "dataset": name, "width": w, "height": h,

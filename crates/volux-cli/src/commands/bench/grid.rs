@@ -119,11 +119,17 @@ pub fn run(
     let name_w = datasets.iter().map(|d| d.0.len()).max().unwrap_or(0).max(7);
     let label_w = cases.iter().map(|c| c.4.len()).max().unwrap_or(0).max(10);
     if !as_json {
-        println!("threads: {threads}; frames per case: {frames} (median)");
-        println!(
+        outln!("threads: {threads}; frames per case: {frames} (median)")?;
+        outln!(
             "{:<name_w$} {:>9} {:<label_w$} {:>10} {:>12} {:>12} {:>16}",
-            "dataset", "size", "integrator", "ms/frame", "samples", "Msamples/s", "Msamples/s/core"
-        );
+            "dataset",
+            "size",
+            "integrator",
+            "ms/frame",
+            "samples",
+            "Msamples/s",
+            "Msamples/s/core"
+        )?;
     }
     let spec = CameraSpec {
         azimuth: Some(30.0),
@@ -161,7 +167,7 @@ pub fn run(
         let s = median(&mut times);
         let rate = samples as f64 / s / 1e6;
         if !as_json {
-            println!(
+            outln!(
                 "{:<name_w$} {:>9} {:<label_w$} {:>10.1} {:>12} {:>12.1} {:>16.1}",
                 name,
                 format!("{w}x{h}"),
@@ -170,7 +176,7 @@ pub fn run(
                 samples,
                 rate,
                 rate / threads as f64
-            );
+            )?;
         }
         rows.push(json!({
             "dataset": name, "width": w, "height": h, "integrator": integrator.name(),

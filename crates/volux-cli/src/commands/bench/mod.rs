@@ -96,7 +96,7 @@ pub fn run(
         }
     };
     if as_json {
-        println!("{}", serde_json::Value::Array(rows));
+        outln!("{}", serde_json::Value::Array(rows))?;
     }
     Ok(())
 }

@@ -61,8 +61,8 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
     let threads = rayon::current_num_threads();
     let mut rows = Vec::new();
     if !as_json {
-        println!("PT, 512x512, centroid order; threads: {threads}; frames per case: {frames} (median), new view each frame");
-        println!(
+        outln!("PT, 512x512, centroid order; threads: {threads}; frames per case: {frames} (median), new view each frame")?;
+        outln!(
             "{:<14} {:>9} {:<14} {:>9} {:>9} {:>11} {:>12} {:>10} {:>9}",
             "mesh",
             "tets",
@@ -73,7 +73,7 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
             "fragments",
             "bytes/tet",
             "drawn"
-        );
+        )?;
     }
     for (name, volume) in meshes(quick)? {
         let tf = volume.preset_tf("auto")?;
@@ -118,7 +118,7 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
             let s = median(&mut times);
             let rate = stats.tets as f64 / s / 1e6;
             if !as_json {
-                println!(
+                outln!(
                     "{:<14} {:>9} {:<14} {:>9.1} {:>9.2} {:>11.1} {:>12} {:>10.1} {:>9}",
                     name,
                     stats.tets,
@@ -129,7 +129,7 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
                     stats.fragments,
                     stats.bytes_per_tet,
                     stats.tets_drawn
-                );
+                )?;
             }
             rows.push(json!({
                 "suite": "pt", "dataset": name, "width": 512, "height": 512, "mode": label,
@@ -151,11 +151,16 @@ fn accuracy(as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
     let (w, h) = (128, 128);
     let mut rows = Vec::new();
     if !as_json {
-        println!("\nPT accuracy against the brute-force reference, {w}x{h}, automatic TF, no early termination");
-        println!(
+        outln!("\nPT accuracy against the brute-force reference, {w}x{h}, automatic TF, no early termination")?;
+        outln!(
             "{:<14} {:<10} {:<8} {:>14} {:>12} {:>12}",
-            "mesh", "sort", "colour", "mean |err|", "max |err|", "violations"
-        );
+            "mesh",
+            "sort",
+            "colour",
+            "mean |err|",
+            "max |err|",
+            "violations"
+        )?;
     }
     let mut all = meshes(true)?;
     if let Some(v @ Volume::Mesh(_)) = shared("vtk_post_tets/post.vtk")? {
@@ -187,7 +192,7 @@ fn accuracy(as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
                 };
                 let violations = stats.sort_violations.map_or("-".into(), |v| v.to_string());
                 if !as_json {
-                    println!(
+                    outln!(
                         "{:<14} {:<10} {:<8} {:>14.2e} {:>12.2e} {:>12}",
                         name,
                         sort_name,
@@ -195,7 +200,7 @@ fn accuracy(as_json: bool) -> Result<Vec<serde_json::Value>, CmdError> {
                         d.mean_error,
                         d.max_error,
                         violations
-                    );
+                    )?;
                 }
                 rows.push(json!({
                     "suite": "pt-accuracy", "dataset": name, "width": w, "height": h,

@@ -120,16 +120,16 @@ pub fn run(
     let rounds = rounds.max(1);
     let names = cases().map(|(name, _)| name);
     if !as_json {
-        println!(
+        outln!(
             "threads: {}; 512x512; fastest of {rounds} rounds (ms); ratio to riemann h=0.2 \
              (fastest frames; median per round in brackets)",
             rayon::current_num_threads()
-        );
-        print!("{:<22} {:>14} {:>14}", "dataset", names[0], names[1]);
+        )?;
+        out!("{:<22} {:>14} {:>14}", "dataset", names[0], names[1])?;
         for c in ADAPTIVE {
-            print!(" {:>26}", names[c]);
+            out!(" {:>26}", names[c])?;
         }
-        println!();
+        outln!()?;
     }
     let mut rows = Vec::new();
     let wanted = |name: &str| only.is_none_or(|o| o.split_whitespace().all(|w| name.contains(w)));
@@ -168,18 +168,18 @@ pub fn run(
                 None => "  ",
             };
             let riemann = format!("{:.1} {mark}", t.fastest(0));
-            print!("{name:<22} {riemann:>14} {:>14.1}", t.fastest(1));
+            out!("{name:<22} {riemann:>14} {:>14.1}", t.fastest(1))?;
             for (a, met) in adaptive.into_iter().zip(adaptive_met) {
-                print!(" {:>26}", cell(a, met));
+                out!(" {:>26}", cell(a, met))?;
             }
-            println!();
+            outln!()?;
         }
     }
     if !as_json {
-        println!(
+        outln!(
             "targets: riemann h=0.5 <= {RIEMANN_TARGET_MS} ms on a 256^3 volume; adaptive \
              (coupled, eps 0.01) no slower than riemann h=0.2; accuracy: `volux accuracy`"
-        );
+        )?;
     }
     Ok(rows)
 }

@@ -17,8 +17,8 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
     let threads = rayon::current_num_threads();
     let mut rows = Vec::new();
     if !as_json {
-        println!("\nTet ray casting, 512x512, automatic TF; threads: {threads}; frames per case: {frames} (median)");
-        println!(
+        outln!("\nTet ray casting, 512x512, automatic TF; threads: {threads}; frames per case: {frames} (median)")?;
+        outln!(
             "{:<14} {:>9} {:<8} {:>9} {:>9} {:>11} {:>10} {:>10} {:>9}",
             "mesh",
             "tets",
@@ -29,7 +29,7 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
             "reentries",
             "abandoned",
             "bytes/tet"
-        );
+        )?;
     }
     let spec = CameraSpec {
         azimuth: Some(30.0),
@@ -55,7 +55,7 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
             let s = median(&mut times);
             let tets = stats.tets;
             if !as_json {
-                println!(
+                outln!(
                     "{:<14} {:>9} {:<8} {:>9.1} {:>9.2} {:>11} {:>10} {:>10} {:>9.1}",
                     name,
                     tets,
@@ -66,7 +66,7 @@ pub fn run(quick: bool, frames: usize, as_json: bool) -> Result<Vec<serde_json::
                     stats.reentries,
                     stats.abandoned,
                     stats.bytes_per_tet
-                );
+                )?;
             }
             rows.push(json!({
                 "suite": "tetray", "dataset": name, "width": 512, "height": 512, "color": label,

@@ -33,25 +33,25 @@ pub fn run(frames: usize, n: usize, as_json: bool) -> Result<Vec<serde_json::Val
     let (ms_erase, erased) = sculpt::eraser_ms(frames.max(5))?;
     let f = clipped_frames(frames.max(3), n)?;
     if !as_json {
-        println!(
+        outln!(
             "\nVolume of interest (issue 18); threads: {}",
             rayon::current_num_threads()
-        );
-        println!(
+        )?;
+        outln!(
             "plane cut, {} vertices: {us_small:.2} us (target 10)",
             small.vertices().len()
-        );
-        println!(
+        )?;
+        outln!(
             "plane cut, {} vertices: {us_big:.2} us (target 200)",
             big.vertices().len()
-        );
+        )?;
         let [x, y, z] = sculpt::ERASER_DIMS;
-        println!(
+        outln!(
             "eraser disc r={} px at 512x512 on a {x}x{y}x{z} mask: {ms_erase:.1} ms, {erased} \
              voxels (target 50)",
             sculpt::ERASER_RADIUS_PX
-        );
-        f.print();
+        )?;
+        f.print()?;
     }
     Ok(vec![json!({
         "suite": "voi", "cut_us_8": us_small, "cut_us_many": us_big,
@@ -73,16 +73,16 @@ struct Frames {
 }
 
 impl Frames {
-    fn print(&self) {
+    fn print(&self) -> std::io::Result<()> {
         match self.dig_ms {
-            Some(ms) => println!(
+            Some(ms) => outln!(
                 "{} dig r={} px at the image centre: {ms:.1} ms (target 50)",
                 self.name,
                 sculpt::DIG_RADIUS_PX
-            ),
-            None => println!("{}: the centre pixel shows no surface to dig", self.name),
+            )?,
+            None => outln!("{}: the centre pixel shows no surface to dig", self.name)?,
         }
-        println!(
+        outln!(
             "{} 512x512 riemann 0.5: {:.1} ms, with five clip planes {:.1} ms ({:.2}x), with \
              the planes and a mask {:.1} ms ({:.2}x, target <= 1.10x)",
             self.name,
@@ -91,7 +91,8 @@ impl Frames {
             self.planes / self.plain,
             self.masked,
             self.masked / self.plain
-        );
+        )?;
+        Ok(())
     }
 }
 

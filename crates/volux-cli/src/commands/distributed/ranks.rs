@@ -299,18 +299,18 @@ fn report(args: &RenderArgs, plan: &Plan, all: &[RankStats], total_ms: f64) {
             "composite_ms_max": max(|s| s.composite_ms),
             "per_rank": all,
         });
-        println!("{v}");
+        outln!("{v}")?;
         return;
     }
-    println!(
+    outln!(
         "{} ranks, level {}, {}x{}: {total_ms:.1} ms in all",
         all.len(),
         plan.job.level,
         plan.job.width,
         plan.job.height
-    );
+    )?;
     for s in all {
-        println!(
+        outln!(
             "rank {}: {} chunks in its region; read {} own, {} neighbour, {} other ({} bytes); render {:.1} ms, compositing {:.1} ms ({} messages, {} bytes sent)",
             s.rank,
             s.region_chunks,
@@ -322,6 +322,6 @@ fn report(args: &RenderArgs, plan: &Plan, all: &[RankStats], total_ms: f64) {
             s.composite_ms,
             s.composite.messages,
             s.composite.bytes_sent
-        );
+        )?;
     }
 }
