@@ -504,8 +504,6 @@ impl RenderPlan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DVec3;
-    use volux_core::Aabb;
 
     #[test]
     fn up_and_layer_specs_parse_or_say_what_they_expect() {
