@@ -40,6 +40,8 @@ use clap::{ArgMatches, CommandFactory, FromArgMatches};
 use messages::sanitize;
 
 fn main() -> ExitCode {
+    #[cfg(feature = "gpu")]
+    volux_gpu::quiet_headless_vulkan();
     let args = match parse() {
         Ok(args) => args,
         Err(e) if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) => {

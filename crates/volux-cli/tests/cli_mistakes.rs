@@ -610,6 +610,16 @@ fn slicing_on_the_cpu_is_refused_with_the_backend_to_use() {
     );
     let err = refused(&[&base[..], &["--jitter", "-o", "x.png"]].concat(), d);
     assert!(err.contains("--jitter does not apply to slicing"), "{err}");
+    // On `auto` only the GPU is asked: no CPU render is announced and then failed.
+    for extra in [&["-o", "x.png"][..], &["--mip", "-o", "x.png"]] {
+        let out = volux(&[&base[..], extra].concat(), d);
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{extra:?}");
+        assert!(
+            err.lines().count() == 1 && !err.contains("on the CPU"),
+            "{extra:?}: {err}"
+        );
+    }
 }
 
 /// A grid too large to split into tetrahedra is refused from its header, before gigabytes

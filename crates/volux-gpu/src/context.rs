@@ -39,6 +39,29 @@ impl fmt::Display for AdapterSummary {
     }
 }
 
+impl AdapterSummary {
+    /// Whether the adapter is a software rasterizer on the CPU (Mesa's llvmpipe/lavapipe,
+    /// SwiftShader, WARP): wgpu's device type `Cpu`. It draws what a GPU draws, several
+    /// times slower than the CPU engine, which is built for the CPU.
+    pub fn is_software(&self) -> bool {
+        self.device_type == format!("{:?}", wgpu::DeviceType::Cpu)
+    }
+}
+
+/// Keeps Mesa's Vulkan device-selection layer from probing a Wayland display that a
+/// headless machine does not have: without `XDG_RUNTIME_DIR` and `WAYLAND_DISPLAY`, the
+/// layer's probe prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment"
+/// on every device opened (the layer only picks the GPU that drives the display, and there
+/// is none). Sets `NODEVICE_SELECT=1` (the layer's own switch) in that case, unless the user
+/// set it. Call it first thing in `main`, before any thread starts (it sets an environment
+/// variable).
+pub fn quiet_headless_vulkan() {
+    let unset = |k: &str| std::env::var_os(k).is_none_or(|v| v.is_empty());
+    if unset("XDG_RUNTIME_DIR") && unset("WAYLAND_DISPLAY") && unset("NODEVICE_SELECT") {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
+}
+
 /// The adapters of `backends` (`WGPU_BACKEND` overrides them, as in every wgpu program).
 fn enumerate(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
     let backends = wgpu::Backends::from_env().unwrap_or(backends);

@@ -52,10 +52,10 @@ mod slicing;
 mod tables;
 mod target;
 
-pub use context::{adapters, AdapterSummary, GpuContext};
+pub use context::{adapters, quiet_headless_vulkan, AdapterSummary, GpuContext};
 pub use error::GpuError;
 pub use grid::{GpuGridRenderer, MAX_ISOVALUES};
 pub use pool::{GpuBrickedRenderer, GpuPoolRenderer, PoolOptions, PoolSource, PoolStats};
 pub use pt::GpuPtRenderer;
-pub use select::{renderer_for, supports};
+pub use select::{auto_draws, renderer_for, supports};
 pub use slicing::GpuSlicingRenderer;

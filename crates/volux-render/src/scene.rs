@@ -335,6 +335,12 @@ impl Method {
         }
     }
 
+    /// Whether only the GPU backend draws this method (texture slicing): `auto` then takes
+    /// any adapter, a software one included.
+    pub fn gpu_only(&self) -> bool {
+        matches!(self, Self::Slicing(_))
+    }
+
     /// Ray casting of `volume`: the grid ray caster with `grid` for grids, the tet ray caster
     /// with `mesh` for meshes.
     pub fn raycast(volume: &Volume, grid: GridRaycast, mesh: SegmentRule) -> Self {

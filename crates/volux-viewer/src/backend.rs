@@ -1,9 +1,10 @@
 //! Where the viewer's frames are rendered: the CPU engine, or the GPU backend (`volux-gpu`,
 //! behind the default `gpu` feature) when there is an adapter and it draws the scene.
 //!
-//! `volux-view --backend auto` (the default) renders a frame on the GPU when an adapter
-//! exists and the GPU backend draws the scene's method and features
-//! ([`volux_gpu::supports`]), else on the CPU;
+//! `volux-view --backend auto` (the default) renders a frame on the GPU when a hardware
+//! adapter exists and the GPU backend draws the scene's method and features
+//! ([`volux_gpu::auto_draws`]: a software adapter such as llvmpipe only for GPU-only
+//! methods), else on the CPU;
 //! `gpu` insists (the view shows why a scene cannot be drawn there); `cpu` never opens a
 //! device. Every frame says which it was drawn on ([`Device`]).
 use volux_render::engine::{create_renderer, Renderer};
@@ -84,8 +85,12 @@ impl Factory {
     pub(crate) fn on_gpu(&mut self, volume: &Volume, scene: &Scene) -> Result<bool, RenderError> {
         match self.backend {
             Backend::Cpu => Ok(false),
-            Backend::Auto => Ok(self.gpu.draws(volume, scene).is_ok()),
-            Backend::Gpu => self.gpu.draws(volume, scene).map(|()| true),
+            // Only the GPU draws a GPU-only method: why it cannot is the answer.
+            Backend::Auto if scene.method.gpu_only() => {
+                self.gpu.draws(volume, scene, false).map(|()| true)
+            }
+            Backend::Auto => Ok(self.gpu.draws(volume, scene, true).is_ok()),
+            Backend::Gpu => self.gpu.draws(volume, scene, false).map(|()| true),
         }
     }
 
@@ -129,10 +134,21 @@ mod gpu {
             opened.clone().map_err(RenderError::Backend)
         }
 
-        /// `Ok` when the GPU backend draws `scene` on `volume` and a device is open.
-        pub(super) fn draws(&mut self, volume: &Volume, scene: &Scene) -> Result<(), RenderError> {
+        /// `Ok` when the GPU backend draws `scene` on `volume` and a device is open; `auto`
+        /// applies the rule of [`volux_gpu::auto_draws`] (no software adapter unless the
+        /// method is GPU-only).
+        pub(super) fn draws(
+            &mut self,
+            volume: &Volume,
+            scene: &Scene,
+            auto: bool,
+        ) -> Result<(), RenderError> {
             volux_gpu::supports(volume, scene).map_err(RenderError::Backend)?;
-            self.context().map(|_| ())
+            let ctx = self.context()?;
+            if auto {
+                volux_gpu::auto_draws(&ctx, volume, scene).map_err(RenderError::Backend)?;
+            }
+            Ok(())
         }
 
         pub(super) fn renderer(
@@ -167,7 +183,7 @@ mod gpu {
     }
 
     impl Lazy {
-        pub(super) fn draws(&mut self, _: &Volume, _: &Scene) -> Result<(), RenderError> {
+        pub(super) fn draws(&mut self, _: &Volume, _: &Scene, _: bool) -> Result<(), RenderError> {
             Err(RenderError::Backend(NOT_BUILT.into()))
         }
 

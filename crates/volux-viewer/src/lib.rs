@@ -39,6 +39,7 @@ pub mod bench;
 pub mod dataset;
 pub mod file_dialog;
 pub mod files;
+pub mod headless;
 pub mod jobs;
 pub mod label_colours;
 pub mod lod_status;

@@ -69,6 +69,8 @@ fn parse_size(s: &str) -> Result<(usize, usize), String> {
 }
 
 fn main() -> ExitCode {
+    #[cfg(feature = "gpu")]
+    volux_gpu::quiet_headless_vulkan();
     let args = Args::parse();
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,
@@ -110,10 +112,16 @@ fn run(args: Args) -> Result<(), String> {
         timepoint: args.timepoint,
         component: args.component,
     };
+    if options.screenshot.is_some() && !volux_viewer::headless::have_display() {
+        // No window to open: the same frames run without one.
+        let screenshot = options.screenshot.clone();
+        volux_viewer::headless::screenshot(options)?;
+        return written(screenshot);
+    }
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("volux-view")
-            .with_inner_size([1280.0, 900.0])
+            .with_inner_size(volux_viewer::headless::WINDOW)
             .with_drag_and_drop(true),
         ..Default::default()
     };
@@ -124,10 +132,13 @@ fn run(args: Args) -> Result<(), String> {
         Box::new(move |cc| Ok(Box::new(ViewerApp::new(&cc.egui_ctx, options)))),
     )
     .map_err(|e| format!("cannot open a window: {e} (is a display available? set DISPLAY)"))?;
-    if let Some(p) = screenshot {
-        if !p.exists() {
-            return Err(format!("{}: no screenshot was written", p.display()));
-        }
+    written(screenshot)
+}
+
+/// `Ok` unless a screenshot was asked for and not written (the viewer said why).
+fn written(screenshot: Option<PathBuf>) -> Result<(), String> {
+    match screenshot {
+        Some(p) if !p.exists() => Err(format!("{}: no screenshot was written", p.display())),
+        _ => Ok(()),
     }
-    Ok(())
 }

@@ -294,3 +294,28 @@ fn png_rgb(path: &Path) -> (usize, usize, Vec<u8>) {
     buf.truncate(info.buffer_size());
     (info.width as usize, info.height as usize, buf)
 }
+
+/// Without a display, `--screenshot` renders without a window (it was "cannot open a
+/// window"): the picture at its size, the data in it, and no warning from a Wayland probe
+/// on stderr.
+#[test]
+fn a_screenshot_without_a_display_is_taken_headless() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dataset(dir.path());
+    let shot = dir.path().join("shot.png");
+    let out = Command::new(VIEWER)
+        .arg(&data)
+        .args(["--screenshot", shot.to_str().unwrap(), "--size", "200x150"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("XDG_RUNTIME_DIR"), "{err}");
+    let (w, h, rgb) = png_rgb(&shot);
+    assert_eq!((w, h), (200, 150));
+    let lit = rgb.chunks(3).filter(|p| p.iter().any(|c| *c > 40)).count();
+    assert!(lit > 200 * 150 / 20, "nearly blank ({lit} lit pixels)");
+}

@@ -7,8 +7,9 @@ use volux_render::scene::{Scene, Volume};
 use super::common::CmdError;
 use crate::cli::Backend;
 
-/// The renderer of `scene` on `volume` for `backend`: `auto` takes the GPU when it can and
-/// says on stderr why not when a GPU build cannot.
+/// The renderer of `scene` on `volume` for `backend`: `auto` takes a hardware GPU when it
+/// draws the scene ([`volux_gpu::auto_draws`]: never a software adapter unless the method
+/// is GPU-only) and says on stderr which it chose and why.
 pub fn renderer(
     volume: &Volume,
     scene: &Scene,
@@ -16,8 +17,10 @@ pub fn renderer(
 ) -> Result<Box<dyn Renderer>, CmdError> {
     match backend {
         Backend::Cpu => Ok(create_renderer(volume, &scene.method)?),
-        Backend::Gpu => gpu::renderer(volume, scene),
-        Backend::Auto => match gpu::renderer(volume, scene) {
+        // Only the GPU draws a GPU-only method: its refusal is the answer, not a CPU render.
+        Backend::Gpu => gpu::renderer(volume, scene, false),
+        Backend::Auto if scene.method.gpu_only() => gpu::renderer(volume, scene, false),
+        Backend::Auto => match gpu::renderer(volume, scene, true) {
             Ok(r) => Ok(r),
             Err(why) => {
                 if gpu::BUILT {
@@ -62,9 +65,17 @@ mod gpu {
 
     pub const BUILT: bool = true;
 
-    pub fn renderer(volume: &Volume, scene: &Scene) -> Result<Box<dyn Renderer>, CmdError> {
+    /// The GPU renderer; `auto` applies the rule of [`volux_gpu::auto_draws`].
+    pub fn renderer(
+        volume: &Volume,
+        scene: &Scene,
+        auto: bool,
+    ) -> Result<Box<dyn Renderer>, CmdError> {
         volux_gpu::supports(volume, scene).map_err(RenderError::Backend)?;
         let ctx = Arc::new(GpuContext::new().map_err(RenderError::from)?);
+        if auto {
+            volux_gpu::auto_draws(&ctx, volume, scene).map_err(RenderError::Backend)?;
+        }
         eprintln!("volux: rendering on the GPU: {}", ctx.adapter());
         Ok(volux_gpu::renderer_for(ctx, volume, &scene.method).map_err(RenderError::from)?)
     }
@@ -88,7 +99,7 @@ mod gpu {
 
     const NOT_BUILT: &str = "this volux was built without the GPU backend (cargo build --release -p volux-cli --features gpu)";
 
-    pub fn renderer(_: &Volume, _: &Scene) -> Result<Box<dyn Renderer>, CmdError> {
+    pub fn renderer(_: &Volume, _: &Scene, _: bool) -> Result<Box<dyn Renderer>, CmdError> {
         Err(NOT_BUILT.into())
     }
 
