@@ -8,7 +8,7 @@ use glam::DVec3;
 use volux_core::image::PngOptions;
 use volux_core::{transfer_import, Camera, CameraSpec, NamedView, TransferFunction};
 use volux_io::Dataset;
-use volux_render::framing::{fit_to_box, visible_bounds};
+use volux_render::framing::{fit_to_box, visible_bounds_of};
 use volux_render::integrate::{AdaptiveParams, Integrator, SegmentRule, StepControl};
 use volux_render::isosurface::{parse_iso, Isosurfaces};
 use volux_render::pt::SortMode;
@@ -466,6 +466,10 @@ impl RenderPlan {
             .iter()
             .map(|s| parse_clip_plane(s))
             .collect::<Result<_, _>>()?;
+        if let (Some(mask), Some(file)) = (&args.view_args.mask, &args.file) {
+            // Before the camera: `--frame visible` frames what the mask leaves.
+            crate::mask_file::add_mask(mask, volume, file, &mut scene)?;
+        }
         let resolved = scene.method.resolve(volume)?;
         crate::applicable::check_method(args, &resolved, loaded_grid)?;
         resolved.check_appearance(&scene.appearance)?;
@@ -485,7 +489,7 @@ impl RenderPlan {
         let bounds = match args.view_args.frame {
             FrameArg::All => volume.bounds(),
             FrameArg::Visible => {
-                visible_bounds(volume, &scene.appearance).unwrap_or_else(|_| volume.bounds())
+                visible_bounds_of(volume, scene).unwrap_or_else(|_| volume.bounds())
             }
         };
         if args.view_args.camera.is_some() {

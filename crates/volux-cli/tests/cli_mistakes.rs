@@ -642,3 +642,96 @@ fn as_tets_is_refused_from_the_header_before_the_grid_is_loaded() {
     );
     assert!(!err.contains("truncated"), "{err}");
 }
+
+/// The centre of the box of what a PNG shows (column, row, as fractions of the image) and
+/// the fraction of the image it covers.
+fn shown(path: &Path) -> ([f64; 2], f64) {
+    let (w, h, px) = common::png_pixels(path);
+    let bg = px[0].clone();
+    let (mut n, mut lo, mut hi) = (0usize, [u32::MAX; 2], [0u32; 2]);
+    for (i, p) in px.iter().enumerate() {
+        if p.iter().zip(&bg).any(|(a, b)| a.abs_diff(*b) > 8) {
+            n += 1;
+            let xy = [i as u32 % w, i as u32 / w];
+            for a in 0..2 {
+                lo[a] = lo[a].min(xy[a]);
+                hi[a] = hi[a].max(xy[a] + 1);
+            }
+        }
+    }
+    let centre = |a: usize, size: u32| f64::from(lo[a] + hi[a]) / 2.0 / f64::from(size);
+    ([centre(0, w), centre(1, h)], n as f64 / f64::from(w * h))
+}
+
+/// `--frame visible` frames what the clip planes and the mask leave: the cap of a ball that
+/// is kept fills the middle of the image (it sat at one side of the ball's frame).
+#[test]
+fn the_camera_frames_what_the_cuts_leave() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = volux(&["generate", "sphere", "--size", "48", "-o", "s.raw"], d);
+    assert!(run.status.success(), "{}", stderr(&run));
+    // A ball of radius about 8 around (23.5, 23.5, 23.5) is visible.
+    std::fs::write(
+        d.join("core.json"),
+        r#"{"space": "normalized", "color": [[0, 1, 1, 1]],
+            "extinction": [[0.78, 0], [0.8, 2], [1, 2]]}"#,
+    )
+    .unwrap();
+    let base = ["render", "s.raw", "--tf", "core.json", "--size", "64x64"];
+    // Keep x >= 26: a cap of the ball, on the image's right seen from the front.
+    let cut = [&base[..], &["--clip-plane", "1,0,0,-26"]].concat();
+    accepted(
+        &[&cut[..], &["--frame", "all", "-o", "all.png"]].concat(),
+        d,
+    );
+    accepted(&[&cut[..], &["-o", "cut.png"]].concat(), d);
+    let ([ax, _], all) = shown(&d.join("all.png"));
+    let ([cx, cy], framed) = shown(&d.join("cut.png"));
+    assert!(
+        ax > 0.55,
+        "the box's frame shows the cap right of centre: {ax}"
+    );
+    assert!(
+        (cx - 0.5).abs() < 0.05 && (cy - 0.5).abs() < 0.05,
+        "the framed cap's centre at ({cx}, {cy})"
+    );
+    assert!(
+        framed > 1.5 * all,
+        "the cap fills {framed} framed, {all} in the box"
+    );
+    // A mask that removes x < 26 frames the same.
+    let (volux_io::Dataset::Grid(g), _) =
+        volux_io::load(&d.join("s.raw"), &Default::default()).unwrap()
+    else {
+        panic!("a grid")
+    };
+    let [nx, ny, nz] = g.dims();
+    let mut kept = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let p = g.index_to_world(glam::DVec3::new(i as f64, j as f64, k as f64));
+                kept.push(u8::from(p.x >= 26.0));
+            }
+        }
+    }
+    let mask = volux_core::Grid::new(
+        g.dims(),
+        g.spacing().to_array(),
+        g.origin().to_array(),
+        volux_core::Samples::U8(volux_core::Buffer::owned(kept)),
+    )
+    .unwrap();
+    volux_io::nrrd::write(&mask, &d.join("mask.nrrd")).unwrap();
+    accepted(
+        &[&base[..], &["--mask", "mask.nrrd", "-o", "masked.png"]].concat(),
+        d,
+    );
+    let ([mx, my], masked) = shown(&d.join("masked.png"));
+    assert!(
+        (mx - 0.5).abs() < 0.05 && (my - 0.5).abs() < 0.05,
+        "the masked cap's centre at ({mx}, {my})"
+    );
+    assert!(masked > 1.5 * all, "{masked} vs {all}");
+}

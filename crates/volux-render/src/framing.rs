@@ -6,11 +6,13 @@
 //! empty-space skipping), meshes cell by cell (a tetrahedron's values span the range of its
 //! vertices'), so the box is conservative: it holds every sample a renderer can see.
 use glam::DVec3;
+use volux_core::sculpt::SculptMask;
+use volux_core::voi::{ClipPlane, ConvexVoi};
 use volux_core::{Aabb, Camera, Grid, Projection, TetMesh};
 
 use crate::classify::ClassifyTable;
 use crate::macrocell::MacrocellGrid;
-use crate::scene::{Appearance, Volume};
+use crate::scene::{Appearance, Scene, Volume};
 
 /// Why a scene shows nothing.
 #[derive(Clone, Debug, PartialEq)]
@@ -25,11 +27,18 @@ pub enum Invisible {
         /// Where the transfer function's extinction is non-zero (`None`: nowhere).
         opaque: Option<[f64; 2]>,
     },
+    /// The transfer function shows values, but the clip planes and the sculpt mask remove
+    /// every cell that holds them.
+    CutAway,
 }
 
 impl std::fmt::Display for Invisible {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            Self::CutAway => write!(
+                f,
+                "the clip planes and the mask remove everything the transfer function shows"
+            ),
             Self::Constant(v) => write!(
                 f,
                 "every value is {} (a constant field): there is no structure to show",
@@ -66,8 +75,193 @@ fn round(v: f64) -> String {
     }
 }
 
+/// The world box of what `scene` shows of `volume`: what its transfer function and
+/// isosurfaces make visible ([`visible_bounds`]) and what its clip planes and sculpt mask
+/// leave (grids; seed `004` ch. 4-6), so that a camera frames a cut head, not the box it was
+/// cut from. Macrocells wholly on the removed side of a plane, or wholly removed by the
+/// mask, are left out; the box is then cut by the planes.
+pub fn visible_bounds_of(volume: &Volume, scene: &Scene) -> Result<Aabb, Invisible> {
+    let planes = &scene.clip_planes;
+    let mask = scene.mask.as_deref();
+    let uncut = visible_bounds(volume, &scene.appearance)?;
+    let Volume::Grid(g) = volume else {
+        return Ok(uncut);
+    };
+    if planes.is_empty() && mask.is_none() {
+        return Ok(uncut);
+    }
+    let appearance = &scene.appearance;
+    let boxed = if appearance.mip {
+        cut_cells_box(g, |_, _| true, planes, mask)
+    } else {
+        let (table, isovalues) = classify(volume, appearance);
+        cut_cells_box(
+            g,
+            |lo, hi| {
+                !table.is_transparent(lo, hi) || isovalues.iter().any(|v| (lo..=hi).contains(v))
+            },
+            planes,
+            mask,
+        )
+    };
+    let boxed = boxed.ok_or(Invisible::CutAway)?;
+    // The planes cut the box of the cells they cross.
+    let Ok(mut voi) = ConvexVoi::from_aabb(&boxed) else {
+        return Ok(boxed);
+    };
+    for plane in planes {
+        if voi.cut(plane).is_err() {
+            return Err(Invisible::CutAway);
+        }
+    }
+    Ok(Aabb::from_points(voi.vertices().iter().copied()).unwrap_or(boxed))
+}
+
+/// The classification table of `appearance` over `volume`'s range, and its isovalues.
+fn classify(volume: &Volume, appearance: &Appearance) -> (ClassifyTable, Vec<f32>) {
+    let tf = appearance.effective_tf();
+    let table = ClassifyTable::new(&tf, volume.range(), ClassifyTable::DEFAULT_SIZE);
+    let isovalues = appearance
+        .isosurfaces
+        .as_slice()
+        .iter()
+        .map(|i| i.value)
+        .collect();
+    (table, isovalues)
+}
+
+/// The world box of the macrocells of `g` that hold visible values (`visible`), are not
+/// wholly on the removed side of a plane and keep a voxel of `mask`; `None` when none does
+/// (the whole grid's box when the macrocells do not fit in the memory budget).
+fn cut_cells_box(
+    g: &Grid,
+    visible: impl Fn(f32, f32) -> bool,
+    planes: &[ClipPlane],
+    mask: Option<&SculptMask>,
+) -> Option<Aabb> {
+    let dims = g.dims();
+    if MacrocellGrid::check_within(volux_core::limits::memory_budget(), dims).is_err() {
+        return Some(g.bounds());
+    }
+    let cells = volux_core::with_samples!(g.samples(), |s| MacrocellGrid::build(s, dims));
+    let counts = cells.counts();
+    let block = cells.block();
+    let index = |i: [usize; 3]| DVec3::from(i.map(|v| v as f64));
+    let mut lo = [usize::MAX; 3];
+    let mut hi = [0usize; 3];
+    for (m, r) in cells.ranges().iter().enumerate() {
+        if !(r[0].is_finite() && visible(r[0], r[1])) {
+            continue;
+        }
+        let c = [
+            m % counts[0],
+            (m / counts[0]) % counts[1],
+            m / (counts[0] * counts[1]),
+        ];
+        let first: [usize; 3] = std::array::from_fn(|a| c[a] * block[a]);
+        let last: [usize; 3] = std::array::from_fn(|a| ((c[a] + 1) * block[a]).min(dims[a] - 1));
+        let corners = Aabb {
+            min: index(first),
+            max: index(last),
+        }
+        .corners()
+        .map(|p| g.index_to_world(p));
+        if planes
+            .iter()
+            .any(|p| corners.iter().all(|&q| p.distance(q) < 0.0))
+        {
+            continue;
+        }
+        if let Some(mask) = mask {
+            let kept = (first[2]..=last[2]).any(|k| {
+                (first[1]..=last[1]).any(|j| (first[0]..=last[0]).any(|i| mask.voxel(i, j, k)))
+            });
+            if !kept {
+                continue;
+            }
+        }
+        for a in 0..3 {
+            lo[a] = lo[a].min(first[a]);
+            hi[a] = hi[a].max(last[a]);
+        }
+    }
+    if lo[0] == usize::MAX {
+        return None;
+    }
+    // Macrocells are 8 voxels wide: shrink the box face by face to the voxel cells that
+    // are visible and kept, so a cut or a small structure is framed to the voxel.
+    let cell_shown = |c: [usize; 3]| {
+        let corner = |o: usize| [c[0] + (o & 1), c[1] + ((o >> 1) & 1), c[2] + (o >> 2)];
+        let samples = g.samples();
+        let (mut vlo, mut vhi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for o in 0..8 {
+            let [i, j, k] = corner(o);
+            let v = samples.get_f32(i + dims[0] * (j + dims[1] * k));
+            vlo = vlo.min(v);
+            vhi = vhi.max(v);
+        }
+        if !(vlo.is_finite() && visible(vlo, vhi)) {
+            return false;
+        }
+        let world = (0..8).map(|o| g.index_to_world(index(corner(o))));
+        let points: Vec<DVec3> = world.collect();
+        if planes
+            .iter()
+            .any(|p| points.iter().all(|&q| p.distance(q) < 0.0))
+        {
+            return false;
+        }
+        mask.is_none_or(|m| {
+            (0..8).any(|o| {
+                let [i, j, k] = corner(o);
+                m.voxel(i, j, k)
+            })
+        })
+    };
+    if dims.iter().all(|&d| d > 1) {
+        tighten(&mut lo, &mut hi, cell_shown);
+    }
+    let visible = Aabb {
+        min: index(lo),
+        max: index(hi),
+    };
+    Aabb::from_points(visible.corners().map(|c| g.index_to_world(c)))
+}
+
+/// Shrinks the voxel index box `lo..=hi` (cells `lo..hi` per axis) face by face while the
+/// layer of cells on a face has none that `shown` (the cell with that lowest corner) keeps.
+/// Leaves the box as it is when no cell is shown.
+fn tighten(lo: &mut [usize; 3], hi: &mut [usize; 3], shown: impl Fn([usize; 3]) -> bool) {
+    let layer_shown = |lo: &[usize; 3], hi: &[usize; 3], axis: usize, at: usize| {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        (lo[u]..hi[u].max(lo[u] + 1)).any(|a| {
+            (lo[v]..hi[v].max(lo[v] + 1)).any(|b| {
+                let mut c = [0; 3];
+                c[axis] = at;
+                c[u] = a;
+                c[v] = b;
+                shown(c)
+            })
+        })
+    };
+    for axis in 0..3 {
+        let (start, end) = (lo[axis], hi[axis]);
+        while lo[axis] + 1 < hi[axis] && !layer_shown(lo, hi, axis, lo[axis]) {
+            lo[axis] += 1;
+        }
+        while hi[axis] > lo[axis] + 1 && !layer_shown(lo, hi, axis, hi[axis] - 1) {
+            hi[axis] -= 1;
+        }
+        if lo[axis] + 1 == hi[axis] && !layer_shown(lo, hi, axis, lo[axis]) {
+            // Nothing shown after all (the macrocell ranges were conservative): as it was.
+            (lo[axis], hi[axis]) = (start, end);
+        }
+    }
+}
+
 /// The world box of what `appearance` makes visible in `volume` (MIP shows the whole
-/// volume), or why nothing is.
+/// volume), or why nothing is. Clip planes and masks are not applied: see
+/// [`visible_bounds_of`].
 pub fn visible_bounds(volume: &Volume, appearance: &Appearance) -> Result<Aabb, Invisible> {
     let range = volume.range();
     if range[0] == range[1] {
@@ -76,26 +270,19 @@ pub fn visible_bounds(volume: &Volume, appearance: &Appearance) -> Result<Aabb, 
     if appearance.mip {
         return Ok(volume.bounds());
     }
-    let tf = appearance.effective_tf();
-    let table = ClassifyTable::new(&tf, range, ClassifyTable::DEFAULT_SIZE);
-    let isovalues: Vec<f32> = appearance
-        .isosurfaces
-        .as_slice()
-        .iter()
-        .map(|i| i.value)
-        .collect();
+    let (table, isovalues) = classify(volume, appearance);
     let visible = |lo: f32, hi: f32| {
         !table.is_transparent(lo, hi) || isovalues.iter().any(|v| (lo..=hi).contains(v))
     };
     let found = match volume {
-        Volume::Grid(g) => grid_box(g, visible),
+        Volume::Grid(g) => cut_cells_box(g, visible, &[], None),
         Volume::Mesh(m) => mesh_box(m, visible),
         // The chunks' ranges are not all known without reading them: the whole box.
         Volume::Bricked(b, _) => Some(b.bounds()),
     };
     found.ok_or_else(|| Invisible::Transparent {
         range,
-        opaque: opaque_span(&tf.resolved(range)),
+        opaque: opaque_span(&appearance.effective_tf().resolved(range)),
     })
 }
 
@@ -109,44 +296,6 @@ fn opaque_span(tf: &volux_core::TransferFunction) -> Option<[f64; 2]> {
     let before = bp.iter().rev().copied().find(|&s| s < lo).unwrap_or(lo);
     let after = bp.iter().copied().find(|&s| s > hi).unwrap_or(hi);
     Some([before, after])
-}
-
-/// The box of the visible macrocells of `g` (the whole grid's box when its macrocells do not
-/// fit in the memory budget).
-fn grid_box(g: &Grid, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
-    let dims = g.dims();
-    if MacrocellGrid::check_within(volux_core::limits::memory_budget(), dims).is_err() {
-        return Some(g.bounds());
-    }
-    let cells = volux_core::with_samples!(g.samples(), |s| MacrocellGrid::build(s, dims));
-    let counts = cells.counts();
-    let index = |i: [usize; 3]| DVec3::from(i.map(|v| v as f64));
-    let mut lo = [usize::MAX; 3];
-    let mut hi = [0usize; 3];
-    for (m, r) in cells.ranges().iter().enumerate() {
-        if !(r[0].is_finite() && visible(r[0], r[1])) {
-            continue;
-        }
-        let c = [
-            m % counts[0],
-            (m / counts[0]) % counts[1],
-            m / (counts[0] * counts[1]),
-        ];
-        for a in 0..3 {
-            let b = cells.block()[a];
-            lo[a] = lo[a].min(c[a] * b);
-            hi[a] = hi[a].max(((c[a] + 1) * b).min(dims[a] - 1));
-        }
-    }
-    if lo[0] == usize::MAX {
-        return None;
-    }
-    // The world box of the visible index box's eight corners, turned by the direction.
-    let visible = Aabb {
-        min: index(lo),
-        max: index(hi),
-    };
-    Aabb::from_points(visible.corners().map(|c| g.index_to_world(c)))
 }
 
 /// The box of the visible tetrahedra of `m`.

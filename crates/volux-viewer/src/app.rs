@@ -12,7 +12,7 @@ use glam::DVec3;
 use volux_core::{Camera, TransferFunction};
 use volux_io::progress::{with_progress, LoadProgress};
 use volux_render::bricked::Lod;
-use volux_render::framing::visible_bounds;
+use volux_render::framing::visible_bounds_of;
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::sculpt::Sculpt;
 use volux_render::session::{DatasetRef, Session, SliceState};
@@ -402,10 +402,11 @@ impl ViewerApp {
     }
 
     /// The home view of `volume`: a three-quarter view fitted to what the transfer
-    /// function and isosurfaces show (the whole box when they show nothing), as `volux
-    /// render --frame visible` frames it.
+    /// function and isosurfaces show and the clip planes and mask leave (the whole box when
+    /// nothing is shown), as `volux render --frame visible` frames it.
     pub fn home_camera(&self, volume: &Volume) -> Camera {
-        let bounds = visible_bounds(volume, &self.scene.appearance).unwrap_or(volume.bounds());
+        let scene = self.render_scene();
+        let bounds = visible_bounds_of(volume, &scene).unwrap_or(volume.bounds());
         let aspect = self.view_size.0 as f64 / self.view_size.1.max(1) as f64;
         navigation::home(&bounds, aspect)
     }

@@ -7,7 +7,7 @@ use volux_core::image::PngOptions;
 use volux_core::{synth, CameraSpec, Image, TransferFunction};
 use volux_io::{Dataset, Format};
 use volux_render::engine::Frame;
-use volux_render::framing::{visible_bounds, Invisible};
+use volux_render::framing::{visible_bounds_of, Invisible};
 use volux_render::scene::{Scene, Volume};
 use volux_render::tiles::Control;
 
@@ -37,10 +37,7 @@ pub fn run(args: &RenderArgs, show: bool) -> Result<(), CmdError> {
             (crate::settings::volume(data, args)?, format, loaded_grid)
         }
     };
-    let mut scene = plan.scene(args, &volume, loaded_grid)?;
-    if let Some(mask) = &args.view_args.mask {
-        super::workbench::add_mask(mask, &volume, file, &mut scene)?;
-    }
+    let scene = plan.scene(args, &volume, loaded_grid)?;
     let measured = super::measure::Drawn::pick(args, &volume, &scene, loaded_grid)?;
     let invisible = warn_invisible(&volume, &scene, format);
     if let Some(spec) = &args.orbit {
@@ -96,7 +93,7 @@ fn warn_invisible(volume: &Volume, scene: &Scene, format: Format) -> bool {
             ));
         }
     }
-    match visible_bounds(volume, &scene.appearance) {
+    match visible_bounds_of(volume, scene) {
         Ok(_) => false,
         Err(why) => {
             let hint = match (&why, format) {

@@ -5,9 +5,8 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use volux_core::sculpt::SculptMask;
 use volux_core::{Buffer, Grid, Samples};
-use volux_io::{Dataset, LoadOptions};
+use volux_io::Dataset;
 use volux_render::scene::{Scene, Volume};
 use volux_render::sculpt::{Sculpt, SculptStep, SurfacePoint};
 use volux_render::session::DatasetRef;
@@ -49,8 +48,9 @@ impl Workbench {
         for plane in std::mem::take(&mut scene.clip_planes) {
             sculpt.apply(SculptStep::AddPlane { plane })?;
         }
-        if let Some(path) = &view.view_args.mask {
-            sculpt = sculpt.with_mask(read_mask(path, &grid, &view.file)?)?;
+        // The scene read `--mask` (and framed what it leaves); the sculpt state owns it.
+        if let Some(mask) = scene.mask.take() {
+            sculpt = sculpt.with_mask(Arc::unwrap_or_clone(mask))?;
         }
         Ok(Self {
             grid,
@@ -109,50 +109,6 @@ pub fn write_u8_like(grid: &Grid, values: Vec<u8>, path: &Path) -> Result<(), Cm
     let out = Grid::new(grid.dims(), s, o, Samples::U8(Buffer::owned(values)))?
         .with_direction(grid.direction())?;
     volux_io::nrrd::write(&out, path).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(())
-}
-
-/// Reads a saved sculpt mask for `grid` (of `file`): any grid file of the same geometry
-/// (dims, spacing, origin, direction, unit), non-zero voxels kept.
-pub fn read_mask(path: &Path, grid: &Grid, file: &Path) -> Result<SculptMask, CmdError> {
-    let named = |e: &dyn std::fmt::Display| format!("--mask {}: {e}", path.display());
-    let (data, _) = volux_io::load(path, &LoadOptions::default()).map_err(|e| named(&e))?;
-    let Dataset::Grid(m) = data else {
-        return Err(named(&"a mask is a grid; this is a tetrahedral mesh").into());
-    };
-    // A mask made on another lattice (another orientation, a resampled copy) would be
-    // applied by voxel index to the wrong place.
-    volux_core::geometry_match::check_same_geometry(grid, &m).map_err(|e| {
-        named(&format!(
-            "the mask does not lie on {}'s voxels: {e}",
-            file.display()
-        ))
-    })?;
-    let s = m.samples();
-    let values: Vec<u8> = (0..s.len())
-        .map(|i| u8::from(s.get_f32(i) != 0.0))
-        .collect();
-    Ok(SculptMask::from_values(m.dims(), &values).map_err(|e| named(&e))?)
-}
-
-/// Puts the mask at `path` into `scene` (`volux render --mask`): grids only.
-pub fn add_mask(
-    path: &Path,
-    volume: &Volume,
-    file: &Path,
-    scene: &mut Scene,
-) -> Result<(), CmdError> {
-    let Volume::Grid(grid) = volume else {
-        return Err(format!(
-            "--mask applies to grids; {} is rendered as a tetrahedral mesh",
-            file.display()
-        )
-        .into());
-    };
-    let mask = read_mask(path, grid, file)?;
-    // A mask that removes nothing changes no pixel: leave the scene without one, as the
-    // engine's sculpt state does (`Sculpt::apply_to`).
-    scene.mask = (!mask.is_untouched()).then(|| Arc::new(mask));
     Ok(())
 }
 
