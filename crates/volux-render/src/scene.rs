@@ -122,6 +122,37 @@ impl Volume {
         }
     }
 
+    /// Whether the volume looks like a CT in Hounsfield units: a grid of signed 16-bit values
+    /// whose minimum is air or the scanner's padding (-4000 to -900 HU) and whose maximum
+    /// reaches bone (at least 300 HU). Integer magnitudes of MR, PET or microscopy are not
+    /// negative; a float simulation field is not 16-bit.
+    pub fn looks_like_ct(&self) -> bool {
+        let [lo, hi] = self.range();
+        let signed16 = match self {
+            Self::Grid(g) => g.scalar_type() == volux_core::ScalarType::I16,
+            _ => false,
+        };
+        signed16 && (-4000.0..=-900.0).contains(&lo) && hi >= 300.0
+    }
+
+    /// The first picture's transfer function and whether to shade the volume, for a front
+    /// end that opens data without being told how to show it: a CT ([`Self::looks_like_ct`])
+    /// gets bone under a faint skin (`ct-bone` + `ct-skin` at 0.15), lit; other grids the
+    /// `auto` preset, lit (a grid unlit is a flat blob); meshes `auto`, unlit (PT draws no
+    /// gradient light).
+    pub fn first_look(&self) -> Result<(TransferFunction, bool), RenderError> {
+        let grid = matches!(self, Self::Grid(_));
+        if self.looks_like_ct() {
+            let range = self.range();
+            let layers = [
+                (self.preset_tf("ct-bone")?.resolved(range), 1.0),
+                (self.preset_tf("ct-skin")?.resolved(range), 0.15),
+            ];
+            return Ok((TransferFunction::layered(&layers)?, true));
+        }
+        Ok((self.preset_tf("auto")?, grid))
+    }
+
     /// A transfer-function preset (`auto`, `ct-bone`, ...) fitted to this volume's histogram,
     /// its extinction per [`Volume::unit_length`].
     pub fn preset_tf(&self, name: &str) -> Result<TransferFunction, RenderError> {
@@ -522,6 +553,50 @@ mod tests {
 
     fn grid() -> Volume {
         synth::marschner_lobb(9).unwrap().into()
+    }
+
+    /// A CT-like int16 grid: air at `air` HU, a cube of bone (1200 HU) in soft tissue (40).
+    fn ct(air: i16) -> Volume {
+        let n = 16;
+        let values: Vec<i16> = (0..n * n * n)
+            .map(|i| {
+                let c = [i % n, (i / n) % n, i / (n * n)];
+                if c.iter().all(|&v| (6..10).contains(&v)) {
+                    1200
+                } else if c.iter().all(|&v| (2..14).contains(&v)) {
+                    40
+                } else {
+                    air
+                }
+            })
+            .collect();
+        let samples = volux_core::Samples::I16(volux_core::Buffer::owned(values));
+        Grid::new([n; 3], [1.0; 3], [0.0; 3], samples)
+            .unwrap()
+            .into()
+    }
+
+    /// A CT opens as bone under faint skin, lit; other grids as `auto`, lit; a field with
+    /// negative values that is not 16-bit, or an int16 volume without air, is not a CT.
+    #[test]
+    fn a_ct_first_looks_like_bone_and_other_data_like_auto() {
+        for air in [-1024, -1000, -3024] {
+            let v = ct(air);
+            assert!(v.looks_like_ct(), "air {air}");
+            let (tf, shade) = v.first_look().unwrap();
+            assert!(shade);
+            let tf = tf.resolved(v.range());
+            assert_eq!(tf.tau_per_world(f64::from(air)), 0.0, "air is clear");
+            assert!(tf.tau_per_world(1200.0) > 0.0, "bone shows");
+        }
+        assert!(!ct(0).looks_like_ct(), "no air");
+        let g = grid();
+        assert!(!g.looks_like_ct());
+        let (tf, shade) = g.first_look().unwrap();
+        assert!(shade);
+        assert_eq!(tf, g.preset_tf("auto").unwrap());
+        let m = g.to_tets().unwrap();
+        assert!(!m.first_look().unwrap().1, "PT draws no gradient light");
     }
 
     #[test]

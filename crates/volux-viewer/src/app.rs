@@ -327,16 +327,18 @@ impl ViewerApp {
         self.level_log.clear();
         let volume = loaded.volume.volume.clone();
         let range = volume.range();
-        let tf = volume
-            .preset_tf("auto")
-            .map(|tf| in_value_space(&tf, range))
-            .unwrap_or_else(|_| self.scene.appearance.tf.clone());
+        // The first picture: bone under faint skin for a CT, lit (volux_render's rule).
+        let (tf, shade) = volume
+            .first_look()
+            .map(|(tf, shade)| (in_value_space(&tf, range), shade))
+            .unwrap_or_else(|_| (self.scene.appearance.tf.clone(), false));
         self.scene = Scene::new(
             self.scene.view.camera,
             self.view_size.0,
             self.view_size.1,
             tf,
         );
+        self.scene.appearance.shade_volume = shade;
         self.scene.view.camera = self.home_camera(&volume);
         self.scene.method = Method::Auto.resolve(&volume).unwrap_or(Method::Auto);
         self.window = [
