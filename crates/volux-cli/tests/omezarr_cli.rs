@@ -206,4 +206,41 @@ fn a_store_renders_out_of_core_as_in_memory_and_a_bad_lod_writes_nothing() {
         "{err}"
     );
     assert!(!dir.join("bad.png").exists());
+    // A level past the last is refused with the levels there are (it rendered the last);
+    // --lod on a file read whole is refused (it was ignored).
+    ok(&["convert", "ml.ome.zarr", "ml.nrrd"], dir);
+    let levels = ok(&["info", "--json", "ml.ome.zarr"], dir);
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &["render", "ml.ome.zarr", "--lod", "9", "-o", "bad.png"],
+            "--lod 9: ml.ome.zarr has",
+        ),
+        (
+            &["render", "ml.nrrd", "--lod", "1", "-o", "bad.png"],
+            "--lod 1 applies to OME-Zarr stores",
+        ),
+        (
+            &[
+                "render",
+                "ml.ome.zarr",
+                "--lod",
+                "1",
+                "--level",
+                "1",
+                "-o",
+                "bad.png",
+            ],
+            "cannot be used with '--level",
+        ),
+    ];
+    for (args, want) in cases {
+        let out = volux(args, dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(
+            err.contains(want) && err.lines().count() == 1,
+            "{args:?}: {err} ({levels})"
+        );
+        assert!(!dir.join("bad.png").exists());
+    }
 }

@@ -323,6 +323,11 @@ impl ViewerApp {
     /// Shows a newly loaded dataset: the session's view when one was opened, otherwise the
     /// home camera, the automatic TF, the crosshair at the centre.
     pub(crate) fn set_data(&mut self, mut loaded: Loaded) {
+        if let Some(why) = crate::store::lod_refusal(&loaded.volume.volume, self.options.lod) {
+            // Said, not clamped: the automatic level is shown instead.
+            self.options.lod = volux_render::bricked::Lod::Auto;
+            loaded.notes.push(why);
+        }
         loaded.volume.volume = crate::store::with_lod(&loaded.volume.volume, self.lod());
         self.level_log.clear();
         let volume = loaded.volume.volume.clone();

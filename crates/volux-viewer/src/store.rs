@@ -114,6 +114,25 @@ fn read_level(level: &dyn ChunkSource) -> Result<Grid, String> {
     .map_err(|e| e.to_string())
 }
 
+/// Why `--lod` cannot apply to `volume` (a level past the store's last, or a level asked of
+/// data read whole), or `None`.
+pub fn lod_refusal(volume: &Volume, lod: Lod) -> Option<String> {
+    let Lod::Level(n) = lod else { return None };
+    match volume {
+        Volume::Bricked(b, _) if n >= b.levels() => Some(format!(
+            "--lod {n}: the store has {} levels, 0 (full resolution) to {}; the automatic \
+             level is shown",
+            b.levels(),
+            b.levels() - 1
+        )),
+        Volume::Bricked(..) => None,
+        _ => Some(format!(
+            "--lod {n} applies to OME-Zarr stores rendered out of core; this data is read \
+             whole"
+        )),
+    }
+}
+
 /// The volume with `lod` (a bricked volume; other volumes are returned as they are).
 pub fn with_lod(volume: &Volume, lod: Lod) -> Volume {
     match volume {

@@ -14,7 +14,21 @@ use crate::cli::RenderArgs;
 /// The bricked volume of `file` when it is a store to render out of core; `None` to load it
 /// in memory as any file.
 pub fn volume(file: &Path, args: &RenderArgs) -> Result<Option<Volume>, CmdError> {
-    if volux_io::detect(file).ok() != Some(volux_io::Format::OmeZarr) || args.load.level.is_some() {
+    let format = volux_io::detect(file).ok();
+    if let Some(lod) = &args.lod {
+        if format != Some(volux_io::Format::OmeZarr) {
+            let what = format.map_or("not a store".to_string(), |f| {
+                format!("a {} file", f.name())
+            });
+            return Err(format!(
+                "--lod {lod} applies to OME-Zarr stores, rendered out of core level by level; \
+                 {} is {what}, read whole",
+                file.display()
+            )
+            .into());
+        }
+    }
+    if format != Some(volux_io::Format::OmeZarr) || args.load.level.is_some() {
         return Ok(None);
     }
     let opts = ZarrOptions {
@@ -32,6 +46,17 @@ pub fn volume(file: &Path, args: &RenderArgs) -> Result<Option<Volume>, CmdError
         return Ok(None);
     };
     let volume = BrickedVolume::open(ms, budget).map_err(|e| format!("{}: {e}", file.display()))?;
+    if let Lod::Level(n) = lod {
+        let levels = volume.levels();
+        if n >= levels {
+            return Err(format!(
+                "--lod {n}: {} has {levels} levels, 0 (full resolution) to {}",
+                file.display(),
+                levels - 1
+            )
+            .into());
+        }
+    }
     Ok(Some(Volume::Bricked(Arc::new(volume), lod)))
 }
 

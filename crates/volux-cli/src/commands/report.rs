@@ -59,6 +59,7 @@ fn grid(
                 "chunks_read": c.misses,
                 "bytes_decoded": c.bytes_read,
                 "evictions": c.evictions,
+                "rereads": c.rereads,
                 "hit_rate": c.hit_rate(),
                 "peak_resident_bytes": c.peak_bytes,
             });
@@ -77,11 +78,19 @@ fn grid(
         );
         if let Some(c) = cache {
             let bytes = volux_core::units::format_bytes;
+            // Chunks read again after an eviction say what a hit rate over the rays'
+            // lookups hides (it stays near 100 % while the cache thrashes).
+            let again = match c.rereads {
+                0 => String::new(),
+                n => format!(
+                    ", {n} of them again after an eviction (the memory budget holds less than \
+                     the view needs)"
+                ),
+            };
             eprintln!(
-                "brick cache: {} chunks read ({} decoded), {:.1} % hits, {} evictions, peak {} resident",
+                "brick cache: {} chunks read{again} ({} decoded), {} evictions, peak {} resident",
                 c.misses,
                 bytes(c.bytes_read),
-                c.hit_rate() * 100.0,
                 c.evictions,
                 bytes(c.peak_bytes)
             );

@@ -134,6 +134,9 @@ pub struct CacheStats {
     pub bytes_read: u64,
     /// Chunks evicted to stay within the budget.
     pub evictions: u64,
+    /// Chunks read again after they were evicted (part of `misses`): a budget too small for
+    /// what the views need thrashes.
+    pub rereads: u64,
     /// The most bytes resident at once.
     pub peak_bytes: u64,
 }
@@ -335,6 +338,9 @@ pub struct BrickCache {
     misses: AtomicU64,
     bytes_read: AtomicU64,
     evictions: AtomicU64,
+    rereads: AtomicU64,
+    /// One bit per chunk: read at least once.
+    ever_read: Vec<AtomicU64>,
 }
 
 impl BrickCache {
@@ -354,6 +360,7 @@ impl BrickCache {
     }
 
     fn in_pool(source: Arc<dyn ChunkSource>, level: usize, pool: Arc<Pool>) -> Self {
+        let words = source.layout().chunk_count().div_ceil(64);
         Self {
             source,
             level,
@@ -362,7 +369,17 @@ impl BrickCache {
             misses: AtomicU64::new(0),
             bytes_read: AtomicU64::new(0),
             evictions: AtomicU64::new(0),
+            rereads: AtomicU64::new(0),
+            ever_read: (0..words).map(|_| AtomicU64::new(0)).collect(),
         }
+    }
+
+    /// Marks chunk `index` as read; whether it had been read before.
+    fn read_before(&self, index: usize) -> bool {
+        let bit = 1u64 << (index % 64);
+        self.ever_read
+            .get(index / 64)
+            .is_some_and(|w| w.fetch_or(bit, Ordering::Relaxed) & bit != 0)
     }
 
     /// The level's geometry.
@@ -389,6 +406,7 @@ impl BrickCache {
             misses: self.misses.load(Ordering::Relaxed),
             bytes_read: self.bytes_read.load(Ordering::Relaxed),
             evictions: self.evictions.load(Ordering::Relaxed),
+            rereads: self.rereads.load(Ordering::Relaxed),
             peak_bytes: self.pool.peak.load(Ordering::Relaxed),
         }
     }
@@ -555,6 +573,9 @@ impl BrickCache {
         let brick = Arc::new(Brick::new(self.layout(), c, &samples, spare)?);
         drop(samples);
         self.misses.fetch_add(1, Ordering::Relaxed);
+        if self.read_before(key.1) {
+            self.rereads.fetch_add(1, Ordering::Relaxed);
+        }
         self.bytes_read.fetch_add(brick.bytes(), Ordering::Relaxed);
         let brick = self.insert(key, brick);
         drop(reading);

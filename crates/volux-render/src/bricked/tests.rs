@@ -523,3 +523,22 @@ fn a_chunk_is_read_once_however_many_readers_miss_it_at_once() {
     assert_eq!(cache.prefetch([0, 0, 0]), Ok(false));
     assert_eq!(cache.stats().misses, 2);
 }
+
+/// A budget of one brick thrashes between two chunks: each read after the first two is a
+/// re-read after an eviction, which the figures say (the rays' hit rate would not).
+#[test]
+fn chunks_read_again_after_an_eviction_are_counted() {
+    let g = grid();
+    let source = Arc::new(GridChunks::new(Arc::new(g), CHUNK).unwrap());
+    let cache = super::cache::BrickCache::new(source, 1);
+    for c in [[0, 0, 0], [1, 0, 0], [0, 0, 0], [1, 0, 0], [1, 0, 0]] {
+        cache.get(c).unwrap();
+    }
+    let stats = cache.stats();
+    assert_eq!(
+        (stats.misses, stats.rereads, stats.hits),
+        (4, 2, 1),
+        "{stats:?}"
+    );
+    assert!(stats.evictions >= 3, "{stats:?}");
+}

@@ -94,6 +94,7 @@ impl BrickedVolume {
                 misses: t.misses + s.misses,
                 bytes_read: t.bytes_read + s.bytes_read,
                 evictions: t.evictions + s.evictions,
+                rereads: t.rereads + s.rereads,
                 peak_bytes: t.peak_bytes.max(s.peak_bytes),
             },
         )
