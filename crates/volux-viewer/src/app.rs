@@ -452,6 +452,11 @@ impl ViewerApp {
         let mut scene = self.scene.clone();
         scene.view.width = w.max(1);
         scene.view.height = h.max(1);
+        // The "shade" box stays ticked while a method or MIP that does not light the volume
+        // is on (the frames and the saved session leave it out; it comes back with them).
+        if scene.appearance.mip || scene.method.draws_tets() {
+            scene.appearance.shade_volume = false;
+        }
         if let Some(s) = &self.sculpt {
             s.apply_to(&mut scene);
         }

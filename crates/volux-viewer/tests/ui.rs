@@ -44,7 +44,8 @@ fn step_until(h: &mut Harness<'static, App>, what: &str, done: impl Fn(&ViewerAp
         }
         assert!(
             start.elapsed() < Duration::from_secs(60),
-            "timed out waiting for {what}"
+            "timed out waiting for {what} (error: {:?})",
+            h.state().as_ref().and_then(|a| a.error.clone())
         );
         std::thread::sleep(Duration::from_millis(10));
     }
@@ -261,6 +262,8 @@ fn a_session_with_a_mesh_method_on_a_grid_splits_it() {
     let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
     json["method"] = serde_json::json!({"name": "projected-tetrahedra",
         "settings": {"sort": "centroid", "color": {"kind": "psi"}, "count_violations": false}});
+    // PT does not shade the volume (a session asking it to is refused, as by the CLI).
+    json["appearance"]["shade_volume"] = serde_json::json!(false);
     std::fs::write(&session, json.to_string()).unwrap();
     let mut h2 = harness(Some(session));
     loaded_with_frame(&mut h2);
@@ -897,4 +900,21 @@ fn the_view_buttons_show_the_patients_named_side() {
         count > 10 && column < 0.4,
         "S: {count} red at column {column}"
     );
+}
+
+/// A grid opens lit; MIP (which shows no light) still renders with the "shade" box ticked,
+/// and the frame and the session leave the shading out until MIP is off again.
+#[test]
+fn mip_renders_while_shading_is_ticked() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    assert!(app(&h).scene.appearance.shade_volume, "a grid opens lit");
+    app_mut(&mut h).scene.appearance.mip = true;
+    let scene = rendered_scene(&mut h);
+    assert!(scene.appearance.mip && !scene.appearance.shade_volume);
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    app_mut(&mut h).scene.appearance.mip = false;
+    let scene = rendered_scene(&mut h);
+    assert!(!scene.appearance.mip && scene.appearance.shade_volume);
 }
