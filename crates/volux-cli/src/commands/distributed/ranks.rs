@@ -107,7 +107,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CmdError> {
         .map_err(|e| format!("the figures of a rank: {e}"))?;
     write(args, &image)?;
     if args.stats {
-        report(args, &plan, &all, started.elapsed().as_secs_f64() * 1e3);
+        report(args, &plan, &all, started.elapsed().as_secs_f64() * 1e3)?;
     }
     Ok(())
 }
@@ -285,7 +285,7 @@ fn write(args: &RenderArgs, image: &Image) -> Result<(), CmdError> {
 }
 
 /// The figures of every rank: JSON on stdout with --json, else a line per rank.
-fn report(args: &RenderArgs, plan: &Plan, all: &[RankStats], total_ms: f64) {
+fn report(args: &RenderArgs, plan: &Plan, all: &[RankStats], total_ms: f64) -> std::io::Result<()> {
     let max = |f: fn(&RankStats) -> f64| all.iter().map(f).fold(0.0, f64::max);
     if args.json {
         let v = serde_json::json!({
@@ -300,7 +300,7 @@ fn report(args: &RenderArgs, plan: &Plan, all: &[RankStats], total_ms: f64) {
             "per_rank": all,
         });
         outln!("{v}")?;
-        return;
+        return Ok(());
     }
     outln!(
         "{} ranks, level {}, {}x{}: {total_ms:.1} ms in all",
@@ -324,4 +324,5 @@ fn report(args: &RenderArgs, plan: &Plan, all: &[RankStats], total_ms: f64) {
             s.composite.bytes_sent
         )?;
     }
+    Ok(())
 }
