@@ -8,7 +8,7 @@ use super::common::CmdError;
 use crate::cli::Backend;
 
 /// The renderer of `scene` on `volume` for `backend`: `auto` takes a hardware GPU when it
-/// draws the scene ([`volux_gpu::auto_draws`]: never a software adapter unless the method
+/// draws the scene (`volux_gpu::auto_draws`: never a software adapter unless the method
 /// is GPU-only) and says on stderr which it chose and why.
 pub fn renderer(
     volume: &Volume,
