@@ -36,6 +36,11 @@ pub fn check_options(args: &RenderArgs) -> Result<(), CmdError> {
     if args.given("json") && !args.stats {
         return Err("--json prints the --stats figures as JSON; add --stats".into());
     }
+    if args.given("sort-violations") && !args.stats {
+        return Err(
+            "--sort-violations adds a diagnostic to the --stats figures; add --stats".into(),
+        );
+    }
     if args.view_args.camera.is_some() {
         if let Some(o) = ORBIT.iter().find(|o| args.given(o)) {
             return Err(format!(
@@ -95,6 +100,12 @@ pub fn check_method(args: &RenderArgs, method: &Method, loaded_grid: bool) -> Re
     }
     if args.given("sort") && !matches!(method, Method::ProjectedTetrahedra(_)) {
         return refuse("sort", "it orders the cells of Projected Tetrahedra");
+    }
+    if args.given("sort-violations") && !matches!(method, Method::ProjectedTetrahedra(_)) {
+        return refuse(
+            "sort-violations",
+            "it counts the face pairs Projected Tetrahedra draws out of order",
+        );
     }
     match method {
         Method::ProjectedTetrahedra(_) => check_pt(args, &refuse),

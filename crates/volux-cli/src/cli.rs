@@ -393,6 +393,11 @@ pub struct RenderArgs {
     /// Print render statistics.
     #[arg(long)]
     pub stats: bool,
+    /// With --stats on Projected Tetrahedra: also count the face pairs the centroid order
+    /// draws out of the exact order (a diagnostic, timed apart; it adds about a third to the
+    /// frame's wall time, so it is asked for, not part of --stats).
+    #[arg(long)]
+    pub sort_violations: bool,
     /// With --stats: print them as one JSON object (per frame with --orbit).
     #[arg(long)]
     pub json: bool,

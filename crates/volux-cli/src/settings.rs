@@ -298,7 +298,7 @@ pub fn method(args: &RenderArgs, volume: &Volume) -> Result<Method, CmdError> {
         Method::ProjectedTetrahedra(PtSettings {
             sort: args.sort.into(),
             color: args.color.into(),
-            count_violations: args.stats,
+            count_violations: args.stats && args.sort_violations,
         })
     };
     let mesh = matches!(volume, Volume::Mesh(_));

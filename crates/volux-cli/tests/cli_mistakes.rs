@@ -735,3 +735,47 @@ fn the_camera_frames_what_the_cuts_leave() {
     );
     assert!(masked > 1.5 * all, "{masked} vs {all}");
 }
+
+/// `--stats` on Projected Tetrahedra times the frame without the sort-order diagnostic,
+/// which costs about a third more; `--sort-violations` asks for it; it needs --stats and PT.
+#[test]
+fn the_pt_sort_diagnostic_is_asked_for_not_part_of_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = volux(
+        &["generate", "tets-smooth", "--size", "300", "-o", "m.vtet"],
+        d,
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let json = |extra: &[&str]| -> serde_json::Value {
+        let args = [
+            &[
+                "render", "m.vtet", "--size", "32x32", "--stats", "--json", "-o", "m.png",
+            ][..],
+            extra,
+        ]
+        .concat();
+        let out = volux(&args, d);
+        assert!(out.status.success(), "{extra:?}: {}", stderr(&out));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let plain = json(&[]);
+    assert!(plain["sort_violations"].is_null(), "{plain}");
+    let counted = json(&["--sort-violations"]);
+    assert!(counted["sort_violations"].is_u64(), "{counted}");
+    let err = refused(&["render", "m.vtet", "--sort-violations", "-o", "x.png"], d);
+    assert!(err.contains("add --stats"), "{err}");
+    data(d);
+    let err = refused(
+        &[
+            "render",
+            "grid.raw",
+            "--stats",
+            "--sort-violations",
+            "-o",
+            "x.png",
+        ],
+        d,
+    );
+    assert!(err.contains("--sort-violations"), "{err}");
+}
