@@ -5,7 +5,9 @@
 //!
 //! - [`aabb::Aabb`]: world-space bounding boxes;
 //! - [`grid::Grid`]: a regular grid of scalars kept in their native type, possibly memory-mapped,
-//!   placed in LPS world millimetres by an origin, spacing and direction matrix;
+//!   placed in LPS world millimetres by an origin, spacing and direction matrix; [`samples`]:
+//!   the typed sample buffers; [`geometry_match`]: whether a mask or labels lie on a grid's
+//!   own lattice;
 //! - [`bricked`]: volumes stored in chunks and read a chunk at a time ([`bricked::ChunkSource`],
 //!   one level; [`bricked::Multiscale`], the pyramid), the seam between chunked storage and the
 //!   bricked renderer (seed `003`);
@@ -19,7 +21,8 @@
 //! - [`transfer::TransferFunction`]: piecewise-linear colour and extinction, presets, JSON;
 //! - [`transfer_import`]: ParaView presets and 3D Slicer `.vp` volume properties read into a
 //!   transfer function;
-//! - [`camera::Camera`]: perspective and orthographic cameras, JSON;
+//! - [`camera::Camera`]: perspective and orthographic cameras, JSON; [`named_view`]: the
+//!   anatomical and axis views every front end names (`left` shows the patient's left);
 //! - [`image::Image`]: the RGBA f32 linear framebuffer and PNG output;
 //! - [`voi::ConvexVoi`]: the convex volume of interest cut by planes (seed `004`, ch. 4);
 //! - [`sculpt`]: the full-resolution sculpt mask, the eraser's and digger's regions and

@@ -39,6 +39,7 @@
 //! - [`sampling`]: field reconstruction (trilinear and tricubic sampling of native-type
 //!   grids, lane-wise);
 //! - [`classify`]: classification, lookup tables built from a transfer function;
+//!   [`data_colour`]: RGB volumes drawn in their own colour, opacity from luminance;
 //! - [`integrate`]: the optical model and its integrators (Riemann, trapezoid, Simpson,
 //!   adaptive Simpson of seed `001`, pre-integration, and the linear-segment rules of the
 //!   tetrahedral renderers: average, ψ, exact);

@@ -11,7 +11,9 @@
 //!   Simpson of a linear ray segment).
 //! - [`mutate`]: seeded mutations of input files for the hostile-input tests (bit flips,
 //!   header and sidecar edits, bombs, file-system cases), and the gzip/zlib encoders the
-//!   readers' tests share.
+//!   readers' tests share;
+//! - [`nifti`]: small NIfTI-1 files written byte by byte (a head with a marker on the
+//!   patient's left, for the named views).
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 

@@ -16,6 +16,8 @@
 //!   [`jobs`]: loading and other background work;
 //! - [`backend`]: where frames are rendered (`--backend auto|cpu|gpu`): the CPU engine or the
 //!   GPU backend (`volux-gpu`, the default `gpu` feature), and which drew each frame;
+//! - [`volume_picker`]: the timepoint/component slider of files holding several volumes;
+//!   [`headless`]: `--screenshot` without a display;
 //! - [`store`]: OME-Zarr stores opened out of core as bricked volumes;
 //!   [`progressive`]: progressive level of detail (coarsest level at once, then each finer
 //!   level in the background); [`lod_status`]: the level choice, the level on screen and the
