@@ -500,19 +500,25 @@ fn formats_are_documented_and_presets_print_as_json_that_reads_back() {
     assert!(err.contains("weight -1 must be >= 0"), "{err}");
 }
 
-#[test]
-fn the_camera_frames_what_the_tf_shows_and_named_views_turn_it() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
+/// `s.raw`, the 48^3 sphere distance field (a box from 0 to 47 on each axis), and
+/// `core.json`, a TF showing only the top fifth of its range: a ball of radius about 8
+/// around (23.5, 23.5, 23.5).
+fn ball_and_core_tf(d: &Path) {
     let run = volux(&["generate", "sphere", "--size", "48", "-o", "s.raw"], d);
     assert!(run.status.success(), "{}", stderr(&run));
-    // Only the top fifth of the range is visible: a ball of radius 0.35 in a box of side 2.
     std::fs::write(
         d.join("core.json"),
         r#"{"space": "normalized", "color": [[0, 1, 1, 1]],
             "extinction": [[0.78, 0], [0.8, 2], [1, 2]]}"#,
     )
     .unwrap();
+}
+
+#[test]
+fn the_camera_frames_what_the_tf_shows_and_named_views_turn_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    ball_and_core_tf(d);
     let covered = |frame: &str, view: &str| {
         let out = format!("{frame}-{view}.png");
         accepted(
@@ -669,15 +675,7 @@ fn shown(path: &Path) -> ([f64; 2], f64) {
 fn the_camera_frames_what_the_cuts_leave() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let run = volux(&["generate", "sphere", "--size", "48", "-o", "s.raw"], d);
-    assert!(run.status.success(), "{}", stderr(&run));
-    // A ball of radius about 8 around (23.5, 23.5, 23.5) is visible.
-    std::fs::write(
-        d.join("core.json"),
-        r#"{"space": "normalized", "color": [[0, 1, 1, 1]],
-            "extinction": [[0.78, 0], [0.8, 2], [1, 2]]}"#,
-    )
-    .unwrap();
+    ball_and_core_tf(d);
     let base = ["render", "s.raw", "--tf", "core.json", "--size", "64x64"];
     // Keep x >= 26: a cap of the ball, on the image's right seen from the front.
     let cut = [&base[..], &["--clip-plane", "1,0,0,-26"]].concat();

@@ -81,30 +81,28 @@ fn round(v: f64) -> String {
 /// cut from. Macrocells wholly on the removed side of a plane, or wholly removed by the
 /// mask, are left out; the box is then cut by the planes.
 pub fn visible_bounds_of(volume: &Volume, scene: &Scene) -> Result<Aabb, Invisible> {
-    let planes = &scene.clip_planes;
-    let mask = scene.mask.as_deref();
-    let uncut = visible_bounds(volume, &scene.appearance)?;
+    let (planes, mask, appearance) = (&scene.clip_planes, scene.mask.as_deref(), &scene.appearance);
     let Volume::Grid(g) = volume else {
-        return Ok(uncut);
+        return visible_bounds(volume, appearance);
     };
     if planes.is_empty() && mask.is_none() {
-        return Ok(uncut);
+        return visible_bounds(volume, appearance);
     }
-    let appearance = &scene.appearance;
+    let range = volume.range();
+    if range[0] == range[1] {
+        return Err(Invisible::Constant(range[0]));
+    }
     let boxed = if appearance.mip {
         cut_cells_box(g, |_, _| true, planes, mask)
     } else {
         let (table, isovalues) = classify(volume, appearance);
-        cut_cells_box(
-            g,
-            |lo, hi| {
-                !table.is_transparent(lo, hi) || isovalues.iter().any(|v| (lo..=hi).contains(v))
-            },
-            planes,
-            mask,
-        )
+        cut_cells_box(g, shows(&table, &isovalues), planes, mask)
     };
-    let boxed = boxed.ok_or(Invisible::CutAway)?;
+    let Some(boxed) = boxed else {
+        // Nothing left: the TF's own reason when it shows nothing uncut, else the cuts.
+        visible_bounds(volume, appearance)?;
+        return Err(Invisible::CutAway);
+    };
     // The planes cut the box of the cells they cross.
     let Ok(mut voi) = ConvexVoi::from_aabb(&boxed) else {
         return Ok(boxed);
@@ -115,6 +113,12 @@ pub fn visible_bounds_of(volume: &Volume, scene: &Scene) -> Result<Aabb, Invisib
         }
     }
     Ok(Aabb::from_points(voi.vertices().iter().copied()).unwrap_or(boxed))
+}
+
+/// Whether a value range `[lo, hi]` shows: the TF's extinction is not zero over it, or an
+/// isovalue lies in it.
+fn shows<'a>(table: &'a ClassifyTable, isovalues: &'a [f32]) -> impl Fn(f32, f32) -> bool + 'a {
+    move |lo, hi| !table.is_transparent(lo, hi) || isovalues.iter().any(|v| (lo..=hi).contains(v))
 }
 
 /// The classification table of `appearance` over `volume`'s range, and its isovalues.
@@ -203,13 +207,14 @@ fn cut_cells_box(
         if !(vlo.is_finite() && visible(vlo, vhi)) {
             return false;
         }
-        let world = (0..8).map(|o| g.index_to_world(index(corner(o))));
-        let points: Vec<DVec3> = world.collect();
-        if planes
-            .iter()
-            .any(|p| points.iter().all(|&q| p.distance(q) < 0.0))
-        {
-            return false;
+        if !planes.is_empty() {
+            let points: [DVec3; 8] = std::array::from_fn(|o| g.index_to_world(index(corner(o))));
+            if planes
+                .iter()
+                .any(|p| points.iter().all(|&q| p.distance(q) < 0.0))
+            {
+                return false;
+            }
         }
         mask.is_none_or(|m| {
             (0..8).any(|o| {
@@ -271,9 +276,7 @@ pub fn visible_bounds(volume: &Volume, appearance: &Appearance) -> Result<Aabb, 
         return Ok(volume.bounds());
     }
     let (table, isovalues) = classify(volume, appearance);
-    let visible = |lo: f32, hi: f32| {
-        !table.is_transparent(lo, hi) || isovalues.iter().any(|v| (lo..=hi).contains(v))
-    };
+    let visible = shows(&table, &isovalues);
     let found = match volume {
         Volume::Grid(g) => cut_cells_box(g, visible, &[], None),
         Volume::Mesh(m) => mesh_box(m, visible),

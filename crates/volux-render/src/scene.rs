@@ -144,10 +144,13 @@ impl Volume {
         let grid = matches!(self, Self::Grid(_));
         if self.looks_like_ct() {
             let range = self.range();
-            let layers = [
-                (self.preset_tf("ct-bone")?.resolved(range), 1.0),
-                (self.preset_tf("ct-skin")?.resolved(range), 0.15),
-            ];
+            let hist = self.histogram(HISTOGRAM_BINS);
+            let preset = |name| -> Result<TransferFunction, RenderError> {
+                Ok(TransferFunction::preset(name, &hist)?
+                    .with_unit_length(self.unit_length())
+                    .resolved(range))
+            };
+            let layers = [(preset("ct-bone")?, 1.0), (preset("ct-skin")?, 0.15)];
             return Ok((TransferFunction::layered(&layers)?, true));
         }
         Ok((self.preset_tf("auto")?, grid))
