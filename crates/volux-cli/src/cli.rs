@@ -104,8 +104,10 @@ pub enum Command {
     /// them (world coordinates) and the polyline's length in millimetres.
     #[command(after_help = PIXELS_HELP)]
     Measure(Box<MeasureArgs>),
-    /// Label the visible voxels by their nearest picked seed (seed `004` sec. 6.2, world
-    /// distance with the data's spacing) and write the labels as NRRD (u8, 0: none).
+    /// Label the visible voxels from seeds picked on the surface (seed `004` sec. 6.2): by
+    /// default the voxels connected to each seed through visible voxels (`--rule
+    /// connected`), or every visible voxel by its nearest seed (`--rule nearest`, world
+    /// distance with the data's spacing); write the labels as NRRD (u8, 0: none).
     #[command(after_help = PIXELS_HELP)]
     Regions(Box<RegionsArgs>),
     /// Transfer functions: print a preset as JSON to start from.
@@ -866,9 +868,39 @@ pub struct RegionsArgs {
     /// A seed: pixel X,Y picked on the visible surface, and its LABEL (1..255); repeatable.
     #[arg(long = "seed", value_name = "X,Y,LABEL", allow_hyphen_values = true)]
     pub seeds: Vec<String>,
+    /// How the seeds claim voxels. `connected`: the visible voxels reachable from a seed
+    /// through visible voxels (6-connected); where seeds' regions meet, a voxel goes to the
+    /// seed reaching it in the fewest voxel steps (the earlier --seed at equal steps); what
+    /// no seed touches stays 0. `nearest`: every visible voxel to the seed nearest in world
+    /// distance, parts no seed touches included (the rule before issue 41).
+    #[arg(long, value_enum, default_value_t = RuleArg::Connected)]
+    pub rule: RuleArg,
     /// The label volume written (NRRD, u8, 0: no label).
     #[arg(long, short, value_name = "LABELS.nrrd")]
     pub output: PathBuf,
+}
+
+/// `volux regions --rule`: [`volux_core::sculpt::RegionRule`] on the command line.
+///
+/// `connected` is the default because a seed placed on a structure is expected to label
+/// that structure, not the head rest beside it that touches nothing (issue 41). Saved
+/// sessions do not follow this default: a label step saved without a rule replays as
+/// `nearest`, what it meant when saved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RuleArg {
+    /// The visible voxels connected to a seed (breadth-first from all seeds at once).
+    Connected,
+    /// Every visible voxel to its nearest seed in world distance.
+    Nearest,
+}
+
+impl From<RuleArg> for volux_core::sculpt::RegionRule {
+    fn from(rule: RuleArg) -> Self {
+        match rule {
+            RuleArg::Connected => Self::Connected,
+            RuleArg::Nearest => Self::Nearest,
+        }
+    }
 }
 
 #[cfg(test)]

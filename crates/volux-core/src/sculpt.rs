@@ -1,7 +1,8 @@
 //! Sculpting a grid (seed `004_...txt` ch. 4-6): the [`SculptMask`] of removed voxels at the
 //! data's full resolution, the regions the tools remove ([`region`]: the eraser's swept disc
 //! on the screen, sec. 4.4, and the digger's ball, sec. 4.5) and the labelling of the visible
-//! voxels by their nearest picked point ([`labels`], sec. 6.2).
+//! voxels from picked points ([`labels`], sec. 6.2): by the nearest point, as the seed does,
+//! or by the region a point's visible voxels connect to (issue 41).
 //!
 //! The seed kept a 64³ mask in a texture, interpolated it and thresholded it at 0.5 (sec.
 //! 4.4.1). Here the mask has one bit per voxel, stored sparsely in 8³ bricks (a brick wholly
@@ -17,12 +18,15 @@
 
 mod cell_states;
 mod cut;
+mod grow;
+#[cfg(test)]
+mod label_tests;
 pub mod labels;
 mod mask;
 pub mod region;
 #[cfg(test)]
 mod tests;
 
-pub use labels::{label_nearest, LabelSeed};
+pub use labels::{label_regions, LabelSeed, RegionRule};
 pub use mask::{MaskEdit, SculptMask};
 pub use region::{Ball, Coverage, Region, ScreenStroke, VoxelFrame};

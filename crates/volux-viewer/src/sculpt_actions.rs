@@ -228,14 +228,16 @@ impl ViewerApp {
         }
     }
 
-    /// A labelling seed at the surface point under `pixel` with the tools' label and colour.
+    /// A labelling seed at the surface point under `pixel` with the tools' label, colour and
+    /// rule.
     pub fn label_at(&mut self, pixel: [f64; 2]) {
         if let Some(point) = self.pick_at(pixel) {
-            let (label, colour) = (self.tools.label, self.tools.colour);
+            let (label, colour, rule) = (self.tools.label, self.tools.colour, self.tools.rule);
             self.sculpt_step(SculptStep::Label {
                 point,
                 label,
                 colour,
+                rule,
             });
         }
     }

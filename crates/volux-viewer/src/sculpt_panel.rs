@@ -1,10 +1,11 @@
 //! The Sculpt section of the settings panel (seed `004_*.txt` ch. 4-6): undo and redo, the
 //! tool modes and their radius, the clipping planes (sec. 4.3: offset from the data's centre,
 //! the normal's azimuth and elevation, remove, add), the measured lengths (sec. 6.2), the
-//! labelling seeds' label and colour with their counts and "Colour by labels" (sec. 6.2),
-//! and the exports.
+//! labelling seeds' label, colour and rule (connected or nearest, issue 41) with their counts
+//! and "Colour by labels" (sec. 6.2), and the exports.
 use eframe::egui;
 use glam::DVec3;
+use volux_core::sculpt::RegionRule;
 use volux_core::voi::ClipPlane;
 
 use crate::app::ViewerApp;
@@ -213,6 +214,13 @@ fn labels(app: &mut ViewerApp, ui: &mut egui::Ui) {
             ui.add(egui::DragValue::new(&mut app.tools.label).range(1..=255));
             ui.color_edit_button_rgb(&mut app.tools.colour);
         });
+        ui.horizontal(|ui| {
+            ui.label("grows");
+            for rule in RegionRule::ALL {
+                ui.radio_value(&mut app.tools.rule, rule, rule.name())
+                    .on_hover_text(rule_hint(rule));
+            }
+        });
     }
     let seeds = app.sculpt.as_ref().map_or(0, |s| s.label_seeds().len());
     if seeds == 0 {
@@ -238,6 +246,20 @@ fn labels(app: &mut ViewerApp, ui: &mut egui::Ui) {
         }
         if counts.is_empty() {
             ui.small("no visible voxel is labelled");
+        }
+    }
+}
+
+/// What a seed placed with `rule` labels (the panel's hover text).
+fn rule_hint(rule: RegionRule) -> &'static str {
+    match rule {
+        RegionRule::Connected => {
+            "the next seeds label the visible voxels connected to them; parts no seed \
+             touches stay unlabelled"
+        }
+        RegionRule::Nearest => {
+            "the next seeds label every visible voxel nearer to them than to other nearest \
+             seeds, parts they do not touch included"
         }
     }
 }

@@ -1,8 +1,9 @@
 //! The sculpting tools' settings in the window (seed `004_*.txt` ch. 4-6): which tool the
-//! left button uses in the 3D view, the eraser's and digger's radius, the label picked next,
-//! the stroke being drawn. The sculpt itself (planes, mask, picks, undo) is the engine's
+//! left button uses in the 3D view, the eraser's and digger's radius, the label picked next
+//! and how it claims voxels, the stroke being drawn. The sculpt itself (planes, mask, picks, undo) is the engine's
 //! [`volux_render::sculpt::Sculpt`], held by the app.
 use eframe::egui;
+use volux_core::sculpt::RegionRule;
 
 use crate::jobs::Job;
 use crate::label_colours::LabelColours;
@@ -72,6 +73,10 @@ pub struct SculptTools {
     pub label: u8,
     /// Its colour (linear RGB).
     pub colour: [f32; 3],
+    /// How the next labelling seed claims voxels: connected by default (a seed on a
+    /// structure labels that structure), nearest as the seed `004` sec. 6.2 does; seeds
+    /// already placed keep theirs (sessions saved before issue 41 are nearest).
+    pub rule: RegionRule,
     /// The next measurement point starts a new polyline.
     pub new_line: bool,
     /// The eraser stroke being drawn, pixels of the rendered image.
@@ -95,6 +100,7 @@ impl Default for SculptTools {
             radius_px: 12.0,
             label: 1,
             colour: [0.9, 0.2, 0.2],
+            rule: RegionRule::Connected,
             new_line: false,
             stroke: Vec::new(),
             label_counts: None,

@@ -1,8 +1,12 @@
 //! `volux regions`: region labelling (seed `004` sec. 6.2). Each `--seed X,Y,LABEL` is picked
-//! on the visible surface; every visible voxel of the volume of interest (inside the clip
-//! planes and the mask, with a non-zero extinction under the transfer function) takes the
-//! label of its nearest seed in world distance (the data's anisotropic spacing, not texture
-//! space), and the labels are written as NRRD `u8` with the grid's geometry.
+//! on the visible surface; the visible voxels of the volume of interest (inside the clip
+//! planes and the mask, with a non-zero extinction under the transfer function) take the
+//! seeds' labels by `--rule`: `connected` (the default, issue 41) grows each seed's region
+//! through the 6-connected visible voxels, breadth-first from all seeds at once, leaving
+//! what no seed reaches at 0; `nearest` gives every visible voxel its nearest seed in world
+//! distance (the data's anisotropic spacing, not texture space), as the seed does. The
+//! labels are written as NRRD `u8` with the grid's geometry, and the voxels of each label
+//! and the unlabelled ones are printed.
 use volux_render::sculpt::SculptStep;
 
 use super::common::CmdError;
@@ -40,6 +44,7 @@ pub fn run(args: &RegionsArgs, given: &[String], show: bool) -> Result<(), CmdEr
             point,
             label: *label,
             colour,
+            rule: args.rule.into(),
         })?;
     }
     let labels = bench.sculpt.labels(&bench.grid, &bench.scene)?;

@@ -305,18 +305,21 @@ fn labels_are_the_nearest_seed_in_world_distance() {
         LabelSeed {
             point: g.index_to_world(DVec3::new(3.0, 3.0, 3.0)),
             label: 1,
+            rule: RegionRule::Nearest,
         },
         LabelSeed {
             point: g.index_to_world(DVec3::new(15.0, 4.0, 9.0)),
             label: 7,
+            rule: RegionRule::Nearest,
         },
         LabelSeed {
             point: g.index_to_world(DVec3::new(9.0, 14.0, 2.0)),
             label: 3,
+            rule: RegionRule::Nearest,
         },
     ];
     let visible = |i: usize, j: usize, _k: usize| !(i + j).is_multiple_of(5);
-    let labels = label_nearest(&frame, &seeds, visible).unwrap();
+    let labels = label_regions(&frame, &seeds, visible).unwrap();
     let [nx, ny, nz] = g.dims();
     let mut used = [false; 8];
     for k in 0..nz {
@@ -338,10 +341,11 @@ fn labels_are_the_nearest_seed_in_world_distance() {
         }
     }
     assert!(used[1] && used[7] && used[3]);
-    assert!(label_nearest(&frame, &[], visible).is_err());
+    assert!(label_regions(&frame, &[], visible).is_err());
     let zero = [LabelSeed {
         point: DVec3::ZERO,
         label: 0,
+        rule: RegionRule::Connected,
     }];
-    assert!(label_nearest(&frame, &zero, visible).is_err());
+    assert!(label_regions(&frame, &zero, visible).is_err());
 }

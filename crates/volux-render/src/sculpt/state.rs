@@ -6,7 +6,9 @@
 use std::sync::Arc;
 
 use glam::DVec3;
-use volux_core::sculpt::{Ball, MaskEdit, ScreenStroke, SculptMask, VoxelFrame};
+use volux_core::sculpt::{
+    Ball, LabelSeed, MaskEdit, RegionRule, ScreenStroke, SculptMask, VoxelFrame,
+};
 use volux_core::voi::ClipPlane;
 use volux_core::{Camera, Grid, Projection};
 
@@ -67,8 +69,8 @@ pub enum SculptStep {
         /// Whether it starts a new polyline.
         new_line: bool,
     },
-    /// A labelling seed (sec. 6.2): the voxels nearest to `point` take `label`, drawn in
-    /// `colour` (linear RGB).
+    /// A labelling seed (sec. 6.2): the visible voxels `rule` gives it (the nearest, or those
+    /// connected to `point`) take `label`, drawn in `colour` (linear RGB).
     Label {
         /// The picked world point.
         point: DVec3,
@@ -76,6 +78,11 @@ pub enum SculptStep {
         label: u8,
         /// Its colour.
         colour: [f32; 3],
+        /// How the seed claims voxels. A session saved before the rule existed has none: its
+        /// seeds are [`RegionRule::Nearest`], as they were; nearest is left out when saved
+        /// (such a session still opens in a build without the field).
+        #[serde(default, skip_serializing_if = "RegionRule::is_nearest")]
+        rule: RegionRule,
     },
 }
 
@@ -254,7 +261,7 @@ impl Sculpt {
     }
 
     /// The labelling seeds with their colours.
-    pub fn label_seeds(&self) -> Vec<(volux_core::sculpt::LabelSeed, [f32; 3])> {
+    pub fn label_seeds(&self) -> Vec<(LabelSeed, [f32; 3])> {
         self.done
             .iter()
             .filter_map(|(step, _)| match step {
@@ -262,10 +269,12 @@ impl Sculpt {
                     point,
                     label,
                     colour,
+                    rule,
                 } => Some((
-                    volux_core::sculpt::LabelSeed {
+                    LabelSeed {
                         point: *point,
                         label: *label,
+                        rule: *rule,
                     },
                     *colour,
                 )),
@@ -274,10 +283,12 @@ impl Sculpt {
             .collect()
     }
 
-    /// The label volume (sec. 6.2): every visible voxel of the volume of interest (kept by
+    /// The label volume (sec. 6.2): the visible voxels of the volume of interest (kept by
     /// the planes and the mask, with a non-zero extinction under `scene`'s transfer function)
-    /// takes the label of the nearest labelling seed in world distance; 0 elsewhere. One byte
-    /// per voxel, x fastest. Errors without seeds.
+    /// take the labels of the labelling seeds by each seed's rule
+    /// ([`volux_core::sculpt::label_regions`]: connected seeds grow through the visible
+    /// voxels, nearest seeds take the rest by world distance); 0 elsewhere. One byte per
+    /// voxel, x fastest. Errors without seeds.
     pub fn labels(&self, grid: &Grid, scene: &Scene) -> Result<Vec<u8>, RenderError> {
         let seeds: Vec<_> = self.label_seeds().into_iter().map(|(s, _)| s).collect();
         let tf = scene.appearance.effective_tf().resolved(grid.range());
@@ -291,7 +302,7 @@ impl Sculpt {
                     .all(|p| p.normal.dot(w) + p.offset >= 0.0)
                 && tf.tau_per_world(f64::from(grid.value(i, j, k))) > 0.0
         };
-        Ok(volux_core::sculpt::label_nearest(&frame, &seeds, visible)?)
+        Ok(volux_core::sculpt::label_regions(&frame, &seeds, visible)?)
     }
 
     /// [`Sculpt::labels`] with the seeds' colours, ready to draw ([`Scene::labels`]).

@@ -3,7 +3,7 @@
 //! blend of the removed voxels, a fine march for the first hit, a box of known size.
 use glam::DVec3;
 use volux_core::grid::{Buffer, Samples};
-use volux_core::sculpt::{Ball, SculptMask, VoxelFrame};
+use volux_core::sculpt::{Ball, RegionRule, SculptMask, VoxelFrame};
 use volux_core::{Camera, CameraSpec, Grid, TransferFunction};
 
 use super::*;
@@ -293,6 +293,7 @@ fn labels_go_to_visible_voxels_of_the_volume_of_interest_only() {
                 point: p,
                 label,
                 colour,
+                rule: RegionRule::Nearest,
             })
             .unwrap();
     }
@@ -307,6 +308,95 @@ fn labels_go_to_visible_voxels_of_the_volume_of_interest_only() {
     // the second in millimetres (32.0 against 41.8 mm squared).
     assert_eq!(get(11, 8, 5), 9);
     assert_eq!(get(7, 9, 5), 2);
+}
+
+/// A label step saved before the rule existed (no `rule` field) replays as a nearest seed,
+/// in a whole session as in the steps; a nearest step is saved without the field, a
+/// connected one with it.
+#[test]
+fn a_label_step_without_a_rule_is_nearest() {
+    let old = r#"{"tool": "label", "point": [1, 2, 3], "label": 4, "colour": [1, 0, 0]}"#;
+    let step: SculptStep = serde_json::from_str(old).unwrap();
+    assert!(matches!(
+        step,
+        SculptStep::Label {
+            label: 4,
+            rule: RegionRule::Nearest,
+            ..
+        }
+    ));
+    let mut session = crate::session::Session::new(
+        Default::default(),
+        &opaque_box_scene(&box_grid(4, 15, [1.0; 3]), "{}"),
+        None,
+    );
+    session.sculpt = vec![step.clone()];
+    let json = session.to_json();
+    assert!(!json.contains("\"rule\""), "{json}");
+    let back = crate::session::Session::from_json(&json, "old.json").unwrap();
+    assert_eq!(back.sculpt, vec![step]);
+    let SculptStep::Label {
+        point,
+        label,
+        colour,
+        ..
+    } = back.sculpt[0].clone()
+    else {
+        unreachable!()
+    };
+    let connected = SculptStep::Label {
+        point,
+        label,
+        colour,
+        rule: RegionRule::Connected,
+    };
+    let json = serde_json::to_string(&connected).unwrap();
+    assert!(json.contains(r#""rule":"connected""#), "{json}");
+    assert_eq!(
+        serde_json::from_str::<SculptStep>(&json).unwrap(),
+        connected
+    );
+}
+
+/// A connected seed on one of two boxes labels that box only; nearest labels both.
+#[test]
+fn connected_labels_leave_the_box_no_seed_touches() {
+    let [nx, ny, nz] = [24, 10, 10];
+    let values: Vec<f32> = (0..nx * ny * nz)
+        .map(|n| (n % nx, n / nx % ny, n / (nx * ny)))
+        .map(|(i, j, k)| {
+            let inner = (2..8).contains(&j) && (2..8).contains(&k);
+            f32::from(u8::from(
+                inner && ((2..9).contains(&i) || (14..21).contains(&i)),
+            ))
+        })
+        .collect();
+    let g = Grid::new(
+        [nx, ny, nz],
+        [1.0, 0.8, 1.5],
+        [0.0; 3],
+        Samples::F32(Buffer::owned(values)),
+    )
+    .unwrap();
+    let scene = opaque_box_scene(&g, "{}");
+    let count = |rule| {
+        let mut sculpt = Sculpt::new(&g).unwrap();
+        let point = g.index_to_world(DVec3::new(5.0, 5.0, 5.0));
+        let colour = [1.0, 0.0, 0.0];
+        sculpt
+            .apply(SculptStep::Label {
+                point,
+                label: 3,
+                colour,
+                rule,
+            })
+            .unwrap();
+        let labels = sculpt.labels(&g, &scene).unwrap();
+        labels.iter().filter(|&&l| l == 3).count()
+    };
+    let one_box = 7 * 6 * 6;
+    assert_eq!(count(RegionRule::Connected), one_box);
+    assert_eq!(count(RegionRule::Nearest), 2 * one_box);
 }
 
 #[test]
@@ -326,6 +416,7 @@ fn labels_colour_the_rendering_with_every_integrator() {
                 point,
                 label,
                 colour,
+                rule: RegionRule::Nearest,
             })
             .unwrap();
     }
