@@ -298,14 +298,16 @@ fn measure_finds_a_box_of_known_size() {
     );
 }
 
-/// Two seeds on the front face, left and right: every voxel of the box is labelled, by the
-/// side it lies on, and nothing else is.
+/// Two seeds on the front face, left and right, by the nearest rule: every voxel of the box
+/// is labelled, by the side it lies on, and nothing else is.
 #[test]
 fn regions_label_the_visible_voxels_by_the_nearest_seed() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     inputs(d);
-    let seeds = ["--seed", "70,60,3", "--seed", "90,60,7", "-o", "l.nrrd"];
+    let seeds = [
+        "--seed", "70,60,3", "--seed", "90,60,7", "--rule", "nearest", "-o", "l.nrrd",
+    ];
     let out = ok(&run("regions", &view("ortho.json", &seeds), d));
     assert!(
         out.contains("label 3: ") && out.contains("label 7: "),
@@ -323,6 +325,92 @@ fn regions_label_the_visible_voxels_by_the_nearest_seed() {
         };
         assert_eq!(l, want, "voxel ({i}, {j}, {k})");
     }
+}
+
+/// Two balls apart in the box's grid (index-space radius 3.5 about (6, 10, 8) and (17, 10,
+/// 8)): whether voxel `ijk` is in the first, the second or neither.
+fn ball_of(i: usize, j: usize, k: usize) -> Option<usize> {
+    let v = DVec3::new(i as f64, j as f64, k as f64);
+    [DVec3::new(6.0, 10.0, 8.0), DVec3::new(17.0, 10.0, 8.0)]
+        .iter()
+        .position(|c| (v - *c).length() <= 3.5)
+}
+
+/// Seeds on two balls apart (issue 41): the connected rule (the default) labels the ball a
+/// seed is on and leaves the other at 0, in the file and in the printed counts; the nearest
+/// rule labels both; one seed per ball labels each its own.
+#[test]
+fn regions_connected_leave_the_ball_no_seed_touches() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    inputs(d);
+    let [nx, ny, nz] = DIMS;
+    let values: Vec<f32> = (0..nx * ny * nz)
+        .map(|n| {
+            f32::from(u8::from(
+                ball_of(n % nx, n / nx % ny, n / (nx * ny)).is_some(),
+            ))
+        })
+        .collect();
+    let balls = Grid::new(DIMS, SPACING, ORIGIN, Samples::F32(Buffer::owned(values))).unwrap();
+    volux_io::nrrd::write(&balls, &d.join("balls.nrrd")).unwrap();
+    // The pixel of each ball's centre in the orthographic view from -y.
+    let cam = camera(d, "ortho.json");
+    let pixel = |i: f64| {
+        let (x, y, _) = cam.project(
+            balls.index_to_world(DVec3::new(i, 10.0, 8.0)),
+            SIZE.0,
+            SIZE.1,
+        );
+        format!("{x:.1},{y:.1}")
+    };
+    let (a, b) = (format!("{},5", pixel(6.0)), format!("{},6", pixel(17.0)));
+    let regions = |rest: &[&str]| {
+        let mut args = view("ortho.json", rest);
+        args[0] = "balls.nrrd";
+        let out = ok(&run("regions", &args, d));
+        (out, read_u8(&d.join("l.nrrd")))
+    };
+    let size = |ball| {
+        (0..nx * ny * nz)
+            .filter(|&n| ball_of(n % nx, n / nx % ny, n / (nx * ny)) == Some(ball))
+            .count()
+    };
+    let (first, second) = (size(0), size(1));
+    assert!(first > 100 && first == second, "{first} {second}");
+    let total = nx * ny * nz;
+    let check = |labels: &[u8], want: [u8; 2]| {
+        for (n, &l) in labels.iter().enumerate() {
+            let (i, j, k) = (n % nx, n / nx % ny, n / (nx * ny));
+            let expected = ball_of(i, j, k).map_or(0, |ball| want[ball]);
+            assert_eq!(l, expected, "voxel ({i}, {j}, {k})");
+        }
+    };
+    let (out, labels) = regions(&["--seed", &a, "-o", "l.nrrd"]);
+    check(&labels, [5, 0]);
+    assert!(out.contains(&format!("label 5: {first} voxels")), "{out}");
+    assert!(
+        out.contains(&format!("unlabelled: {} voxels", total - first)),
+        "{out}"
+    );
+    let (out, labels) = regions(&["--seed", &a, "--rule", "nearest", "-o", "l.nrrd"]);
+    check(&labels, [5, 5]);
+    assert!(
+        out.contains(&format!("label 5: {} voxels", 2 * first)),
+        "{out}"
+    );
+    let (out, labels) = regions(&[
+        "--seed",
+        &a,
+        "--seed",
+        &b,
+        "--rule",
+        "connected",
+        "-o",
+        "l.nrrd",
+    ]);
+    check(&labels, [5, 6]);
+    assert!(out.contains(&format!("label 6: {second} voxels")), "{out}");
 }
 
 /// Each bad input exits non-zero with one error line and writes no output file.
