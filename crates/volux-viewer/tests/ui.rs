@@ -104,6 +104,62 @@ fn dragging_a_tf_control_point_changes_the_tf() {
     assert!(after[i][0] > curve(&tf)[i][0] || i + 1 == after.len());
 }
 
+/// A quick drag moves a control point at once: by the time egui calls it a drag (a few
+/// pixels), the pointer has left the point's grab radius, and the point under the press is
+/// the one moved.
+#[test]
+fn a_quick_drag_moves_a_tf_point_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let tf = app(&h).scene.appearance.tf.clone();
+    let curve = |tf: &volux_core::TransferFunction| {
+        if tf.extinction.is_empty() {
+            tf.opacity.clone()
+        } else {
+            tf.extinction.clone()
+        }
+    };
+    let i = curve(&tf).len() / 2;
+    let from = app(&h)
+        .editor
+        .as_ref()
+        .unwrap()
+        .point_position(&tf, i)
+        .unwrap();
+    // Each move is 20 px: the first frame of the drag is already 20 px from the point.
+    let to = Pos2::new(from.x, from.y - 40.0);
+    h.hover_at(from);
+    h.step();
+    let press = |pressed, pos| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    h.event(press(true, from));
+    h.step();
+    for k in 1..=2 {
+        h.hover_at(from + (to - from) * (k as f32 / 2.0));
+        h.step();
+    }
+    h.event(press(false, to));
+    h.step();
+    h.step();
+    let after = curve(&app(&h).scene.appearance.tf);
+    assert_eq!(
+        after.len(),
+        curve(&tf).len(),
+        "a drag moves, it does not add"
+    );
+    assert!(
+        after[i][1] > curve(&tf)[i][1],
+        "{:?} -> {:?}",
+        curve(&tf)[i],
+        after[i]
+    );
+}
+
 /// A press, moves in steps, and a release, one frame each.
 fn drag(
     h: &mut Harness<'static, App>,
