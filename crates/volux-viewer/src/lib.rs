@@ -33,7 +33,8 @@
 //!   [`sculpt_tools`]: their gestures and overlay in the 3D view (seed `004` ch. 4-6);
 //!   [`plane_handle`]: the clipping planes' tilt handles;
 //! - [`tf_editor`]: the transfer-function editor over the histogram;
-//! - [`panels`]: the menu and the settings panel; [`file_dialog`]: the file dialog;
+//! - [`panels`]: the menu and the settings panel; [`status_bar`]: the error, message and
+//!   cache line at the bottom; [`file_dialog`]: the file dialog;
 //!   [`files`]: TF files, sessions and screenshots read and written; [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
 pub mod app;
 pub mod backend;
@@ -58,6 +59,7 @@ pub mod sculpt_state;
 pub mod sculpt_tools;
 pub mod slice_views;
 pub mod slices;
+pub mod status_bar;
 pub mod store;
 pub mod tf_editor;
 pub mod view3d;

@@ -974,3 +974,34 @@ fn mip_renders_while_shading_is_ticked() {
     let scene = rendered_scene(&mut h);
     assert!(!scene.appearance.mip && scene.appearance.shade_volume);
 }
+
+/// A message or an error appearing (or going) moves nothing: the 3D view and the panels'
+/// widgets keep their places, so a click aimed a moment before lands where it was aimed.
+#[test]
+fn messages_do_not_move_the_layout() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    h.step();
+    let places = |h: &Harness<'static, App>| {
+        let button = h.get_by_label("Add plane").rect();
+        (app(h).view_rect, button)
+    };
+    let before = places(&h);
+    app_mut(&mut h).status = Some("saved /somewhere/screenshot.png".into());
+    h.step();
+    h.step();
+    assert_eq!(places(&h), before, "a message appeared");
+    app_mut(&mut h).error = Some("a long error\nover two lines ".repeat(20));
+    h.step();
+    h.step();
+    assert_eq!(places(&h), before, "an error appeared");
+    h.get_by_label("dismiss").click_accesskit();
+    h.step();
+    h.step();
+    assert!(app(&h).error.is_none(), "dismissed");
+    app_mut(&mut h).status = None;
+    h.step();
+    h.step();
+    assert_eq!(places(&h), before, "the messages went");
+}
