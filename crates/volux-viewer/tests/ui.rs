@@ -1005,3 +1005,41 @@ fn messages_do_not_move_the_layout() {
     h.step();
     assert_eq!(places(&h), before, "the messages went");
 }
+
+/// Enter in the file dialog's path field saves, as the Save button does; a save is proposed
+/// in the working directory (the dataset's folder may be read-only), then in the folder of
+/// the last save.
+#[test]
+fn the_file_dialog_saves_on_enter_where_the_last_save_went() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let cwd = std::env::current_dir().unwrap();
+    app_mut(&mut h).open_dialog(volux_viewer::file_dialog::Purpose::SaveTf);
+    h.step();
+    let proposed = PathBuf::from(app(&h).file_dialog().path_text());
+    assert_eq!(proposed, cwd.join("tf.json"), "not the dataset's folder");
+    let out = tempfile::tempdir().unwrap();
+    let target = out.path().join("mine.json");
+    let field = h.get_by_role(egui::accesskit::Role::TextInput);
+    field.focus();
+    h.step();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.step();
+    h.get_by_role(egui::accesskit::Role::TextInput)
+        .type_text(&target.display().to_string());
+    h.step();
+    h.key_press(egui::Key::Enter);
+    h.step();
+    h.step();
+    assert!(!app(&h).file_dialog().is_open(), "Enter closed the dialog");
+    assert!(target.is_file(), "Enter saved {}", target.display());
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    app_mut(&mut h).open_dialog(volux_viewer::file_dialog::Purpose::SaveSession);
+    h.step();
+    let proposed = PathBuf::from(app(&h).file_dialog().path_text());
+    assert_eq!(proposed, out.path().join("session.json"));
+    // Reading still starts beside the dataset.
+    app_mut(&mut h).open_dialog(volux_viewer::file_dialog::Purpose::LoadTf);
+    assert_eq!(PathBuf::from(app(&h).file_dialog().path_text()), dir.path());
+}
