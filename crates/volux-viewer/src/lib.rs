@@ -22,7 +22,8 @@
 //!   [`progressive`]: progressive level of detail (coarsest level at once, then each finer
 //!   level in the background); [`lod_status`]: the level choice, the level on screen and the
 //!   status line's level and cache figures;
-//! - [`view3d`]: the 3D view, its gestures and overlay; [`navigation`]: the camera gestures
+//! - [`view3d`]: the 3D view, its gestures and overlay; [`overlay_text`]: text on a dark
+//!   backing over pictures; [`navigation`]: the camera gestures
 //!   as pure functions (orbit, pan, zoom, standard views);
 //! - [`slices`]: the axial, coronal and sagittal planes cut from the data;
 //!   [`slice_views`]: their views, crosshair and window/level;
@@ -47,6 +48,7 @@ pub mod jobs;
 pub mod label_colours;
 pub mod lod_status;
 pub mod navigation;
+pub mod overlay_text;
 pub mod panels;
 pub mod plane_handle;
 pub mod progressive;

@@ -1043,3 +1043,59 @@ fn the_file_dialog_saves_on_enter_where_the_last_save_went() {
     app_mut(&mut h).open_dialog(volux_viewer::file_dialog::Purpose::LoadTf);
     assert_eq!(PathBuf::from(app(&h).file_dialog().path_text()), dir.path());
 }
+
+/// The texts drawn in the last frame, each with the shape drawn just before it.
+fn texts_with_what_lies_under(h: &Harness<'static, App>) -> Vec<(String, Option<egui::Shape>)> {
+    let shapes: Vec<&egui::Shape> = h.output().shapes.iter().map(|c| &c.shape).collect();
+    let mut out = Vec::new();
+    for (k, shape) in shapes.iter().enumerate() {
+        if let egui::Shape::Text(t) = shape {
+            let under = k.checked_sub(1).map(|j| shapes[j].clone());
+            out.push((t.galley.text().to_string(), under));
+        }
+    }
+    out
+}
+
+/// Whether `under` is a dark filled rectangle holding `text`'s shape.
+fn is_dark_backing(under: &Option<egui::Shape>) -> bool {
+    match under {
+        Some(egui::Shape::Rect(r)) => {
+            let [red, green, blue, alpha] = r.fill.to_array();
+            alpha >= 128 && red.max(green).max(blue) < 64
+        }
+        _ => false,
+    }
+}
+
+/// A measurement's label reads over bright data: it lies on a dark backing. One point asks
+/// for a second (never "-0.00 mm"); two say their distance.
+#[test]
+fn the_measurement_label_is_backed_and_honest() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let (w, hgt) = app(&h).view_size;
+    let centre = [w as f64 * 0.5, hgt as f64 * 0.5];
+    app_mut(&mut h).measure_at(centre, true);
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    h.step();
+    let texts = texts_with_what_lies_under(&h);
+    let label = texts
+        .iter()
+        .find(|(t, _)| t == "no length yet — click a second point")
+        .unwrap_or_else(|| panic!("one point asks for a second: {texts:?}"));
+    assert!(is_dark_backing(&label.1), "{label:?}");
+    assert!(texts.iter().all(|(t, _)| !t.contains("-0.00")), "{texts:?}");
+    app_mut(&mut h).measure_at([centre[0] + 30.0, centre[1] + 10.0], false);
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    h.step();
+    let texts = texts_with_what_lies_under(&h);
+    let label = texts
+        .iter()
+        .find(|(t, _)| t.ends_with(" mm") && !t.starts_with("measurement"))
+        .unwrap_or_else(|| panic!("two points give a length: {texts:?}"));
+    assert!(is_dark_backing(&label.1), "{label:?}");
+    let length: f64 = label.0.trim_end_matches(" mm").parse().unwrap();
+    assert!(length > 0.0, "{label:?}");
+}
