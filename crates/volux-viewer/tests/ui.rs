@@ -1099,3 +1099,57 @@ fn the_measurement_label_is_backed_and_honest() {
     let length: f64 = label.0.trim_end_matches(" mm").parse().unwrap();
     assert!(length > 0.0, "{label:?}");
 }
+
+/// The slices' captions (plane, voxel, window) lie where no crosshair line crosses them,
+/// inside their views (not cut), with the window's values in a few digits.
+#[test]
+fn slice_captions_are_clear_of_the_crosshair() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    h.step();
+    let crosshair = volux_viewer::slice_views::CROSSHAIR_COLOUR;
+    let mut lines = Vec::new();
+    let mut captions = Vec::new();
+    for clipped in &h.output().shapes {
+        match &clipped.shape {
+            egui::Shape::LineSegment { points, stroke } if stroke.color == crosshair => {
+                lines.push(egui::Rect::from_two_pos(points[0], points[1]).expand(0.5));
+            }
+            egui::Shape::Text(t) => {
+                let text = t.galley.text().to_string();
+                let window = text
+                    .strip_prefix("window ")
+                    .is_some_and(|v| v.starts_with(|c: char| c.is_ascii_digit() || c == '-'));
+                let caption = window
+                    || ["axial [", "coronal [", "sagittal ["]
+                        .iter()
+                        .any(|p| text.starts_with(p));
+                if caption {
+                    captions.push((text, t.visual_bounding_rect(), clipped.clip_rect));
+                }
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(lines.len(), 6, "two crosshair lines per view");
+    assert_eq!(captions.len(), 6, "a caption pair per view: {captions:?}");
+    for (text, rect, clip) in &captions {
+        assert!(!text.contains('…'), "{text} is cut short");
+        assert!(
+            clip.contains_rect(*rect),
+            "{text} is clipped: {rect:?} in {clip:?}"
+        );
+        for line in &lines {
+            assert!(!line.intersects(*rect), "a crosshair line crosses {text}");
+        }
+        if let Some(values) = text.strip_prefix("window ") {
+            // Marschner-Lobb spans about 0 to 1: three significant digits at most.
+            for v in values.split(" – ") {
+                let decimals = v.split('.').nth(1).map_or(0, str::len);
+                assert!(decimals <= 3, "{text}");
+                assert!(v.parse::<f64>().is_ok(), "{text}");
+            }
+        }
+    }
+}
