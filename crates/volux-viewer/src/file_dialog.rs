@@ -1,5 +1,5 @@
 //! A file dialog drawn with egui (no system dialog dependency): the folder's entries,
-//! folders first, a path field, and the action's button. Opening a DICOM folder is opening
+//! folders first, a path field (Enter confirms it), and the action's button. Opening a DICOM folder is opening
 //! the folder itself, and so is opening an OME-Zarr store (a `.zarr` folder).
 use std::path::{Path, PathBuf};
 
@@ -37,7 +37,8 @@ impl Purpose {
         }
     }
 
-    fn saves(self) -> bool {
+    /// Whether the chosen path is written (a save or an export), not read.
+    pub fn saves(self) -> bool {
         matches!(
             self,
             Purpose::SaveTf
@@ -57,6 +58,8 @@ pub struct FileDialog {
     path_text: String,
     entries: Vec<(String, bool)>,
     listing_error: Option<String>,
+    /// The folder of the last file saved through the dialog in this session.
+    last_save_folder: Option<PathBuf>,
 }
 
 impl FileDialog {
@@ -74,6 +77,22 @@ impl FileDialog {
     /// Whether it is open.
     pub fn is_open(&self) -> bool {
         self.purpose.is_some()
+    }
+
+    /// The path in the dialog's path field (what Enter or the action's button would choose).
+    pub fn path_text(&self) -> &str {
+        &self.path_text
+    }
+
+    /// Where a file is saved unless the user goes elsewhere: the folder of the last file
+    /// saved in this session, else the working directory (not the dataset's folder, which
+    /// may be read-only, as shared data often is).
+    pub fn save_folder(&self) -> PathBuf {
+        self.last_save_folder
+            .clone()
+            .filter(|p| p.is_dir())
+            .or_else(|| std::env::current_dir().ok())
+            .unwrap_or_else(|| PathBuf::from("."))
     }
 
     fn enter(&mut self, folder: PathBuf) {
@@ -111,6 +130,14 @@ impl FileDialog {
             });
         if !open || chosen.is_some() {
             self.purpose = None;
+        }
+        if let Some(folder) = chosen
+            .as_deref()
+            .filter(|_| purpose.saves())
+            .and_then(Path::parent)
+            .filter(|p| !p.as_os_str().is_empty())
+        {
+            self.last_save_folder = Some(folder.to_path_buf());
         }
         chosen.map(|p| (purpose, p))
     }
@@ -160,9 +187,13 @@ impl FileDialog {
             }
         }
         ui.horizontal(|ui| {
-            ui.add(egui::TextEdit::singleline(&mut self.path_text).desired_width(380.0));
+            let field =
+                ui.add(egui::TextEdit::singleline(&mut self.path_text).desired_width(380.0));
+            // A single-line field gives up the focus on Enter.
+            let entered = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
             let action = if purpose.saves() { "Save" } else { "Open" };
-            if ui.button(action).clicked() && !self.path_text.trim().is_empty() {
+            let clicked = ui.button(action).clicked();
+            if (entered || clicked) && !self.path_text.trim().is_empty() {
                 chosen = Some(PathBuf::from(self.path_text.trim()));
             }
         });

@@ -12,15 +12,21 @@ use crate::jobs::Job;
 use crate::tf_editor::in_value_space;
 
 impl ViewerApp {
-    /// Opens the file dialog for `purpose`.
+    /// Opens the file dialog for `purpose`: files to read are looked for beside the dataset,
+    /// files to write go where the last one went ([`FileDialog::save_folder`]).
+    ///
+    /// [`FileDialog::save_folder`]: crate::file_dialog::FileDialog::save_folder
     pub fn open_dialog(&mut self, purpose: Purpose) {
-        let folder = self
-            .data
-            .as_ref()
-            .and_then(|d| d.source.path.parent().map(Path::to_path_buf))
-            .filter(|p| p.is_dir())
-            .or_else(|| std::env::current_dir().ok())
-            .unwrap_or_else(|| PathBuf::from("."));
+        let folder = if purpose.saves() {
+            self.dialog.save_folder()
+        } else {
+            self.data
+                .as_ref()
+                .and_then(|d| d.source.path.parent().map(Path::to_path_buf))
+                .filter(|p| p.is_dir())
+                .or_else(|| std::env::current_dir().ok())
+                .unwrap_or_else(|| PathBuf::from("."))
+        };
         let name = match purpose {
             Purpose::SaveTf => "tf.json",
             Purpose::SaveSession => "session.json",
@@ -30,6 +36,11 @@ impl ViewerApp {
             _ => "",
         };
         self.dialog.open(purpose, &folder, name);
+    }
+
+    /// The file dialog (open or not).
+    pub fn file_dialog(&self) -> &crate::file_dialog::FileDialog {
+        &self.dialog
     }
 
     /// Acts on a path chosen in the file dialog.

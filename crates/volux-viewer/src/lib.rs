@@ -22,7 +22,8 @@
 //!   [`progressive`]: progressive level of detail (coarsest level at once, then each finer
 //!   level in the background); [`lod_status`]: the level choice, the level on screen and the
 //!   status line's level and cache figures;
-//! - [`view3d`]: the 3D view, its gestures and overlay; [`navigation`]: the camera gestures
+//! - [`view3d`]: the 3D view, its gestures and overlay; [`overlay_text`]: text on a dark
+//!   backing over pictures; [`navigation`]: the camera gestures
 //!   as pure functions (orbit, pan, zoom, standard views);
 //! - [`slices`]: the axial, coronal and sagittal planes cut from the data;
 //!   [`slice_views`]: their views, crosshair and window/level;
@@ -33,7 +34,8 @@
 //!   [`sculpt_tools`]: their gestures and overlay in the 3D view (seed `004` ch. 4-6);
 //!   [`plane_handle`]: the clipping planes' tilt handles;
 //! - [`tf_editor`]: the transfer-function editor over the histogram;
-//! - [`panels`]: the menu and the settings panel; [`file_dialog`]: the file dialog;
+//! - [`panels`]: the menu and the settings panel; [`status_bar`]: the error, message and
+//!   cache line at the bottom; [`file_dialog`]: the file dialog;
 //!   [`files`]: TF files, sessions and screenshots read and written; [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
 pub mod app;
 pub mod backend;
@@ -46,6 +48,7 @@ pub mod jobs;
 pub mod label_colours;
 pub mod lod_status;
 pub mod navigation;
+pub mod overlay_text;
 pub mod panels;
 pub mod plane_handle;
 pub mod progressive;
@@ -58,6 +61,7 @@ pub mod sculpt_state;
 pub mod sculpt_tools;
 pub mod slice_views;
 pub mod slices;
+pub mod status_bar;
 pub mod store;
 pub mod tf_editor;
 pub mod view3d;

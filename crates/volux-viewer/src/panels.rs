@@ -15,9 +15,10 @@ use crate::tf_editor::in_value_space;
 
 use volux_core::transfer::PRESETS;
 
-/// Draws the menu bar, the status line and the settings panel.
+/// Draws the menu bar, the status bar ([`crate::status_bar`]) and the settings panel.
 pub fn show(app: &mut ViewerApp, ctx: &egui::Context) {
     egui::TopBottomPanel::top("menu").show(ctx, |ui| menu(app, ui));
+    crate::status_bar::show(app, ctx);
     egui::SidePanel::left("settings")
         .default_width(330.0)
         .show(ctx, |ui| {
@@ -74,22 +75,6 @@ fn menu(app: &mut ViewerApp, ui: &mut egui::Ui) {
             ));
         }
     });
-    if let Some(e) = &app.error {
-        ui.horizontal(|ui| {
-            ui.colored_label(
-                egui::Color32::from_rgb(255, 120, 110),
-                format!("error: {e}"),
-            );
-        });
-        if ui.small_button("dismiss").clicked() {
-            app.error = None;
-        }
-    } else if let Some(s) = &app.status {
-        ui.label(s.as_str());
-    }
-    if let Some(s) = app.lod_status() {
-        ui.label(s);
-    }
 }
 
 fn settings(app: &mut ViewerApp, ui: &mut egui::Ui) {

@@ -53,50 +53,59 @@ impl LevelShown {
     }
 }
 
-/// The brick caches' figures, over all levels.
+/// The brick caches' figures, over all levels. A hit ratio is not among them: it counts the
+/// rays' lookups, which stay near 100 % hits while the cache evicts and reads the same
+/// chunks again; the chunks read, and how many of them were read again, say what it costs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CacheFigures {
     /// Bytes of bricks resident now.
     pub resident_bytes: u64,
     /// The memory budget.
     pub budget: u64,
-    /// Lookups answered from memory.
-    pub hits: u64,
     /// Chunks read from the store.
-    pub misses: u64,
+    pub chunks_read: u64,
+    /// Chunks read again after they were evicted (part of `chunks_read`).
+    pub rereads: u64,
 }
 
 impl CacheFigures {
     /// The figures of `volume` now.
     pub fn of(volume: &BrickedVolume) -> Self {
-        let totals = volume.cache_totals();
+        Self::from_stats(
+            volume.resident_bytes(),
+            volume.budget(),
+            &volume.cache_totals(),
+        )
+    }
+
+    /// The figures of caches holding `resident_bytes` of `budget`, with counters `stats`.
+    pub fn from_stats(resident_bytes: u64, budget: u64, stats: &CacheStats) -> Self {
         Self {
-            resident_bytes: volume.resident_bytes(),
-            budget: volume.budget(),
-            hits: totals.hits,
-            misses: totals.misses,
+            resident_bytes,
+            budget,
+            chunks_read: stats.misses,
+            rereads: stats.rereads,
         }
     }
 
-    /// Hits over lookups (1 when there was none).
-    pub fn hit_rate(&self) -> f64 {
-        let (hits, misses) = (self.hits, self.misses);
-        CacheStats {
-            hits,
-            misses,
-            ..CacheStats::default()
-        }
-        .hit_rate()
-    }
-
-    /// "cache 12.0 of 4096.0 MiB, 97.5 % hits".
+    /// "cache 12.0 of 32.0 MiB, 680 chunks read, 22 read again" ("none read again" while
+    /// the budget holds every chunk the views needed).
     pub fn describe(&self) -> String {
         let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+        let chunks = if self.chunks_read == 1 {
+            "chunk"
+        } else {
+            "chunks"
+        };
+        let again = match self.rereads {
+            0 => "none".to_string(),
+            n => n.to_string(),
+        };
         format!(
-            "cache {:.1} of {:.1} MiB, {:.1} % hits",
+            "cache {:.1} of {:.1} MiB, {} {chunks} read, {again} read again",
             mib(self.resident_bytes),
             mib(self.budget),
-            self.hit_rate() * 100.0
+            self.chunks_read,
         )
     }
 }
@@ -172,12 +181,33 @@ mod tests {
         l.level = 1;
         l.target = 1;
         assert!(l.describe().contains("as fine as the view needs"));
-        let c = CacheFigures {
-            resident_bytes: 3 << 20,
-            budget: 1 << 30,
-            hits: 3,
-            misses: 1,
+    }
+
+    /// A thrashing cache's line says how many chunks were read and read again, not the
+    /// lookups' hit ratio (near 100 % whatever the thrashing).
+    #[test]
+    fn the_cache_line_counts_chunks_read_again() {
+        let stats = CacheStats {
+            hits: 2_000_000,
+            misses: 680,
+            evictions: 650,
+            rereads: 22,
+            ..CacheStats::default()
         };
-        assert_eq!(c.describe(), "cache 3.0 of 1024.0 MiB, 75.0 % hits");
+        let c = CacheFigures::from_stats(12 << 20, 32 << 20, &stats);
+        assert_eq!(
+            c.describe(),
+            "cache 12.0 of 32.0 MiB, 680 chunks read, 22 read again"
+        );
+        let calm = CacheStats {
+            hits: 10,
+            misses: 1,
+            ..CacheStats::default()
+        };
+        let c = CacheFigures::from_stats(3 << 20, 1 << 30, &calm);
+        assert_eq!(
+            c.describe(),
+            "cache 3.0 of 1024.0 MiB, 1 chunk read, none read again"
+        );
     }
 }

@@ -9,6 +9,7 @@ use volux_core::Camera;
 use volux_render::sculpt::polyline_length;
 
 use crate::app::ViewerApp;
+use crate::overlay_text::{backed_text, BACKING};
 use crate::sculpt_state::Tool;
 
 /// Whether the left button belongs to a tool now (not with Alt held: Alt+drag navigates).
@@ -164,22 +165,26 @@ fn voi_outline(app: &ViewerApp, painter: &egui::Painter, project: &dyn Fn(DVec3)
 }
 
 /// The measured polylines with their lengths in the grid's unit, millimetres for medical
-/// data (sec. 6.2).
+/// data (sec. 6.2): yellow lines on a dark outline, the label on a dark backing
+/// ([`backed_text`]) so that both read over bright data; a line of one point asks for the
+/// second.
 fn measurements(app: &ViewerApp, painter: &egui::Painter, project: &dyn Fn(DVec3) -> Option<Pos2>) {
     let Some(sculpt) = &app.sculpt else { return };
     let unit = unit_of(app);
     let colour = Color32::from_rgb(250, 230, 80);
     for line in sculpt.measurements() {
         let pts: Vec<Pos2> = line.iter().filter_map(|p| project(*p)).collect();
-        for p in &pts {
-            painter.circle_filled(*p, 3.0, colour);
-        }
+        painter.add(egui::Shape::line(pts.clone(), Stroke::new(4.0, BACKING)));
         painter.add(egui::Shape::line(pts.clone(), Stroke::new(2.0, colour)));
-        if let (Some(last), true) = (pts.last(), line.len() > 1) {
-            painter.text(
+        for p in &pts {
+            painter.circle(*p, 3.0, colour, Stroke::new(1.0, BACKING));
+        }
+        if let Some(last) = pts.last() {
+            backed_text(
+                painter,
                 *last + egui::vec2(8.0, -8.0),
                 Align2::LEFT_BOTTOM,
-                length_text(&line, &unit),
+                &length_text(&line, &unit),
                 FontId::proportional(14.0),
                 colour,
             );
@@ -187,9 +192,14 @@ fn measurements(app: &ViewerApp, painter: &egui::Painter, project: &dyn Fn(DVec3
     }
 }
 
-/// A polyline's length as the overlay and the panel show it, in the grid's unit.
+/// A polyline's length as the overlay and the panel show it, in the grid's unit ("12.34
+/// mm"); a single point has no length yet, and says what to do.
 pub fn length_text(line: &[DVec3], unit: &str) -> String {
-    format!("{:.2} {unit}", polyline_length(line))
+    if line.len() < 2 {
+        return "no length yet — click a second point".to_string();
+    }
+    // The sum of no segments (or of zero-length ones) may be -0: a length is never negative.
+    format!("{:.2} {unit}", polyline_length(line).abs())
 }
 
 /// The loaded grid's unit of length (`mm` unless the file says otherwise).
@@ -241,5 +251,24 @@ fn cursor(app: &ViewerApp, ui: &egui::Ui, painter: &egui::Painter, rect: Rect) {
             pts,
             Stroke::new(2.0 * radius, stroke.color.gamma_multiply(0.3)),
         ));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One point asks for the second (no "-0.00"); two give their distance.
+    #[test]
+    fn a_measurement_says_its_length_or_asks_for_a_second_point() {
+        let one = [DVec3::new(1.0, 2.0, 3.0)];
+        assert_eq!(
+            length_text(&one, "mm"),
+            "no length yet — click a second point"
+        );
+        let two = [DVec3::ZERO, DVec3::new(3.0, 4.0, 0.0)];
+        assert_eq!(length_text(&two, "mm"), "5.00 mm");
+        let same = [DVec3::ONE, DVec3::ONE];
+        assert_eq!(length_text(&same, "µm"), "0.00 µm");
     }
 }

@@ -200,13 +200,16 @@ impl TfEditor {
         let window_gesture = ui.input(|i| i.modifiers.ctrl || i.modifiers.command)
             || response.dragged_by(egui::PointerButton::Middle);
         if response.drag_started() {
+            // egui starts a drag only once the pointer has moved a few pixels: the point
+            // grabbed is the one under the press, not under the pointer now.
+            let press = press_origin(ui).unwrap_or(pos);
             self.dragging = if window_gesture {
                 Some(Drag::Window {
-                    start: pos,
+                    start: press,
                     tf: tf.clone(),
                 })
             } else {
-                self.nearest_point(rect, tf, pos).map(Drag::Point)
+                self.nearest_point(rect, tf, press).map(Drag::Point)
             };
         }
         if response.drag_stopped() {
@@ -269,17 +272,20 @@ impl TfEditor {
         let Some(pos) = response.interact_pointer_pos().or(response.hover_pos()) else {
             return false;
         };
-        let near = tf
-            .color
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (i, (self.to_screen(strip, [p[0], 0.0]).x - pos.x).abs()))
-            .filter(|(_, d)| *d <= GRAB_RADIUS)
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(i, _)| i);
+        let near_x = |x: f32| {
+            tf.color
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (i, (self.to_screen(strip, [p[0], 0.0]).x - x).abs()))
+                .filter(|(_, d)| *d <= GRAB_RADIUS)
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(i, _)| i)
+        };
+        let near = near_x(pos.x);
         let x = self.to_data(strip, pos)[0];
         if response.drag_started() {
-            self.dragging = near.map(Drag::Color);
+            let press = press_origin(ui).unwrap_or(pos);
+            self.dragging = near_x(press.x).map(Drag::Color);
         }
         if response.drag_stopped() {
             self.dragging = None;
@@ -308,7 +314,6 @@ impl TfEditor {
                 return delete_point(&mut tf.color, i);
             }
         }
-        let _ = ui;
         false
     }
 
@@ -404,6 +409,11 @@ impl TfEditor {
             );
         }
     }
+}
+
+/// Where the pointer was when its button went down (`None` while no button is down).
+fn press_origin(ui: &egui::Ui) -> Option<Pos2> {
+    ui.input(|i| i.pointer.press_origin())
 }
 
 fn linear_to_srgb(v: f64) -> f32 {

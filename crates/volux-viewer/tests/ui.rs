@@ -104,6 +104,62 @@ fn dragging_a_tf_control_point_changes_the_tf() {
     assert!(after[i][0] > curve(&tf)[i][0] || i + 1 == after.len());
 }
 
+/// A quick drag moves a control point at once: by the time egui calls it a drag (a few
+/// pixels), the pointer has left the point's grab radius, and the point under the press is
+/// the one moved.
+#[test]
+fn a_quick_drag_moves_a_tf_point_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let tf = app(&h).scene.appearance.tf.clone();
+    let curve = |tf: &volux_core::TransferFunction| {
+        if tf.extinction.is_empty() {
+            tf.opacity.clone()
+        } else {
+            tf.extinction.clone()
+        }
+    };
+    let i = curve(&tf).len() / 2;
+    let from = app(&h)
+        .editor
+        .as_ref()
+        .unwrap()
+        .point_position(&tf, i)
+        .unwrap();
+    // Each move is 20 px: the first frame of the drag is already 20 px from the point.
+    let to = Pos2::new(from.x, from.y - 40.0);
+    h.hover_at(from);
+    h.step();
+    let press = |pressed, pos| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    h.event(press(true, from));
+    h.step();
+    for k in 1..=2 {
+        h.hover_at(from + (to - from) * (k as f32 / 2.0));
+        h.step();
+    }
+    h.event(press(false, to));
+    h.step();
+    h.step();
+    let after = curve(&app(&h).scene.appearance.tf);
+    assert_eq!(
+        after.len(),
+        curve(&tf).len(),
+        "a drag moves, it does not add"
+    );
+    assert!(
+        after[i][1] > curve(&tf)[i][1],
+        "{:?} -> {:?}",
+        curve(&tf)[i],
+        after[i]
+    );
+}
+
 /// A press, moves in steps, and a release, one frame each.
 fn drag(
     h: &mut Harness<'static, App>,
@@ -917,4 +973,183 @@ fn mip_renders_while_shading_is_ticked() {
     app_mut(&mut h).scene.appearance.mip = false;
     let scene = rendered_scene(&mut h);
     assert!(!scene.appearance.mip && scene.appearance.shade_volume);
+}
+
+/// A message or an error appearing (or going) moves nothing: the 3D view and the panels'
+/// widgets keep their places, so a click aimed a moment before lands where it was aimed.
+#[test]
+fn messages_do_not_move_the_layout() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    h.step();
+    let places = |h: &Harness<'static, App>| {
+        let button = h.get_by_label("Add plane").rect();
+        (app(h).view_rect, button)
+    };
+    let before = places(&h);
+    app_mut(&mut h).status = Some("saved /somewhere/screenshot.png".into());
+    h.step();
+    h.step();
+    assert_eq!(places(&h), before, "a message appeared");
+    app_mut(&mut h).error = Some("a long error\nover two lines ".repeat(20));
+    h.step();
+    h.step();
+    assert_eq!(places(&h), before, "an error appeared");
+    h.get_by_label("dismiss").click_accesskit();
+    h.step();
+    h.step();
+    assert!(app(&h).error.is_none(), "dismissed");
+    app_mut(&mut h).status = None;
+    h.step();
+    h.step();
+    assert_eq!(places(&h), before, "the messages went");
+}
+
+/// Enter in the file dialog's path field saves, as the Save button does; a save is proposed
+/// in the working directory (the dataset's folder may be read-only), then in the folder of
+/// the last save.
+#[test]
+fn the_file_dialog_saves_on_enter_where_the_last_save_went() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let cwd = std::env::current_dir().unwrap();
+    app_mut(&mut h).open_dialog(volux_viewer::file_dialog::Purpose::SaveTf);
+    h.step();
+    let proposed = PathBuf::from(app(&h).file_dialog().path_text());
+    assert_eq!(proposed, cwd.join("tf.json"), "not the dataset's folder");
+    let out = tempfile::tempdir().unwrap();
+    let target = out.path().join("mine.json");
+    let field = h.get_by_role(egui::accesskit::Role::TextInput);
+    field.focus();
+    h.step();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.step();
+    h.get_by_role(egui::accesskit::Role::TextInput)
+        .type_text(&target.display().to_string());
+    h.step();
+    h.key_press(egui::Key::Enter);
+    h.step();
+    h.step();
+    assert!(!app(&h).file_dialog().is_open(), "Enter closed the dialog");
+    assert!(target.is_file(), "Enter saved {}", target.display());
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    app_mut(&mut h).open_dialog(volux_viewer::file_dialog::Purpose::SaveSession);
+    h.step();
+    let proposed = PathBuf::from(app(&h).file_dialog().path_text());
+    assert_eq!(proposed, out.path().join("session.json"));
+    // Reading still starts beside the dataset.
+    app_mut(&mut h).open_dialog(volux_viewer::file_dialog::Purpose::LoadTf);
+    assert_eq!(PathBuf::from(app(&h).file_dialog().path_text()), dir.path());
+}
+
+/// The texts drawn in the last frame, each with the shape drawn just before it.
+fn texts_with_what_lies_under(h: &Harness<'static, App>) -> Vec<(String, Option<egui::Shape>)> {
+    let shapes: Vec<&egui::Shape> = h.output().shapes.iter().map(|c| &c.shape).collect();
+    let mut out = Vec::new();
+    for (k, shape) in shapes.iter().enumerate() {
+        if let egui::Shape::Text(t) = shape {
+            let under = k.checked_sub(1).map(|j| shapes[j].clone());
+            out.push((t.galley.text().to_string(), under));
+        }
+    }
+    out
+}
+
+/// Whether `under` is a dark filled rectangle holding `text`'s shape.
+fn is_dark_backing(under: &Option<egui::Shape>) -> bool {
+    match under {
+        Some(egui::Shape::Rect(r)) => {
+            let [red, green, blue, alpha] = r.fill.to_array();
+            alpha >= 128 && red.max(green).max(blue) < 64
+        }
+        _ => false,
+    }
+}
+
+/// A measurement's label reads over bright data: it lies on a dark backing. One point asks
+/// for a second (never "-0.00 mm"); two say their distance.
+#[test]
+fn the_measurement_label_is_backed_and_honest() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    let (w, hgt) = app(&h).view_size;
+    let centre = [w as f64 * 0.5, hgt as f64 * 0.5];
+    app_mut(&mut h).measure_at(centre, true);
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    h.step();
+    let texts = texts_with_what_lies_under(&h);
+    let label = texts
+        .iter()
+        .find(|(t, _)| t == "no length yet — click a second point")
+        .unwrap_or_else(|| panic!("one point asks for a second: {texts:?}"));
+    assert!(is_dark_backing(&label.1), "{label:?}");
+    assert!(texts.iter().all(|(t, _)| !t.contains("-0.00")), "{texts:?}");
+    app_mut(&mut h).measure_at([centre[0] + 30.0, centre[1] + 10.0], false);
+    assert!(app(&h).error.is_none(), "{:?}", app(&h).error);
+    h.step();
+    let texts = texts_with_what_lies_under(&h);
+    let label = texts
+        .iter()
+        .find(|(t, _)| t.ends_with(" mm") && !t.starts_with("measurement"))
+        .unwrap_or_else(|| panic!("two points give a length: {texts:?}"));
+    assert!(is_dark_backing(&label.1), "{label:?}");
+    let length: f64 = label.0.trim_end_matches(" mm").parse().unwrap();
+    assert!(length > 0.0, "{label:?}");
+}
+
+/// The slices' captions (plane, voxel, window) lie where no crosshair line crosses them,
+/// inside their views (not cut), with the window's values in a few digits.
+#[test]
+fn slice_captions_are_clear_of_the_crosshair() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    h.step();
+    let crosshair = volux_viewer::slice_views::CROSSHAIR_COLOUR;
+    let mut lines = Vec::new();
+    let mut captions = Vec::new();
+    for clipped in &h.output().shapes {
+        match &clipped.shape {
+            egui::Shape::LineSegment { points, stroke } if stroke.color == crosshair => {
+                lines.push(egui::Rect::from_two_pos(points[0], points[1]).expand(0.5));
+            }
+            egui::Shape::Text(t) => {
+                let text = t.galley.text().to_string();
+                let window = text
+                    .strip_prefix("window ")
+                    .is_some_and(|v| v.starts_with(|c: char| c.is_ascii_digit() || c == '-'));
+                let caption = window
+                    || ["axial [", "coronal [", "sagittal ["]
+                        .iter()
+                        .any(|p| text.starts_with(p));
+                if caption {
+                    captions.push((text, t.visual_bounding_rect(), clipped.clip_rect));
+                }
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(lines.len(), 6, "two crosshair lines per view");
+    assert_eq!(captions.len(), 6, "a caption pair per view: {captions:?}");
+    for (text, rect, clip) in &captions {
+        assert!(!text.contains('…'), "{text} is cut short");
+        assert!(
+            clip.contains_rect(*rect),
+            "{text} is clipped: {rect:?} in {clip:?}"
+        );
+        for line in &lines {
+            assert!(!line.intersects(*rect), "a crosshair line crosses {text}");
+        }
+        if let Some(values) = text.strip_prefix("window ") {
+            // Marschner-Lobb spans about 0 to 1: three significant digits at most.
+            for v in values.split(" – ") {
+                let decimals = v.split('.').nth(1).map_or(0, str::len);
+                assert!(decimals <= 3, "{text}");
+                assert!(v.parse::<f64>().is_ok(), "{text}");
+            }
+        }
+    }
 }
