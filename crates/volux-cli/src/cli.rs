@@ -278,8 +278,10 @@ pub struct RenderArgs {
     #[arg(required_unless_present = "session")]
     pub file: Option<PathBuf>,
     /// Render a session saved by volux-view or `volux sculpt --session-out` (dataset,
-    /// camera, TF, method, size, background, clip planes and sculpt steps, replayed): the
-    /// viewer's picture, to the pixel; only -o goes with it.
+    /// camera, TF, method, size, background, clip planes and sculpt steps, replayed, with
+    /// its region labels and measurements): the viewer's picture, to the pixel; -o,
+    /// --backend, and for a figure --size, --zoom, --background and --sixteen-bit go with
+    /// it (each override said on stderr).
     #[arg(long, value_name = "S.json", conflicts_with = "file")]
     pub session: Option<PathBuf>,
     /// Output PNG [default: out.png, and it says so when it replaces a file].
@@ -356,6 +358,11 @@ pub struct RenderArgs {
     /// the CPU.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     pub backend: Backend,
+    /// Colour region labels: a label volume on the grid's voxels (integers 0 to 255, 0
+    /// unlabelled; e.g. written by `volux regions`), each label in its palette colour, the
+    /// opacity the transfer function's (grid ray casting, not MIP).
+    #[arg(long, value_name = "LABELS.nrrd")]
+    pub labels: Option<PathBuf>,
     /// Measure on the visible surface, as `volux measure` does, and draw it: pixel X,Y
     /// (at least two; a polyline in the order given) picked where the opacity along its ray
     /// reaches 0.5 after the clip planes and the mask; the points and the polyline are drawn

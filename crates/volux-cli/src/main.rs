@@ -26,6 +26,7 @@ macro_rules! out {
 mod applicable;
 mod cli;
 mod commands;
+mod label_file;
 mod mask_file;
 mod memory;
 mod messages;

@@ -38,7 +38,7 @@ pub fn parse_size(s: &str) -> Result<(usize, usize), CmdError> {
 }
 
 /// Parses `R,G,B` in 0..1 or `none`.
-fn parse_background(s: &str) -> Result<Option<[f32; 3]>, CmdError> {
+pub fn parse_background(s: &str) -> Result<Option<[f32; 3]>, CmdError> {
     if s.eq_ignore_ascii_case("none") {
         return Ok(None);
     }
@@ -469,6 +469,9 @@ impl RenderPlan {
         if let (Some(mask), Some(file)) = (&args.view_args.mask, &args.file) {
             // Before the camera: `--frame visible` frames what the mask leaves.
             crate::mask_file::add_mask(mask, volume, file, &mut scene)?;
+        }
+        if let (Some(labels), Some(file)) = (&args.labels, &args.file) {
+            crate::label_file::add_labels(labels, volume, file, &mut scene)?;
         }
         let resolved = scene.method.resolve(volume)?;
         crate::applicable::check_method(args, &resolved, loaded_grid)?;

@@ -244,3 +244,58 @@ fn a_store_renders_out_of_core_as_in_memory_and_a_bad_lod_writes_nothing() {
         assert!(!dir.join("bad.png").exists());
     }
 }
+
+/// A store rendered out of core and the same data in memory get the same picture with the
+/// default framing and automatic transfer function: the out-of-core path frames the voxels
+/// its chunks' recorded ranges and its brick cache show (not the whole box), and fits the
+/// preset on the full level's histogram the writer recorded (not a coarse level's).
+#[test]
+fn out_of_core_frames_and_fits_the_transfer_function_as_in_memory() {
+    use volux_core::grid::{Buffer, Samples};
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    // A ball off the centre of a 40 x 36 x 30 box, a ramp inside it.
+    let dims = [40usize, 36, 30];
+    let values: Vec<u16> = (0..dims.iter().product::<usize>())
+        .map(|n| {
+            let (i, j, k) = (n % 40, n / 40 % 36, n / (40 * 36));
+            let d =
+                ((i as f64 - 27.0).powi(2) + (j as f64 - 12.0).powi(2) + (k as f64 - 20.0).powi(2))
+                    .sqrt();
+            if d < 7.0 {
+                (1000.0 - 100.0 * d) as u16
+            } else {
+                0
+            }
+        })
+        .collect();
+    let grid = volux_core::Grid::new(
+        dims,
+        [1.0, 1.0, 1.5],
+        [3.0, -2.0, 0.0],
+        Samples::U16(Buffer::owned(values)),
+    )
+    .unwrap();
+    volux_io::nrrd::write(&grid, &dir.join("ball.nrrd")).unwrap();
+    ok(
+        &["convert", "ball.nrrd", "ball.ome.zarr", "--chunk", "8"],
+        dir,
+    );
+    let common = ["--size", "48x40", "--azimuth", "35", "--elevation", "20"];
+    ok(
+        &[
+            &["render", "ball.ome.zarr", "--lod", "0"],
+            &common[..],
+            &["-o", "bricked.png"],
+        ]
+        .concat(),
+        dir,
+    );
+    ok(
+        &[&["render", "ball.nrrd"], &common[..], &["-o", "incore.png"]].concat(),
+        dir,
+    );
+    let a = std::fs::read(dir.join("bricked.png")).unwrap();
+    let b = std::fs::read(dir.join("incore.png")).unwrap();
+    assert!(a == b, "the out-of-core PNG differs from the in-memory one");
+}

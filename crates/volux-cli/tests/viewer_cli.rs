@@ -106,3 +106,249 @@ fn a_session_renders_on_its_backend_unless_told_otherwise() {
     assert!(on_cpu.status.success(), "{err}");
     assert!(d.join("cpu.png").is_file());
 }
+
+/// Opaque grey where the box is, transparent elsewhere.
+const GREY_BOX_TF: &str = r#"{"color": [[0, 0.6, 0.6, 0.6], [1, 0.6, 0.6, 0.6]],
+    "extinction": [[0, 0], [0.4, 0], [0.5, 50], [1, 50]]}"#;
+
+/// A 24³ grid holding a box of 1 (voxels 6 to 17 on each axis) in 0, spacing 1: its front
+/// face (seen from -y) is the plane y = 6.
+fn boxed_grid() -> volux_core::Grid {
+    use volux_core::grid::{Buffer, Samples};
+    let n = 24;
+    let inside = |i: usize| (6..=17).contains(&i);
+    let values: Vec<u8> = (0..n * n * n)
+        .map(|v| u8::from(inside(v % n) && inside(v / n % n) && inside(v / (n * n))))
+        .collect();
+    volux_core::Grid::new(
+        [n; 3],
+        [1.0; 3],
+        [0.0; 3],
+        Samples::U8(Buffer::owned(values)),
+    )
+    .unwrap()
+}
+
+/// A session of the box seen from the front (orthographic, 40 x 30), opaque grey, with a
+/// region seed on the front face and a measurement across it (world x 8 to 15 at y = 6,
+/// z = 12: 7 mm), as the viewer saves them.
+fn boxed_session(d: &std::path::Path) {
+    use glam::DVec3;
+    use volux_core::camera::{Camera, Projection};
+    use volux_render::scene::Scene;
+    use volux_render::sculpt::SculptStep;
+    use volux_render::session::{DatasetRef, Session};
+    volux_io::nrrd::write(&boxed_grid(), &d.join("box.nrrd")).unwrap();
+    let camera = Camera {
+        eye: DVec3::new(11.5, -40.0, 11.5),
+        target: DVec3::new(11.5, 11.5, 11.5),
+        up: DVec3::Z,
+        projection: Projection::Orthographic { height: 30.0 },
+    };
+    let tf = volux_core::TransferFunction::from_json(GREY_BOX_TF).unwrap();
+    let scene = Scene::new(camera, 40, 30, tf);
+    let dataset = DatasetRef {
+        path: d.join("box.nrrd"),
+        ..Default::default()
+    };
+    let mut session = Session::new(dataset, &scene, None);
+    session.background = Some([0.0; 3]);
+    session.sculpt = vec![
+        SculptStep::Label {
+            point: DVec3::new(11.5, 6.0, 11.5),
+            label: 1,
+            colour: [0.9, 0.1, 0.1],
+        },
+        SculptStep::Measure {
+            point: DVec3::new(8.0, 6.0, 12.0),
+            new_line: true,
+        },
+        SculptStep::Measure {
+            point: DVec3::new(15.0, 6.0, 12.0),
+            new_line: false,
+        },
+    ];
+    session.save(&d.join("box.json")).unwrap();
+}
+
+/// `render --session` draws what the viewer shows: the region labels in their colour and
+/// the measurement line (its length printed), and renders larger or nearer for a figure
+/// with --size and --zoom, each said on stderr, the lines where the points are.
+#[test]
+fn a_session_renders_with_its_labels_and_measurements_and_larger_for_a_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    boxed_session(d);
+    let out = volux(&["render", "--session", "box.json", "-o", "s.png"], d);
+    let (text, err) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{err}");
+    assert!(text.contains("length: 7.000"), "{text}");
+    // 30 world units over 30 pixels, the box's middle (11.5, 11.5) at the image's middle:
+    // world x = 11.5 + (px + 0.5 - 20), z = 11.5 - (py + 0.5 - 15).
+    let (w, h, px) = common::png_pixels(&d.join("s.png"));
+    assert_eq!((w, h), (40, 30));
+    let at = |px: &[Vec<u8>], w: u32, x: u32, y: u32| px[(y * w + x) as usize].clone();
+    // The labelled face is red, away from the line.
+    let face = at(&px, w, 20, 18);
+    assert!(
+        face[0] > 2 * face[1] && face[0] > 100,
+        "label colour: {face:?}"
+    );
+    // The line at z = 12 (row 14), x from 8 to 15 (columns 16 to 23): yellow.
+    let line = at(&px, w, 20, 14);
+    assert!(
+        line[0] > 180 && line[1] > 140 && line[2] < 90,
+        "line: {line:?}"
+    );
+    // Twice the size: the same view, the line where its points are.
+    let out = volux(
+        &[
+            "render",
+            "--session",
+            "box.json",
+            "--size",
+            "80x60",
+            "-o",
+            "big.png",
+        ],
+        d,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("--size 80x60 replaces the session's 40x30"),
+        "{err}"
+    );
+    let (w, h, px) = common::png_pixels(&d.join("big.png"));
+    assert_eq!((w, h), (80, 60));
+    let line = at(&px, w, 40, 28);
+    assert!(
+        line[0] > 180 && line[1] > 140 && line[2] < 90,
+        "big line: {line:?}"
+    );
+    let face = at(&px, w, 40, 36);
+    assert!(
+        face[0] > 2 * face[1] && face[0] > 100,
+        "big label colour: {face:?}"
+    );
+    // Zoomed twice: column 10 (world x 2 unzoomed, 6.75 zoomed) moves onto the box.
+    let out = volux(
+        &[
+            "render",
+            "--session",
+            "box.json",
+            "--zoom",
+            "2",
+            "-o",
+            "near.png",
+        ],
+        d,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && err.contains("--zoom 2 zooms"),
+        "{err}"
+    );
+    let (_, _, plain) = common::png_pixels(&d.join("s.png"));
+    let (_, _, near) = common::png_pixels(&d.join("near.png"));
+    assert!(
+        plain[15 * 40 + 10][0] < 20,
+        "unzoomed, column 10 is background"
+    );
+    assert!(
+        near[15 * 40 + 10][0] > 50,
+        "zoomed, the box fills column 10"
+    );
+}
+
+/// `render --labels` colours a label volume on the data's voxels; one on other voxels, or
+/// with values that are not labels, or under MIP, is one clear line and no picture.
+#[test]
+fn render_colours_a_label_volume_and_refuses_one_that_does_not_fit() {
+    use volux_core::grid::{Buffer, Samples};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let g = boxed_grid();
+    volux_io::nrrd::write(&g, &d.join("box.nrrd")).unwrap();
+    std::fs::write(d.join("grey.json"), GREY_BOX_TF).unwrap();
+    // Label 2 on the left half of the box (x < 12), nothing elsewhere.
+    let labels: Vec<u8> = (0..24 * 24 * 24)
+        .map(|v| {
+            if g.value(v % 24, v / 24 % 24, v / 576) > 0.5 && v % 24 < 12 {
+                2
+            } else {
+                0
+            }
+        })
+        .collect();
+    let label_grid = |values: Samples, spacing: f64| {
+        volux_core::Grid::new([24; 3], [spacing; 3], [0.0; 3], values).unwrap()
+    };
+    let write = |name: &str, grid: &volux_core::Grid| {
+        volux_io::nrrd::write(grid, &d.join(name)).unwrap();
+    };
+    write(
+        "l.nrrd",
+        &label_grid(Samples::U8(Buffer::owned(labels.clone())), 1.0),
+    );
+    write(
+        "far.nrrd",
+        &label_grid(Samples::U8(Buffer::owned(labels)), 2.0),
+    );
+    write(
+        "half.nrrd",
+        &label_grid(Samples::F32(Buffer::owned(vec![0.5; 24 * 24 * 24])), 1.0),
+    );
+    let args = |labels: &str, out: &str| -> Vec<String> {
+        [
+            "render",
+            "box.nrrd",
+            "--view",
+            "-y",
+            "--tf",
+            "grey.json",
+            "--size",
+            "40x40",
+            "--labels",
+            labels,
+            "-o",
+            out,
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let run = |a: &[String]| volux(&a.iter().map(String::as_str).collect::<Vec<_>>(), d);
+    let out = run(&args("l.nrrd", "l.png"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (w, _, px) = common::png_pixels(&d.join("l.png"));
+    // Seen from -y, +x runs to the right: the left half is label 2's colour (light blue).
+    let (left, right) = (&px[(20 * w + 14) as usize], &px[(20 * w + 25) as usize]);
+    assert!(left[2] > left[0] + 40, "label 2 on the left: {left:?}");
+    assert!(
+        (right[2] as i32 - right[0] as i32).abs() < 30,
+        "no label on the right: {right:?}"
+    );
+    let mut mip = args("l.nrrd", "mip.png");
+    mip.push("--mip".into());
+    for (a, expected, png) in [
+        (args("far.nrrd", "far.png"), "do not lie on", "far.png"),
+        (args("half.nrrd", "half.png"), "not a label", "half.png"),
+        (mip, "MIP", "mip.png"),
+    ] {
+        let out = run(&a);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(expected),
+            "{a:?}: {err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(!d.join(png).exists());
+    }
+}

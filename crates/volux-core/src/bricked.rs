@@ -10,6 +10,7 @@ use glam::DVec3;
 
 use crate::error::{Error, Result};
 use crate::grid::{Buffer, Grid, Samples, ScalarType};
+use crate::histogram::{Histogram, STORED_BINS};
 
 /// The geometry of a chunked level: samples per axis, chunk shape, voxel spacing and origin
 /// (world units, axis-aligned), and the scalar type of its samples.
@@ -138,6 +139,14 @@ pub trait ChunkSource: Send + Sync {
     fn value_range(&self) -> Option<[f64; 2]> {
         None
     }
+
+    /// The histogram of the level's samples over [`ChunkSource::value_range`] in
+    /// [`STORED_BINS`] bins, when known without reading the level (Volux's OME-Zarr writer
+    /// records it): the transfer-function presets then fit a store read out of core as
+    /// they fit the same data held whole.
+    fn value_histogram(&self) -> Option<Histogram> {
+        None
+    }
 }
 
 /// A pyramid of levels, level 0 at full resolution; each next level halves the samples per
@@ -263,6 +272,10 @@ impl ChunkSource for GridChunks {
 
     fn value_range(&self) -> Option<[f64; 2]> {
         Some(self.grid.range())
+    }
+
+    fn value_histogram(&self) -> Option<Histogram> {
+        Some(Histogram::of_grid(&self.grid, STORED_BINS))
     }
 }
 

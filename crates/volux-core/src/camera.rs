@@ -269,6 +269,23 @@ impl Camera {
         Ok(())
     }
 
+    /// The camera zoomed by `zoom` about its target, as [`CameraSpec::zoom`] zooms: a
+    /// perspective eye `zoom` times nearer, an orthographic view `zoom` times narrower (its
+    /// eye stays, so that rays still start outside the data).
+    pub fn zoomed(&self, zoom: f64) -> Result<Self> {
+        if !(zoom.is_finite() && zoom > 0.0) {
+            return Err(Error::InvalidCamera(format!("zoom {zoom} must be > 0")));
+        }
+        let mut out = *self;
+        match &mut out.projection {
+            Projection::Perspective { .. } => {
+                out.eye = self.target + (self.eye - self.target) / zoom;
+            }
+            Projection::Orthographic { height } => *height /= zoom,
+        }
+        Ok(out)
+    }
+
     /// Orthonormal camera basis (right, true up, forward).
     pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
         let f = (self.target - self.eye).normalize();
@@ -331,6 +348,39 @@ mod tests {
             min: DVec3::ZERO,
             max: DVec3::ONE,
         }
+    }
+
+    #[test]
+    fn zooming_a_camera_is_zooming_its_spec() {
+        for projection in [None, Some("orthographic".to_string())] {
+            let spec = |zoom| CameraSpec {
+                projection: projection.clone(),
+                azimuth: Some(30.0),
+                zoom: Some(zoom),
+                ..CameraSpec::default()
+            };
+            let plain = spec(1.0).resolve(&unit_box()).unwrap();
+            let want = spec(2.5).resolve(&unit_box()).unwrap();
+            let got = plain.zoomed(2.5).unwrap();
+            // An orthographic picture does not depend on the eye's distance: the eye stays
+            // (outside the data), where the spec moves it nearer.
+            let eye = if projection.is_some() {
+                plain.eye
+            } else {
+                want.eye
+            };
+            assert!((got.eye - eye).length() < 1e-9, "{projection:?}");
+            assert_eq!(got.target, want.target);
+            match (got.projection, want.projection) {
+                (
+                    Projection::Orthographic { height: a },
+                    Projection::Orthographic { height: b },
+                ) => assert!((a - b).abs() < 1e-12),
+                (a, b) => assert_eq!(a, b),
+            }
+        }
+        assert!(Camera::fit(&unit_box()).zoomed(0.0).is_err());
+        assert!(Camera::fit(&unit_box()).zoomed(f64::NAN).is_err());
     }
 
     #[test]

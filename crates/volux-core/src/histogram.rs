@@ -3,6 +3,10 @@ use crate::grid::{Grid, Scalar};
 use crate::with_samples;
 use rayon::prelude::*;
 
+/// The bins of the histogram a store records beside its range (a chunk source's
+/// `value_histogram`), as many as the transfer-function presets are fitted on.
+pub const STORED_BINS: usize = 256;
+
 /// A histogram of `counts.len()` equal bins over `[min, max]`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Histogram {

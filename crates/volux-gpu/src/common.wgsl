@@ -30,7 +30,9 @@ struct Params {
     spacing: vec4<f32>,
     // xyz: macrocells per axis; w: pre-integration table entries per axis.
     cells: vec4<u32>,
-    // x: the pre-integration table's scale; y: the jitter-free first lattice offset (0).
+    // x: the pre-integration table's scale; y: the jitter-free first lattice offset (0);
+    // z: the depth behind a clip plane lit with its normal (world units); w: the length
+    // given to a cut's normal (`CutFaces`).
     extra: vec4<f32>,
 };
 

@@ -1,8 +1,8 @@
 // The field and its lighting, shared by the ray caster (`raycast.wgsl`) and texture slicing
 // (`slicing.wgsl`), each appended after `common.wgsl` and this file and declaring the
 // bindings `volume`, `mask_bits` and `gradients` these functions read: the trilinear sample,
-// the sculpt mask (seed `004` §4.4.1), gradients (the gradient volume or on the fly) and
-// Blinn-Phong shading (`002` §4.6).
+// the sculpt mask (seed `004` §4.4.1), gradients (the gradient volume or on the fly),
+// Blinn-Phong shading (`002` §4.6) and the cut faces lit with the cut's normal (`004` §4).
 
 // The features a pipeline draws (the flags below), fixed when the pipeline is created, so
 // that the driver compiles out what a frame does not use (lavapipe ran the plain Riemann sum
@@ -16,6 +16,7 @@ const SKIP: u32 = 8u;
 const JITTER: u32 = 16u;
 const ISO_LIT: u32 = 32u;
 const ISOSURFACES: u32 = 64u;
+const CUTS: u32 = 128u;
 
 fn flag(f: u32) -> bool {
     return (FLAGS & f) != 0u;
@@ -51,8 +52,8 @@ fn kept(v: vec3<u32>) -> f32 {
     return f32((mask_bits[i >> 5u] >> (i & 31u)) & 1u);
 }
 
-// `SculptMask::visible`: the cell's kept corners blended at the point, at least 0.5.
-fn visible(q: vec3<f32>) -> bool {
+// `SculptMask::value`: the cell's kept corners blended at the point.
+fn mask_value(q: vec3<f32>) -> f32 {
     let n = params.dims.xyz;
     let hi = vec3<f32>(n - vec3<u32>(1u));
     let x = clamp(q, vec3<f32>(0.0), hi);
@@ -65,7 +66,12 @@ fn visible(q: vec3<f32>) -> bool {
     let x10 = mix(kept(vec3<u32>(lo.x, up.y, lo.z)), kept(vec3<u32>(up.x, up.y, lo.z)), f.x);
     let x01 = mix(kept(vec3<u32>(lo.x, lo.y, up.z)), kept(vec3<u32>(up.x, lo.y, up.z)), f.x);
     let x11 = mix(kept(vec3<u32>(lo.x, up.y, up.z)), kept(up), f.x);
-    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z) >= 0.5;
+    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+}
+
+// `SculptMask::visible`: the interpolated mask at least 0.5.
+fn visible(q: vec3<f32>) -> bool {
+    return mask_value(q) >= 0.5;
 }
 
 // The field: the trilinear sample, undefined where the mask hides the point.
@@ -179,12 +185,72 @@ fn shade(rgb: vec3<f32>, g: vec3<f32>, view: vec3<f32>) -> vec3<f32> {
     return rgb * k + vec3<f32>(params.phong.z * specular);
 }
 
+// Whether q's cell has kept and removed corners (`SculptMask::cut_gradient` is some).
+fn cell_cut(q: vec3<f32>) -> bool {
+    let n = params.dims.xyz;
+    let hi = vec3<f32>(n - vec3<u32>(1u));
+    let x = clamp(q, vec3<f32>(0.0), hi);
+    let top = vec3<f32>(max(n, vec3<u32>(2u)) - vec3<u32>(2u));
+    let lo = vec3<u32>(min(floor(x), top));
+    let up = min(lo + vec3<u32>(1u), n - vec3<u32>(1u));
+    let sum = kept(lo) + kept(vec3<u32>(up.x, lo.y, lo.z)) + kept(vec3<u32>(lo.x, up.y, lo.z))
+        + kept(vec3<u32>(up.x, up.y, lo.z)) + kept(vec3<u32>(lo.x, lo.y, up.z))
+        + kept(vec3<u32>(up.x, lo.y, up.z)) + kept(vec3<u32>(lo.x, up.y, up.z)) + kept(up);
+    return sum > 0.0 && sum < 8.0;
+}
+
+// `cut_faces::mask_differences`: the central differences of the interpolated mask at one
+// voxel on either side of q along each axis, per voxel.
+fn mask_differences(q: vec3<f32>) -> vec3<f32> {
+    var g = vec3<f32>(0.0);
+    for (var a = 0; a < 3; a++) {
+        var lo = q;
+        var hi = q;
+        lo[a] -= 1.0;
+        hi[a] += 1.0;
+        g[a] = 0.5 * (mask_value(hi) - mask_value(lo));
+    }
+    return g;
+}
+
+// `CutFaces::lighting_gradient` (seed `004` sec. 4): behind the nearest clip plane within the
+// layer (`params.extra.z` world units), the plane's normal; where the sculpt mask's cell is
+// cut, the interpolated mask's gradient; each of length `params.extra.w` (above the
+// threshold); else the field's gradient g.
+fn lighting_gradient(q: vec3<f32>, g: vec3<f32>) -> vec3<f32> {
+    if (!flag(CUTS)) {
+        return g;
+    }
+    let x = params.origin.xyz + q * params.spacing.xyz;
+    var best = params.extra.z;
+    var normal = vec3<f32>(0.0);
+    for (var k = 0u; k < params.dims.w; k++) {
+        let pl = frame[k];
+        let d = dot(pl.xyz, x) + pl.w;
+        if (d >= 0.0 && d < best) {
+            best = d;
+            normal = pl.xyz;
+        }
+    }
+    if (flag(MASK) && all(normal == vec3<f32>(0.0)) && cell_cut(q)) {
+        let m = mask_differences(q) * params.inv_spacing.xyz;
+        let len = length(m);
+        if (len > 0.0) {
+            normal = m / len;
+        }
+    }
+    if (all(normal == vec3<f32>(0.0))) {
+        return g;
+    }
+    return normal * params.extra.w;
+}
+
 // A premultiplied entry e lit at q (its colour e.rgb / e.a).
 fn lit(e: vec4<f32>, q: vec3<f32>, view: vec3<f32>) -> vec4<f32> {
     if (!flag(SHADE) || !(e.w > 0.0)) {
         return e;
     }
-    let c = shade(e.xyz / e.w, gradient_at(q), view);
+    let c = shade(e.xyz / e.w, lighting_gradient(q, gradient_at(q)), view);
     return vec4<f32>(c * e.w, e.w);
 }
 

@@ -180,6 +180,7 @@ impl GpuGridRenderer {
         let mut flags = flags::SKIP;
         let to_world = self.res.prepare_gradients(opts, &mut flags)?;
         self.res.prepare_mask(opts, &mut flags)?;
+        flags |= flags::cuts(opts, flags);
         if opts.jitter {
             flags |= flags::JITTER;
         }

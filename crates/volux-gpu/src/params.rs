@@ -3,8 +3,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 use volux_core::camera::Projection;
-use volux_render::raycast::{local_clip_planes, Placement, RenderOptions};
-use volux_render::shading::Light;
+use volux_render::raycast::{cut_layer, local_clip_planes, Placement, RenderOptions};
+use volux_render::shading::{CutFaces, Light};
 
 use crate::tables::Tables;
 
@@ -46,6 +46,20 @@ pub(crate) mod flags {
     pub(crate) const ISO_LIT: u32 = 32;
     /// Isosurfaces are drawn.
     pub(crate) const ISOSURFACES: u32 = 64;
+    /// The faces clip planes and the mask expose are lit with the cut's normal.
+    pub(crate) const CUTS: u32 = 128;
+
+    /// [`CUTS`] when `opts` lights volume samples (`flags` has [`SHADE`]) and something cuts
+    /// the volume (a clip plane, or a sculpt mask: [`MASK`]), as
+    /// [`CutFaces`](volux_render::shading::CutFaces) decides on the CPU.
+    pub(crate) fn cuts(opts: &volux_render::raycast::RenderOptions, flags: u32) -> u32 {
+        let cut = !opts.clip_planes.is_empty() || flags & MASK != 0;
+        if flags & SHADE != 0 && cut {
+            CUTS
+        } else {
+            0
+        }
+    }
 }
 
 /// What a frame draws besides the camera: the tables, the gradient volume's units per
@@ -115,7 +129,12 @@ impl Params {
             gradient: [gx, gy, gz, model.min_gradient],
             spacing: v4(place.spacing, pre_lo),
             cells: [cx, cy, cz, pre_n as u32],
-            extra: [pre_scale, 0.0, 0.0, 0.0],
+            extra: [
+                pre_scale,
+                0.0,
+                cut_layer(opts, place) as f32,
+                CutFaces::strength(&model),
+            ],
         }
     }
 }

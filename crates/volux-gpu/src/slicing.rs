@@ -20,7 +20,7 @@ use wgpu::util::DeviceExt;
 
 use crate::context::GpuContext;
 use crate::error::GpuError;
-use crate::params::{frame_data, Drawn, Params};
+use crate::params::{flags, frame_data, Drawn, Params};
 use crate::resident::Resident;
 use crate::slices::{slice_triangles, Sweep};
 use crate::target::{read_target, target};
@@ -168,6 +168,7 @@ impl GpuSlicingRenderer {
         let mut flags = 0;
         let to_world = self.res.prepare_gradients(opts, &mut flags)?;
         self.res.prepare_mask(opts, &mut flags)?;
+        flags |= flags::cuts(opts, flags);
         let pipeline = self.pipeline(flags)?;
         let Some(tables) = &self.res.tables else {
             return Err(GpuError::Failed("no classification tables".into()));

@@ -197,6 +197,52 @@ fn the_sculpt_mask_equals_the_cpu_engines() {
     check(&mut gpu, &g, "masked preintegration", &pre, 1e-4);
 }
 
+/// The faces a clip plane and the sculpt mask expose, lit with the cut's normal
+/// (`CutFaces`, whose lighting the CPU engine's tests check against Blinn-Phong with the
+/// cut's normal), shaded Riemann and pre-integration: mean under 1/255, and a bound of 0.25
+/// on the few pixels whose sample lies within f32 rounding of the lit layer's depth, which
+/// the GPU (world positions in f32) and the CPU (voxel-space planes) may put on either side.
+#[test]
+fn cut_faces_lit_with_the_cuts_normal_equal_the_cpu_engine() {
+    use glam::DVec3;
+    use volux_core::voi::ClipPlane;
+    let Some(ctx) = context() else { return };
+    let g = Arc::new(grid());
+    let mut gpu = GpuGridRenderer::new(ctx, g.clone()).unwrap();
+    let [nx, ny, nz] = g.dims();
+    let mut kept = vec![1u8; nx * ny * nz];
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let d = [i as f64 - 24.0, j as f64 - 10.0, k as f64 - 14.0];
+                if d.iter().map(|d| d * d).sum::<f64>() < 49.0 {
+                    kept[i + nx * (j + ny * k)] = 0;
+                }
+            }
+        }
+    }
+    let centre = g.bounds().center();
+    let normal = DVec3::new(-0.6, 0.8, 0.2).normalize();
+    for camera in CAMERAS {
+        let mut s = scene(&g, camera, 0.5);
+        s.appearance.shade_volume = true;
+        s.clip_planes = vec![ClipPlane {
+            normal,
+            offset: -normal.dot(centre),
+        }];
+        s.mask = Some(Arc::new(SculptMask::from_values(g.dims(), &kept).unwrap()));
+        check(&mut gpu, &g, &format!("cut faces {camera}"), &s, 0.25);
+        let pre = with_integrator(s, Integrator::Preintegrated { step: 0.5 });
+        check(
+            &mut gpu,
+            &g,
+            &format!("cut faces preintegrated {camera}"),
+            &pre,
+            0.25,
+        );
+    }
+}
+
 /// Empty-space skipping over the macrocells: with a TF transparent below 72 most of the
 /// grid is skipped, the picture is the CPU's (max 1e-4) and the rays take fewer samples than
 /// with a TF that leaves no macrocell empty.

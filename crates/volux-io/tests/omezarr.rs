@@ -66,8 +66,9 @@ fn ome_zarr_py_fixtures_read_with_the_formula_spacing_and_origin() {
         let v1 = read_level(levels[1].as_ref());
         // (x, y, z) = (1, 2, 1) of level 1 is (2, 4, 2) of level 0.
         assert_eq!(v1[1 + 5 * (2 + 4)], (2 + 40 + 200) as f64);
-        // Foreign stores carry no ranges.
+        // Foreign stores carry no ranges, nor a histogram.
         assert_eq!(levels[0].chunk_range([0, 0, 0]), None);
+        assert_eq!(levels[0].value_histogram(), None);
         // Through the loader, as an in-core grid, at either level.
         let (d, f) = volux_io::load(&data(name), &LoadOptions::default()).unwrap();
         assert_eq!(f, volux_io::Format::OmeZarr);
@@ -172,6 +173,16 @@ fn round_trip_of_odd_anisotropic_volumes_equals_the_source() {
             assert_eq!(*x, g.samples().get_f32(i) as f64);
         }
         assert_eq!(l0.value_range(), Some(g.range()));
+        // The full level's histogram is recorded: the in-core grid's, bin for bin; coarser
+        // levels record none.
+        assert_eq!(
+            l0.value_histogram(),
+            Some(volux_core::histogram::Histogram::of_grid(
+                &g,
+                volux_core::histogram::STORED_BINS
+            ))
+        );
+        assert_eq!(store.multiscale.levels()[1].value_histogram(), None);
         // Per-chunk ranges are those of the chunk's samples.
         let c = [2, 1, 2];
         let s = l0.read_chunk(c).unwrap();

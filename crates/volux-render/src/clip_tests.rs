@@ -20,6 +20,7 @@ use crate::scene::{GridRaycast, Method, Scene};
 use crate::tetray::{TetRayCaster, TetRayOptions};
 use crate::tiles::Control;
 
+mod cut_faces;
 mod mesh;
 
 /// A constant field over `[0, 7]^3`.

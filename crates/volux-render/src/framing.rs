@@ -10,6 +10,7 @@ use volux_core::sculpt::SculptMask;
 use volux_core::voi::{ClipPlane, ConvexVoi};
 use volux_core::{Aabb, Camera, Grid, Projection, TetMesh};
 
+use crate::bricked::BrickedVolume;
 use crate::classify::ClassifyTable;
 use crate::macrocell::MacrocellGrid;
 use crate::scene::{Appearance, Scene, Volume};
@@ -280,12 +281,69 @@ pub fn visible_bounds(volume: &Volume, appearance: &Appearance) -> Result<Aabb, 
     let found = match volume {
         Volume::Grid(g) => cut_cells_box(g, visible, &[], None),
         Volume::Mesh(m) => mesh_box(m, visible),
-        // The chunks' ranges are not all known without reading them: the whole box.
-        Volume::Bricked(b, _) => Some(b.bounds()),
+        Volume::Bricked(b, _) => bricked_box(b, visible),
     };
     found.ok_or_else(|| Invisible::Transparent {
         range,
         opaque: opaque_span(&appearance.effective_tf().resolved(range)),
+    })
+}
+
+/// The world box of the voxel cells of a bricked volume's full level that hold visible
+/// values, as [`cut_cells_box`] finds it in a grid held whole, so that a store framed out of
+/// core is framed as the same data in memory: the chunks whose recorded ranges (widened by
+/// their neighbours' first samples, [`BrickedVolume::chunk_cells`]) are visible give the
+/// box, which [`tighten`] shrinks to the voxel cells, reading the full level's samples
+/// through its brick cache (the chunks on the box's faces, within the memory budget). The
+/// whole box when the store records no chunk ranges (a foreign store: finding them would
+/// read it all); `None` when no chunk is visible.
+fn bricked_box(b: &BrickedVolume, visible: impl Fn(f32, f32) -> bool) -> Option<Aabb> {
+    let (Some(cells), Some(cache)) = (b.chunk_cells(0), b.cache(0)) else {
+        return Some(b.bounds());
+    };
+    let layout = cache.layout().clone();
+    let (dims, chunk) = (layout.dims, layout.chunk);
+    let mut lo = [usize::MAX; 3];
+    let mut hi = [0usize; 3];
+    for (m, r) in cells.ranges().iter().enumerate() {
+        if !(r[0].is_finite() && visible(r[0], r[1])) {
+            continue;
+        }
+        let c = layout.chunk_coords(m);
+        for a in 0..3 {
+            lo[a] = lo[a].min(c[a] * chunk[a]);
+            hi[a] = hi[a].max(((c[a] + 1) * chunk[a]).min(dims[a] - 1));
+        }
+    }
+    if lo[0] == usize::MAX {
+        return None;
+    }
+    // A sample through the cache; a chunk that cannot be read counts as visible (the box
+    // stays larger, never cuts data away).
+    let sample = |v: [usize; 3]| -> Option<f32> {
+        let c: [usize; 3] = std::array::from_fn(|a| v[a] / chunk[a]);
+        cache.get(c).ok().map(|brick| brick.at(v[0], v[1], v[2]))
+    };
+    let cell_shown = |c: [usize; 3]| {
+        let (mut vlo, mut vhi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for o in 0..8 {
+            let corner = [c[0] + (o & 1), c[1] + ((o >> 1) & 1), c[2] + (o >> 2)];
+            let Some(v) = sample(corner) else {
+                return true;
+            };
+            vlo = vlo.min(v);
+            vhi = vhi.max(v);
+        }
+        vlo.is_finite() && visible(vlo, vhi)
+    };
+    if dims.iter().all(|&d| d > 1) {
+        tighten(&mut lo, &mut hi, cell_shown);
+    }
+    let (origin, spacing) = (layout.origin_vec(), layout.spacing_vec());
+    let at = |i: [usize; 3]| origin + spacing * DVec3::from(i.map(|v| v as f64));
+    Some(Aabb {
+        min: at(lo).min(at(hi)),
+        max: at(lo).max(at(hi)),
     })
 }
 

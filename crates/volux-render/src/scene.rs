@@ -517,6 +517,19 @@ impl Scene {
         }
     }
 
+    /// Why this scene cannot draw region labels ([`Scene::labels`]), when it cannot: MIP
+    /// shows the transfer function's colours, and the mesh renderers draw no labels. Every
+    /// front end says this rather than dropping the labels without a word.
+    pub fn labels_not_drawn(&self) -> Option<&'static str> {
+        if self.appearance.mip {
+            Some("labels colour the composited rendering; MIP shows the TF's colours")
+        } else if self.method.draws_tets() {
+            Some("labels colour grid ray casting, not the tetrahedra")
+        } else {
+            None
+        }
+    }
+
     /// Checks what does not depend on the volume: image size, camera, transfer function,
     /// lighting, early termination.
     pub fn validate(&self) -> Result<(), RenderError> {

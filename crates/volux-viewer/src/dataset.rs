@@ -132,9 +132,9 @@ pub fn load(source: &DatasetRef) -> Result<Loaded, String> {
     Ok(loaded)
 }
 
-/// Opens an OME-Zarr store out of core, within the memory budget.
+/// Opens an OME-Zarr store out of core, its bricks cached within the cache budget.
 fn load_store(source: &DatasetRef) -> Result<Loaded, String> {
-    let store = crate::store::open(source, volux_core::limits::memory_budget())?;
+    let store = crate::store::open(source, crate::store::cache_budget())?;
     Ok(Loaded {
         source: source.clone(),
         format: Format::OmeZarr,

@@ -41,12 +41,6 @@ impl LabelColours {
     /// Why `scene` cannot draw labels, when it cannot: MIP shows the transfer function's
     /// colours, and the mesh renderers draw no labels.
     pub fn not_drawn(scene: &Scene) -> Option<&'static str> {
-        if scene.appearance.mip {
-            Some("labels colour the composited rendering; MIP shows the TF's colours")
-        } else if scene.method.draws_tets() {
-            Some("labels colour grid ray casting, not the tetrahedra")
-        } else {
-            None
-        }
+        scene.labels_not_drawn()
     }
 }

@@ -31,7 +31,8 @@ struct Args {
     #[arg(long, value_name = "auto|N", default_value = "auto")]
     lod: String,
     /// The memory budget of an OME-Zarr store's brick cache (4G, 512M, 50%); default: a
-    /// quarter of the available memory, as the CLI's.
+    /// quarter of the available memory, as the CLI's. The images and slices are not counted
+    /// in it: a small cache shows the coarse level first and refines, reading chunks again.
     #[arg(long, value_name = "SIZE")]
     memory_budget: Option<String>,
     /// Where frames are rendered: auto (the GPU when there is an adapter and it draws the
@@ -85,8 +86,7 @@ fn run(args: Args) -> Result<(), String> {
     let size = args.size.as_deref().map(parse_size).transpose()?;
     let lod = volux_viewer::store::parse_lod(&args.lod)?;
     if let Some(b) = &args.memory_budget {
-        let bytes = volux_viewer::store::parse_budget(b)?;
-        volux_core::limits::set_memory_budget(bytes).map_err(|e| e.to_string())?;
+        volux_viewer::store::set_cache_budget(volux_viewer::store::parse_budget(b)?);
     }
     if let Some(p) = &args.screenshot {
         volux_viewer::png_path(p)?;

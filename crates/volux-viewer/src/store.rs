@@ -1,8 +1,10 @@
 //! OME-Zarr stores in the viewer (issue 19): a store is opened as a bricked volume
-//! ([`Volume::Bricked`]) read chunk by chunk within the memory budget (a quarter of RAM, as
-//! the CLI's, [`volux_core::limits::memory_budget`]), never its full level at once; the
+//! ([`Volume::Bricked`]) read chunk by chunk within the brick-cache budget ([`cache_budget`]:
+//! `--memory-budget`, else a quarter of RAM as the CLI's,
+//! [`volux_core::limits::memory_budget`]), never its full level at once; the
 //! render thread refines it level by level ([`crate::progressive`]). The slice views cut a
 //! coarse level read whole (at most [`SLICE_SAMPLES`] samples), which the panel notes.
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use volux_core::bricked::ChunkSource;
@@ -14,6 +16,27 @@ use volux_render::scene::Volume;
 use volux_render::session::DatasetRef;
 
 use crate::slices::SliceVolume;
+
+/// The brick caches' budget set by `--memory-budget` (0: not set).
+static CACHE_BUDGET: AtomicU64 = AtomicU64::new(0);
+
+/// Sets the memory budget of the stores' brick caches (`volux-view --memory-budget`): the
+/// caches only. The frames' images, the slices and every other allocation keep the process's
+/// budget ([`volux_core::limits::memory_budget`]), so that a small cache still shows the
+/// coarse level first and refines (reading chunks again as it must), instead of refusing
+/// the view's image. 0 goes back to the process's budget.
+pub fn set_cache_budget(bytes: u64) {
+    CACHE_BUDGET.store(bytes, Ordering::Relaxed);
+}
+
+/// The stores' brick-cache budget: the one set ([`set_cache_budget`]), else the process's
+/// memory budget.
+pub fn cache_budget() -> u64 {
+    match CACHE_BUDGET.load(Ordering::Relaxed) {
+        0 => volux_core::limits::memory_budget(),
+        set => set,
+    }
+}
 
 /// The most samples of the level the slice views cut (128^3: 8 MiB of f32).
 pub const SLICE_SAMPLES: usize = 1 << 21;

@@ -63,6 +63,9 @@ fn print_text(
             p.z
         )?;
     }
+    if points.len() < 2 {
+        return Ok(());
+    }
     outln!(
         "length: {length:.3} {unit} ({} segment{})",
         points.len() - 1,
@@ -127,6 +130,29 @@ impl Drawn {
             length,
             unit: grid.unit().to_string(),
         }))
+    }
+
+    /// The measurements a session holds (its polylines of world points, as the viewer
+    /// picked them) seen in `scene`: each point projected to its pixel, so that a session
+    /// rendered larger or zoomed draws its lines where the points are.
+    pub fn of_session(lines: &[Vec<DVec3>], scene: &Scene, unit: &str) -> Vec<Self> {
+        let (w, h) = (scene.view.width, scene.view.height);
+        lines
+            .iter()
+            .filter(|points| !points.is_empty())
+            .map(|points| Self {
+                pixels: points
+                    .iter()
+                    .map(|&p| {
+                        let (x, y, _) = scene.view.camera.project(p, w, h);
+                        [x, y]
+                    })
+                    .collect(),
+                points: points.clone(),
+                length: polyline_length(points),
+                unit: unit.to_string(),
+            })
+            .collect()
     }
 
     /// Draws the points and the polyline on `image`.

@@ -3,18 +3,35 @@
 //! method and every setting, background, clip planes and sculpt steps, seed `004`), so
 //! nothing is taken from defaults that could differ, and the PNG equals the viewer's
 //! screenshot of the same session. The sculpt steps are replayed on the grid to rebuild
-//! its mask ([`Session::scene_on`]). It renders on the session's backend (`auto`, `cpu`,
-//! `gpu`; the CPU when it names none) unless `--backend` is given.
+//! its mask ([`Session::scene_on`]), its region labels are coloured and its measurements
+//! drawn and printed, as the viewer shows them. `--size`, `--zoom`, `--background` and
+//! `--sixteen-bit` override the session for a figure (larger, nearer), each said on stderr.
+//! It renders on the session's backend (`auto`, `cpu`, `gpu`; the CPU when it names none)
+//! unless `--backend` is given.
 use std::path::Path;
+use std::sync::Arc;
 
-use volux_render::scene::Volume;
+use volux_core::image::PngOptions;
+use volux_core::Grid;
+use volux_render::scene::{Scene, Volume};
+use volux_render::sculpt::Sculpt;
 use volux_render::session::{Session, SessionBackend};
 
 use super::common::CmdError;
+use super::measure::Drawn;
 use crate::cli::{Backend, LoadArgs, RenderArgs};
 
-/// Options that may go with `--session` (the rest is in the session).
-const WITH_SESSION: [&str; 3] = ["session", "output", "backend"];
+/// Options that may go with `--session`: where the picture goes and renders, and what
+/// changes its size or look without changing the scene (each override is said on stderr).
+const WITH_SESSION: [&str; 7] = [
+    "session",
+    "output",
+    "backend",
+    "size",
+    "zoom",
+    "background",
+    "sixteen-bit",
+];
 
 /// Where the session renders: `--backend` when given, else the session's backend, else the
 /// CPU engine (the reference, as sessions saved before backends existed were rendered).
@@ -29,7 +46,8 @@ fn backend(args: &RenderArgs, session: &Session) -> Backend {
     }
 }
 
-/// Renders the session at `path` to `args.output()`.
+/// Renders the session at `path` to `args.output()`: its scene with the overrides given,
+/// its region labels coloured and its measurements drawn, as the viewer shows them.
 pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
     if let Some(o) = args
         .given
@@ -37,8 +55,9 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
         .find(|g| !WITH_SESSION.contains(&g.as_str()))
     {
         return Err(format!(
-            "--{o} does not go with --session: the session holds the whole scene \
-             (open it in volux-view to change it)"
+            "--{o} does not go with --session: the session holds the scene (open it in \
+             volux-view to change it); --size, --zoom, --background, --sixteen-bit, \
+             --backend and -o may override it"
         )
         .into());
     }
@@ -63,16 +82,30 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
     if mesh_method && matches!(volume, Volume::Grid(_)) {
         volume = volume.to_tets()?;
     }
-    let (scene, _) = session.scene_on(&volume)?;
+    let (mut scene, sculpt) = session.scene_on(&volume)?;
+    let png = overrides(args, &session, &mut scene)?;
     scene
         .method
         .resolve(&volume)?
         .check_appearance(&scene.appearance)?;
-    let frame = super::render::render_on(&volume, &scene, show, backend(args, &session))?;
+    let measured = match (&sculpt, &volume) {
+        (Some(sculpt), Volume::Grid(grid)) => {
+            add_labels(sculpt, grid, &mut scene)?;
+            Drawn::of_session(&sculpt.measurements(), &scene, grid.unit())
+        }
+        _ => Vec::new(),
+    };
+    let mut frame = super::render::render_on(&volume, &scene, show, backend(args, &session))?;
+    for m in &measured {
+        m.draw(&mut frame.image);
+    }
     frame
         .image
-        .write_png(&output, &session.png_options())
+        .write_png(&output, &png)
         .map_err(|e| format!("{}: {e}", output.display()))?;
+    for m in &measured {
+        m.print()?;
+    }
     eprintln!(
         "wrote {} ({}x{}, {:.0} ms)",
         output.display(),
@@ -80,5 +113,62 @@ pub fn run(args: &RenderArgs, path: &Path, show: bool) -> Result<(), CmdError> {
         scene.view.height,
         frame.stats.ms
     );
+    Ok(())
+}
+
+/// Applies the overrides given beside `--session` to `scene` (size, zoom) and returns the
+/// PNG options (background, bit depth), saying on stderr what each one replaces.
+fn overrides(
+    args: &RenderArgs,
+    session: &Session,
+    scene: &mut Scene,
+) -> Result<PngOptions, CmdError> {
+    let mut png = session.png_options();
+    if args.given("size") {
+        let (w, h) = crate::settings::parse_size(&args.view_args.size)?;
+        eprintln!(
+            "volux: --size {w}x{h} replaces the session's {}x{} (the same view, its height \
+             kept)",
+            scene.view.width, scene.view.height
+        );
+        (scene.view.width, scene.view.height) = (w, h);
+    }
+    if args.given("zoom") {
+        let zoom = args.view_args.zoom;
+        scene.view.camera = scene
+            .view
+            .camera
+            .zoomed(zoom)
+            .map_err(|e| format!("--zoom {zoom}: {e}"))?;
+        eprintln!("volux: --zoom {zoom} zooms the session's camera");
+    }
+    if args.given("background") {
+        png.background = crate::settings::parse_background(&args.background)?;
+        let was = match session.background {
+            Some([r, g, b]) => format!("{r},{g},{b}"),
+            None => "none".into(),
+        };
+        eprintln!(
+            "volux: --background {} replaces the session's {was}",
+            args.background
+        );
+    }
+    if args.sixteen_bit {
+        png.sixteen_bit = true;
+    }
+    Ok(png)
+}
+
+/// Colours the session's region labels in `scene` as the viewer does (its seeds' nearest
+/// visible voxels, [`Sculpt::label_volume`]), or says why this scene cannot draw them.
+fn add_labels(sculpt: &Sculpt, grid: &Grid, scene: &mut Scene) -> Result<(), CmdError> {
+    if sculpt.label_seeds().is_empty() {
+        return Ok(());
+    }
+    if let Some(why) = scene.labels_not_drawn() {
+        super::render::warn(&format!("the session's region labels are not drawn: {why}"));
+        return Ok(());
+    }
+    scene.labels = Some(Arc::new(sculpt.label_volume(grid, scene)?));
     Ok(())
 }

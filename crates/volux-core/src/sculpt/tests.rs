@@ -275,6 +275,67 @@ fn visibility_is_the_interpolated_mask_at_one_half_and_block_states_agree() {
 }
 
 #[test]
+fn the_cut_gradient_is_the_interpolated_masks_gradient_on_the_exposed_surface_only() {
+    let g = grid([30, 26, 19], false);
+    let frame = VoxelFrame::of(&g);
+    let mut mask = SculptMask::new(g.dims()).unwrap();
+    let centre = [15.0, 13.0, 9.0];
+    mask.remove(&Ball::new(g.index_to_world(DVec3::from(centre)), 14.0, frame).unwrap());
+    let mut state = 777u64;
+    let mut rnd = |hi: usize| {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64 * (hi - 1) as f64
+    };
+    let (mut on_surface, mut away) = (0, 0);
+    for _ in 0..20000 {
+        let p = [rnd(30) as f32, rnd(26) as f32, rnd(19) as f32];
+        let c: [usize; 3] =
+            std::array::from_fn(|a| (p[a].floor() as usize).min(mask.dims()[a] - 2));
+        let corners: Vec<bool> = (0..8usize)
+            .map(|k| mask.voxel(c[0] + (k & 1), c[1] + (k >> 1 & 1), c[2] + (k >> 2 & 1)))
+            .collect();
+        let mixed = corners.iter().any(|&k| k) && corners.iter().any(|&k| !k);
+        match mask.cut_gradient(p) {
+            None => away += usize::from(!mixed),
+            Some(grad) => {
+                assert!(
+                    mixed,
+                    "at {p:?}: a gradient in a cell the cut does not cross"
+                );
+                on_surface += 1;
+                // Central differences of the interpolated mask inside the same cell.
+                for a in 0..3 {
+                    let h = 1e-3f32;
+                    let (mut lo, mut hi) = (p, p);
+                    lo[a] = (p[a] - h).max(c[a] as f32);
+                    hi[a] = (p[a] + h).min(c[a] as f32 + 1.0);
+                    let want = (trilinear_of_voxels(&mask, hi) - trilinear_of_voxels(&mask, lo))
+                        / (hi[a] - lo[a]);
+                    assert!(
+                        (grad[a] - want).abs() < 2e-2,
+                        "at {p:?}, axis {a}: {grad:?} vs {want}"
+                    );
+                }
+                // Towards what is kept: away from the ball's centre.
+                let out: f32 = (0..3).map(|a| grad[a] * (p[a] - centre[a] as f32)).sum();
+                assert!(out > 0.0, "at {p:?}: {grad:?} points into the hole");
+            }
+        }
+    }
+    assert!(
+        on_surface > 100 && away > 1000,
+        "{on_surface} on the surface, {away} away"
+    );
+    assert_eq!(
+        SculptMask::new([4, 4, 4]).unwrap().cut_gradient([1.5; 3]),
+        None
+    );
+    let _ = mask.cut_gradient([f32::NAN, -3.0, 1e9]);
+}
+
+#[test]
 fn the_mask_round_trips_through_bytes_and_bad_input_is_refused() {
     let g = grid([17, 9, 12], false);
     let frame = VoxelFrame::of(&g);

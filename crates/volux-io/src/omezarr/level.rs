@@ -3,6 +3,7 @@
 //! stored type to our sample types.
 use volux_core::bricked::{ChunkLayout, ChunkSource};
 use volux_core::grid::{Buffer, Samples, ScalarType};
+use volux_core::histogram::Histogram;
 use zarrs::array::{Array, DataType, ElementOwned};
 use zarrs::array_subset::ArraySubset;
 use zarrs::filesystem::FilesystemStore;
@@ -63,6 +64,9 @@ pub struct ZarrLevel {
     pub(super) fixed: Vec<u64>,
     /// Per-chunk ranges recorded by the volux writer (x fastest), when present and consistent.
     pub(super) ranges: Option<Vec<[f64; 2]>>,
+    /// The level's histogram counts over `range` recorded by the volux writer
+    /// ([`volux_core::histogram::STORED_BINS`] bins), when present and consistent.
+    pub(super) histogram: Option<Vec<u64>>,
     pub(super) range: Option<[f64; 2]>,
     pub(super) name: String,
 }
@@ -161,6 +165,15 @@ impl ChunkSource for ZarrLevel {
 
     fn value_range(&self) -> Option<[f64; 2]> {
         self.range
+    }
+
+    fn value_histogram(&self) -> Option<Histogram> {
+        let [min, max] = self.range?;
+        Some(Histogram {
+            min,
+            max,
+            counts: self.histogram.clone()?,
+        })
     }
 }
 

@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use serde_json::Value;
 use volux_core::bricked::{ChunkLayout, ChunkSource, Multiscale};
+use volux_core::histogram::STORED_BINS;
 use zarrs::array::Array;
 use zarrs::filesystem::FilesystemStore;
 
@@ -46,6 +47,21 @@ fn volux_ranges(
                 .collect::<Option<Vec<_>>>()
         });
     (chunks, range)
+}
+
+/// The full level's histogram counts recorded by [`super::write_ome_zarr`] (the `volux`
+/// attribute `histogram`: [`STORED_BINS`] counts over the level's range), when present and
+/// counting `samples` samples.
+fn volux_histogram(attrs: &serde_json::Map<String, Value>, samples: u64) -> Option<Vec<u64>> {
+    let counts: Vec<u64> = attrs
+        .get(VOLUX_KEY)?
+        .get("histogram")?
+        .as_array()?
+        .iter()
+        .map(Value::as_u64)
+        .collect::<Option<_>>()?;
+    let total = counts.iter().try_fold(0u64, |a, &c| a.checked_add(c));
+    (counts.len() == STORED_BINS && total == Some(samples)).then_some(counts)
 }
 
 /// The codec chain of an array's metadata file, in words (`blosc(zstd)`, `zstd`, `gzip`).
@@ -227,6 +243,8 @@ pub fn open_store(path: &Path, opts: &ZarrOptions) -> Result<OmeZarr> {
             return Err(header(&level_path, "absurd number of chunks"));
         }
         let (ranges, range) = volux_ranges(array.attributes(), layout.chunk_count());
+        let samples = layout.dims.iter().map(|&d| d as u64).product();
+        let histogram = volux_histogram(array.attributes(), samples);
         if li == 0 {
             data_type = array.data_type().name();
             codec = codec_words(&level_path);
@@ -245,6 +263,7 @@ pub fn open_store(path: &Path, opts: &ZarrOptions) -> Result<OmeZarr> {
             fixed,
             ranges,
             range,
+            histogram,
             name: format!("{} level {li} ({})", path.display(), ds.path),
         }));
     }

@@ -7,6 +7,7 @@ use rayon::prelude::*;
 use serde_json::json;
 use volux_core::bricked::{ChunkLayout, ChunkSource};
 use volux_core::grid::ScalarType;
+use volux_core::histogram::{Histogram, STORED_BINS};
 use volux_core::Error;
 use zarrs::array::codec::{
     BloscCodec, BloscCompressionLevel, BloscCompressor, BloscShuffleMode, GzipCodec, ZstdCodec,
@@ -189,6 +190,32 @@ fn data_type(s: ScalarType) -> volux_core::Result<DataType> {
 }
 
 /// zarr order (z, y, x) of an xyz triple.
+/// The counts of the histogram of `source`'s samples (chunked as `layout`) over `range` in
+/// [`STORED_BINS`] bins, read chunk by chunk in parallel (the bins of
+/// [`Histogram::from_values`], so that they equal those of the data held whole).
+fn full_histogram(
+    source: &dyn ChunkSource,
+    layout: &ChunkLayout,
+    range: [f64; 2],
+) -> volux_core::Result<Vec<u64>> {
+    (0..layout.chunk_count())
+        .into_par_iter()
+        .map(|i| {
+            let s = source.read_chunk(layout.chunk_coords(i))?;
+            Ok(
+                volux_core::with_samples!(&s, |v| Histogram::from_values(v, range, STORED_BINS))
+                    .counts,
+            )
+        })
+        .try_reduce(
+            || vec![0; STORED_BINS],
+            |mut a, b| {
+                a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                Ok(a)
+            },
+        )
+}
+
 fn zyx<T: Copy>(v: [T; 3]) -> [T; 3] {
     [v[2], v[1], v[0]]
 }
@@ -305,10 +332,14 @@ fn write_typed<T: Elem>(
                 [a[0].min(r[0]), a[1].max(r[1])]
             });
         let flat: Vec<f64> = ranges.iter().flat_map(|r| *r).collect();
-        array.attributes_mut().insert(
-            VOLUX_KEY.into(),
-            json!({"range": range, "chunk_ranges": flat, "downsampling": if k == 0 { "none" } else { "2x mean" }}),
-        );
+        let mut attrs = json!({"range": range, "chunk_ranges": flat, "downsampling": if k == 0 { "none" } else { "2x mean" }});
+        if k == 0 {
+            // The full level's histogram over its range, so that a reader fits the
+            // transfer-function presets as on the data in memory (one more pass over the
+            // source, chunk by chunk).
+            attrs["histogram"] = json!(full_histogram(source, &l0, range)?);
+        }
+        array.attributes_mut().insert(VOLUX_KEY.into(), attrs);
         array
             .store_metadata()
             .map_err(|e| zarr_err("the level metadata")(&e))?;

@@ -50,7 +50,7 @@ impl std::fmt::Debug for BrickedVolume {
 
 /// The bins of the kept histogram (as many as the presets are fitted on,
 /// `scene::HISTOGRAM_BINS`).
-const KEPT_BINS: usize = 256;
+const KEPT_BINS: usize = volux_core::histogram::STORED_BINS;
 
 /// The histogram is taken from the finest level with at most this many samples (read whole,
 /// chunk by chunk: 64 MiB of f32).
@@ -60,9 +60,9 @@ impl BrickedVolume {
     /// `multiscale` with its bricks cached within `budget` bytes, shared by all levels (one
     /// least-recently-used order over them). Finds the value range
     /// (recorded by the store, else read chunk by chunk from the full level: the transfer
-    /// function is placed on it, as for the in-core grid) and a histogram of the finest level
-    /// of at most 2^24 samples (for the transfer-function presets). Errors name a chunk that
-    /// cannot be read.
+    /// function is placed on it, as for the in-core grid) and the histogram the presets fit
+    /// on: the full level's when the store records it (Volux's writer does), else one of the
+    /// finest level of at most 2^24 samples. Errors name a chunk that cannot be read.
     pub fn open(multiscale: Multiscale, budget: u64) -> Result<Self, RenderError> {
         for level in multiscale.levels() {
             check_addressable(level.layout())?;
@@ -72,7 +72,15 @@ impl BrickedVolume {
             Some(r) => r,
             None => scan_range(full.as_ref())?,
         };
-        let histogram = coarse_histogram(&multiscale, range)?;
+        // The full level's histogram when the store records it over the same range (the
+        // presets then fit as on the data in memory), else one of a coarse level.
+        let recorded = full
+            .value_histogram()
+            .filter(|h| h.min == range[0] && h.max == range[1] && h.counts.len() == KEPT_BINS);
+        let histogram = match recorded {
+            Some(h) => h,
+            None => coarse_histogram(&multiscale, range)?,
+        };
         let caches = BrickCache::shared(multiscale.levels(), budget);
         let chunk_cells = caches.iter().map(|_| OnceLock::new()).collect();
         Ok(Self {

@@ -129,7 +129,10 @@ impl<F: Field> RayContext<'_, F> {
         // The lighting (factor, highlight) per lane; the emission-only path has none.
         let (k, s) = match shading {
             Some(sh) if LIT => {
-                let g = sh.gradients.gradient_lanes(&pos);
+                let mut g = sh.gradients.gradient_lanes(&pos);
+                if let Some(cuts) = sh.cut_faces {
+                    cuts.lighting_gradient_lanes(&pos, &mut g, u32::MAX);
+                }
                 sh.model
                     .light_lanes(&g, (&f.to_eye, &f.light, &f.half), &f.lit)
             }

@@ -10,12 +10,14 @@ use super::options::{Placement, RenderOptions};
 use crate::classify::{BreakpointRanks, ClassifyTable, LaneTable};
 use crate::composite::RayAccumulator;
 use crate::data_colour::DataColour;
+use crate::integrate::integrator::Integrator;
 use crate::integrate::medium::RayIntegral;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::intervals::IntervalSource;
 use crate::macrocell::{CellClass, MacrocellGrid, Occupancy};
 use crate::sculpt::labels::LabelVolume;
 use crate::shading::blinn_phong::BlinnPhong;
+use crate::shading::cut_faces::CutFaces;
 use crate::shading::gradient::GradientVolume;
 
 /// One pixel's result.
@@ -137,7 +139,40 @@ pub(crate) struct RayContext<'a, F> {
     pub(crate) rays: LocalRays,
     /// The clipping planes in the grid's local frame ([`local_clip_planes`]).
     pub(crate) clip: Vec<ClipPlane>,
+    /// The faces the clip planes and the sculpt mask expose, when shading lights them.
+    pub(crate) cut_faces: Option<CutFaces<'a>>,
     pub(crate) opts: &'a RenderOptions,
+}
+
+/// The depth behind a clip plane that [`CutFaces`] lights with the plane's normal, world
+/// units: one step of the sample lattice, and at least one voxel (of the smallest spacing),
+/// so that every ray through a cut face has a sample in it.
+pub fn cut_layer(opts: &RenderOptions, place: &Placement) -> f64 {
+    let voxels = match opts.integrator {
+        Integrator::Riemann { step }
+        | Integrator::Trapezoid { step }
+        | Integrator::Simpson { step }
+        | Integrator::Preintegrated { step } => step,
+        Integrator::AdaptiveSimpson(p) => p.h0,
+        Integrator::Reference => 1.0,
+    };
+    voxels.max(1.0) * place.spacing.min_element()
+}
+
+/// The cut faces of a render ([`CutFaces`]): `None` without shading or without cuts.
+pub(crate) fn cut_faces<'a>(
+    opts: &'a RenderOptions,
+    place: &Placement,
+    local_planes: &[ClipPlane],
+) -> Option<CutFaces<'a>> {
+    let model = opts.shading.as_ref()?;
+    CutFaces::new(
+        local_planes,
+        opts.mask.as_deref(),
+        (place.origin, place.spacing),
+        model,
+        cut_layer(opts, place),
+    )
 }
 
 /// World clipping planes in a grid's local frame: a world point is `o + R (p - o)` for the
@@ -200,6 +235,8 @@ pub(crate) struct GridRay<'a, F> {
 pub(crate) struct RayShading<'a> {
     pub(crate) model: &'a BlinnPhong,
     pub(crate) gradients: Option<&'a GradientVolume>,
+    /// The cut faces, lit with the cut's normal.
+    pub(crate) cut_faces: Option<&'a CutFaces<'a>>,
     pub(crate) spacing: Vec3,
     pub(crate) view: Vec3,
 }

@@ -36,7 +36,7 @@ mod traverse;
 pub use crate::frame::RenderStats;
 pub use clip::{ray_box, to_voxel, voxel_crossings};
 pub(crate) use context::first_at_or_after;
-pub use context::local_clip_planes;
+pub use context::{cut_layer, local_clip_planes};
 pub use options::{Placement, RenderOptions, Rendered};
 pub(crate) use renderer::{grid_frame, grid_settings};
 pub use renderer::{render_grid, GridRenderer};

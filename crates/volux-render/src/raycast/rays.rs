@@ -51,10 +51,13 @@ impl<F: Field> RayMedium for GridRay<'_, F> {
         }
         if let (Some(sh), true) = (&self.shade, m.tau > 0.0) {
             let p = p.as_vec3();
-            let g = match sh.gradients {
+            let mut g = match sh.gradients {
                 Some(g) => g.gradient(p),
                 None => shading::gradient(self.field, p, sh.spacing),
             };
+            if let Some(cuts) = sh.cut_faces {
+                g = cuts.lighting_gradient(p, g);
+            }
             m.rgb = sh
                 .model
                 .shade(m.rgb.map(|c| c as f32), g, sh.view)
@@ -201,6 +204,7 @@ impl<F: Field> RayContext<'_, F> {
             shade: self.opts.shading.as_ref().map(|model| RayShading {
                 model,
                 gradients: self.gradients,
+                cut_faces: self.cut_faces.as_ref(),
                 spacing: self.place.spacing.as_vec3(),
                 view: (d_v * self.place.spacing).normalize_or_zero().as_vec3(),
             }),
@@ -403,7 +407,7 @@ impl<F: Field> RayContext<'_, F> {
             c.rgb = rgb;
         }
         if let (Some(sh), true) = (&self.opts.shading, c.tau > 0.0) {
-            c.rgb = sh.shade(c.rgb, self.gradient(p), view);
+            c.rgb = sh.shade(c.rgb, self.lighting_gradient(p), view);
         }
         c
     }
@@ -419,7 +423,7 @@ impl<F: Field> RayContext<'_, F> {
         match (&self.opts.shading, e[3] > 0.0) {
             (Some(model), true) => {
                 let c = [e[0] / e[3], e[1] / e[3], e[2] / e[3]];
-                let lit = model.shade(c, self.gradient(mid), view);
+                let lit = model.shade(c, self.lighting_gradient(mid), view);
                 [lit[0] * e[3], lit[1] * e[3], lit[2] * e[3], e[3]]
             }
             _ => e,
@@ -434,6 +438,16 @@ impl<F: Field> RayContext<'_, F> {
             .as_ref()
             .and_then(|l| l.colour_at(p))
             .or_else(|| self.opts.data_colour.as_ref().map(|c| c.colour_at(p)))
+    }
+
+    /// The gradient that lights a volume sample at voxel position `p`: the field's, or a
+    /// cut's normal on the faces it exposes ([`CutFaces`](crate::shading::CutFaces)).
+    fn lighting_gradient(&self, p: Vec3) -> Vec3 {
+        let g = self.gradient(p);
+        match &self.cut_faces {
+            Some(cuts) => cuts.lighting_gradient(p, g),
+            None => g,
+        }
     }
 
     /// The world-space gradient at voxel position `p`.

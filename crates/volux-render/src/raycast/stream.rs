@@ -38,7 +38,7 @@ use crate::integrate::{riemann_step, Integrator};
 use crate::intervals::IntervalSource;
 use crate::macrocell::CellClass;
 use crate::sampling::{Field, LANES};
-use crate::shading::{BlinnPhong, GradientVolume, Lanes3};
+use crate::shading::{BlinnPhong, CutFaces, GradientVolume, Lanes3};
 use crate::tiles::TILE;
 
 /// Shading in the stream: the model and the gradients it lights with.
@@ -46,6 +46,8 @@ use crate::tiles::TILE;
 pub(super) struct StreamShading<'a> {
     pub(super) model: &'a BlinnPhong,
     pub(super) gradients: &'a GradientVolume,
+    /// The cut faces, lit with the cut's normal.
+    pub(super) cut_faces: Option<&'a CutFaces<'a>>,
 }
 
 /// How the stream composites: what one lane step adds, from the sample before it (`front`)
@@ -692,7 +694,10 @@ impl<F: Field> RayContext<'_, F> {
                 }
             }
         }
-        let g = sh.gradients.gradient_lanes(&p);
+        let mut g = sh.gradients.gradient_lanes(&p);
+        if let Some(cuts) = sh.cut_faces {
+            cuts.lighting_gradient_lanes(&p, &mut g, lanes.hiding);
+        }
         let dirs = (&lanes.to_eye, &lanes.light, &lanes.half);
         let (k, s) = sh.model.light_lanes(&g, dirs, &lanes.lit);
         LaneLight { k, s }
@@ -904,6 +909,7 @@ impl<F: Field> RayContext<'_, F> {
         Some(StreamShading {
             model: self.opts.shading.as_ref()?,
             gradients: self.gradients?,
+            cut_faces: self.cut_faces.as_ref(),
         })
     }
 }

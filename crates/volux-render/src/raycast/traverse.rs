@@ -5,7 +5,9 @@ use std::time::Instant;
 use volux_core::image::Image;
 use volux_core::sculpt::SculptMask;
 
-use super::context::{local_clip_planes, Classification, Derived, LocalRays, PixelOut, RayContext};
+use super::context::{
+    cut_faces, local_clip_planes, Classification, Derived, LocalRays, PixelOut, RayContext,
+};
 use super::mask_tiles::MaskTiles;
 use super::options::{Placement, RenderOptions, Rendered};
 use crate::error::RenderError;
@@ -265,6 +267,7 @@ pub(crate) fn with_context<F: Field, R>(
         }
         _ => (None, None),
     };
+    let clip = local_clip_planes(&place, &opts.clip_planes);
     let ctx = RayContext {
         field,
         place,
@@ -281,7 +284,8 @@ pub(crate) fn with_context<F: Field, R>(
             world: opts.camera.rays(opts.width, opts.height),
             place,
         },
-        clip: local_clip_planes(&place, &opts.clip_planes),
+        cut_faces: cut_faces(opts, &place, &clip),
+        clip,
         opts,
     };
     body(&ctx)

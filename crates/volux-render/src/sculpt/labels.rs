@@ -5,6 +5,22 @@ use glam::Vec3;
 
 use crate::error::RenderError;
 
+/// Colours given to labels in turn (linear RGB): label `n` takes entry `(n - 1) % 6`, as
+/// `volux regions` saves them in its sculpt steps.
+pub const LABEL_PALETTE: [[f32; 3]; 6] = [
+    [0.9, 0.2, 0.2],
+    [0.2, 0.7, 0.9],
+    [0.3, 0.85, 0.3],
+    [0.95, 0.8, 0.2],
+    [0.75, 0.35, 0.9],
+    [0.95, 0.55, 0.2],
+];
+
+/// The [`LABEL_PALETTE`] colour of label `label` (1 to 255; 0 has none).
+pub fn palette_colour(label: u8) -> Option<[f32; 3]> {
+    (label > 0).then(|| LABEL_PALETTE[usize::from(label - 1) % LABEL_PALETTE.len()])
+}
+
 /// One label per voxel (0: none) and the colour of each label (linear RGB).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LabelVolume {
