@@ -184,11 +184,14 @@ fn measurements(app: &mut ViewerApp, ui: &mut egui::Ui) {
     let lines = app.sculpt.as_ref().map_or(Vec::new(), |s| s.measurements());
     let unit = crate::sculpt_tools::unit_of(app);
     for (i, line) in lines.iter().enumerate() {
+        let points = match line.len() {
+            1 => String::new(),
+            n => format!(" ({n} points)"),
+        };
         ui.label(format!(
-            "measurement {}: {} ({} points)",
+            "measurement {}: {}{points}",
             i + 1,
             crate::sculpt_tools::length_text(line, &unit),
-            line.len()
         ));
     }
     if app.tools.tool == Tool::Measure {

@@ -13,16 +13,6 @@ use super::common::CmdError;
 use super::workbench::{self, Workbench};
 use crate::cli::RegionsArgs;
 
-/// Colours given to labels in turn (linear RGB), as saved in the sculpt steps.
-const PALETTE: [[f32; 3]; 6] = [
-    [0.9, 0.2, 0.2],
-    [0.2, 0.7, 0.9],
-    [0.3, 0.85, 0.3],
-    [0.95, 0.8, 0.2],
-    [0.75, 0.35, 0.9],
-    [0.95, 0.55, 0.2],
-];
-
 /// Runs `volux regions`.
 pub fn run(args: &RegionsArgs, given: &[String], show: bool) -> Result<(), CmdError> {
     workbench::nrrd_path(&args.output, "--output")?;
@@ -39,7 +29,9 @@ pub fn run(args: &RegionsArgs, given: &[String], show: bool) -> Result<(), CmdEr
         let what = format!("--seed {typed}");
         workbench::in_image(&what, *pixel, bench.size())?;
         let point = bench.pick(*pixel, &what)?.world;
-        let colour = PALETTE[usize::from(label - 1) % PALETTE.len()];
+        // The colour `render --labels` gives the label too.
+        let colour = volux_render::sculpt::labels::LABEL_PALETTE
+            [usize::from(label - 1) % volux_render::sculpt::labels::LABEL_PALETTE.len()];
         bench.sculpt.apply(SculptStep::Label {
             point,
             label: *label,
