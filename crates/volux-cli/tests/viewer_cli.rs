@@ -158,6 +158,7 @@ fn boxed_session(d: &std::path::Path) {
             point: DVec3::new(11.5, 6.0, 11.5),
             label: 1,
             colour: [0.9, 0.1, 0.1],
+            rule: volux_core::sculpt::RegionRule::Connected,
         },
         SculptStep::Measure {
             point: DVec3::new(8.0, 6.0, 12.0),

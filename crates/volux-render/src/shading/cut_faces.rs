@@ -199,11 +199,11 @@ mod tests {
         let g = Vec3::new(0.0, 7.0, 0.0);
         assert_eq!(cuts.lighting_gradient(Vec3::new(9.0, 1.0, 1.0), g), g);
         // The lanes agree with the point, whichever lanes consult the mask.
-        let mut p = [[0.0f32; LANES]; 3];
-        for l in 0..LANES {
-            p[0][l] = 4.5 + 0.1 * l as f32;
-            p[1][l] = 1.0;
-        }
+        let p = [
+            std::array::from_fn(|l| 4.5 + 0.1 * l as f32),
+            [1.0; LANES],
+            [0.0; LANES],
+        ];
         for mask_lanes in [0, u32::MAX, 0b1010] {
             let mut gl = [[0.0f32; LANES]; 3];
             gl[1] = [7.0; LANES];
