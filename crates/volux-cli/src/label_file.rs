@@ -5,7 +5,6 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use volux_io::{Dataset, LoadOptions};
 use volux_render::scene::{Scene, Volume};
 use volux_render::sculpt::labels::palette_colour;
 use volux_render::sculpt::LabelVolume;
@@ -32,16 +31,7 @@ pub fn add_labels(
     if let Some(why) = scene.labels_not_drawn() {
         return Err(named(&why).into());
     }
-    let (data, _) = volux_io::load(path, &LoadOptions::default()).map_err(|e| named(&e))?;
-    let Dataset::Grid(labels) = data else {
-        return Err(named(&"a label volume is a grid; this is a tetrahedral mesh").into());
-    };
-    volux_core::geometry_match::check_same_geometry(grid, &labels).map_err(|e| {
-        named(&format!(
-            "the labels do not lie on {}'s voxels: {e}",
-            file.display()
-        ))
-    })?;
+    let labels = crate::mask_file::read_on_voxels("labels", "label volume", path, grid, file)?;
     let s = labels.samples();
     let mut values = Vec::with_capacity(s.len());
     for i in 0..s.len() {

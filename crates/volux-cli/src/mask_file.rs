@@ -11,22 +11,37 @@ use volux_render::scene::{Scene, Volume};
 
 use crate::commands::common::CmdError;
 
-/// Reads a saved sculpt mask for `grid` (of `file`): any grid file of the same geometry
-/// (dims, spacing, origin, direction, unit), non-zero voxels kept.
-fn read_mask(path: &Path, grid: &Grid, file: &Path) -> Result<SculptMask, CmdError> {
-    let named = |e: &dyn std::fmt::Display| format!("--mask {}: {e}", path.display());
+/// Reads a grid given with `--FLAG path` that must lie on the voxels of `grid` (of `file`):
+/// a mask or a label volume, applied by voxel index. One made on another lattice (another
+/// orientation, a resampled copy) would land in the wrong place, so the geometry (dims,
+/// spacing, origin, direction, unit) is checked; `noun` names it in the errors ("mask",
+/// "label volume").
+pub fn read_on_voxels(
+    flag: &str,
+    noun: &str,
+    path: &Path,
+    grid: &Grid,
+    file: &Path,
+) -> Result<Grid, CmdError> {
+    let named = |e: &dyn std::fmt::Display| format!("--{flag} {}: {e}", path.display());
     let (data, _) = volux_io::load(path, &LoadOptions::default()).map_err(|e| named(&e))?;
-    let Dataset::Grid(m) = data else {
-        return Err(named(&"a mask is a grid; this is a tetrahedral mesh").into());
+    let Dataset::Grid(g) = data else {
+        return Err(named(&format!("a {noun} is a grid; this is a tetrahedral mesh")).into());
     };
-    // A mask made on another lattice (another orientation, a resampled copy) would be
-    // applied by voxel index to the wrong place.
-    volux_core::geometry_match::check_same_geometry(grid, &m).map_err(|e| {
+    volux_core::geometry_match::check_same_geometry(grid, &g).map_err(|e| {
         named(&format!(
-            "the mask does not lie on {}'s voxels: {e}",
+            "the {noun} does not lie on {}'s voxels: {e}",
             file.display()
         ))
     })?;
+    Ok(g)
+}
+
+/// Reads a saved sculpt mask for `grid` (of `file`): any grid file of the same geometry,
+/// non-zero voxels kept.
+fn read_mask(path: &Path, grid: &Grid, file: &Path) -> Result<SculptMask, CmdError> {
+    let named = |e: &dyn std::fmt::Display| format!("--mask {}: {e}", path.display());
+    let m = read_on_voxels("mask", "mask", path, grid, file)?;
     let s = m.samples();
     let values: Vec<u8> = (0..s.len())
         .map(|i| u8::from(s.get_f32(i) != 0.0))

@@ -350,7 +350,7 @@ fn render_colours_a_label_volume_and_refuses_one_that_does_not_fit() {
     let mut mip = args("l.nrrd", "mip.png");
     mip.push("--mip".into());
     for (a, expected, png) in [
-        (args("far.nrrd", "far.png"), "do not lie on", "far.png"),
+        (args("far.nrrd", "far.png"), "does not lie on", "far.png"),
         (args("half.nrrd", "half.png"), "not a label", "half.png"),
         (mip, "MIP", "mip.png"),
     ] {
