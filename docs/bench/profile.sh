@@ -6,7 +6,8 @@
 #
 #   docs/bench/profile.sh VOLUX DATA OUT [FRAMES]
 #
-# VOLUX: a release build (the release profile keeps debug line info); DATA: the directory
+# VOLUX: a build with `cargo build --profile profiling` (release with debug line info,
+# target/profiling/volux); DATA: the directory
 # prepared by `python3 docs/bench/vs_base.py --data DATA --setup`.
 set -euo pipefail
 volux=$1 data=$2 out=$3 frames=${4:-6}
