@@ -1,6 +1,8 @@
 //! Command-line arguments.
 use std::path::PathBuf;
 
+pub use volux_app::Backend;
+
 use clap::{ArgMatches, Args, FromArgMatches, Parser, Subcommand, ValueEnum};
 
 /// Volux: accurate, fast volume visualization of regular grids and tetrahedral meshes.
@@ -271,6 +273,25 @@ pub struct LoadArgs {
     pub component: Option<usize>,
 }
 
+impl LoadArgs {
+    /// The dataset at `path` read with these options: the one place where the reader
+    /// options on the command line become the application layer's dataset reference.
+    pub fn dataset(&self, path: &std::path::Path) -> volux_app::session::DatasetRef {
+        volux_app::session::DatasetRef {
+            path: path.to_path_buf(),
+            q_variable: self.q_variable.clone(),
+            q_file: self.q_file.clone(),
+            series_uid: self.series.clone(),
+            array: self.array.clone(),
+            as_tets: false,
+            channel: self.channel,
+            timepoint: self.timepoint,
+            component: self.component,
+            level: self.level,
+        }
+    }
+}
+
 /// `volux render` options.
 #[derive(Debug, Args, Clone)]
 pub struct RenderArgs {
@@ -356,7 +377,7 @@ pub struct RenderArgs {
     /// feature), or
     /// `auto`: the GPU when the build has it, an adapter exists and it draws the scene, else
     /// the CPU.
-    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
     pub backend: Backend,
     /// Colour region labels: a label volume on the grid's voxels (integers 0 to 255, 0
     /// unlabelled; e.g. written by `volux regions`), each label in its palette colour, the
@@ -951,13 +972,10 @@ mod tests {
     }
 }
 
-/// Where `volux render` renders (`--backend`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Backend {
-    /// The GPU when there is one that draws the scene, else the CPU.
-    Auto,
-    /// The CPU engine (the reference).
-    Cpu,
-    /// The GPU backend (`volux-gpu`), or an error saying why not.
-    Gpu,
+/// `--backend`: the application layer's backend names ([`Backend::NAMES`]), listed in the
+/// help and completions.
+fn backend_parser() -> impl clap::builder::TypedValueParser<Value = Backend> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(Backend::NAMES)
+        .map(|s| s.parse::<Backend>().expect("a listed name"))
 }

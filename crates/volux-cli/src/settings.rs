@@ -23,18 +23,9 @@ use crate::cli::{
 use crate::commands::common::CmdError;
 use volux_core::voi::ClipPlane;
 
-/// Parses `WxH`.
+/// Parses `--size WxH` ([`volux_app::words::image_size`]).
 pub fn parse_size(s: &str) -> Result<(usize, usize), CmdError> {
-    let bad = || format!("--size '{s}': expected WxH, e.g. 512x512, each 1..=16384");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    let (w, h): (usize, usize) = (
-        w.trim().parse().map_err(|_| bad())?,
-        h.trim().parse().map_err(|_| bad())?,
-    );
-    if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
-        return Err(bad().into());
-    }
-    Ok((w, h))
+    volux_app::words::image_size(s).map_err(|e| format!("--size {e}").into())
 }
 
 /// Parses `R,G,B` in 0..1 or `none`.

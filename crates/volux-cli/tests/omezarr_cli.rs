@@ -298,4 +298,60 @@ fn out_of_core_frames_and_fits_the_transfer_function_as_in_memory() {
     let a = std::fs::read(dir.join("bricked.png")).unwrap();
     let b = std::fs::read(dir.join("incore.png")).unwrap();
     assert!(a == b, "the out-of-core PNG differs from the in-memory one");
+
+    // A foreign store (ome-zarr-py's: no range, chunk ranges or histogram recorded) is read
+    // at opening for the same statistics, and says so.
+    let stripped = strip_volux_attributes(&dir.join("ball.ome.zarr"));
+    assert!(stripped > 0, "no level carried Volux's statistics");
+    let out = volux(
+        &[
+            &["render", "ball.ome.zarr", "--lod", "0"],
+            &common[..],
+            &["-o", "foreign.png"],
+        ]
+        .concat(),
+        dir,
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("records no value statistics"), "{stderr}");
+    let c = std::fs::read(dir.join("foreign.png")).unwrap();
+    assert!(
+        c == b,
+        "the foreign store's PNG differs from the in-memory one"
+    );
+}
+
+/// Removes the `volux` attributes (range, chunk ranges, histogram) from every level's
+/// metadata under `store`, as a store written by another tool lacks them; the number of
+/// files changed.
+fn strip_volux_attributes(store: &std::path::Path) -> usize {
+    let mut changed = 0;
+    let mut dirs = vec![store.to_path_buf()];
+    while let Some(d) = dirs.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let path = e.unwrap().path();
+            if path.is_dir() {
+                dirs.push(path);
+                continue;
+            }
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            if name != "zarr.json" && name != ".zattrs" {
+                continue;
+            }
+            let mut json: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+            let attrs = match json.get_mut("attributes") {
+                Some(a) => a,
+                None => &mut json,
+            };
+            if let Some(map) = attrs.as_object_mut() {
+                if map.remove("volux").is_some() {
+                    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+                    changed += 1;
+                }
+            }
+        }
+    }
+    changed
 }

@@ -61,7 +61,9 @@ fn every_gallery_picture_is_made_by_its_command() {
             .iter()
             .find(|a| a.starts_with("../shared/") && !root().join(a).exists());
         if let Some(m) = missing {
-            eprintln!("skipping the gallery command for {m}: the dataset is absent");
+            volux_testkit::data::skip_or_fail(&format!(
+                "the gallery command for {m} has no dataset"
+            ));
             continue;
         }
         let o = args

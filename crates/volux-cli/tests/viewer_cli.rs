@@ -57,8 +57,8 @@ fn session_mistakes_are_one_line_each() {
 /// with the GPU backend and says so in one line otherwise), and `--backend` overrides it.
 #[test]
 fn a_session_renders_on_its_backend_unless_told_otherwise() {
+    use volux_app::session::{DatasetRef, Session};
     use volux_render::scene::Scene;
-    use volux_render::session::{DatasetRef, Session, SessionBackend};
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let grid = volux_core::synth::marschner_lobb(12).unwrap();
@@ -79,7 +79,7 @@ fn a_session_renders_on_its_backend_unless_told_otherwise() {
         ..Default::default()
     };
     let mut session = Session::new(dataset, &scene, None);
-    session.backend = Some(SessionBackend::Gpu);
+    session.backend = Some(volux_app::Backend::Gpu);
     session.save(&d.join("gpu.json")).unwrap();
 
     let on_gpu = volux(&["render", "--session", "gpu.json", "-o", "gpu.png"], d);
@@ -134,10 +134,10 @@ fn boxed_grid() -> volux_core::Grid {
 /// z = 12: 7 mm), as the viewer saves them.
 fn boxed_session(d: &std::path::Path) {
     use glam::DVec3;
+    use volux_app::session::{DatasetRef, Session};
     use volux_core::camera::{Camera, Projection};
     use volux_render::scene::Scene;
     use volux_render::sculpt::SculptStep;
-    use volux_render::session::{DatasetRef, Session};
     volux_io::nrrd::write(&boxed_grid(), &d.join("box.nrrd")).unwrap();
     let camera = Camera {
         eye: DVec3::new(11.5, -40.0, 11.5),

@@ -38,6 +38,8 @@
 //! What the shaders do not draw is refused with a
 //! [`RenderError`](volux_render::RenderError) that names it (each renderer's `supports`);
 //! a front end with `--backend auto` then renders on the CPU.
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
 mod context;
 mod error;
 mod grid;

@@ -48,7 +48,8 @@ pub fn auto_draws(ctx: &GpuContext, volume: &Volume, scene: &Scene) -> Result<()
     let adapter = ctx.adapter();
     if adapter.is_software() && !scene.method.gpu_only() {
         return Err(format!(
-            "the GPU adapter {adapter} is a software rasterizer, slower than the CPU              engine (--backend gpu uses it anyway)"
+            "the GPU adapter {adapter} is a software rasterizer, slower than the CPU engine \
+             (the GPU backend asked for by name uses it anyway)"
         ));
     }
     Ok(())

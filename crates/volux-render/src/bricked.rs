@@ -25,4 +25,4 @@ pub mod volume;
 pub use cache::{Brick, BrickCache, CacheStats};
 pub use region::{level_placement, render_cache_frame, render_cache_region};
 pub use render::{render_level, BrickedRenderer};
-pub use volume::{BrickedVolume, Lod};
+pub use volume::{BrickedVolume, Lod, StoreStatistics};

@@ -17,14 +17,6 @@ pub enum RenderError {
     /// limit, out of device memory, a lost device.
     #[error("{0}")]
     Backend(String),
-    /// A session file that cannot be read, or that describes no valid scene.
-    #[error("session {path}: {reason}")]
-    Session {
-        /// The session file.
-        path: String,
-        /// What is wrong with it.
-        reason: String,
-    },
 }
 
 /// Largest image side accepted by the renderers.

@@ -31,8 +31,6 @@
 //!   runs on, and [`Control`](tiles::Control).
 //! - [`framing`]: what a scene makes visible (the box a camera frames, or why nothing
 //!   shows), and a camera fitted to a box.
-//! - [`session`]: a scene and its dataset saved as versioned JSON (the viewer's sessions,
-//!   rendered in batch by `volux render --session`).
 //!
 //! ## Shared stages
 //!
@@ -103,7 +101,6 @@ pub mod resample;
 pub mod sampling;
 pub mod scene;
 pub mod sculpt;
-pub mod session;
 pub mod shading;
 pub mod tetray;
 pub mod tiles;

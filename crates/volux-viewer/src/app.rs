@@ -9,13 +9,13 @@ use std::time::Instant;
 
 use eframe::egui;
 use glam::DVec3;
+use volux_app::session::{DatasetRef, Session, SliceState};
 use volux_core::{Camera, TransferFunction};
 use volux_io::progress::{with_progress, LoadProgress};
 use volux_render::bricked::Lod;
 use volux_render::framing::visible_bounds_of;
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::sculpt::Sculpt;
-use volux_render::session::{DatasetRef, Session, SliceState};
 
 use crate::backend::{Backend, Device};
 use crate::dataset::{self, Loaded};
@@ -442,7 +442,7 @@ impl ViewerApp {
             window: self.window,
             crosshair: self.crosshair.to_array(),
         });
-        s.backend = Some(self.options.backend.into());
+        s.backend = Some(self.options.backend);
         Some(s)
     }
 

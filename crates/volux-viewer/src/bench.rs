@@ -10,9 +10,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
+use volux_app::session::DatasetRef;
 use volux_render::bricked::Lod;
 use volux_render::scene::{Method, Scene};
-use volux_render::session::DatasetRef;
 
 use crate::dataset;
 use crate::navigation;

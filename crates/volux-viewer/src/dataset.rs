@@ -5,10 +5,10 @@ use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
+use volux_app::session::DatasetRef;
 use volux_core::histogram::Histogram;
-use volux_io::{Dataset, Format, LoadOptions};
+use volux_io::{Dataset, Format};
 use volux_render::scene::{Volume, HISTOGRAM_BINS};
-use volux_render::session::DatasetRef;
 
 use crate::render_service::VolumeRef;
 use crate::slices::SliceVolume;
@@ -85,16 +85,7 @@ impl Loaded {
 
 /// Loads `source` (any format the CLI reads); errors are one readable line.
 pub fn load(source: &DatasetRef) -> Result<Loaded, String> {
-    let opts = LoadOptions {
-        q_variable: source.q_variable.clone(),
-        q_file: source.q_file.clone(),
-        series_uid: source.series_uid.clone(),
-        array: source.array.clone(),
-        channel: source.channel.unwrap_or(0),
-        timepoint: source.timepoint.unwrap_or(0),
-        component: source.component,
-        ..LoadOptions::default()
-    };
+    let opts = source.load_options();
     let shown = source.path.display().to_string();
     if volux_io::detect(&source.path).ok() == Some(Format::OmeZarr) {
         return load_store(source);

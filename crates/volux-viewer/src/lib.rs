@@ -5,7 +5,7 @@
 //! CPU engine's, shown as a texture) builds a [`volux_render::scene::Scene`] and hands it to
 //! the render thread ([`render_service`]), which renders through the engine API like every
 //! other front end: reduced-resolution previews while the user drags, the full frame when
-//! input stops. Sessions ([`volux_render::session`]) are shared with `volux render
+//! input stops. Sessions ([`volux_app::session`]) are shared with `volux render
 //! --session`, so a view found by hand renders in batch to the same pixels.
 //!
 //! Where each part lives:
@@ -37,6 +37,8 @@
 //! - [`panels`]: the menu and the settings panel; [`status_bar`]: the error, message and
 //!   cache line at the bottom; [`file_dialog`]: the file dialog;
 //!   [`files`]: TF files, sessions and screenshots read and written; [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
 pub mod app;
 pub mod backend;
 pub mod bench;

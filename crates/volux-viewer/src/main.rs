@@ -6,6 +6,8 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use eframe::egui;
+use volux_app::{words, Backend};
+use volux_render::bricked::Lod;
 use volux_viewer::app::{Options, ViewerApp};
 
 /// The interactive viewer of Volux.
@@ -18,8 +20,8 @@ struct Args {
     #[arg(long, value_name = "OUT.png")]
     screenshot: Option<PathBuf>,
     /// Render size of the 3D view for --screenshot and --bench, WxH.
-    #[arg(long, value_name = "WxH")]
-    size: Option<String>,
+    #[arg(long, value_name = "WxH", value_parser = words::image_size)]
+    size: Option<(usize, usize)>,
     /// With --screenshot: also save the session here.
     #[arg(long, value_name = "S.json")]
     save_session: Option<PathBuf>,
@@ -28,17 +30,17 @@ struct Args {
     bench: bool,
     /// For an OME-Zarr store: the level it refines to, auto (voxels about a pixel) or a
     /// level number (0 = full resolution).
-    #[arg(long, value_name = "auto|N", default_value = "auto")]
-    lod: String,
+    #[arg(long, value_name = "auto|N", default_value = "auto", value_parser = words::level)]
+    lod: Lod,
     /// The memory budget of an OME-Zarr store's brick cache (4G, 512M, 50%); default: a
     /// quarter of the available memory, as the CLI's. The images and slices are not counted
     /// in it: a small cache shows the coarse level first and refines, reading chunks again.
-    #[arg(long, value_name = "SIZE")]
-    memory_budget: Option<String>,
+    #[arg(long, value_name = "SIZE", value_parser = words::memory_budget)]
+    memory_budget: Option<u64>,
     /// Where frames are rendered: auto (the GPU when there is an adapter and it draws the
     /// scene, else the CPU), cpu, or gpu (an error shown in the view when it cannot).
-    #[arg(long, value_name = "auto|cpu|gpu", default_value = "auto")]
-    backend: String,
+    #[arg(long, value_name = "auto|cpu|gpu", default_value = "auto", value_parser = Backend::parse)]
+    backend: Backend,
     /// OME-Zarr, ImageJ hyperstacks and OME-TIFF: the channel to show [default: 0].
     #[arg(long)]
     channel: Option<usize>,
@@ -55,20 +57,6 @@ struct Args {
     bench_seconds: f64,
 }
 
-fn parse_size(s: &str) -> Result<(usize, usize), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("--size '{s}': expected WxH, e.g. 800x600"))?;
-    let p = |v: &str| {
-        v.trim()
-            .parse::<usize>()
-            .ok()
-            .filter(|n| (1..=16384).contains(n))
-            .ok_or_else(|| format!("--size '{s}': sides are whole numbers from 1 to 16384"))
-    };
-    Ok((p(w)?, p(h)?))
-}
-
 fn main() -> ExitCode {
     #[cfg(feature = "gpu")]
     volux_gpu::quiet_headless_vulkan();
@@ -83,10 +71,9 @@ fn main() -> ExitCode {
 }
 
 fn run(args: Args) -> Result<(), String> {
-    let size = args.size.as_deref().map(parse_size).transpose()?;
-    let lod = volux_viewer::store::parse_lod(&args.lod)?;
-    if let Some(b) = &args.memory_budget {
-        volux_viewer::store::set_cache_budget(volux_viewer::store::parse_budget(b)?);
+    let (size, lod) = (args.size, args.lod);
+    if let Some(b) = args.memory_budget {
+        volux_viewer::store::set_cache_budget(b);
     }
     if let Some(p) = &args.screenshot {
         volux_viewer::png_path(p)?;
@@ -107,7 +94,7 @@ fn run(args: Args) -> Result<(), String> {
         size,
         save_session: args.save_session,
         lod,
-        backend: volux_viewer::backend::Backend::parse(&args.backend)?,
+        backend: args.backend,
         channel: args.channel,
         timepoint: args.timepoint,
         component: args.component,

@@ -31,8 +31,9 @@ use volux_render::scene::{Method, Scene, Volume};
 use volux_render::tiles::Control;
 use volux_render::RenderError;
 
-use crate::backend::{Backend, Device, Factory};
+use crate::backend::{Backend, Device};
 use crate::progressive::{self, LevelShown};
+use volux_app::RendererFactory;
 
 /// Time a preview frame aims at (ms): the divisor of the resolution adapts to meet it.
 pub const PREVIEW_BUDGET_MS: f64 = 25.0;
@@ -137,7 +138,7 @@ impl RenderService {
             tx,
             wake: Box::new(wake),
             renderers: HashMap::new(),
-            factory: Factory::new(backend),
+            factory: RendererFactory::new(backend),
             ns_per_pixel: None,
             previewed: None,
         };
@@ -225,7 +226,7 @@ struct Worker {
     wake: Box<dyn Fn() + Send>,
     /// The renderers kept, by volume, method and whether on the GPU, with what they draw on.
     renderers: HashMap<RendererKey, (Box<dyn Renderer>, Device)>,
-    factory: Factory,
+    factory: RendererFactory,
     /// Preview cost measured on the last preview, to size the next one.
     ns_per_pixel: Option<f64>,
     /// The last scene previewed: when the same scene comes back without interaction (the
@@ -381,7 +382,7 @@ impl Worker {
         let resolved = scene.method.resolve(volume)?;
         let mut drawn = scene.clone();
         drawn.method = resolved;
-        let on_gpu = self.factory.on_gpu(volume, &drawn)?;
+        let on_gpu = self.factory.place(volume, &drawn)?.on_gpu;
         let key = (request.volume.id, resolved.name(), on_gpu);
         if !self.renderers.contains_key(&key) {
             self.renderers

@@ -8,11 +8,11 @@
 use std::sync::Arc;
 
 use glam::DVec3;
+use volux_app::session::Session;
 use volux_core::voi::{ClipPlane, ConvexVoi};
 use volux_core::{Aabb, Buffer, Grid, Samples};
 use volux_render::scene::{Scene, Volume};
 use volux_render::sculpt::{Sculpt, SculptStep};
-use volux_render::session::Session;
 
 use crate::app::ViewerApp;
 use crate::sculpt_state::Tool;

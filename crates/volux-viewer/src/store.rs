@@ -7,13 +7,12 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
+use volux_app::session::DatasetRef;
 use volux_core::bricked::ChunkSource;
 use volux_core::grid::{Buffer, Grid, Samples, Scalar};
 use volux_core::units::format_bytes;
-use volux_io::omezarr::{self, ZarrOptions};
 use volux_render::bricked::{BrickedVolume, Lod};
 use volux_render::scene::Volume;
-use volux_render::session::DatasetRef;
 
 use crate::slices::SliceVolume;
 
@@ -55,15 +54,8 @@ pub struct OpenedStore {
 /// metadata, a chunk that cannot be read) are one line naming the store.
 pub fn open(source: &DatasetRef, budget: u64) -> Result<OpenedStore, String> {
     let shown = source.path.display().to_string();
-    let opts = ZarrOptions {
-        array: source.array.clone(),
-        channel: source.channel.unwrap_or(0),
-        timepoint: source.timepoint.unwrap_or(0),
-        ..ZarrOptions::default()
-    };
-    let store = omezarr::open_store(&source.path, &opts).map_err(|e| format!("{shown}: {e}"))?;
-    let bricked =
-        BrickedVolume::open(store.multiscale, budget).map_err(|e| format!("{shown}: {e}"))?;
+    let store = volux_app::store::open_store(source, budget).map_err(|e| e.to_string())?;
+    let bricked = store.volume;
     let (slices, slice_level) = coarse_slices(&bricked).map_err(|e| format!("{shown}: {e}"))?;
     let full = bricked.multiscale().full().layout().clone();
     let [x, y, z] = full.dims;
@@ -79,7 +71,7 @@ pub fn open(source: &DatasetRef, budget: u64) -> Result<OpenedStore, String> {
         "slices: level {slice_level} ({sx}x{sy}x{sz}) read whole; the 3D view refines to full resolution"
     ));
     Ok(OpenedStore {
-        volume: Volume::Bricked(Arc::new(bricked), Lod::Auto),
+        volume: Volume::Bricked(bricked, Lod::Auto),
         slices,
         notes,
     })
@@ -161,67 +153,5 @@ pub fn with_lod(volume: &Volume, lod: Lod) -> Volume {
     match volume {
         Volume::Bricked(b, _) => Volume::Bricked(b.clone(), lod),
         v => v.clone(),
-    }
-}
-
-/// `auto` or a level number (0: full resolution), as `volux render --lod`.
-pub fn parse_lod(s: &str) -> Result<Lod, String> {
-    if s == "auto" {
-        return Ok(Lod::Auto);
-    }
-    s.parse::<usize>()
-        .map(Lod::Level)
-        .map_err(|_| format!("--lod {s}: give auto or a level number (0 = full resolution)"))
-}
-
-/// `--memory-budget SIZE`: bytes with an optional binary unit (`4G`, `512MiB`, `1.5g`), or
-/// a percentage of the memory available now (`50%`), as the CLI's option.
-pub fn parse_budget(text: &str) -> Result<u64, String> {
-    let t = text.trim();
-    let bad = || format!("--memory-budget {text}: expected a size such as 4G, 512M or 50%");
-    let (number, scale) = if let Some(p) = t.strip_suffix('%') {
-        let available = volux_core::limits::available_memory() as f64;
-        (p, available / 100.0)
-    } else {
-        let split = t
-            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-            .unwrap_or(t.len());
-        let (number, unit) = t.split_at(split);
-        let unit = unit.trim().to_ascii_lowercase();
-        let unit = unit.trim_end_matches("ib").trim_end_matches('b');
-        let power = ["", "k", "m", "g", "t"]
-            .iter()
-            .position(|u| *u == unit)
-            .ok_or_else(bad)?;
-        (number, 1024f64.powi(power as i32))
-    };
-    let bytes = number.trim().parse::<f64>().map_err(|_| bad())? * scale;
-    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(bad());
-    }
-    Ok(bytes as u64)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn budget_words() {
-        assert_eq!(parse_budget("4G"), Ok(4 << 30));
-        assert_eq!(parse_budget("512MiB"), Ok(512 << 20));
-        assert_eq!(parse_budget("1000"), Ok(1000));
-        assert_eq!(parse_budget("1.5kb"), Ok(1536));
-        assert!(parse_budget("50%").is_ok_and(|b| b > 0));
-        for bad in ["", "0", "-1G", "4X", "abc", "%"] {
-            assert!(parse_budget(bad).is_err(), "{bad}");
-        }
-    }
-
-    #[test]
-    fn lod_words() {
-        assert_eq!(parse_lod("auto"), Ok(Lod::Auto));
-        assert_eq!(parse_lod("2"), Ok(Lod::Level(2)));
-        assert!(parse_lod("fine").is_err());
     }
 }

@@ -262,10 +262,7 @@ fn a_saved_session_reopens_the_same_view() {
     assert_eq!(b.window, [0.1, 0.7]);
     assert_eq!(b.crosshair, glam::DVec3::new(0.2, -0.3, 0.1));
     // The harness renders on the CPU (the library's default), and the session says so.
-    assert_eq!(
-        saved.backend,
-        Some(volux_render::session::SessionBackend::Cpu)
-    );
+    assert_eq!(saved.backend, Some(volux_app::Backend::Cpu));
 }
 
 /// A session naming a missing dataset says so, and the viewer stays usable.

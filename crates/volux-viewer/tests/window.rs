@@ -1,7 +1,7 @@
 //! The viewer in a real window under Xvfb: `--screenshot` against `volux render --session`,
 //! and a mouse drag (xdotool) that must change the picture. `.ci/run` installs Xvfb,
 //! xdotool, x11-apps (xwd) and Mesa when they are missing; without them these tests say so
-//! and skip.
+//! and skip, unless `VOLUX_WINDOW_REQUIRED=1` (set by `.ci/run`): then they fail.
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -31,11 +31,19 @@ fn have(tool: &str) -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// Says that a test skips for `why`, or fails with it when `VOLUX_WINDOW_REQUIRED` is set.
+fn skip_or_fail(why: &str) {
+    if std::env::var_os("VOLUX_WINDOW_REQUIRED").is_some_and(|v| v != "0") {
+        panic!("VOLUX_WINDOW_REQUIRED is set and {why}");
+    }
+    eprintln!("skipped: {why}");
+}
+
 /// Starts Xvfb, or says why not (the test then skips).
 fn display() -> Option<Display> {
     for tool in ["Xvfb", "xdotool", "xwd"] {
         if !have(tool) {
-            eprintln!("skipped: {tool} is not installed (.ci/run installs it)");
+            skip_or_fail(&format!("{tool} is not installed (.ci/run installs it)"));
             return None;
         }
     }
@@ -67,9 +75,9 @@ fn display() -> Option<Display> {
 
 /// The shared CT head when present, else a synthetic grid written to `dir`.
 fn dataset(dir: &Path) -> PathBuf {
-    let shared = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/invesalius_cranium_ct/cranium_256x256x108_int16.raw.gz");
-    if shared.is_file() {
+    if let Some(shared) =
+        volux_testkit::data::shared("invesalius_cranium_ct/cranium_256x256x108_int16.raw.gz")
+    {
         return shared;
     }
     eprintln!("note: the shared CT head is absent; using a synthetic grid");
@@ -106,7 +114,10 @@ fn screenshot_equals_the_batch_render_of_its_session() {
     );
     let volux = Path::new(VIEWER).with_file_name("volux");
     if !volux.is_file() {
-        eprintln!("skipped the batch half: {} is not built", volux.display());
+        skip_or_fail(&format!(
+            "the batch half needs {}, not built",
+            volux.display()
+        ));
         return;
     }
     let (session, batch_name) = (session.to_str().unwrap(), batch.to_str().unwrap());

@@ -1,7 +1,7 @@
 //! What every command shares: the error type, and loading a file with a spinner.
 use std::path::Path;
 
-use volux_io::{Dataset, Format, LoadOptions};
+use volux_io::{Dataset, Format};
 
 use crate::cli::LoadArgs;
 use crate::progress;
@@ -12,17 +12,7 @@ pub type CmdError = Box<dyn std::error::Error + Send + Sync>;
 /// Loads a file with a spinner.
 pub fn load(path: &Path, args: &LoadArgs, show: bool) -> Result<(Dataset, Format), CmdError> {
     let pb = progress::spinner(show, format!("loading {}", path.display()));
-    let opts = LoadOptions {
-        q_variable: args.q_variable.clone(),
-        q_file: args.q_file.clone(),
-        series_uid: args.series.clone(),
-        array: args.array.clone(),
-        level: args.level,
-        channel: args.channel.unwrap_or(0),
-        timepoint: args.timepoint.unwrap_or(0),
-        component: args.component,
-    };
-    let out = volux_io::load(path, &opts);
+    let out = volux_io::load(path, &args.dataset(path).load_options());
     pb.finish_and_clear();
     let (data, format) = out?;
     check_reader_options(args, format)?;

@@ -3,8 +3,8 @@
 //! NRRD `u8` (1 kept, 0 removed) and, optionally, the steps saved in a session.
 use std::time::Instant;
 
+use volux_app::session::Session;
 use volux_render::sculpt::SculptStep;
-use volux_render::session::Session;
 
 use super::common::CmdError;
 use super::workbench::{self, Workbench};

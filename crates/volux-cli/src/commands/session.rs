@@ -11,11 +11,11 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use volux_app::session::Session;
 use volux_core::image::PngOptions;
 use volux_core::Grid;
 use volux_render::scene::{Scene, Volume};
 use volux_render::sculpt::Sculpt;
-use volux_render::session::{Session, SessionBackend};
 
 use super::common::CmdError;
 use super::measure::Drawn;
@@ -39,11 +39,7 @@ fn backend(args: &RenderArgs, session: &Session) -> Backend {
     if args.given("backend") {
         return args.backend;
     }
-    match session.backend {
-        Some(SessionBackend::Auto) => Backend::Auto,
-        Some(SessionBackend::Gpu) => Backend::Gpu,
-        Some(SessionBackend::Cpu) | None => Backend::Cpu,
-    }
+    session.backend.unwrap_or(Backend::Cpu)
 }
 
 /// Renders the session at `path` to `args.output()`: its scene with the overrides given,

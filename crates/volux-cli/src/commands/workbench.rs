@@ -5,11 +5,11 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use volux_app::session::DatasetRef;
 use volux_core::{Buffer, Grid, Samples};
 use volux_io::Dataset;
 use volux_render::scene::{Scene, Volume};
 use volux_render::sculpt::{Sculpt, SculptStep, SurfacePoint};
-use volux_render::session::DatasetRef;
 
 use super::common::CmdError;
 use crate::cli::ToolViewArgs;
@@ -89,17 +89,7 @@ pub fn no_surface(what: &str, [x, y]: [f64; 2]) -> CmdError {
 
 /// The dataset reference a session saves for `view`.
 pub fn dataset_ref(view: &ToolViewArgs) -> DatasetRef {
-    DatasetRef {
-        path: view.file.clone(),
-        q_variable: view.load.q_variable.clone(),
-        q_file: view.load.q_file.clone(),
-        series_uid: view.load.series.clone(),
-        array: view.load.array.clone(),
-        as_tets: false,
-        channel: view.load.channel,
-        timepoint: view.load.timepoint,
-        component: view.load.component,
-    }
+    view.load.dataset(&view.file)
 }
 
 /// Writes `values` as an NRRD `u8` volume with `grid`'s geometry.

@@ -873,7 +873,7 @@ fn vtet() -> Seed {
 
 /// The tiny multi-frame DICOM file of the shared data, when present.
 fn dicom() -> Option<Seed> {
-    let p = volux_testkit::data::shared_root().join("pydicom_emri_small/emri_small.dcm");
+    let p = volux_testkit::data::shared("pydicom_emri_small/emri_small.dcm")?;
     let bytes = std::fs::read(p).ok()?;
     Some(Seed::grid(
         "dicom",

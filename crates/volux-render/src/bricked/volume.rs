@@ -26,6 +26,43 @@ pub enum Lod {
     Level(usize),
 }
 
+/// Where a bricked volume's value statistics (range, histogram, chunk ranges) come from:
+/// framing and the transfer-function presets use them, so they decide whether a store
+/// rendered out of core looks as the same data held whole.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StoreStatistics {
+    /// Recorded by the store (Volux's writer): nothing was read to find them, and they are
+    /// the full level's.
+    Recorded,
+    /// Found by reading the full level twice at opening (a store that records none):
+    /// the full level's, as in memory.
+    ReadAtOpening,
+    /// The range and chunk ranges are recorded, the histogram is not: the presets fit the
+    /// histogram of this coarser level.
+    HistogramOfLevel(usize),
+}
+
+impl StoreStatistics {
+    /// What a user should know when the statistics are not simply recorded: the time spent
+    /// reading them, or the presets fitted on a coarser level.
+    pub fn note(self) -> Option<String> {
+        match self {
+            Self::Recorded => None,
+            Self::ReadAtOpening => Some(
+                "the store records no value statistics: its full level was read twice at \
+                 opening to frame it and fit the presets as in memory (stores written by Volux \
+                 record them)"
+                    .into(),
+            ),
+            Self::HistogramOfLevel(level) => Some(format!(
+                "the store records no histogram: the presets fit level {level}'s, so an \
+                 automatic transfer function can differ slightly from the one of the data held \
+                 whole"
+            )),
+        }
+    }
+}
+
 /// A volume stored in chunks, rendered without holding it whole: each level's chunks are
 /// read into a cache of bounded size as rays need them (seed `003`, done exactly: one pass,
 /// opacity carried across bricks).
@@ -35,8 +72,12 @@ pub struct BrickedVolume {
     /// Per level, the chunks as macrocells for empty-space skipping (built on first use;
     /// `None` when the store does not record every chunk's range).
     chunk_cells: Vec<OnceLock<Option<MacrocellGrid>>>,
+    /// The full level's chunk ranges found by reading it, for a store that records neither
+    /// them nor its range (x fastest); `None` when the store records its range.
+    scanned_ranges: Option<Vec<[f64; 2]>>,
     range: [f64; 2],
     histogram: Histogram,
+    statistics: StoreStatistics,
 }
 
 impl std::fmt::Debug for BrickedVolume {
@@ -58,28 +99,48 @@ const HISTOGRAM_SAMPLES: usize = 1 << 24;
 
 impl BrickedVolume {
     /// `multiscale` with its bricks cached within `budget` bytes, shared by all levels (one
-    /// least-recently-used order over them). Finds the value range
-    /// (recorded by the store, else read chunk by chunk from the full level: the transfer
-    /// function is placed on it, as for the in-core grid) and the histogram the presets fit
-    /// on: the full level's when the store records it (Volux's writer does), else one of the
-    /// finest level of at most 2^24 samples. Errors name a chunk that cannot be read.
+    /// least-recently-used order over them). Finds the statistics that framing and the
+    /// transfer-function presets use, the same as for the data held whole:
+    /// - the value range, recorded by the store (Volux's writer records it), else read chunk
+    ///   by chunk from the full level, with each chunk's range (for framing and empty-space
+    ///   skipping, [`BrickedVolume::chunk_cells`]);
+    /// - the full level's histogram, recorded by the store, else counted in a second read of
+    ///   the full level when the first one was needed anyway; a store that records its range
+    ///   but not its histogram gets the one of its finest level of at most 2^24 samples
+    ///   ([`BrickedVolume::statistics`] says which).
+    ///
+    /// Errors name a chunk that cannot be read.
     pub fn open(multiscale: Multiscale, budget: u64) -> Result<Self, RenderError> {
         for level in multiscale.levels() {
             check_addressable(level.layout())?;
         }
         let full = multiscale.full();
-        let range = match full.value_range() {
-            Some(r) => r,
-            None => scan_range(full.as_ref())?,
+        let (range, scanned_ranges) = match full.value_range() {
+            Some(r) => (r, None),
+            None => {
+                let (r, chunks) = scan_range(full.as_ref())?;
+                (r, Some(chunks))
+            }
         };
         // The full level's histogram when the store records it over the same range (the
         // presets then fit as on the data in memory), else one of a coarse level.
         let recorded = full
             .value_histogram()
             .filter(|h| h.min == range[0] && h.max == range[1] && h.counts.len() == KEPT_BINS);
-        let histogram = match recorded {
-            Some(h) => h,
-            None => coarse_histogram(&multiscale, range)?,
+        let (histogram, statistics) = match recorded {
+            Some(h) => (h, StoreStatistics::Recorded),
+            None if scanned_ranges.is_some() => (
+                full_histogram(full.as_ref(), range)?,
+                StoreStatistics::ReadAtOpening,
+            ),
+            None => {
+                let (h, level) = coarse_histogram(&multiscale, range)?;
+                let statistics = match level {
+                    0 => StoreStatistics::Recorded,
+                    l => StoreStatistics::HistogramOfLevel(l),
+                };
+                (h, statistics)
+            }
         };
         let caches = BrickCache::shared(multiscale.levels(), budget);
         let chunk_cells = caches.iter().map(|_| OnceLock::new()).collect();
@@ -87,8 +148,10 @@ impl BrickedVolume {
             multiscale,
             caches,
             chunk_cells,
+            scanned_ranges,
             range,
             histogram,
+            statistics,
         })
     }
 
@@ -126,8 +189,20 @@ impl BrickedVolume {
         let source = self.multiscale.levels().get(level)?;
         self.chunk_cells
             .get(level)?
-            .get_or_init(|| chunk_cells(source.as_ref()))
+            .get_or_init(|| {
+                let layout = source.layout();
+                let recorded: Option<Vec<[f64; 2]>> = (0..layout.chunk_count())
+                    .map(|i| source.chunk_range(layout.chunk_coords(i)))
+                    .collect();
+                let scanned = (level == 0).then(|| self.scanned_ranges.clone()).flatten();
+                chunk_cells(layout, &recorded.or(scanned)?)
+            })
             .as_ref()
+    }
+
+    /// Where the range, histogram and chunk ranges come from.
+    pub fn statistics(&self) -> StoreStatistics {
+        self.statistics
     }
 
     /// The full-resolution level's world box.
@@ -146,7 +221,8 @@ impl BrickedVolume {
         self.range
     }
 
-    /// The histogram (of the finest level of at most 2^24 samples) over [`BrickedVolume::range`] with `bins` bins
+    /// The histogram the presets fit ([`BrickedVolume::statistics`] says of which level) over
+    /// [`BrickedVolume::range`] with `bins` bins
     /// (from the kept one of 256 bins, each counted in the new bin holding its centre, when
     /// `bins` differs).
     pub fn histogram(&self, bins: usize) -> Histogram {
@@ -215,8 +291,9 @@ impl BrickedVolume {
     }
 }
 
-/// The range of every chunk's samples, read one chunk per thread at a time.
-fn scan_range(level: &dyn ChunkSource) -> Result<[f64; 2], RenderError> {
+/// The range of the level's finite samples and each chunk's (`[0, 0]` for a chunk with
+/// none), read one chunk per thread at a time.
+fn scan_range(level: &dyn ChunkSource) -> Result<([f64; 2], Vec<[f64; 2]>), RenderError> {
     let layout = level.layout();
     let ranges: Result<Vec<[f64; 2]>, volux_core::Error> = (0..layout.chunk_count())
         .into_par_iter()
@@ -235,8 +312,9 @@ fn scan_range(level: &dyn ChunkSource) -> Result<[f64; 2], RenderError> {
             )))
         })
         .collect();
-    let r = ranges?
-        .into_iter()
+    let ranges = ranges?;
+    let r = ranges
+        .iter()
         .fold([f64::INFINITY, f64::NEG_INFINITY], |a, b| {
             [a[0].min(b[0]), a[1].max(b[1])]
         });
@@ -245,17 +323,51 @@ fn scan_range(level: &dyn ChunkSource) -> Result<[f64; 2], RenderError> {
             "the volume has no finite sample".into(),
         )));
     }
-    Ok(r)
+    // A chunk with no finite sample as Volux's writer records it.
+    let ranges = ranges
+        .into_iter()
+        .map(|c| if c[0] <= c[1] { c } else { [0.0, 0.0] })
+        .collect();
+    Ok((r, ranges))
+}
+
+/// The full level's histogram over `range` with [`KEPT_BINS`] bins, counted chunk by chunk
+/// (the counts of [`Histogram::from_values`] on the level held whole).
+fn full_histogram(level: &dyn ChunkSource, range: [f64; 2]) -> Result<Histogram, RenderError> {
+    let layout = level.layout();
+    let counts: Result<Vec<u64>, volux_core::Error> = (0..layout.chunk_count())
+        .into_par_iter()
+        .map(|i| {
+            let s = level.read_chunk(layout.chunk_coords(i))?;
+            Ok(volux_core::with_samples!(&s, |v| Histogram::from_values(
+                v, range, KEPT_BINS
+            )
+            .counts))
+        })
+        .try_reduce(
+            || vec![0u64; KEPT_BINS],
+            |mut a, b| {
+                a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                Ok(a)
+            },
+        );
+    Ok(Histogram {
+        min: range[0],
+        max: range[1],
+        counts: counts?,
+    })
 }
 
 /// The histogram over `range` of the finest level with at most [`HISTOGRAM_SAMPLES`]
-/// samples (the full level when it is that small: the presets then match the in-core grid's).
-fn coarse_histogram(ms: &Multiscale, range: [f64; 2]) -> Result<Histogram, RenderError> {
+/// samples (the full level when it is that small: the presets then match the in-core grid's),
+/// and that level.
+fn coarse_histogram(ms: &Multiscale, range: [f64; 2]) -> Result<(Histogram, usize), RenderError> {
     let bins = KEPT_BINS;
-    let Some(level) = ms
+    let Some((index, level)) = ms
         .levels()
         .iter()
-        .find(|l| l.layout().dims.iter().product::<usize>() <= HISTOGRAM_SAMPLES)
+        .enumerate()
+        .find(|(_, l)| l.layout().dims.iter().product::<usize>() <= HISTOGRAM_SAMPLES)
     else {
         return Err(RenderError::InvalidOptions(format!(
             "{}: its coarsest level has more than {HISTOGRAM_SAMPLES} samples; write a pyramid (volux convert --levels auto)",
@@ -268,16 +380,12 @@ fn coarse_histogram(ms: &Multiscale, range: [f64; 2]) -> Result<Histogram, Rende
         let s = level.read_chunk(layout.chunk_coords(i))?;
         volux_core::with_samples!(&s, |v| values.extend(v.iter().map(|x| x.to_f32())));
     }
-    Ok(Histogram::from_values(&values, range, bins))
+    Ok((Histogram::from_values(&values, range, bins), index))
 }
 
 /// The macrocells of [`BrickedVolume::chunk_cells`].
-fn chunk_cells(source: &dyn ChunkSource) -> Option<MacrocellGrid> {
-    let layout = source.layout();
+fn chunk_cells(layout: &ChunkLayout, ranges: &[[f64; 2]]) -> Option<MacrocellGrid> {
     let n = layout.chunks_per_axis();
-    let ranges: Vec<[f64; 2]> = (0..layout.chunk_count())
-        .map(|i| source.chunk_range(layout.chunk_coords(i)))
-        .collect::<Option<_>>()?;
     let cells = (0..ranges.len())
         .map(|i| {
             let c = layout.chunk_coords(i);

@@ -7,18 +7,17 @@
 //! pipeline of `volux_render::distributed::pipeline`, exact), its regions rendered as the
 //! states arrive; the ranks then agree that it succeeded. An error on any rank is reported
 //! once, by rank 0, as one line; nothing is written then.
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
+use volux_app::session::DatasetRef;
 use volux_core::Image;
-use volux_io::omezarr::{self, ZarrOptions};
+use volux_io::omezarr;
 use volux_mpi::stats::RankStats;
 use volux_mpi::{Mpi, World};
 use volux_render::bricked::{
-    level_placement, render_cache_frame, render_cache_region, BrickCache, BrickedRenderer,
-    BrickedVolume, Lod,
+    level_placement, render_cache_frame, render_cache_region, BrickCache, BrickedRenderer, Lod,
 };
 use volux_render::distributed::exchange::Exchange;
 use volux_render::distributed::job::RegionJob;
@@ -35,23 +34,10 @@ use crate::settings::RenderPlan;
 /// What rank 0 sends every rank.
 #[derive(Serialize, Deserialize)]
 struct Plan {
-    store: PathBuf,
-    array: Option<String>,
-    channel: usize,
-    timepoint: usize,
+    /// The store and its array, channel and timepoint.
+    dataset: DatasetRef,
     budget: u64,
     job: RegionJob,
-}
-
-impl Plan {
-    fn zarr(&self) -> ZarrOptions {
-        ZarrOptions {
-            array: self.array.clone(),
-            level: 0,
-            channel: self.channel,
-            timepoint: self.timepoint,
-        }
-    }
 }
 
 /// Runs this rank's part.
@@ -144,12 +130,13 @@ struct Region {
 
 /// Opens this rank's region of the plan's level.
 fn open_region(plan: &Plan, rank: usize, size: usize) -> Result<Region, CmdError> {
-    let ms = omezarr::open_multiscale(&plan.store, &plan.zarr())
-        .map_err(|e| format!("{}: {e}", plan.store.display()))?;
+    let store = &plan.dataset.path;
+    let ms = omezarr::open_multiscale(store, &volux_app::store::zarr_options(&plan.dataset))
+        .map_err(|e| format!("{}: {e}", store.display()))?;
     let level = ms.levels().get(plan.job.level).cloned().ok_or_else(|| {
         format!(
             "{}: level {} does not exist",
-            plan.store.display(),
+            store.display(),
             plan.job.level
         )
     })?;
@@ -215,16 +202,9 @@ fn plan(args: &RenderArgs) -> Result<Plan, CmdError> {
         )
         .into());
     }
-    let zarr = ZarrOptions {
-        array: args.load.array.clone(),
-        level: 0,
-        channel: args.load.channel.unwrap_or(0),
-        timepoint: args.load.timepoint.unwrap_or(0),
-    };
+    let dataset = args.load.dataset(file);
     let budget = volux_core::limits::memory_budget();
-    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", file.display());
-    let ms = omezarr::open_multiscale(file, &zarr).map_err(|e| at(&e))?;
-    let volume = Arc::new(BrickedVolume::open(ms, budget).map_err(|e| at(&e))?);
+    let volume = volux_app::store::open_store(&dataset, budget)?.volume;
     let lod = match args.lod.as_deref() {
         Some(s) => crate::commands::bricked::parse_lod(s)?,
         None => Lod::Level(0),
@@ -233,10 +213,7 @@ fn plan(args: &RenderArgs) -> Result<Plan, CmdError> {
     let level = BrickedRenderer::new(volume.clone(), lod).level_for(&scene);
     let job = RegionJob::from_scene(&scene, level, volume.range())?;
     Ok(Plan {
-        store: file.to_path_buf(),
-        array: zarr.array,
-        channel: zarr.channel,
-        timepoint: zarr.timepoint,
+        dataset,
         budget,
         job,
     })

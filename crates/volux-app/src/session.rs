@@ -24,9 +24,11 @@ use serde::{Deserialize, Serialize};
 use volux_core::image::{write_atomically, PngOptions};
 use volux_core::Camera;
 
-use crate::error::RenderError;
-use crate::scene::{Appearance, Method, Scene, View, Volume};
-use crate::sculpt::{Sculpt, SculptStep};
+use volux_render::scene::{Appearance, Method, Scene, View, Volume};
+use volux_render::sculpt::{Sculpt, SculptStep};
+
+use crate::backend::Backend;
+use crate::error::AppError;
 
 /// The session format's version; files of another version are refused.
 pub const SESSION_VERSION: u32 = 1;
@@ -66,6 +68,35 @@ pub struct DatasetRef {
     /// vector; a colour image keeps its colour).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub component: Option<usize>,
+    /// OME-Zarr: a pyramid level read whole into memory (default: the store rendered out of
+    /// core when it is over the memory budget, else its full level read whole).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub level: Option<usize>,
+}
+
+impl DatasetRef {
+    /// The dataset at `path` with the readers' defaults.
+    pub fn at(path: impl Into<PathBuf>) -> Self {
+        Self {
+            path: path.into(),
+            ..Self::default()
+        }
+    }
+
+    /// The reader options this dataset is loaded with: the one translation of a dataset
+    /// reference into [`volux_io::LoadOptions`], for every front end.
+    pub fn load_options(&self) -> volux_io::LoadOptions {
+        volux_io::LoadOptions {
+            q_variable: self.q_variable.clone(),
+            q_file: self.q_file.clone(),
+            series_uid: self.series_uid.clone(),
+            array: self.array.clone(),
+            level: self.level,
+            channel: self.channel.unwrap_or(0),
+            timepoint: self.timepoint.unwrap_or(0),
+            component: self.component,
+        }
+    }
 }
 
 /// The slice views' state: the window (values mapped to black and white) and the
@@ -115,20 +146,7 @@ pub struct Session {
     /// Where the session is rendered (`volux render --session` follows it unless
     /// `--backend` is given; `null`: the CPU engine, the reference).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub backend: Option<SessionBackend>,
-}
-
-/// Where a session asks to be rendered: the CPU engine, the GPU backend, or the GPU when
-/// it can draw the scene (`auto`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SessionBackend {
-    /// The GPU where it draws the scene, else the CPU.
-    Auto,
-    /// The CPU engine.
-    Cpu,
-    /// The GPU backend, or an error saying why not.
-    Gpu,
+    pub backend: Option<Backend>,
 }
 
 impl Session {
@@ -160,16 +178,13 @@ impl Session {
 
     /// The scene this session renders on `volume`: [`Session::scene`] with the sculpt steps
     /// replayed on a grid (their mask and planes); the sculpt state is returned too.
-    pub fn scene_on(&self, volume: &Volume) -> Result<(Scene, Option<Sculpt>), RenderError> {
+    pub fn scene_on(&self, volume: &Volume) -> Result<(Scene, Option<Sculpt>), AppError> {
         let mut scene = self.scene();
         if self.sculpt.is_empty() {
             return Ok((scene, None));
         }
         let Volume::Grid(grid) = volume else {
-            return Err(RenderError::InvalidOptions(
-                "the session's sculpt steps apply to grids; this dataset is a tetrahedral mesh"
-                    .into(),
-            ));
+            return Err(AppError::SculptOnMesh);
         };
         let sculpt = Sculpt::replay(grid, &self.sculpt)?;
         sculpt.apply_to(&mut scene);
@@ -204,8 +219,8 @@ impl Session {
 
     /// Parses and checks a session (`origin` names it in errors): the version, the fields,
     /// and the scene it describes.
-    pub fn from_json(text: &str, origin: &str) -> Result<Self, RenderError> {
-        let fail = |reason: String| RenderError::Session {
+    pub fn from_json(text: &str, origin: &str) -> Result<Self, AppError> {
+        let fail = |reason: String| AppError::Session {
             path: origin.to_string(),
             reason,
         };
@@ -238,9 +253,9 @@ impl Session {
     }
 
     /// Reads a session file; a relative dataset path becomes relative to the file's folder.
-    pub fn load(path: &Path) -> Result<Self, RenderError> {
+    pub fn load(path: &Path) -> Result<Self, AppError> {
         let origin = path.display().to_string();
-        let fail = |reason: String| RenderError::Session {
+        let fail = |reason: String| AppError::Session {
             path: origin.clone(),
             reason,
         };
@@ -266,10 +281,10 @@ impl Session {
     /// Writes the session (to a temporary name, then renamed). The dataset path, relative
     /// to the working folder in memory, is written relative to the session's folder when
     /// the dataset lies inside it (the two move together), absolute otherwise.
-    pub fn save(&self, path: &Path) -> Result<(), RenderError> {
+    pub fn save(&self, path: &Path) -> Result<(), AppError> {
         let mut saved = self.clone();
         saved.dataset.path = path_for_session(&self.dataset.path, path);
-        write_atomically(path, saved.to_json().as_bytes()).map_err(|e| RenderError::Session {
+        write_atomically(path, saved.to_json().as_bytes()).map_err(|e| AppError::Session {
             path: path.display().to_string(),
             reason: e.to_string(),
         })
@@ -298,10 +313,10 @@ fn path_for_session(dataset: &Path, session: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrate::integrator::Integrator;
-    use crate::isosurface::{Isosurfaces, Isovalue};
-    use crate::scene::GridRaycast;
     use volux_core::{synth, CameraSpec};
+    use volux_render::integrate::integrator::Integrator;
+    use volux_render::isosurface::{Isosurfaces, Isovalue};
+    use volux_render::scene::GridRaycast;
 
     fn scene() -> Scene {
         let grid = synth::marschner_lobb(8).unwrap();
@@ -339,7 +354,7 @@ mod tests {
             window: [0.0, 1.0],
             crosshair: [0.5, 0.5, 0.5],
         });
-        session.backend = Some(SessionBackend::Gpu);
+        session.backend = Some(Backend::Gpu);
         let json = session.to_json();
         let raw: serde_json::Value = serde_json::from_str(&json).unwrap();
         assert_eq!(raw["backend"], "gpu");
@@ -394,5 +409,27 @@ mod tests {
             assert!(err.contains(expected), "{err} (wanted {expected})");
             assert!(err.starts_with("session s.json: "), "{err}");
         }
+    }
+
+    /// A session saved before label steps had a rule reads them as nearest seeds, and saves
+    /// a nearest step without the field.
+    #[test]
+    fn an_old_label_step_reads_as_nearest() {
+        use volux_core::sculpt::RegionRule;
+        let old = r#"{"tool": "label", "point": [1, 2, 3], "label": 4, "colour": [1, 0, 0]}"#;
+        let step: SculptStep = serde_json::from_str(old).unwrap();
+        let mut session = Session::new(DatasetRef::default(), &scene(), None);
+        session.sculpt = vec![step.clone()];
+        let json = session.to_json();
+        assert!(!json.contains("\"rule\""), "{json}");
+        let back = Session::from_json(&json, "old.json").unwrap();
+        assert_eq!(back.sculpt, vec![step]);
+        assert!(matches!(
+            back.sculpt[0],
+            SculptStep::Label {
+                rule: RegionRule::Nearest,
+                ..
+            }
+        ));
     }
 }

@@ -1,0 +1,27 @@
+//! The application layer of Volux: what every front end (the `volux` CLI, the `volux-view`
+//! viewer, the MPI driver, the Python bindings) needs once, between the libraries (core, io,
+//! render, gpu) and the front ends, as f3d's libf3d sits under its application and its
+//! Python bindings. A front end translates its arguments or widgets into these calls and
+//! phrases their errors for its users; it never decides what another front end also needs.
+//!
+//! - [`backend`]: where frames are rendered ([`Backend`] `auto | cpu | gpu`), and the one
+//!   [`RendererFactory`] that opens renderers on it (OSPRay's device role); `auto` never
+//!   prefers a software adapter to the CPU engine;
+//! - [`session`]: a scene and its dataset saved as versioned JSON (the viewer's sessions,
+//!   rendered in batch by `volux render --session`);
+//! - [`store`]: OME-Zarr stores opened out of core as bricked volumes, with the notes a user
+//!   should read;
+//! - [`words`]: the words of options (memory sizes and budgets, pyramid levels, image sizes,
+//!   backends), parsed the same way in every front end;
+//! - [`AppError`]: errors as data (which session, which word, which backend).
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod backend;
+mod error;
+pub mod session;
+pub mod store;
+pub mod words;
+
+pub use backend::{Backend, Device, RendererFactory};
+pub use error::AppError;
