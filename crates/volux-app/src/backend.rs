@@ -1,5 +1,6 @@
 //! Where frames are rendered (OSPRay's device role): the CPU engine, or the GPU backend
-//! (`volux-gpu`, behind the `gpu` feature) when there is an adapter and it draws the scene.
+//! (`volux-gpu`, in front ends built with it) when there is an adapter and it draws the
+//! scene.
 //!
 //! - [`Backend::Cpu`] never opens a device;
 //! - [`Backend::Gpu`] insists: what the GPU cannot draw is an error that says why;
@@ -7,20 +8,19 @@
 //!   method and features, else on the CPU, and says why ([`Placement::cpu_because`]). A
 //!   software adapter (llvmpipe, lavapipe: wgpu's device type `Cpu`) is never preferred to
 //!   the CPU engine, which is faster on the same cores, unless the method is GPU-only
-//!   (texture slicing), whose refusal by the GPU is then the answer
-//!   ([`volux_gpu::auto_draws`]).
+//!   (texture slicing), whose refusal by the GPU is then the answer (`volux_gpu::auto_draws`).
 //!
-//! Every front end renders through a [`RendererFactory`], which keeps the device once opened.
+//! Every front end renders through a [`RendererFactory`], given the GPU device
+//! ([`GpuDevice`]) when the front end was built with one: the application layer itself
+//! carries no GPU dependency, so a front end built without the GPU has none.
 use serde::{Deserialize, Serialize};
+use volux_render::device::GpuDevice;
 use volux_render::engine::{create_renderer, Renderer};
 use volux_render::scene::{Method, Scene, Volume};
 use volux_render::RenderError;
 
 use crate::error::AppError;
 use crate::words::WordError;
-
-/// Whether this build has the GPU backend (the `gpu` feature).
-pub const GPU_BUILT: bool = cfg!(feature = "gpu");
 
 /// Where frames are rendered. The default is the CPU engine, the reference (a library
 /// caller that names no backend gets the same pixels everywhere); the CLI and the viewer
@@ -110,20 +110,19 @@ pub struct Opened {
     pub cpu_because: Option<String>,
 }
 
-/// Makes renderers on a [`Backend`]: keeps the GPU device once opened (or why it could not
-/// be), so a front end that renders many frames opens it once.
+/// Makes renderers on a [`Backend`], on the CPU engine or on the GPU device the front end
+/// hands over (`volux_gpu::LazyGpu` in a build with the GPU backend; `None` otherwise), which
+/// is kept once opened, so a front end that renders many frames opens it once.
 pub struct RendererFactory {
     backend: Backend,
-    gpu: gpu::Lazy,
+    gpu: Option<Box<dyn GpuDevice>>,
 }
 
 impl RendererFactory {
-    /// A factory for `backend`; no device is opened yet.
-    pub fn new(backend: Backend) -> Self {
-        Self {
-            backend,
-            gpu: gpu::Lazy::new(),
-        }
+    /// A factory for `backend` with the front end's GPU device, if it was built with one; no
+    /// device is opened yet.
+    pub fn new(backend: Backend, gpu: Option<Box<dyn GpuDevice>>) -> Self {
+        Self { backend, gpu }
     }
 
     /// The backend it renders on.
@@ -131,29 +130,38 @@ impl RendererFactory {
         self.backend
     }
 
+    /// The GPU device, or [`AppError::GpuNotBuilt`].
+    fn gpu(&mut self) -> Result<&mut Box<dyn GpuDevice>, AppError> {
+        self.gpu.as_mut().ok_or(AppError::GpuNotBuilt)
+    }
+
     /// Where the frame of `scene` (its method resolved) on `volume` is drawn; an error when
     /// the backend is `gpu` (or the method is GPU-only) and the GPU cannot draw it.
     pub fn place(&mut self, volume: &Volume, scene: &Scene) -> Result<Placement, AppError> {
-        let gpu = |on_gpu| Placement {
+        let placed = |on_gpu| Placement {
             on_gpu,
             cpu_because: None,
         };
-        match self.backend {
-            Backend::Cpu => Ok(gpu(false)),
-            // Only the GPU draws a GPU-only method: why it cannot is the answer.
-            Backend::Gpu => self.gpu.draws(volume, scene, false).map(|()| gpu(true)),
-            Backend::Auto if scene.method.gpu_only() => {
-                self.gpu.draws(volume, scene, false).map(|()| gpu(true))
-            }
-            Backend::Auto => match self.gpu.draws(volume, scene, true) {
-                Ok(()) => Ok(gpu(true)),
-                Err(AppError::GpuNotBuilt) => Ok(gpu(false)),
-                Err(why) => Ok(Placement {
-                    on_gpu: false,
-                    cpu_because: Some(why.to_string()),
-                }),
-            },
+        let insist = self.backend == Backend::Gpu || scene.method.gpu_only();
+        if self.backend == Backend::Cpu {
+            return Ok(placed(false));
         }
+        if insist {
+            // Only the GPU draws a GPU-only method: why it cannot is the answer.
+            self.gpu()?.draws(volume, scene, false)?;
+            return Ok(placed(true));
+        }
+        let Some(gpu) = self.gpu.as_mut() else {
+            // A build without the GPU: there was no choice to explain.
+            return Ok(placed(false));
+        };
+        Ok(match gpu.draws(volume, scene, true) {
+            Ok(()) => placed(true),
+            Err(why) => Placement {
+                on_gpu: false,
+                cpu_because: Some(why.to_string()),
+            },
+        })
     }
 
     /// A renderer of `method` (resolved) for `volume`, on the GPU or the CPU.
@@ -164,7 +172,8 @@ impl RendererFactory {
         on_gpu: bool,
     ) -> Result<(Box<dyn Renderer>, Device), AppError> {
         if on_gpu {
-            return self.gpu.renderer(volume, method);
+            let (renderer, adapter) = self.gpu()?.renderer(volume, method)?;
+            return Ok((renderer, Device::Gpu(adapter)));
         }
         Ok((create_renderer(volume, method)?, Device::Cpu))
     }
@@ -180,11 +189,12 @@ impl RendererFactory {
             cpu_because: placement.cpu_because,
         })
     }
-}
 
-/// The adapters the GPU backend can open, preferred first (name, API, kind, driver).
-pub fn adapters() -> Result<Vec<String>, AppError> {
-    gpu::adapters()
+    /// The adapters the GPU device can open, preferred first.
+    pub fn adapters(&self) -> Result<Vec<String>, AppError> {
+        let gpu = self.gpu.as_ref().ok_or(AppError::GpuNotBuilt)?;
+        Ok(gpu.adapters())
+    }
 }
 
 impl From<AppError> for RenderError {
@@ -195,104 +205,6 @@ impl From<AppError> for RenderError {
             AppError::Render(r) => r,
             other => RenderError::Backend(other.to_string()),
         }
-    }
-}
-
-#[cfg(feature = "gpu")]
-mod gpu {
-    use std::sync::Arc;
-
-    use volux_gpu::GpuContext;
-    use volux_render::engine::Renderer;
-    use volux_render::scene::{Method, Scene, Volume};
-    use volux_render::RenderError;
-
-    use super::Device;
-    use crate::error::AppError;
-
-    /// The device, opened on first use (or why it could not be).
-    pub(super) struct Lazy(Option<Result<Arc<GpuContext>, String>>);
-
-    impl Lazy {
-        pub(super) fn new() -> Self {
-            Self(None)
-        }
-
-        fn context(&mut self) -> Result<Arc<GpuContext>, AppError> {
-            let opened = self
-                .0
-                .get_or_insert_with(|| GpuContext::new().map(Arc::new).map_err(|e| e.to_string()));
-            Ok(opened.clone().map_err(RenderError::Backend)?)
-        }
-
-        /// `Ok` when the GPU backend draws `scene` on `volume` and a device is open; `auto`
-        /// applies the rule of [`volux_gpu::auto_draws`] (no software adapter unless the
-        /// method is GPU-only).
-        pub(super) fn draws(
-            &mut self,
-            volume: &Volume,
-            scene: &Scene,
-            auto: bool,
-        ) -> Result<(), AppError> {
-            volux_gpu::supports(volume, scene).map_err(RenderError::Backend)?;
-            let ctx = self.context()?;
-            if auto {
-                volux_gpu::auto_draws(&ctx, volume, scene).map_err(RenderError::Backend)?;
-            }
-            Ok(())
-        }
-
-        pub(super) fn renderer(
-            &mut self,
-            volume: &Volume,
-            method: &Method,
-        ) -> Result<(Box<dyn Renderer>, Device), AppError> {
-            let ctx = self.context()?;
-            let device = Device::Gpu(ctx.adapter().to_string());
-            let renderer =
-                volux_gpu::renderer_for(ctx, volume, method).map_err(RenderError::from)?;
-            Ok((renderer, device))
-        }
-    }
-
-    pub(super) fn adapters() -> Result<Vec<String>, AppError> {
-        Ok(volux_gpu::adapters()
-            .iter()
-            .map(|a| a.to_string())
-            .collect())
-    }
-}
-
-#[cfg(not(feature = "gpu"))]
-mod gpu {
-    use volux_render::engine::Renderer;
-    use volux_render::scene::{Method, Scene, Volume};
-
-    use super::Device;
-    use crate::error::AppError;
-
-    pub(super) struct Lazy;
-
-    impl Lazy {
-        pub(super) fn new() -> Self {
-            Self
-        }
-
-        pub(super) fn draws(&mut self, _: &Volume, _: &Scene, _: bool) -> Result<(), AppError> {
-            Err(AppError::GpuNotBuilt)
-        }
-
-        pub(super) fn renderer(
-            &mut self,
-            _: &Volume,
-            _: &Method,
-        ) -> Result<(Box<dyn Renderer>, Device), AppError> {
-            Err(AppError::GpuNotBuilt)
-        }
-    }
-
-    pub(super) fn adapters() -> Result<Vec<String>, AppError> {
-        Err(AppError::GpuNotBuilt)
     }
 }
 
@@ -315,7 +227,7 @@ mod tests {
     fn the_cpu_backend_never_opens_a_device() {
         let volume = Volume::from(synth::marschner_lobb(12).unwrap());
         let scene = scene_on(&volume);
-        let mut factory = RendererFactory::new(Backend::Cpu);
+        let mut factory = RendererFactory::new(Backend::Cpu, None);
         let mut opened = factory.open(&volume, &scene).unwrap();
         assert_eq!(opened.device, Device::Cpu);
         assert_eq!(opened.cpu_because, None);
@@ -328,14 +240,13 @@ mod tests {
         assert_eq!(a.image, b.image);
     }
 
-    /// Without the GPU backend, `auto` renders on the CPU without a reason (there was no
+    /// Without a GPU device, `auto` renders on the CPU without a reason (there was no
     /// choice) and `gpu` is refused as not built.
-    #[cfg(not(feature = "gpu"))]
     #[test]
     fn a_build_without_the_gpu_refuses_it_by_name() {
         let volume = Volume::from(synth::marschner_lobb(8).unwrap());
         let scene = scene_on(&volume);
-        let auto = RendererFactory::new(Backend::Auto)
+        let auto = RendererFactory::new(Backend::Auto, None)
             .place(&volume, &scene)
             .unwrap();
         assert_eq!(
@@ -345,9 +256,81 @@ mod tests {
                 cpu_because: None
             }
         );
-        let gpu = RendererFactory::new(Backend::Gpu).place(&volume, &scene);
-        assert!(matches!(gpu, Err(AppError::GpuNotBuilt)));
-        assert!(matches!(adapters(), Err(AppError::GpuNotBuilt)));
+        let mut gpu = RendererFactory::new(Backend::Gpu, None);
+        assert!(matches!(
+            gpu.place(&volume, &scene),
+            Err(AppError::GpuNotBuilt)
+        ));
+        assert!(matches!(gpu.adapters(), Err(AppError::GpuNotBuilt)));
+    }
+
+    /// A device that draws everything, on a hardware or a software adapter; it counts the
+    /// times it was asked.
+    struct FakeGpu {
+        software: bool,
+        asked: std::sync::Arc<std::sync::atomic::AtomicUsize>,
+    }
+
+    impl GpuDevice for FakeGpu {
+        fn draws(&mut self, _: &Volume, scene: &Scene, auto: bool) -> Result<(), RenderError> {
+            self.asked
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if auto && self.software && !scene.method.gpu_only() {
+                return Err(RenderError::Backend("a software rasterizer".into()));
+            }
+            Ok(())
+        }
+
+        fn renderer(
+            &mut self,
+            volume: &Volume,
+            method: &Method,
+        ) -> Result<(Box<dyn Renderer>, String), RenderError> {
+            Ok((create_renderer(volume, method)?, "fake".into()))
+        }
+
+        fn adapters(&self) -> Vec<String> {
+            vec!["fake".into()]
+        }
+    }
+
+    /// `auto` takes a hardware device, says why it keeps to the CPU on a software one, and
+    /// insists on the device for a GPU-only method; `cpu` never asks the device.
+    #[test]
+    fn auto_prefers_hardware_and_says_why_not() {
+        let volume = Volume::from(synth::marschner_lobb(8).unwrap());
+        let scene = scene_on(&volume);
+        let asked = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let device = |software| -> Option<Box<dyn GpuDevice>> {
+            Some(Box::new(FakeGpu {
+                software,
+                asked: asked.clone(),
+            }))
+        };
+        let hardware = RendererFactory::new(Backend::Auto, device(false))
+            .open(&volume, &scene)
+            .unwrap();
+        assert_eq!(hardware.device, Device::Gpu("fake".into()));
+        let software = RendererFactory::new(Backend::Auto, device(true))
+            .place(&volume, &scene)
+            .unwrap();
+        assert!(!software.on_gpu);
+        assert_eq!(
+            software.cpu_because.as_deref(),
+            Some("a software rasterizer")
+        );
+        let mut slicing = scene.clone();
+        slicing.method = Method::Slicing(Default::default());
+        let placed = RendererFactory::new(Backend::Auto, device(true))
+            .place(&volume, &slicing)
+            .unwrap();
+        assert!(placed.on_gpu, "a GPU-only method goes to the GPU");
+        let before = asked.load(std::sync::atomic::Ordering::Relaxed);
+        let cpu = RendererFactory::new(Backend::Cpu, device(false))
+            .place(&volume, &scene)
+            .unwrap();
+        assert!(!cpu.on_gpu);
+        assert_eq!(asked.load(std::sync::atomic::Ordering::Relaxed), before);
     }
 
     #[test]

@@ -931,6 +931,14 @@ impl From<RuleArg> for volux_core::sculpt::RegionRule {
     }
 }
 
+/// `--backend`: the application layer's backend names ([`Backend::NAMES`]), listed in the
+/// help and completions.
+fn backend_parser() -> impl clap::builder::TypedValueParser<Value = Backend> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(Backend::NAMES)
+        .map(|s| s.parse::<Backend>().expect("a listed name"))
+}
+
 #[cfg(test)]
 mod tests {
     use clap::CommandFactory;
@@ -970,12 +978,4 @@ mod tests {
         let size = option(render, &clap::Id::from("size"));
         assert_eq!(size.get_default_values(), ["512x512"]);
     }
-}
-
-/// `--backend`: the application layer's backend names ([`Backend::NAMES`]), listed in the
-/// help and completions.
-fn backend_parser() -> impl clap::builder::TypedValueParser<Value = Backend> {
-    use clap::builder::TypedValueParser;
-    clap::builder::PossibleValuesParser::new(Backend::NAMES)
-        .map(|s| s.parse::<Backend>().expect("a listed name"))
 }

@@ -41,6 +41,7 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 mod context;
+mod device;
 mod error;
 mod grid;
 mod params;
@@ -55,6 +56,7 @@ mod tables;
 mod target;
 
 pub use context::{adapters, quiet_headless_vulkan, AdapterSummary, GpuContext};
+pub use device::LazyGpu;
 pub use error::GpuError;
 pub use grid::{GpuGridRenderer, MAX_ISOVALUES};
 pub use pool::{GpuBrickedRenderer, GpuPoolRenderer, PoolOptions, PoolSource, PoolStats};

@@ -83,6 +83,7 @@ pub mod classify;
 mod clip_tests;
 pub mod composite;
 pub mod data_colour;
+pub mod device;
 pub mod distributed;
 pub mod engine;
 pub mod error;

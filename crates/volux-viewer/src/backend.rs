@@ -9,3 +9,13 @@
 //! says which it was drawn on ([`Device`]). The render thread opens its renderers through
 //! one [`volux_app::RendererFactory`].
 pub use volux_app::backend::{Backend, Device};
+use volux_render::device::GpuDevice;
+
+/// The GPU device of a build with the `gpu` feature (the default), for the render thread's
+/// [`volux_app::RendererFactory`].
+pub fn gpu_device() -> Option<Box<dyn GpuDevice>> {
+    #[cfg(feature = "gpu")]
+    return Some(Box::new(volux_gpu::LazyGpu::new()));
+    #[cfg(not(feature = "gpu"))]
+    None
+}

@@ -138,7 +138,7 @@ impl RenderService {
             tx,
             wake: Box::new(wake),
             renderers: HashMap::new(),
-            factory: RendererFactory::new(backend),
+            factory: RendererFactory::new(backend, crate::backend::gpu_device()),
             ns_per_pixel: None,
             previewed: None,
         };
