@@ -202,7 +202,7 @@ fn a_store_renders_out_of_core_as_in_memory_and_a_bad_lod_writes_nothing() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("--lod fine") && err.lines().count() == 1,
+        err.contains("--lod 'fine'") && err.lines().count() == 1,
         "{err}"
     );
     assert!(!dir.join("bad.png").exists());

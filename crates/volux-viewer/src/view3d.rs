@@ -9,6 +9,7 @@ use volux_render::engine::{FrameStats, MethodStats};
 
 use crate::app::ViewerApp;
 use crate::navigation;
+use crate::overlay_text::backed_text;
 use crate::render_service::Rendered;
 use crate::slices::{direction_name, Plane};
 use crate::{plane_handle, sculpt_tools};
@@ -205,7 +206,8 @@ pub fn method_figure(stats: &FrameStats) -> String {
 }
 
 /// The letters of the sides the screen's edges face: patient sides (LPS) for medical data,
-/// axis names otherwise.
+/// axis names otherwise; on a dark backing, as the slice views' letters, so they read over
+/// bright tissue.
 fn orientation_letters(app: &ViewerApp, painter: &egui::Painter, rect: Rect) {
     let medical = app.data.as_ref().is_some_and(|d| d.is_medical());
     let (right, up, _) = app.scene.view.camera.basis();
@@ -228,7 +230,7 @@ fn orientation_letters(app: &ViewerApp, painter: &egui::Painter, rect: Rect) {
             Align2::CENTER_BOTTOM,
         ),
     ] {
-        painter.text(pos, align, name(d), font.clone(), colour);
+        backed_text(painter, pos, align, &name(d), font.clone(), colour);
     }
 }
 

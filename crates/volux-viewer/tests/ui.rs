@@ -1097,6 +1097,26 @@ fn the_measurement_label_is_backed_and_honest() {
     assert!(length > 0.0, "{label:?}");
 }
 
+/// The 3D view's orientation letters (axis names of an unoriented grid) read over bright
+/// data: each lies on a dark backing, as the slice views' do.
+#[test]
+fn the_orientation_letters_are_backed() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = harness(Some(small_grid(dir.path())));
+    loaded_with_frame(&mut h);
+    h.step();
+    let texts = texts_with_what_lies_under(&h);
+    let letters: Vec<_> = texts
+        .iter()
+        .filter(|(t, _)| ["+X", "-X", "+Y", "-Y", "+Z", "-Z"].contains(&t.as_str()))
+        .collect();
+    // Four in the 3D view, and the slice views' own.
+    assert!(letters.len() >= 4, "one letter per edge: {texts:?}");
+    for letter in letters {
+        assert!(is_dark_backing(&letter.1), "{letter:?}");
+    }
+}
+
 /// The slices' captions (plane, voxel, window) lie where no crosshair line crosses them,
 /// inside their views (not cut), with the window's values in a few digits.
 #[test]
