@@ -62,7 +62,7 @@ fn the_gpu_backend_draws_what_the_cpu_engine_draws() {
         ("grid", &["grid.raw"]),
         (
             "shaded",
-            &["grid.raw", "--shade", "--clip-plane", "0,-1,0,0"],
+            &["grid.raw", "--shade", "--clip-plane", "0,-1,0,20"],
         ),
         ("mip", &["grid.raw", "--mip"]),
         ("pt", &["mesh.vtet", "--method", "pt"]),
