@@ -203,7 +203,7 @@ impl From<AppError> for RenderError {
     fn from(e: AppError) -> Self {
         match e {
             AppError::Render(r) => r,
-            other => RenderError::Backend(other.to_string()),
+            other => RenderError::backend(other.to_string()),
         }
     }
 }
@@ -276,7 +276,7 @@ mod tests {
             self.asked
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             if auto && self.software && !scene.method.gpu_only() {
-                return Err(RenderError::Backend("a software rasterizer".into()));
+                return Err(RenderError::backend("a software rasterizer"));
             }
             Ok(())
         }

@@ -42,6 +42,14 @@ pub enum AppError {
     /// A word of an option that does not parse ([`crate::words`]).
     #[error(transparent)]
     Word(#[from] crate::words::WordError),
+    /// A rank of a distributed frame failed ([`crate::distributed`]): which, and why.
+    #[error("rank {rank}: {reason}")]
+    Distributed {
+        /// The rank that failed first.
+        rank: usize,
+        /// Why.
+        reason: String,
+    },
     /// The engine's error.
     #[error(transparent)]
     Render(#[from] RenderError),

@@ -7,6 +7,10 @@
 //! - [`backend`]: where frames are rendered ([`Backend`] `auto | cpu | gpu`), and the one
 //!   [`RendererFactory`] that opens renderers on it (OSPRay's device role); `auto` never
 //!   prefers a software adapter to the CPU engine;
+//! - [`distributed`]: a frame of a store rendered by several ranks (sort-last, seed `003`)
+//!   over any message passing (MPI in the CLI, threads in tests), equal to one process's;
+//! - [`preview`]: what an interactive front end shows while the user drags (previews sized
+//!   to a time budget, fixed-step integrators) and how a store refines level by level;
 //! - [`session`]: a scene and its dataset saved as versioned JSON (the viewer's sessions,
 //!   rendered in batch by `volux render --session`);
 //! - [`store`]: OME-Zarr stores opened out of core as bricked volumes, with the notes a user
@@ -18,7 +22,9 @@
 #![forbid(unsafe_code)]
 
 pub mod backend;
+pub mod distributed;
 mod error;
+pub mod preview;
 pub mod session;
 pub mod store;
 pub mod words;

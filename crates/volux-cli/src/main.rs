@@ -31,6 +31,7 @@ mod mask_file;
 mod memory;
 mod messages;
 mod numbers;
+mod phrase;
 mod progress;
 mod settings;
 
@@ -63,7 +64,7 @@ fn main() -> ExitCode {
         // The reader went away (`| head`): nothing more to say, as Unix tools end.
         Err(e) if is_closed_pipe(e.as_ref()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("volux: error: {}", sanitize(&e.to_string()));
+            eprintln!("volux: error: {}", sanitize(&phrase::phrase(e.as_ref())));
             ExitCode::FAILURE
         }
     }

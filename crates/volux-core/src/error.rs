@@ -52,7 +52,7 @@ pub enum Error {
     /// A structure that would take more memory than the process's budget
     /// ([`crate::limits::memory_budget`]).
     #[error(
-        "{what} needs {}, over the memory budget of {} (--memory-budget)",
+        "{what} needs {}, over the memory budget of {}",
         crate::units::format_bytes_apart(*bytes, *budget).0,
         crate::units::format_bytes_apart(*bytes, *budget).1
     )]

@@ -819,7 +819,7 @@ fn vp_settings(lines: &[&str], notes: &mut Vec<String>) -> Result<()> {
     }
     if values[1] == Some(1.0) {
         notes.push(
-            "Slicer's shading (shade 1, ambient/diffuse/specular) is not applied; see --shade"
+            "Slicer's shading (shade 1, ambient/diffuse/specular) is not applied; turn on the renderer's shading to light the volume"
                 .into(),
         );
     }

@@ -25,16 +25,16 @@ impl LazyGpu {
         let opened = self
             .0
             .get_or_insert_with(|| GpuContext::new().map(Arc::new).map_err(|e| e.to_string()));
-        opened.clone().map_err(RenderError::Backend)
+        opened.clone().map_err(RenderError::backend)
     }
 }
 
 impl GpuDevice for LazyGpu {
     fn draws(&mut self, volume: &Volume, scene: &Scene, auto: bool) -> Result<(), RenderError> {
-        supports(volume, scene).map_err(RenderError::Backend)?;
+        supports(volume, scene)?;
         let ctx = self.context()?;
         if auto {
-            auto_draws(&ctx, volume, scene).map_err(RenderError::Backend)?;
+            auto_draws(&ctx, volume, scene)?;
         }
         Ok(())
     }

@@ -1,12 +1,12 @@
 //! The errors of the GPU backend.
-use volux_render::RenderError;
+use volux_render::{Remedy, RenderError};
 
 /// What can go wrong on the GPU.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum GpuError {
     /// No adapter (no GPU, no Vulkan/Metal/DX12/GL driver, no software rasterizer).
-    #[error("no GPU adapter found (install a Vulkan driver, e.g. mesa-vulkan-drivers, or use --backend cpu)")]
+    #[error("no GPU adapter found (install a Vulkan driver, e.g. mesa-vulkan-drivers)")]
     NoAdapter,
     /// The adapter refused to open a device.
     #[error("the GPU adapter '{adapter}' refused a device: {reason}")]
@@ -17,7 +17,7 @@ pub enum GpuError {
         reason: String,
     },
     /// The data or the image is over a limit of the device.
-    #[error("{what} is over the GPU's limit ({limit}); use --backend cpu")]
+    #[error("{what} is over the GPU's limit ({limit})")]
     OverLimit {
         /// What is too large, with its size.
         what: String,
@@ -31,6 +31,13 @@ pub enum GpuError {
 
 impl From<GpuError> for RenderError {
     fn from(e: GpuError) -> Self {
-        RenderError::Backend(e.to_string())
+        let remedy = match e {
+            GpuError::NoAdapter | GpuError::OverLimit { .. } => Some(Remedy::CpuBackend),
+            GpuError::Device { .. } | GpuError::Failed(_) => None,
+        };
+        RenderError::Backend {
+            reason: e.to_string(),
+            remedy,
+        }
     }
 }

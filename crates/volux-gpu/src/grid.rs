@@ -6,14 +6,14 @@ use std::time::Instant;
 
 use volux_core::image::Image;
 use volux_core::Grid;
+use volux_render::backend_kit::{Placement, RenderOptions};
 use volux_render::frame::{Frame, FrameStats, MethodStats, Rebuilt, RenderStats};
 use volux_render::integrate::Integrator;
-use volux_render::raycast::{Placement, RenderOptions};
 use volux_render::renderer::Renderer;
 use volux_render::sampling::Reconstruction;
 use volux_render::scene::{GridRaycast, Method, Scene, Volume};
 use volux_render::tiles::Control;
-use volux_render::{check_image_size, RenderError};
+use volux_render::{check_image_size, Refusal, Remedy, RenderError};
 use wgpu::util::DeviceExt;
 
 use crate::context::GpuContext;
@@ -53,11 +53,17 @@ impl GpuGridRenderer {
 
     /// Whether the shader draws `scene` (a grid ray casting scene): `Err` says what it does
     /// not draw yet, for a front end to fall back to the CPU or to say so.
-    pub fn supports(scene: &Scene) -> Result<(), String> {
+    pub fn supports(scene: &Scene) -> Result<(), Refusal> {
         let settings = match scene.method {
             Method::GridRaycast(s) => s,
             Method::Auto => GridRaycast::default(),
-            ref m => return Err(format!("the GPU backend does not draw '{}'", m.name())),
+            ref m => {
+                return Err(Refusal::new(
+                    "the GPU grid renderer",
+                    format!("does not draw '{}'", m.name()),
+                    None,
+                ))
+            }
         };
         let a = &scene.appearance;
         let drawn = matches!(
@@ -79,8 +85,10 @@ impl GpuGridRenderer {
             None
         };
         match refused {
-            Some(what) => Err(format!(
-                "the GPU backend does not draw {what} yet (use --backend cpu)"
+            Some(what) => Err(Refusal::new(
+                "the GPU backend",
+                format!("does not draw {what} yet"),
+                Some(Remedy::CpuBackend),
             )),
             None => Ok(()),
         }
@@ -108,13 +116,15 @@ impl GpuGridRenderer {
         let settings = match scene.method.resolve(&volume)? {
             Method::GridRaycast(s) => s,
             m => {
-                return Err(RenderError::InvalidOptions(format!(
-                    "the GPU grid renderer cannot draw method '{}'",
-                    m.name()
-                )))
+                return Err(Refusal::new(
+                    "the GPU grid renderer",
+                    format!("cannot draw method '{}'", m.name()),
+                    None,
+                )
+                .into())
             }
         };
-        Self::supports(scene).map_err(RenderError::Backend)?;
+        Self::supports(scene)?;
         let opts = RenderOptions::from_scene(scene, &settings, control);
         check_image_size(opts.width, opts.height)?;
         Ok(opts)

@@ -3,8 +3,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 use volux_core::camera::Projection;
-use volux_render::raycast::{cut_layer, local_clip_planes, Placement, RenderOptions};
-use volux_render::shading::{CutFaces, Light};
+use volux_render::backend_kit::CutFaces;
+use volux_render::backend_kit::{cut_layer, local_clip_planes, Placement, RenderOptions};
+use volux_render::shading::Light;
 
 use crate::tables::Tables;
 

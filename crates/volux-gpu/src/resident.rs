@@ -4,11 +4,11 @@
 use std::sync::Arc;
 
 use volux_core::Grid;
+use volux_render::backend_kit::GradientVolume;
+use volux_render::backend_kit::MacrocellGrid;
+use volux_render::backend_kit::RenderOptions;
+use volux_render::backend_kit::Trilinear;
 use volux_render::integrate::Integrator;
-use volux_render::macrocell::MacrocellGrid;
-use volux_render::raycast::RenderOptions;
-use volux_render::sampling::Trilinear;
-use volux_render::shading::GradientVolume;
 
 use crate::context::GpuContext;
 use crate::error::GpuError;

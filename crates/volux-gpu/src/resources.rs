@@ -2,7 +2,7 @@
 //! volume or per edit: the gradient volume ([`upload_gradients`]) and the sculpt mask's bits
 //! ([`MaskBits`]).
 use volux_core::sculpt::SculptMask;
-use volux_render::shading::GradientVolume;
+use volux_render::backend_kit::GradientVolume;
 use wgpu::util::DeviceExt;
 
 use crate::context::GpuContext;

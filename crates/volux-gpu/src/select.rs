@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use volux_render::renderer::Renderer;
 use volux_render::scene::{Method, Scene, Volume};
+use volux_render::{Refusal, Remedy};
 
 use crate::context::GpuContext;
 use crate::error::GpuError;
@@ -17,14 +18,14 @@ use crate::slicing::GpuSlicingRenderer;
 /// `Ok` when the GPU backend draws `scene` of `volume`, else what it does not draw. (A grid
 /// over the device's texture limits is drawn through the brick pool, which draws less: its
 /// refusal comes with the frame.)
-pub fn supports(volume: &Volume, scene: &Scene) -> Result<(), String> {
+pub fn supports(volume: &Volume, scene: &Scene) -> Result<(), Refusal> {
     if let Volume::Grid(g) = volume {
         if g.color().is_some() && scene.appearance.data_colour && !scene.appearance.mip {
-            return Err(
-                "the GPU backend does not draw an RGB grid in its own colour yet (use --backend \
-                 cpu)"
-                    .into(),
-            );
+            return Err(Refusal::new(
+                "the GPU backend",
+                "does not draw an RGB grid in its own colour yet",
+                Some(Remedy::CpuBackend),
+            ));
         }
     }
     match volume {
@@ -34,7 +35,11 @@ pub fn supports(volume: &Volume, scene: &Scene) -> Result<(), String> {
         Volume::Grid(_) => GpuGridRenderer::supports(scene),
         Volume::Mesh(_) => GpuPtRenderer::supports(scene),
         Volume::Bricked(..) => GpuPoolRenderer::supports(scene),
-        _ => Err(format!("the GPU backend does not draw a {}", volume.kind())),
+        _ => Err(Refusal::new(
+            "the GPU backend",
+            format!("does not draw a {}", volume.kind()),
+            Some(Remedy::CpuBackend),
+        )),
     }
 }
 
@@ -43,13 +48,15 @@ pub fn supports(volume: &Volume, scene: &Scene) -> Result<(), String> {
 /// type `Cpu`), which is never preferred to the CPU engine (it was 3.6x-19x slower on the CT
 /// head and the Blunt Fin) unless the method is GPU-only ([`Method::gpu_only`]). One rule
 /// for every front end.
-pub fn auto_draws(ctx: &GpuContext, volume: &Volume, scene: &Scene) -> Result<(), String> {
+pub fn auto_draws(ctx: &GpuContext, volume: &Volume, scene: &Scene) -> Result<(), Refusal> {
     supports(volume, scene)?;
     let adapter = ctx.adapter();
     if adapter.is_software() && !scene.method.gpu_only() {
-        return Err(format!(
-            "the GPU adapter {adapter} is a software rasterizer, slower than the CPU engine \
-             (the GPU backend asked for by name uses it anyway)"
+        return Err(Refusal::new(
+            format!("the GPU adapter {adapter}"),
+            "is a software rasterizer, slower than the CPU engine (the GPU backend asked for by \
+             name uses it anyway)",
+            None,
         ));
     }
     Ok(())

@@ -5,7 +5,7 @@
 use glam::DVec3;
 use volux_core::voi::{ClipPlane, ConvexVoi};
 use volux_core::{Aabb, Error};
-use volux_render::raycast::Placement;
+use volux_render::backend_kit::Placement;
 
 use crate::error::GpuError;
 

@@ -9,13 +9,13 @@ use std::time::Instant;
 
 use volux_core::image::Image;
 use volux_core::Grid;
+use volux_render::backend_kit::{local_clip_planes, Placement, RenderOptions};
 use volux_render::frame::{Frame, FrameStats, MethodStats, Rebuilt, RenderStats};
 use volux_render::integrate::Integrator;
-use volux_render::raycast::{local_clip_planes, Placement, RenderOptions};
 use volux_render::renderer::Renderer;
 use volux_render::scene::{GridRaycast, Method, Scene, SlicingSettings};
 use volux_render::tiles::Control;
-use volux_render::RenderError;
+use volux_render::{Refusal, Remedy, RenderError};
 use wgpu::util::DeviceExt;
 
 use crate::context::GpuContext;
@@ -73,11 +73,12 @@ impl GpuSlicingRenderer {
     }
 
     /// Whether texture slicing draws `scene`: `Err` says what it does not draw.
-    pub fn supports(scene: &Scene) -> Result<(), String> {
+    pub fn supports(scene: &Scene) -> Result<(), Refusal> {
         let Method::Slicing(_) = scene.method else {
-            return Err(format!(
-                "texture slicing draws --method slicing, not '{}'",
-                scene.method.name()
+            return Err(Refusal::new(
+                "texture slicing",
+                format!("draws the slicing method, not '{}'", scene.method.name()),
+                Some(Remedy::Method("slicing")),
             ));
         };
         let a = &scene.appearance;
@@ -91,8 +92,10 @@ impl GpuSlicingRenderer {
             None
         };
         match refused {
-            Some(what) => Err(format!(
-                "texture slicing does not draw {what} (use --method raycast)"
+            Some(what) => Err(Refusal::new(
+                "texture slicing",
+                format!("does not draw {what}"),
+                Some(Remedy::Method("raycast")),
             )),
             None => Ok(()),
         }
@@ -101,12 +104,12 @@ impl GpuSlicingRenderer {
     /// The ray caster's options for `scene`, with its Riemann step.
     fn render_options(scene: &Scene, control: &Control) -> Result<RenderOptions, RenderError> {
         scene.validate()?;
-        Self::supports(scene).map_err(RenderError::Backend)?;
+        Self::supports(scene)?;
         let Method::Slicing(SlicingSettings { step }) = scene.method else {
-            return Err(RenderError::Backend("not a slicing scene".into()));
+            return Err(RenderError::Internal("not a slicing scene".into()));
         };
         let integrator = Integrator::Riemann { step };
-        integrator.validate().map_err(RenderError::InvalidOptions)?;
+        integrator.validate()?;
         let settings = GridRaycast {
             integrator,
             ..GridRaycast::default()

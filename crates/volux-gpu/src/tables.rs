@@ -2,9 +2,9 @@
 //! lanes tabulate it, the macrocells it leaves empty, and the pre-integration table, kept
 //! between frames while the TF, the step, the isovalues and the integrator stay.
 use volux_core::TransferFunction;
-use volux_render::classify::ClassifyTable;
-use volux_render::integrate::preintegrated::PreintegrationTable;
-use volux_render::macrocell::MacrocellGrid;
+use volux_render::backend_kit::ClassifyTable;
+use volux_render::backend_kit::MacrocellGrid;
+use volux_render::backend_kit::PreintegrationTable;
 use wgpu::util::DeviceExt;
 
 use crate::error::GpuError;
@@ -58,7 +58,8 @@ impl Tables {
             .map(|empty| u32::from(!empty))
             .collect();
         let (preint, preint_domain) = if key.preintegrated {
-            let t = PreintegrationTable::new(&key.tf, range, key.h).map_err(GpuError::Failed)?;
+            let t = PreintegrationTable::new(&key.tf, range, key.h)
+                .map_err(|e| GpuError::Failed(e.to_string()))?;
             let (lo, scale) = t.lane_domain();
             (t.table_entries().to_vec(), (lo, scale, t.size()))
         } else {

@@ -137,13 +137,13 @@ fn what_the_pool_does_not_draw_is_refused_by_name() {
     let g = grid();
     let mut s = scene(&g, "{}", 0.5);
     s.appearance.shade_volume = true;
-    let err = GpuPoolRenderer::supports(&s).unwrap_err();
+    let err = GpuPoolRenderer::supports(&s).unwrap_err().to_string();
     assert!(err.contains("shading"), "{err}");
     let mut s = scene(&g, "{}", 0.5);
     s.appearance.mip = true;
-    assert!(GpuPoolRenderer::supports(&s)
-        .unwrap_err()
-        .contains("maximum"));
+    let refusal = GpuPoolRenderer::supports(&s).unwrap_err();
+    assert!(refusal.to_string().contains("maximum"), "{refusal}");
+    assert_eq!(refusal.remedy, Some(volux_render::Remedy::CpuBackend));
     let bad = PoolOptions {
         brick: 12,
         ..PoolOptions::default()

@@ -176,7 +176,12 @@ fn an_oriented_grid_is_sliced_in_its_frame() {
 fn what_slicing_does_not_draw_is_refused() {
     let g = grid();
     let (raycast, sliced) = scenes(&g, PERSPECTIVE, 0.5);
-    let e = GpuSlicingRenderer::supports(&raycast).unwrap_err();
+    let refusal = GpuSlicingRenderer::supports(&raycast).unwrap_err();
+    assert_eq!(
+        refusal.remedy,
+        Some(volux_render::Remedy::Method("slicing"))
+    );
+    let e = refusal.to_string();
     assert!(e.contains("'raycast'"), "{e}");
     assert!(GpuSlicingRenderer::supports(&sliced).is_ok());
     let mut mip = sliced.clone();
@@ -192,7 +197,7 @@ fn what_slicing_does_not_draw_is_refused() {
         (&iso, "isosurfaces"),
     ];
     for (s, what) in cases {
-        let e = GpuSlicingRenderer::supports(s).unwrap_err();
+        let e = GpuSlicingRenderer::supports(s).unwrap_err().to_string();
         assert!(e.contains(what) && e.contains("slicing"), "{e}");
     }
     let volume = volux_render::scene::Volume::from(grid());

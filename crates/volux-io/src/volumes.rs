@@ -98,7 +98,7 @@ pub(crate) fn grid(
                     .and_then(|g| g.with_direction(place.direction))
                     .map_err(err)?;
                 if n == 4 {
-                    g = g.with_note("the alpha channel was dropped (--component 3 reads it)");
+                    g = g.with_note("the alpha channel was dropped (component 3 reads it)");
                 }
                 let all = data.note.into_iter().chain(notes);
                 Ok(all.fold(g, Grid::with_note))

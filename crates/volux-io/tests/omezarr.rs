@@ -430,7 +430,7 @@ fn a_level_over_the_budget_names_level_and_the_bricked_renderer() {
     let e = volux_io::load(&out, &LoadOptions::default())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("--level") && e.contains("bricked"), "{e}");
+    assert!(e.contains("coarser level") && e.contains("bricked"), "{e}");
 }
 
 #[test]

@@ -41,7 +41,7 @@ fn a_mapped_raw_larger_than_the_budget_streams_into_a_store() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("--level 1 fits") || e.contains("--level 2 fits"),
+        e.contains("level 1 fits") || e.contains("level 2 fits"),
         "{e}"
     );
     let opts = LoadOptions {

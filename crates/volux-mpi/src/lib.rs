@@ -14,16 +14,17 @@
 //!
 //! Modules:
 //! - [`error`]: the errors of the MPI layer;
-//! - [`stats`]: what each rank did (always built);
 //! - `world` (with the `mpi` feature): `World`, MPI's world communicator as an
-//!   `Exchange`, with byte broadcast and gather and agreement.
+//!   `Exchange` and a `Collective` (byte broadcast and gather, agreement).
+//!
+//! The distributed frame itself (planning, regions, agreement, figures) is the application
+//! layer's (`volux_app::distributed`), written over those traits.
 //!
 //! Without the `mpi` feature the crate has no MPI dependency (and no `World`).
 #![deny(missing_docs)]
 #![deny(unsafe_code)]
 
 pub mod error;
-pub mod stats;
 #[cfg(feature = "mpi")]
 pub mod world;
 

@@ -1,11 +1,12 @@
-//! MPI's world communicator as an [`Exchange`], with the collectives around a distributed
-//! render: broadcast of bytes, gather of bytes to a root, agreement on success.
+//! MPI's world communicator as an [`Exchange`] and a [`Collective`] (the collectives around
+//! a distributed render: broadcast of bytes, gather of bytes to a root, agreement on
+//! success), with MPI's own collectives in place of the trait's point-to-point ones.
 use mpi::collective::SystemOperation;
 use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use volux_render::distributed::error::DistributedError;
-use volux_render::distributed::exchange::Exchange;
+use volux_render::distributed::exchange::{Collective, Exchange};
 
 use crate::error::MpiError;
 
@@ -132,5 +133,29 @@ impl Exchange for World {
             got
         });
         Ok(got)
+    }
+}
+
+impl Collective for World {
+    fn broadcast_bytes(
+        &mut self,
+        root: usize,
+        bytes: Option<Vec<u8>>,
+    ) -> Result<Vec<u8>, DistributedError> {
+        self.check(root)?;
+        Ok(World::broadcast_bytes(self, root, bytes))
+    }
+
+    fn gather_bytes(
+        &mut self,
+        root: usize,
+        bytes: &[u8],
+    ) -> Result<Option<Vec<Vec<u8>>>, DistributedError> {
+        self.check(root)?;
+        Ok(World::gather_bytes(self, root, bytes))
+    }
+
+    fn all(&mut self, ok: bool) -> Result<bool, DistributedError> {
+        Ok(World::all(self, ok))
     }
 }

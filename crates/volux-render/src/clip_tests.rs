@@ -175,7 +175,7 @@ fn the_tet_ray_caster_draws_the_clipped_chord_of_a_constant_medium() {
             clip_planes: planes.clone(),
             ..TetRayOptions::new(cam, tf.clone())
         };
-        let img = caster.render(&o).unwrap().image;
+        let img = caster.render_with(&o).unwrap().image;
         let (worst, clipped) = worst_against_chords(&img, &cam, &planes);
         assert!(clipped > 50, "the planes clip only {clipped} rays");
         assert!(worst < 2e-3, "{color:?}: worst opacity error {worst}");
@@ -209,7 +209,7 @@ fn pt_draws_the_clipped_chord_of_a_constant_medium() {
                 clip_planes: planes.clone(),
                 ..PtOptions::new(cam, tf.clone())
             };
-            let img = PtRenderer::new(&mesh).render(&o).unwrap().image;
+            let img = PtRenderer::new(&mesh).render_with(&o).unwrap().image;
             let (worst, clipped) = worst_against_chords(&img, &cam, &planes);
             assert!(clipped > 50, "the planes clip only {clipped} rays");
             let tol = pt_tolerance(color);

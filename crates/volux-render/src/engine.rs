@@ -28,7 +28,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 use crate::bricked::BrickedRenderer;
-use crate::error::RenderError;
+use crate::error::{Refusal, Remedy, RenderError};
 use crate::pt::reference::MeshReference;
 use crate::pt::render::PtRenderer;
 use crate::raycast::renderer::GridRenderer;
@@ -55,17 +55,20 @@ pub fn create_renderer(volume: &Volume, method: &Method) -> Result<Box<dyn Rende
         (Method::Resample { .. }, Volume::Mesh(m)) => Box::new(ResampleRenderer::new(m.clone())),
         (Method::MeshReference, Volume::Mesh(m)) => Box::new(MeshReference::new(m.clone())),
         (Method::Slicing(_), _) => {
-            return Err(RenderError::InvalidOptions(
-                "slicing is a GPU method: the CPU engine does not draw it (volux: --backend gpu)"
-                    .into(),
-            ))
+            return Err(Refusal::new(
+                "the CPU engine",
+                "does not draw texture slicing, a GPU method",
+                Some(Remedy::GpuBackend),
+            )
+            .into())
         }
         (m, v) => {
-            return Err(RenderError::InvalidOptions(format!(
-                "no renderer for {} of a {}",
-                m.name(),
-                v.kind()
-            )))
+            return Err(Refusal::new(
+                format!("the {} method", m.name()),
+                format!("has no renderer for a {}", v.kind()),
+                None,
+            )
+            .into())
         }
     })
 }

@@ -138,7 +138,7 @@ pub struct TetRayStats {
     /// Rays cast (one per pixel).
     pub rays: u64,
     /// Segments integrated (cells crossed, summed over rays). With empty-space skipping
-    /// ([`TetRayOptions::skip_empty`](crate::tetray::TetRayOptions::skip_empty)) only the
+    /// (the tet ray caster's `skip_empty` option) only the
     /// visible cells' segments are walked and counted.
     pub segments: u64,
     /// Scalar values evaluated: the medium samples of the adaptive rule, two per segment

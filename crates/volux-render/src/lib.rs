@@ -31,6 +31,8 @@
 //!   runs on, and [`Control`](tiles::Control).
 //! - [`framing`]: what a scene makes visible (the box a camera frames, or why nothing
 //!   shows), and a camera fitted to a box.
+//! - [`backend_kit`]: the engine's parts a rendering backend (the GPU's) reuses, listed in
+//!   one place: ray set-up, tables, lattices.
 //!
 //! ## Shared stages
 //!
@@ -77,6 +79,7 @@
 // (`sampling::Trilinear::interpolate4`, with the argument for their soundness).
 #![deny(unsafe_code)]
 
+pub mod backend_kit;
 pub mod bricked;
 pub mod classify;
 #[cfg(test)]
@@ -106,5 +109,8 @@ pub mod shading;
 pub mod tetray;
 pub mod tiles;
 
-pub use error::{check_image_size, RenderError, MAX_IMAGE_SIDE};
+pub use error::{
+    check_image_size, EngineWords, Refusal, Remedy, RenderError, Setting, SettingError, Vocabulary,
+    MAX_IMAGE_SIDE,
+};
 pub use raycast::{render_grid, RenderOptions, RenderStats};

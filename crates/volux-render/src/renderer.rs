@@ -4,7 +4,7 @@ use std::time::Instant;
 
 use volux_core::image::Image;
 
-use crate::error::RenderError;
+use crate::error::{Refusal, RenderError};
 use crate::frame::{Frame, FrameStats, MethodStats, Rebuilt};
 use crate::scene::{Method, Scene};
 use crate::tiles::Control;
@@ -35,10 +35,15 @@ pub trait Renderer: Send {
 
 /// The error of a renderer handed a scene for another method.
 pub(crate) fn wrong_method(renderer: &'static str, method: &Method) -> RenderError {
-    RenderError::InvalidOptions(format!(
-        "the '{renderer}' renderer cannot draw method '{}': create a renderer for it",
-        method.name()
-    ))
+    Refusal::new(
+        format!("the '{renderer}' renderer"),
+        format!(
+            "cannot draw method '{}': create a renderer for it",
+            method.name()
+        ),
+        None,
+    )
+    .into()
 }
 
 /// Refuses a scene with a sculpt mask or region labels in a renderer of tetrahedra: both are
@@ -49,9 +54,14 @@ pub(crate) fn no_voxel_layers(renderer: &'static str, scene: &Scene) -> Result<(
         (_, Some(_)) => "region labels",
         _ => return Ok(()),
     };
-    Err(RenderError::InvalidOptions(format!(
-        "the '{renderer}' renderer draws tetrahedra and cannot apply {layer}: masks and labels apply to grids (ray cast the grid); cut a mesh with clip planes"
-    )))
+    Err(Refusal::new(
+        format!("the '{renderer}' renderer"),
+        format!(
+            "draws tetrahedra and cannot apply {layer}: masks and labels apply to grids (ray cast the grid); cut a mesh with clip planes"
+        ),
+        None,
+    )
+    .into())
 }
 
 /// A frame from an image, the error map where the method estimates one, and the figures.

@@ -120,7 +120,7 @@ impl Renderer for ResampleRenderer {
             self.resampled = Some((samples, resample_mesh(&self.mesh, samples)?));
         }
         let Some((_, r)) = self.resampled.as_ref() else {
-            return Err(RenderError::InvalidOptions(
+            return Err(RenderError::Internal(
                 "the resampled grid is missing".into(),
             ));
         };

@@ -32,7 +32,7 @@ use volux_core::voi::ClipPlane;
 use volux_core::{Aabb, Camera, Grid, TetMesh, TransferFunction};
 
 use crate::bricked::volume::{BrickedVolume, Lod};
-use crate::error::RenderError;
+use crate::error::{Refusal, Remedy, RenderError, Setting, SettingError};
 use crate::integrate::integrator::Integrator;
 use crate::integrate::segment::SegmentRule;
 use crate::isosurface::Isosurfaces;
@@ -169,9 +169,12 @@ impl Volume {
         match self {
             Self::Grid(g) => Ok(grid_to_tets(g)?.into()),
             Self::Mesh(_) => Ok(self.clone()),
-            Self::Bricked(..) => Err(RenderError::InvalidOptions(
-                "a bricked grid is not split into tetrahedra: it is ray cast out of core".into(),
-            )),
+            Self::Bricked(..) => Err(Refusal::new(
+                "a bricked grid",
+                "is not split into tetrahedra: it is ray cast out of core",
+                None,
+            )
+            .into()),
         }
     }
 }
@@ -388,34 +391,35 @@ impl Method {
     /// method does not apply to the volume (PT or tet ray casting of a grid: split it first
     /// with [`Volume::to_tets`]; grid ray casting of a mesh: resample it).
     pub fn resolve(&self, volume: &Volume) -> Result<Method, RenderError> {
-        let wrong = |why: &str| {
-            Err(RenderError::InvalidOptions(format!(
-                "{} does not draw a {}: {why}",
-                self.name(),
-                volume.kind()
-            )))
+        let wrong = |why: &str, remedy: Option<Remedy>| {
+            Err(Refusal::new(
+                format!("the {} method", self.name()),
+                format!("does not draw a {}: {why}", volume.kind()),
+                remedy,
+            )
+            .into())
         };
-        let split = "split the grid into tetrahedra first (Volume::to_tets; volux: --as-tets)";
         match (self, volume) {
             (Self::Auto, Volume::Grid(_) | Volume::Bricked(..)) => {
                 Ok(Self::GridRaycast(GridRaycast::default()))
             }
             (Self::Auto, Volume::Mesh(_)) => Ok(Self::ProjectedTetrahedra(PtSettings::default())),
             (Self::GridRaycast(_), Volume::Grid(_) | Volume::Bricked(..)) => Ok(*self),
-            (Self::GridRaycast(_), _) => {
-                wrong("ray cast the mesh cell by cell (tet-raycast) or resample it")
-            }
+            (Self::GridRaycast(_), _) => wrong(
+                "a mesh is ray cast cell by cell, or resampled onto a grid",
+                Some(Remedy::Method("tet-raycast")),
+            ),
             (
                 Self::ProjectedTetrahedra(_) | Self::TetRaycast(_) | Self::MeshReference,
                 Volume::Mesh(_),
             ) => Ok(*self),
             (Self::ProjectedTetrahedra(_) | Self::TetRaycast(_) | Self::MeshReference, _) => {
-                wrong(split)
+                wrong("it draws tetrahedra", Some(Remedy::SplitIntoTets))
             }
             (Self::Resample { .. }, Volume::Mesh(_)) => Ok(*self),
-            (Self::Resample { .. }, _) => wrong("it is a grid already"),
+            (Self::Resample { .. }, _) => wrong("it is a grid already", None),
             (Self::Slicing(_), Volume::Grid(_)) => Ok(*self),
-            (Self::Slicing(_), _) => wrong("it slices grids held in memory"),
+            (Self::Slicing(_), _) => wrong("it slices grids held in memory", None),
         }
     }
 }
@@ -441,29 +445,26 @@ impl Method {
             Self::MeshReference => "the mesh reference",
             _ => self.name(),
         };
-        let refuse = |what: &str, instead: &str| {
-            Err(RenderError::InvalidOptions(format!(
-                "{who} {what}; {instead}"
-            )))
-        };
+        let refuse =
+            |what: &str, instead: Remedy| Err(Refusal::new(who, what, Some(instead)).into());
         let mesh = self.draws_tets();
         if appearance.mip && matches!(self, Self::ProjectedTetrahedra(_) | Self::MeshReference) {
             return refuse(
                 "composites cells and has no maximum intensity projection",
-                "ray cast the mesh for MIP (volux: --method raycast)",
+                Remedy::Method("raycast"),
             );
         }
         if appearance.mip && (appearance.shade_volume || !appearance.isosurfaces.is_empty()) {
             return refuse(
                 "with maximum intensity projection shows the colour of each ray's largest \
                  value, unlit and without isosurfaces",
-                "drop MIP to shade the volume or draw isosurfaces",
+                Remedy::DropMip,
             );
         }
         if appearance.shade_volume && mesh {
             return refuse(
                 "lights isosurfaces but does not shade the volume",
-                "add isosurfaces, or resample the mesh onto a grid (volux: --method resample)",
+                Remedy::Method("resample"),
             );
         }
         Ok(())
@@ -538,27 +539,27 @@ impl Scene {
         self.appearance.tf.validate()?;
         let s = self.appearance.opacity_scale;
         if !(s.is_finite() && s >= 0.0) {
-            return Err(RenderError::InvalidOptions(format!(
-                "opacity scale {s} must be finite and >= 0"
-            )));
+            return Err(SettingError::new(Setting::OpacityScale, s, "finite and >= 0").into());
         }
-        self.appearance
-            .lighting
-            .validate()
-            .map_err(RenderError::InvalidOptions)?;
-        if let Some(e) = self.early_termination {
-            if !(e > 0.0 && e.is_finite()) {
-                return Err(RenderError::InvalidOptions(format!(
-                    "early termination {e} must be a positive opacity"
-                )));
-            }
-        }
+        self.appearance.lighting.validate()?;
+        check_early_termination(self.early_termination)?;
         for p in &self.clip_planes {
             // Planes read from a session file are checked as the CLI's are.
-            p.check()
-                .map_err(|e| RenderError::InvalidOptions(e.to_string()))?;
+            p.check()?;
         }
         Ok(())
+    }
+}
+
+/// Checks an early ray termination opacity: `None`, or positive and finite.
+pub(crate) fn check_early_termination(opacity: Option<f32>) -> Result<(), SettingError> {
+    match opacity {
+        Some(e) if !(e > 0.0 && e.is_finite()) => Err(SettingError::new(
+            Setting::EarlyTermination,
+            e,
+            "a positive opacity",
+        )),
+        _ => Ok(()),
     }
 }
 
@@ -629,8 +630,9 @@ mod tests {
             Ok(Method::ProjectedTetrahedra(_))
         ));
         let pt = Method::ProjectedTetrahedra(PtSettings::default());
-        let e = pt.resolve(&g).unwrap_err().to_string();
-        assert!(e.contains("--as-tets"), "{e}");
+        let e = pt.resolve(&g).unwrap_err();
+        assert_eq!(e.remedy(), Some(crate::error::Remedy::SplitIntoTets), "{e}");
+        assert!(e.to_string().contains("Volume::to_tets"), "{e}");
         assert!(Method::GridRaycast(GridRaycast::default())
             .resolve(&m)
             .is_err());
@@ -649,14 +651,9 @@ mod tests {
         assert!(slicing.resolve(&g.to_tets().unwrap()).is_err());
         let json = serde_json::to_string(&slicing).unwrap();
         assert_eq!(json, r#"{"name":"slicing","settings":{"step":0.5}}"#);
-        let e = crate::engine::create_renderer(&g, &slicing)
-            .err()
-            .unwrap()
-            .to_string();
-        assert!(
-            e.contains("GPU method") && e.contains("--backend gpu"),
-            "{e}"
-        );
+        let e = crate::engine::create_renderer(&g, &slicing).err().unwrap();
+        assert_eq!(e.remedy(), Some(crate::error::Remedy::GpuBackend), "{e}");
+        assert!(e.to_string().contains("GPU method"), "{e}");
     }
 
     #[test]

@@ -3,9 +3,10 @@
 //! channel on a convex mesh and on the non-convex torus (issues 4 and 5).
 use volux_core::image::ImageDiff;
 use volux_core::{synth, CameraSpec, TetMesh, TransferFunction};
+use volux_render::engine::{create_renderer, MethodStats};
 use volux_render::integrate::SegmentRule;
-use volux_render::pt::{PtOptions, PtRenderer, SortMode};
-use volux_render::tetray::{TetRayCaster, TetRayOptions};
+use volux_render::scene::{Method, PtSettings, Scene, SortMode, Volume};
+use volux_render::tiles::Control;
 
 fn tf() -> TransferFunction {
     TransferFunction::from_json(
@@ -25,15 +26,26 @@ fn agree(mesh: &TetMesh, azimuth: f64, elevation: f64, orthographic: bool) {
     }
     .resolve(&mesh.bounds())
     .unwrap();
-    let mut pt = PtOptions::new(camera, tf());
-    (pt.width, pt.height) = (96, 80);
-    (pt.sort, pt.color, pt.early_termination) = (SortMode::Exact, SegmentRule::Exact, None);
-    let a = PtRenderer::new(mesh).render(&pt).unwrap();
-    let mut rc = TetRayOptions::new(camera, tf());
-    (rc.width, rc.height) = (96, 80);
-    (rc.color, rc.early_termination) = (SegmentRule::Exact, None);
-    let b = TetRayCaster::new(mesh).unwrap().render(&rc).unwrap();
-    assert_eq!(b.stats.abandoned, 0);
+    let volume = Volume::from(mesh.clone());
+    let mut scene = Scene::new(camera, 96, 80, tf());
+    scene.early_termination = None;
+    let mut render = |method: Method| {
+        scene.method = method;
+        create_renderer(&volume, &scene.method)
+            .unwrap()
+            .render(&scene, &Control::default())
+            .unwrap()
+    };
+    let a = render(Method::ProjectedTetrahedra(PtSettings {
+        sort: SortMode::Exact,
+        color: SegmentRule::Exact,
+        count_violations: false,
+    }));
+    let b = render(Method::TetRaycast(SegmentRule::Exact));
+    let MethodStats::TetRaycast(stats) = b.stats.method else {
+        panic!("{:?}", b.stats.method)
+    };
+    assert_eq!(stats.abandoned, 0);
     assert!(a.image.coverage(0.01) > 0.1, "something is drawn");
     let ImageDiff {
         mean_error: mean,

@@ -23,7 +23,7 @@ use crate::file_dialog::FileDialog;
 use crate::jobs::{Job, Poll};
 use crate::navigation;
 use crate::progressive::LevelShown;
-use crate::render_service::{Event, RenderService, Rendered};
+use crate::render_service::{Event, FinishedFrame, RenderService};
 use crate::sculpt_state::SculptTools;
 use crate::tf_editor::{in_value_space, TfEditor};
 
@@ -59,7 +59,7 @@ pub struct Shown {
     /// The texture.
     pub texture: egui::TextureHandle,
     /// The frame's figures and kind.
-    pub frame: Rendered,
+    pub frame: FinishedFrame,
 }
 
 /// What was last handed to the render thread.
@@ -493,7 +493,7 @@ impl ViewerApp {
             .and_then(|_| scene.method.resolve(&volume.volume))
             .and_then(|m| m.check_appearance(&scene.appearance))
         {
-            self.error = Some(e.to_string());
+            self.error = Some(crate::phrase::phrase(&e));
             self.render_error = true;
             self.submitted = Some(now);
             return;

@@ -16,7 +16,7 @@ use volux_render::scene::{Method, Scene};
 
 use crate::dataset;
 use crate::navigation;
-use crate::render_service::{Event, RenderService, Rendered, VolumeRef};
+use crate::render_service::{Event, FinishedFrame, RenderService, VolumeRef};
 use crate::tf_editor::in_value_space;
 
 /// Interval between scripted inputs (60 Hz).
@@ -126,7 +126,7 @@ pub fn run(
             pts[i][1] *= if (k / 30) % 2 == 0 { 1.01 } else { 1.0 / 1.01 };
         },
     )?;
-    let latencies = |frames: &[Rendered]| {
+    let latencies = |frames: &[FinishedFrame]| {
         let mut v: Vec<f64> = frames
             .iter()
             .map(|f| f.latency.as_secs_f64() * 1e3)
@@ -164,7 +164,7 @@ fn drive(
     scene: &mut Scene,
     seconds: f64,
     mut step: impl FnMut(&mut Scene, usize),
-) -> Result<Vec<Rendered>, String> {
+) -> Result<Vec<FinishedFrame>, String> {
     let start = Instant::now();
     let mut frames = Vec::new();
     let mut k = 0;
@@ -184,7 +184,7 @@ fn drive(
     Ok(frames)
 }
 
-fn wait_frame(service: &RenderService, timeout: Duration) -> Result<Rendered, String> {
+fn wait_frame(service: &RenderService, timeout: Duration) -> Result<FinishedFrame, String> {
     match service.wait(timeout) {
         Some(Event::Frame(f)) => Ok(*f),
         Some(Event::Failed { message, .. }) => Err(message),
@@ -192,7 +192,7 @@ fn wait_frame(service: &RenderService, timeout: Duration) -> Result<Rendered, St
     }
 }
 
-fn wait_full(service: &RenderService, timeout: Duration) -> Result<Rendered, String> {
+fn wait_full(service: &RenderService, timeout: Duration) -> Result<FinishedFrame, String> {
     let end = Instant::now() + timeout;
     loop {
         let left = end.saturating_duration_since(Instant::now());

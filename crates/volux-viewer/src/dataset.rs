@@ -144,7 +144,11 @@ impl Loaded {
     /// Splits a grid into tetrahedra (for PT and tet ray casting), within the memory budget.
     pub fn split_into_tets(&mut self) -> Result<(), String> {
         if self.tets.is_none() && matches!(self.volume.volume, Volume::Grid(_)) {
-            let tets = self.volume.volume.to_tets().map_err(|e| e.to_string())?;
+            let tets = self
+                .volume
+                .volume
+                .to_tets()
+                .map_err(|e| crate::phrase::phrase(&e))?;
             self.tets = Some(VolumeRef {
                 id: next_volume_id(),
                 volume: tets,

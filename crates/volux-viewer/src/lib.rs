@@ -35,7 +35,8 @@
 //!   [`plane_handle`]: the clipping planes' tilt handles;
 //! - [`tf_editor`]: the transfer-function editor over the histogram;
 //! - [`panels`]: the menu and the settings panel; [`status_bar`]: the error, message and
-//!   cache line at the bottom; [`file_dialog`]: the file dialog;
+//!   cache line at the bottom; [`phrase`]: the engine's errors in the viewer's words (widgets,
+//!   not flags); [`file_dialog`]: the file dialog;
 //!   [`files`]: TF files, sessions and screenshots read and written; [`dataset`]: a loaded dataset; [`bench`](mod@bench): the scripted benchmark (`--bench`).
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
@@ -52,6 +53,7 @@ pub mod lod_status;
 pub mod navigation;
 pub mod overlay_text;
 pub mod panels;
+pub mod phrase;
 pub mod plane_handle;
 pub mod progressive;
 pub mod render_service;

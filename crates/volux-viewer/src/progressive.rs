@@ -1,18 +1,13 @@
 //! Progressive level of detail for bricked volumes (issue 19: "the viewer shows coarse
 //! levels at once and refines to full resolution"). After every new scene the render thread
-//! ([`crate::render_service`]) walks a [`ladder`] of pyramid levels, coarsest first, down to
-//! the level the volume's [`Lod`] picks for the view (full resolution when the user asks for
+//! ([`crate::render_service`]) walks a ladder of pyramid levels, coarsest first, down to
+//! the level the volume's [`Lod`](volux_render::bricked::Lod) picks for the view (full resolution when the user asks for
 //! it): each level is one frame, rendered in the background and superseded as soon as the
-//! scene changes again. This module holds what that needs and what the status line says:
-//! the ladder, the rendering of one level ([`render_level`]), the level a frame shows
-//! ([`LevelShown`]) and the cache's figures ([`CacheFigures`]).
-use std::sync::Arc;
-
-use volux_render::bricked::{BrickedRenderer, BrickedVolume, CacheStats, Lod};
-use volux_render::engine::{Frame, Renderer};
-use volux_render::scene::Scene;
-use volux_render::tiles::Control;
-use volux_render::RenderError;
+//! scene changes again. The ladder is the application layer's
+//! ([`volux_app::preview::lod_ladder`]), each level drawn by the factory's renderer; this
+//! module holds what the status line says: the level a frame shows ([`LevelShown`]) and the
+//! cache's figures ([`CacheFigures`]).
+use volux_render::bricked::{BrickedVolume, CacheStats};
 
 /// The level a frame of a bricked volume shows, and where refinement stops.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -110,19 +105,6 @@ impl CacheFigures {
     }
 }
 
-/// The level `lod` picks for `scene` (the end of refinement).
-pub fn target_level(volume: &Arc<BrickedVolume>, lod: Lod, scene: &Scene) -> usize {
-    BrickedRenderer::new(volume.clone(), lod).level_for(scene)
-}
-
-/// The levels to draw for `scene`, one frame each: the coarsest level first (a few
-/// chunks, on screen at once), then every finer level down to [`target_level`].
-pub fn ladder(volume: &Arc<BrickedVolume>, lod: Lod, scene: &Scene) -> Vec<usize> {
-    let coarsest = volume.levels().saturating_sub(1);
-    let target = target_level(volume, lod, scene).min(coarsest);
-    (target..=coarsest).rev().collect()
-}
-
 /// What a frame of `level` shows, refining towards `target`.
 pub fn level_shown(volume: &BrickedVolume, level: usize, target: usize) -> LevelShown {
     let dims = volume
@@ -135,23 +117,6 @@ pub fn level_shown(volume: &BrickedVolume, level: usize, target: usize) -> Level
         levels: volume.levels(),
         target,
         dims,
-    }
-}
-
-/// Renders `scene` at `level` of `volume` (at `1 / divisor` of the resolution when
-/// `divisor > 1`); `control` cancels it.
-pub fn render_level(
-    volume: &Arc<BrickedVolume>,
-    level: usize,
-    scene: &Scene,
-    control: &Control,
-    divisor: usize,
-) -> Result<Frame, RenderError> {
-    let mut renderer = BrickedRenderer::new(volume.clone(), Lod::Level(level));
-    if divisor > 1 {
-        renderer.render_preview(scene, control, divisor)
-    } else {
-        renderer.render(scene, control)
     }
 }
 

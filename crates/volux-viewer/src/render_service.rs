@@ -6,15 +6,19 @@
 //! faster than previews render, and cancelling them would show nothing while the user drags.
 //! Each request is answered with a
 //! reduced-resolution **preview** first (sized so that it takes about
-//! [`PREVIEW_BUDGET_MS`]), then, once the user stops interacting, the **full** frame with the
-//! scene's own integrator (for adaptive integration, the error-controlled one). Renderers are
-//! kept per method between requests, so their caches (macrocells, gradients, PT's kept set
-//! and projection, the tet ray caster's hierarchy) survive camera and TF changes.
+//! [`PREVIEW_BUDGET_MS`](volux_app::preview::PREVIEW_BUDGET_MS)), then, once the user stops
+//! interacting, the **full** frame with the scene's own integrator (for adaptive integration,
+//! the error-controlled one): the application layer's preview policy
+//! ([`volux_app::preview`]). Renderers come from the application layer's
+//! [`RendererFactory`] and are kept per method between requests, so their caches
+//! (macrocells, gradients, PT's kept set and projection, the tet ray caster's hierarchy)
+//! survive camera and TF changes.
 //!
 //! A bricked volume (an OME-Zarr store rendered out of core) is refined by level instead
-//! ([`crate::progressive`]): the coarsest level at once (a preview of it while the user
-//! drags), then each finer level down to the one its [`Lod`] picks, one frame each; a newer
-//! request cancels the level in flight, as it cancels a full frame.
+//! ([`volux_app::preview::lod_ladder`]): the coarsest level at once (a preview of it while
+//! the user drags), then each finer level down to the one its [`Lod`] picks, one frame
+//! each, drawn by the factory's renderer of that level (the GPU's brick pool on the GPU
+//! backend); a newer request cancels the level in flight, as it cancels a full frame.
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, Receiver, Sender};
@@ -25,21 +29,14 @@ use std::time::{Duration, Instant};
 use volux_core::Image;
 use volux_render::bricked::{BrickedVolume, Lod};
 use volux_render::engine::{FrameStats, Renderer};
-use volux_render::integrate::integrator::Integrator;
-use volux_render::integrate::segment::SegmentRule;
-use volux_render::scene::{Method, Scene, Volume};
+use volux_render::scene::{Scene, Volume};
 use volux_render::tiles::Control;
 use volux_render::RenderError;
 
 use crate::backend::{Backend, Device};
 use crate::progressive::{self, LevelShown};
+use volux_app::preview::{lod_ladder, preview_method, PreviewPolicy};
 use volux_app::RendererFactory;
-
-/// Time a preview frame aims at (ms): the divisor of the resolution adapts to meet it.
-pub const PREVIEW_BUDGET_MS: f64 = 25.0;
-
-/// Coarsest preview: 1/8 of the resolution on each side.
-pub const MAX_DIVISOR: usize = 8;
 
 /// A volume with an identity, so that renderers built for it are reused.
 #[derive(Clone, Debug)]
@@ -62,10 +59,10 @@ struct Request {
 
 /// A frame the thread finished.
 #[derive(Clone, Debug)]
-pub struct Rendered {
+pub struct FinishedFrame {
     /// The picture.
     pub image: Image,
-    /// The picture over [`Rendered::background`] as 8-bit sRGB RGBA, ready for the screen
+    /// The picture over [`FinishedFrame::background`] as 8-bit sRGB RGBA, ready for the screen
     /// (converted on the render thread: the window only uploads it).
     pub display: Vec<u8>,
     /// The background it was composited over.
@@ -92,7 +89,7 @@ pub struct Rendered {
 #[derive(Clone, Debug)]
 pub enum Event {
     /// A frame.
-    Frame(Box<Rendered>),
+    Frame(Box<FinishedFrame>),
     /// The request failed; the message is for the user.
     Failed {
         /// The request.
@@ -139,7 +136,7 @@ impl RenderService {
             wake: Box::new(wake),
             renderers: HashMap::new(),
             factory: RendererFactory::new(backend, crate::backend::gpu_device()),
-            ns_per_pixel: None,
+            previews: PreviewPolicy::default(),
             previewed: None,
         };
         let thread = std::thread::Builder::new()
@@ -217,7 +214,9 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 }
 
 /// A kept renderer's volume, method name and whether it draws on the GPU.
-type RendererKey = (u64, &'static str, bool);
+/// A kept renderer's key: the volume, the method, whether on the GPU, and for a bricked
+/// volume the level it draws.
+type RendererKey = (u64, &'static str, bool, Option<usize>);
 
 /// The thread's side.
 struct Worker {
@@ -227,8 +226,8 @@ struct Worker {
     /// The renderers kept, by volume, method and whether on the GPU, with what they draw on.
     renderers: HashMap<RendererKey, (Box<dyn Renderer>, Device)>,
     factory: RendererFactory,
-    /// Preview cost measured on the last preview, to size the next one.
-    ns_per_pixel: Option<f64>,
+    /// Sizes previews from the last one's cost.
+    previews: PreviewPolicy,
     /// The last scene previewed: when the same scene comes back without interaction (the
     /// drag ended), only the full frame is rendered.
     previewed: Option<(u64, Scene)>,
@@ -268,7 +267,7 @@ impl Worker {
             let (b, lod) = (b.clone(), *lod);
             return self.serve_bricked(&request, &b, lod);
         }
-        let divisor = self.preview_divisor(&request.scene);
+        let divisor = self.previews.divisor(&request.scene);
         let seen = self.previewed.as_ref() == Some(&(request.volume.id, request.scene.clone()));
         if !seen || request.interacting || divisor == 1 {
             match self.render(&request, divisor) {
@@ -297,7 +296,7 @@ impl Worker {
     /// finer level down to the target, each a frame; a newer request stops the walk (and
     /// cancels the level in flight, except the first, which shows something at once).
     fn serve_bricked(&mut self, request: &Request, volume: &Arc<BrickedVolume>, lod: Lod) {
-        let ladder = progressive::ladder(volume, lod, &request.scene);
+        let ladder = lod_ladder(volume, lod, &request.scene);
         let target = ladder.last().copied().unwrap_or(0);
         let seen = self.previewed.as_ref() == Some(&(request.volume.id, request.scene.clone()));
         for (i, &level) in ladder.iter().enumerate() {
@@ -313,7 +312,7 @@ impl Worker {
                 }
             }
             let divisor = if request.interacting {
-                self.preview_divisor(&request.scene)
+                self.previews.divisor(&request.scene)
             } else {
                 1
             };
@@ -345,27 +344,14 @@ impl Worker {
         divisor: usize,
     ) -> Result<(), RenderError> {
         let full = divisor == 1 && shown.is_final();
-        let mut scene = request.scene.clone();
-        if !full {
-            scene.method = preview_method(&scene.method);
-        }
-        let control = Control {
-            cancel: Some(request.cancel.clone()),
-            progress: None,
-        };
-        let frame = progressive::render_level(volume, shown.level, &scene, &control, divisor)?;
-        if divisor > 1 {
-            let px = (frame.stats.pixels.max(1)) as f64;
-            self.ns_per_pixel = Some(frame.stats.ms * 1e6 / px);
-        }
-        self.send(request, frame, (full, divisor), Some(shown), Device::Cpu);
-        Ok(())
+        let level = Volume::Bricked(volume.clone(), Lod::Level(shown.level));
+        self.render_volume(request, &level, divisor, full, Some(shown))
     }
 
     fn fail(&self, request: &Request, e: RenderError) {
         let _ = self.tx.send(Event::Failed {
             generation: request.generation,
-            message: e.to_string(),
+            message: crate::phrase::phrase(&e),
         });
         (self.wake)();
     }
@@ -373,17 +359,35 @@ impl Worker {
     /// Renders the request at `1 / divisor` (a preview with a cheap integrator) or in full,
     /// and sends the frame.
     fn render(&mut self, request: &Request, divisor: usize) -> Result<(), RenderError> {
-        let full = divisor == 1;
+        let volume = request.volume.volume.clone();
+        self.render_volume(request, &volume, divisor, divisor == 1, None)
+    }
+
+    /// Renders `volume` (the request's, or one level of it) for the request at
+    /// `1 / divisor` (a preview with the preview's method unless `full`), with a renderer
+    /// from the factory kept for the next frames, and sends the frame.
+    fn render_volume(
+        &mut self,
+        request: &Request,
+        volume: &Volume,
+        divisor: usize,
+        full: bool,
+        level: Option<LevelShown>,
+    ) -> Result<(), RenderError> {
         let mut scene = request.scene.clone();
         if !full {
             scene.method = preview_method(&scene.method);
         }
-        let volume = &request.volume.volume;
         let resolved = scene.method.resolve(volume)?;
         let mut drawn = scene.clone();
         drawn.method = resolved;
         let on_gpu = self.factory.place(volume, &drawn)?.on_gpu;
-        let key = (request.volume.id, resolved.name(), on_gpu);
+        let key = (
+            request.volume.id,
+            resolved.name(),
+            on_gpu,
+            level.map(|l| l.level),
+        );
         if !self.renderers.contains_key(&key) {
             self.renderers
                 .retain(|(id, ..), _| *id == request.volume.id);
@@ -391,23 +395,22 @@ impl Worker {
             self.renderers.insert(key, made);
         }
         let Some((renderer, device)) = self.renderers.get_mut(&key) else {
-            return Err(RenderError::InvalidOptions("no renderer".into()));
+            return Err(RenderError::Internal("no renderer".into()));
         };
         let device = device.clone();
         let control = Control {
             cancel: Some(request.cancel.clone()),
             progress: None,
         };
-        let frame = if full {
-            renderer.render(&scene, &control)?
-        } else {
+        let frame = if divisor > 1 {
             renderer.render_preview(&scene, &control, divisor)?
+        } else {
+            renderer.render(&scene, &control)?
         };
-        if !full {
-            let px = (frame.stats.pixels.max(1)) as f64;
-            self.ns_per_pixel = Some(frame.stats.ms * 1e6 / px);
+        if divisor > 1 {
+            self.previews.measured(&frame);
         }
-        self.send(request, frame, (full, divisor), None, device);
+        self.send(request, frame, (full, divisor), level, device);
         Ok(())
     }
 
@@ -421,7 +424,7 @@ impl Worker {
         device: Device,
     ) {
         let background = *lock(&self.mailbox.background);
-        let rendered = Rendered {
+        let rendered = FinishedFrame {
             display: frame.image.to_srgba8(background),
             background,
             image: frame.image,
@@ -437,43 +440,14 @@ impl Worker {
         let _ = self.tx.send(Event::Frame(Box::new(rendered)));
         (self.wake)();
     }
-
-    /// The divisor whose preview meets [`PREVIEW_BUDGET_MS`] at the last measured cost.
-    fn preview_divisor(&self, scene: &Scene) -> usize {
-        let pixels = (scene.view.width * scene.view.height) as f64;
-        match self.ns_per_pixel {
-            None => 4,
-            Some(ns) => {
-                let ms_full = pixels * ns * 1e-6;
-                let k = (ms_full / PREVIEW_BUDGET_MS).sqrt().ceil() as usize;
-                k.clamp(1, MAX_DIVISOR)
-            }
-        }
-    }
-}
-
-/// The method a preview uses: the scene's, with adaptive or reference integration replaced
-/// by fixed steps of one unit (the error-controlled frame follows when input stops).
-pub fn preview_method(method: &Method) -> Method {
-    match *method {
-        Method::GridRaycast(mut g) => {
-            if matches!(
-                g.integrator,
-                Integrator::AdaptiveSimpson(_) | Integrator::Reference
-            ) {
-                g.integrator = Integrator::Riemann { step: 1.0 };
-            }
-            Method::GridRaycast(g)
-        }
-        Method::TetRaycast(SegmentRule::AdaptiveSimpson(_)) => Method::TetRaycast(SegmentRule::Psi),
-        m => m,
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use volux_core::{synth, CameraSpec};
+    use volux_render::integrate::segment::SegmentRule;
+    use volux_render::scene::Method;
 
     fn volume() -> VolumeRef {
         VolumeRef {
@@ -487,7 +461,7 @@ mod tests {
         Scene::new(camera, w, w, v.volume.preset_tf("auto").unwrap())
     }
 
-    fn next_frame(s: &RenderService) -> Rendered {
+    fn next_frame(s: &RenderService) -> FinishedFrame {
         match s.wait(Duration::from_secs(60)).expect("a frame") {
             Event::Frame(f) => *f,
             Event::Failed { message, .. } => panic!("{message}"),
@@ -547,18 +521,5 @@ mod tests {
         }
         service.submit(&v, &scene(&v, 32), false);
         assert!(!next_frame(&service).full);
-    }
-
-    /// The preview integrator is fixed-step where the scene's is adaptive.
-    #[test]
-    fn previews_use_fixed_steps() {
-        let adaptive = Method::GridRaycast(volux_render::scene::GridRaycast {
-            integrator: Integrator::Reference,
-            ..Default::default()
-        });
-        let Method::GridRaycast(g) = preview_method(&adaptive) else {
-            panic!()
-        };
-        assert_eq!(g.integrator, Integrator::Riemann { step: 1.0 });
     }
 }

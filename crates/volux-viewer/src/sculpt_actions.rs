@@ -84,7 +84,7 @@ impl ViewerApp {
         };
         let result = planes_after(sculpt.planes(), &step)
             .and_then(|planes| voi_of(&bounds, &planes).map(|_| ()))
-            .and_then(|_| sculpt.apply(step).map_err(|e| e.to_string()));
+            .and_then(|_| sculpt.apply(step).map_err(|e| crate::phrase::phrase(&e)));
         match result {
             Ok(()) => {
                 self.error = None;
@@ -246,10 +246,10 @@ impl ViewerApp {
 /// A sculpt state for `volume`: a grid's own, or planes only on a mesh's box.
 fn sculpt_on(volume: &Volume) -> Result<Sculpt, String> {
     let grid = match volume {
-        Volume::Grid(g) => return Sculpt::new(g).map_err(|e| e.to_string()),
+        Volume::Grid(g) => return Sculpt::new(g).map_err(|e| crate::phrase::phrase(&e)),
         other => stand_in(&other.bounds())?,
     };
-    Sculpt::new(&grid).map_err(|e| e.to_string())
+    Sculpt::new(&grid).map_err(|e| crate::phrase::phrase(&e))
 }
 
 /// A 2x2x2 grid spanning `bounds` (the frame of a mesh's plane-only sculpt).

@@ -32,7 +32,11 @@ impl ViewerApp {
             return None;
         }
         let scene = self.scene.clone();
-        Some(move || sculpt.labels(&grid, &scene).map_err(|e| e.to_string()))
+        Some(move || {
+            sculpt
+                .labels(&grid, &scene)
+                .map_err(|e| crate::phrase::phrase(&e))
+        })
     }
 
     /// Takes the label counts once counted.

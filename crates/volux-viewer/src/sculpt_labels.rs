@@ -81,7 +81,7 @@ impl ViewerApp {
         let job = Job::spawn("colouring by labels", move || {
             sculpt
                 .label_volume(&grid, &scene)
-                .map_err(|e| e.to_string())
+                .map_err(|e| crate::phrase::phrase(&e))
         });
         self.tools.label_colours.job = Some((key, job));
     }

@@ -10,7 +10,7 @@ use volux_render::engine::{FrameStats, MethodStats};
 use crate::app::ViewerApp;
 use crate::navigation;
 use crate::overlay_text::backed_text;
-use crate::render_service::Rendered;
+use crate::render_service::FinishedFrame;
 use crate::slices::{direction_name, Plane};
 use crate::{plane_handle, sculpt_tools};
 use volux_core::NamedView;
@@ -154,7 +154,7 @@ fn paint(app: &ViewerApp, ui: &egui::Ui, rect: Rect) {
     }
 }
 
-fn overlay(app: &ViewerApp, painter: &egui::Painter, rect: Rect, frame: &Rendered) {
+fn overlay(app: &ViewerApp, painter: &egui::Painter, rect: Rect, frame: &FinishedFrame) {
     let (stats, divisor, device) = (&frame.stats, frame.divisor, &frame.device);
     let kind = if frame.full {
         "full".to_string()

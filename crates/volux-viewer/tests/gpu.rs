@@ -12,7 +12,7 @@ use volux_render::integrate::Integrator;
 use volux_render::scene::{GridRaycast, Method, Scene, SlicingSettings, Volume};
 use volux_viewer::app::{Options, ViewerApp};
 use volux_viewer::backend::{Backend, Device};
-use volux_viewer::render_service::{Event, RenderService, Rendered, VolumeRef};
+use volux_viewer::render_service::{Event, FinishedFrame, RenderService, VolumeRef};
 
 /// Whether this machine has an adapter (a skip message when not, a failure in CI).
 fn have_adapter() -> bool {
@@ -39,7 +39,7 @@ fn scene(v: &VolumeRef) -> Scene {
 }
 
 /// The full frame of `scene` on `backend` (previews skipped), or the failure's message.
-fn full_frame(backend: Backend, v: &VolumeRef, scene: &Scene) -> Result<Rendered, String> {
+fn full_frame(backend: Backend, v: &VolumeRef, scene: &Scene) -> Result<FinishedFrame, String> {
     let mut service = RenderService::start_on(|| {}, backend);
     service.submit(v, scene, false);
     loop {
@@ -137,6 +137,70 @@ fn texture_slicing_is_drawn_on_the_gpu() {
     );
     let err = full_frame(Backend::Cpu, &v, &s).unwrap_err();
     assert!(err.contains("GPU method"), "{err}");
+}
+
+/// A store's frames go through the application layer's factory like a grid's: on `gpu`
+/// every level of the refinement is drawn by the GPU's brick pool, and the final level is
+/// the CPU's picture of that level.
+#[test]
+fn a_stores_levels_are_drawn_by_the_gpus_brick_pool() {
+    use std::sync::Arc;
+    use volux_core::bricked::GridChunks;
+    use volux_io::omezarr::{write_ome_zarr, Levels, WriteOptions};
+    use volux_render::bricked::Lod;
+    if !have_adapter() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ml.ome.zarr");
+    let grid = Arc::new(synth::marschner_lobb(32).unwrap());
+    let chunks = GridChunks::new(grid, [16, 16, 16]).unwrap();
+    let opts = WriteOptions {
+        levels: Levels::Auto,
+        name: "ml".into(),
+        ..WriteOptions::default()
+    };
+    write_ome_zarr(&chunks, &path, &opts).unwrap();
+    let store =
+        volux_app::store::open_store(&volux_app::session::DatasetRef::at(&path), 64 << 20).unwrap();
+    let v = VolumeRef {
+        id: 7,
+        volume: Volume::Bricked(store.volume, Lod::Level(0)),
+    };
+    let s = scene(&v);
+    let mut service = RenderService::start_on(|| {}, Backend::Gpu);
+    service.submit(&v, &s, false);
+    let mut levels = Vec::new();
+    let gpu = loop {
+        match service.wait(Duration::from_secs(60)).expect("an event") {
+            Event::Frame(f) => {
+                assert!(matches!(f.device, Device::Gpu(_)), "{:?}", f.device);
+                levels.push(f.level.expect("a store's frame names its level").level);
+                if f.full {
+                    break f;
+                }
+            }
+            Event::Failed { message, .. } => panic!("{message}"),
+        }
+    };
+    assert_eq!(
+        levels.first(),
+        Some(&1),
+        "the coarsest level first: {levels:?}"
+    );
+    assert_eq!(levels.last(), Some(&0), "{levels:?}");
+    let cpu = full_frame(Backend::Cpu, &v, &s).unwrap();
+    assert_eq!(cpu.device, Device::Cpu);
+    let mean = gpu
+        .image
+        .pixels()
+        .iter()
+        .zip(cpu.image.pixels())
+        .map(|(a, b)| (0..4).map(|c| f64::from((a[c] - b[c]).abs())).sum::<f64>())
+        .sum::<f64>()
+        / (4 * gpu.image.pixels().len()) as f64;
+    assert!(mean < 1.0 / 255.0, "mean {mean}");
+    assert!(gpu.image.coverage(0.01) > 0.1, "the store is drawn");
 }
 
 /// The window with `--backend gpu` opens a grid and shows a full frame drawn on the GPU.

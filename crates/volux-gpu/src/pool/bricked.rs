@@ -53,7 +53,7 @@ impl Renderer for GpuBrickedRenderer {
     }
 
     fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
-        GpuPoolRenderer::supports(scene).map_err(RenderError::Backend)?;
+        GpuPoolRenderer::supports(scene)?;
         let level = self.levels.level_for(scene);
         if self.pool.as_ref().is_none_or(|(l, _)| *l != level) {
             self.pool = None;
@@ -63,7 +63,7 @@ impl Renderer for GpuBrickedRenderer {
         }
         match &mut self.pool {
             Some((_, pool)) => pool.render(scene, control),
-            None => Err(RenderError::Backend("no brick pool".into())),
+            None => Err(RenderError::Internal("no brick pool".into())),
         }
     }
 }

@@ -6,16 +6,16 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use volux_core::image::Image;
-use volux_render::classify::ClassifyTable;
+use volux_render::backend_kit::ClassifyTable;
+use volux_render::backend_kit::MacrocellGrid;
+use volux_render::backend_kit::{Placement, RenderOptions};
 use volux_render::frame::{Frame, FrameStats, MethodStats, Rebuilt, RenderStats};
 use volux_render::integrate::Integrator;
-use volux_render::macrocell::MacrocellGrid;
-use volux_render::raycast::{Placement, RenderOptions};
 use volux_render::renderer::Renderer;
 use volux_render::sampling::Reconstruction;
 use volux_render::scene::{GridRaycast, Method, Scene};
 use volux_render::tiles::Control;
-use volux_render::{check_image_size, RenderError};
+use volux_render::{check_image_size, Refusal, Remedy, RenderError};
 use wgpu::util::DeviceExt;
 
 use super::slots::{bricks_per_axis, PoolOptions, Slots};
@@ -100,11 +100,17 @@ impl GpuPoolRenderer {
     }
 
     /// Whether the pool draws `scene`: `Err` names what it does not draw.
-    pub fn supports(scene: &Scene) -> Result<(), String> {
+    pub fn supports(scene: &Scene) -> Result<(), Refusal> {
         let settings = match scene.method {
             Method::GridRaycast(s) => s,
             Method::Auto => GridRaycast::default(),
-            ref m => return Err(format!("the GPU brick pool does not draw '{}'", m.name())),
+            ref m => {
+                return Err(Refusal::new(
+                    "the GPU brick pool",
+                    format!("does not draw '{}'", m.name()),
+                    None,
+                ))
+            }
         };
         let a = &scene.appearance;
         let refused = if !matches!(settings.integrator, Integrator::Riemann { .. }) {
@@ -125,8 +131,10 @@ impl GpuPoolRenderer {
             None
         };
         match refused {
-            Some(what) => Err(format!(
-                "the GPU brick pool does not draw {what} yet (use --backend cpu)"
+            Some(what) => Err(Refusal::new(
+                "the GPU brick pool",
+                format!("does not draw {what} yet"),
+                Some(Remedy::CpuBackend),
             )),
             None => Ok(()),
         }
@@ -140,7 +148,7 @@ impl Renderer for GpuPoolRenderer {
 
     fn render(&mut self, scene: &Scene, control: &Control) -> Result<Frame, RenderError> {
         let started = Instant::now();
-        Self::supports(scene).map_err(RenderError::Backend)?;
+        Self::supports(scene)?;
         let settings = match scene.method {
             Method::GridRaycast(s) => s,
             _ => GridRaycast::default(),

@@ -4,8 +4,9 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use volux_core::Grid;
-use volux_render::bricked::{level_placement, Brick, BrickCache, BrickedVolume};
-use volux_render::raycast::Placement;
+use volux_render::backend_kit::Placement;
+use volux_render::backend_kit::{level_placement, Brick, BrickCache};
+use volux_render::bricked::BrickedVolume;
 
 use crate::error::GpuError;
 

@@ -4,8 +4,8 @@
 //! image size, the clipping planes, the kept set and whether gradients are needed). A frame
 //! runs only the stages whose key changed, then the fans and the readback.
 use volux_core::{TetMesh, TransferFunction};
+use volux_render::backend_kit::{mpvo_order, SortView};
 use volux_render::frame::Rebuilt;
-use volux_render::pt::sort::{mpvo_order, View};
 use volux_render::scene::Scene;
 use wgpu::util::DeviceExt;
 
@@ -94,7 +94,7 @@ fn exact_order(
     scene: &Scene,
 ) -> Result<Vec<[u32; 2]>, GpuError> {
     let adjacency = adjacency.get_or_insert_with(|| mesh.face_adjacency());
-    let view = View::from_camera(&scene.view.camera);
+    let view = SortView::from_camera(&scene.view.camera);
     let order = mpvo_order(mesh, adjacency, &view, None)
         .map_err(|e| GpuError::Failed(format!("exact visibility sort: {e}")))?;
     if order.len() != mesh.tets().len() {

@@ -70,13 +70,13 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use volux_core::{Image, TetMesh};
+use volux_render::backend_kit::PsiTable;
 use volux_render::frame::{Frame, FrameStats, MethodStats, PtStats, Rebuilt};
-use volux_render::integrate::psi::PsiTable;
 use volux_render::integrate::SegmentRule;
 use volux_render::renderer::Renderer;
 use volux_render::scene::{Method, PtSettings, Scene, SortMode};
 use volux_render::tiles::Control;
-use volux_render::{check_image_size, RenderError};
+use volux_render::{check_image_size, Refusal, Remedy, RenderError};
 use wgpu::util::DeviceExt;
 
 use crate::context::GpuContext;
@@ -154,14 +154,15 @@ impl GpuPtRenderer {
 
     /// Whether the shaders draw `scene` (a Projected Tetrahedra scene): `Err` names what they
     /// do not draw, for a front end to fall back to the CPU or to say so.
-    pub fn supports(scene: &Scene) -> Result<(), String> {
+    pub fn supports(scene: &Scene) -> Result<(), Refusal> {
         let settings = match scene.method {
             Method::ProjectedTetrahedra(s) => s,
             Method::Auto => PtSettings::default(),
             ref m => {
-                return Err(format!(
-                    "the GPU Projected Tetrahedra renderer does not draw '{}'",
-                    m.name()
+                return Err(Refusal::new(
+                    "the GPU Projected Tetrahedra renderer",
+                    format!("does not draw '{}'", m.name()),
+                    None,
                 ))
             }
         };
@@ -182,8 +183,10 @@ impl GpuPtRenderer {
         .or_else(|| scene.mask.is_some().then(|| "a sculpt mask".into()))
         .or_else(|| scene.labels.is_some().then(|| "region labels".into()));
         match refused {
-            Some(what) => Err(format!(
-                "the GPU backend does not draw {what} with Projected Tetrahedra yet (use --backend cpu)"
+            Some(what) => Err(Refusal::new(
+                "the GPU backend",
+                format!("does not draw {what} with Projected Tetrahedra yet"),
+                Some(Remedy::CpuBackend),
             )),
             None => Ok(()),
         }
@@ -267,14 +270,16 @@ impl Renderer for GpuPtRenderer {
             Method::ProjectedTetrahedra(s) => s,
             Method::Auto => PtSettings::default(),
             m => {
-                return Err(RenderError::InvalidOptions(format!(
-                    "the GPU pt renderer cannot draw method '{}'",
-                    m.name()
-                )))
+                return Err(Refusal::new(
+                    "the GPU pt renderer",
+                    format!("cannot draw method '{}'", m.name()),
+                    None,
+                )
+                .into())
             }
         };
         scene.validate()?;
-        Self::supports(scene).map_err(RenderError::Backend)?;
+        Self::supports(scene)?;
         let (w, h) = (scene.view.width, scene.view.height);
         check_image_size(w, h)?;
         let psi = settings.color == SegmentRule::Psi;

@@ -2,8 +2,8 @@
 //! seed `002` figure 4; the CPU's [`TERNARY_TABLE`], packed), the TF's pieces and its
 //! classification table ([`CellClassifier`]), and the ψ table ([`PsiTable`]) as a texture.
 use volux_core::TransferFunction;
-use volux_render::integrate::psi::{CellClassifier, PsiTable};
-use volux_render::pt::classify::{ThickTopology, TERNARY_TABLE};
+use volux_render::backend_kit::{CellClassifier, PsiTable};
+use volux_render::backend_kit::{ThickTopology, TERNARY_TABLE};
 use wgpu::util::DeviceExt;
 
 use super::view::TfShape;

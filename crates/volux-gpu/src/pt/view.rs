@@ -6,8 +6,8 @@ use glam::DVec3;
 use volux_core::camera::Projection;
 use volux_core::voi::ClipPlane;
 use volux_core::Camera;
+use volux_render::backend_kit::NEAR_FRACTION;
 use volux_render::isosurface::Isovalue;
-use volux_render::pt::project::NEAR_FRACTION;
 use volux_render::shading::{BlinnPhong, Light};
 
 /// The most isovalues the shaders draw (the uniform block holds them).

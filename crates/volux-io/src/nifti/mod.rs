@@ -120,7 +120,7 @@ fn read_flavour(path: &Path, choice: VolumeChoice, flavour: Flavour) -> Result<G
         Voxels::Scalar(samples) => Grid::new(dims, place.spacing, place.origin, samples),
         Voxels::Colour(rgb) => {
             if hdr.dtype.channels() == Some(4) {
-                notes.push("rgba32: the alpha channel was dropped (--component 3 reads it)".into());
+                notes.push("rgba32: the alpha channel was dropped (component 3 reads it)".into());
             }
             Grid::from_rgb(dims, place.spacing, place.origin, rgb)
         }

@@ -80,13 +80,13 @@ pub fn load_level(path: &Path, opts: &ZarrOptions) -> Result<Grid> {
                     .saturating_mul(l.layout().scalar.size() as u64)
                     <= volux_core::limits::memory_budget()
             })
-            .map(|i| format!("--level {i} fits"))
+            .map(|i| format!("level {i} fits"))
             .unwrap_or_else(|| "no level fits".into());
         return Err(ReadError::new(
             path,
             ErrorKind::Invalid(format!(
                 "level {} ({} x {} x {} samples) is larger than the memory budget ({e}); \
-                 choose a coarser level with --level N ({coarser}) or render the store with \
+                 choose a coarser level ({coarser}) or render the store with \
                  the bricked (out-of-core) renderer",
                 opts.level, layout.dims[0], layout.dims[1], layout.dims[2]
             )),

@@ -134,7 +134,7 @@ pub fn open_store(path: &Path, opts: &ZarrOptions) -> Result<OmeZarr> {
         )?
     } else {
         let (list, version) = meta::multiscales_value(&node.attributes).ok_or_else(|| {
-            header(&dir, "a Zarr group without OME-NGFF \"multiscales\" metadata (name an image inside it with --array)")
+            header(&dir, "a Zarr group without OME-NGFF \"multiscales\" metadata (name an image inside it with the array reader option)")
         })?;
         let first = list
             .first()

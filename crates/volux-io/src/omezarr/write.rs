@@ -86,7 +86,7 @@ pub fn level_dims(
         }
         Levels::Count(n) => {
             if n == 0 {
-                return Err("--levels must be at least 1".into());
+                return Err("a pyramid needs at least 1 level".into());
             }
             while out.len() < n {
                 let last = *out.last().unwrap_or(&dims);

@@ -10,22 +10,22 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
 use volux_core::bricked::{ChunkLayout, ChunkSource};
 use volux_core::grid::{Samples, Scalar};
 
-use crate::raycast::bricks::Bricks;
-/// The micro-bricks of the in-core renderer's bricked copy: cells per side, samples per
-/// side, samples per micro-brick, a cell's corners' offsets and reach.
-pub(crate) use crate::raycast::bricks::{BRICK as MICRO, CELLS, REACH, SIDE};
+use crate::raycast::cell_blocks::CellBlocks;
+/// The cell blocks of the in-core renderer's bricked copy: cells per side, samples per
+/// side, samples per cell block, a cell's corners' offsets and reach.
+pub(crate) use crate::raycast::cell_blocks::{BLOCK, CELLS, REACH, SIDE};
 
 /// What local coordinate `l` along axis `a` adds to the offset of the first sample of cell
 /// `l` in a brick of a level whose chunks have `shape` samples. Bricks hold their samples in
-/// micro-bricks of `CELLS`³ cells with their far faces (`SIDE`³ samples, x fastest;
-/// micro-bricks x fastest), the layout of the in-core renderer's bricked copy: a cell's eight
+/// cell blocks of `CELLS`³ cells with their far faces (`SIDE`³ samples, x fastest;
+/// cell blocks x fastest), the layout of the in-core renderer's bricked copy: a cell's eight
 /// corners lie at the fixed displacements `CORNERS` from its first sample, within a few
-/// kilobytes. The far faces of the chunk's last micro-bricks belong to the next chunk and are
+/// kilobytes. The far faces of the chunk's last cell blocks belong to the next chunk and are
 /// not filled: the cells there are sampled corner by corner.
 #[inline]
 pub fn axis_offset(shape: [usize; 3], a: usize, l: usize) -> usize {
     let m = shape.map(|c| c.div_ceil(CELLS).max(1));
-    let stride = [MICRO, m[0] * MICRO, m[0] * m[1] * MICRO][a];
+    let stride = [BLOCK, m[0] * BLOCK, m[0] * m[1] * BLOCK][a];
     let step = [1, SIDE, SIDE * SIDE][a];
     (l / CELLS) * stride + (l % CELLS) * step
 }
@@ -33,11 +33,11 @@ pub fn axis_offset(shape: [usize; 3], a: usize, l: usize) -> usize {
 /// Bytes of a brick of a level whose chunks have `shape` samples.
 pub fn brick_bytes(shape: [usize; 3]) -> u64 {
     let m = shape.map(|c| c.div_ceil(CELLS).max(1) as u64);
-    m.iter().product::<u64>() * (MICRO * std::mem::size_of::<f32>()) as u64
+    m.iter().product::<u64>() * (BLOCK * std::mem::size_of::<f32>()) as u64
 }
 
 /// One resident chunk: its samples as f32 (the renderer's sample type), and where it sits.
-/// Every brick of a level has the same layout (micro-bricks: `axis_offset`), so a sample's place in its
+/// Every brick of a level has the same layout (cell blocks: `axis_offset`), so a sample's place in its
 /// brick depends only on its coordinates: the field finds it from per-axis tables.
 #[derive(Debug)]
 pub struct Brick {
@@ -47,7 +47,7 @@ pub struct Brick {
     pub size: [usize; 3],
     /// The level's chunk shape, which the layout follows.
     pub shape: [usize; 3],
-    /// The samples in micro-bricks (`axis_offset` gives the layout).
+    /// The samples in cell blocks (`axis_offset` gives the layout).
     pub values: Vec<f32>,
     /// The smallest and largest sample (NaN ignored; infinite when none is finite).
     pub range: [f32; 2],
@@ -73,7 +73,7 @@ impl Brick {
         }
         let shape = layout.chunk;
         let m = shape.map(|c| c.div_ceil(CELLS).max(1));
-        let len = m.iter().product::<usize>() * MICRO;
+        let len = m.iter().product::<usize>() * BLOCK;
         // Every sample of the buffer is written below.
         let mut values = match spare {
             Some(v) if v.len() == len => v,
@@ -87,9 +87,9 @@ impl Brick {
                     range = [range[0].min(x), range[1].max(x)];
                 }
             }
-            // Each micro-brick's samples; beyond the chunk's last sample the last is
+            // Each cell block's samples; beyond the chunk's last sample the last is
             // repeated (read only along an axis with one sample, as the in-core sampler does).
-            for (b, micro) in values.chunks_exact_mut(MICRO).enumerate() {
+            for (b, micro) in values.chunks_exact_mut(BLOCK).enumerate() {
                 let o = [b % m[0], b / m[0] % m[1], b / m[0] / m[1]].map(|i| i * CELLS);
                 for (r, row) in micro.chunks_exact_mut(SIDE).enumerate() {
                     let y = (o[1] + r % SIDE).min(size[1] - 1);
@@ -171,7 +171,7 @@ const WHOLE: usize = usize::MAX;
 /// Where a render finds the bricks of a level ([`BrickCache::frame_bricks`]).
 pub(crate) enum FrameBricks {
     /// The level's whole bricked copy, the in-core renderer's layout.
-    Whole(Arc<Bricks>),
+    Whole(Arc<CellBlocks>),
     /// A table of the level's bricks by chunk index, the missing ones left for the render's
     /// first reader.
     Table(Vec<OnceLock<Arc<Brick>>>),
@@ -187,7 +187,7 @@ struct Resident {
     /// Chunks being read.
     reading: HashSet<Key>,
     /// Whole copies of levels, by level, with their last use.
-    wholes: HashMap<usize, (Arc<Bricks>, u64)>,
+    wholes: HashMap<usize, (Arc<CellBlocks>, u64)>,
     by_use: BTreeMap<u64, Key>,
     bytes: u64,
     /// Bytes resident per level.
@@ -208,7 +208,7 @@ impl Resident {
     }
 
     /// The whole copy of level `level`, marked as used now.
-    fn touch_whole(&mut self, level: usize) -> Option<Arc<Bricks>> {
+    fn touch_whole(&mut self, level: usize) -> Option<Arc<CellBlocks>> {
         self.clock += 1;
         let now = self.clock;
         let (whole, used) = self.wholes.get_mut(&level)?;
@@ -219,7 +219,7 @@ impl Resident {
     }
 
     /// Makes `whole` level `level`'s copy in place of its bricks.
-    fn replace_bricks(&mut self, level: usize, whole: Arc<Bricks>) {
+    fn replace_bricks(&mut self, level: usize, whole: Arc<CellBlocks>) {
         let keys: Vec<Key> = self
             .bricks
             .keys()
@@ -447,7 +447,7 @@ impl BrickCache {
     pub(crate) fn frame_bricks(&self) -> Option<FrameBricks> {
         let layout = self.layout();
         let count = layout.chunk_count();
-        let whole_bytes = Bricks::bytes_for(layout.dims);
+        let whole_bytes = CellBlocks::bytes_for(layout.dims);
         let budget = self.pool.budget;
         if (count as u64).saturating_mul(brick_bytes(layout.chunk)) > budget {
             return None;
@@ -491,7 +491,7 @@ impl BrickCache {
 
     /// The level's whole copy from `table`, which holds every brick (`None` if it would
     /// take more than `room` bytes or the in-core layout cannot address it).
-    fn whole_copy(&self, table: &[OnceLock<Arc<Brick>>], room: u64) -> Option<Bricks> {
+    fn whole_copy(&self, table: &[OnceLock<Arc<Brick>>], room: u64) -> Option<CellBlocks> {
         let layout = self.layout();
         let (chunk, counts) = (layout.chunk, layout.chunks_per_axis());
         let stride = [1, counts[0], counts[0] * counts[1]];
@@ -508,7 +508,7 @@ impl BrickCache {
             .iter()
             .map(|slot| slot.get().map(|b| &**b))
             .collect::<Option<_>>()?;
-        Bricks::build_from(layout.dims, room, |x, y, z| {
+        CellBlocks::build_from(layout.dims, room, |x, y, z| {
             let (a, b, c) = (axes[0][x], axes[1][y], axes[2][z]);
             bricks[a.0 + b.0 + c.0].values[a.1 + b.1 + c.1]
         })

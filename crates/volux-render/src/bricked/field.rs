@@ -17,7 +17,9 @@ use glam::{DVec3, Vec3};
 
 use super::cache::{axis_offset, brick_bytes, Brick, BrickCache, FrameBricks, REACH};
 use super::memo::{self, Entry, MAX_SLOTS};
-use crate::raycast::bricks::{cells_of_four, corners_in, lerp_corners, undefined_to_nan, Bricks};
+use crate::raycast::cell_blocks::{
+    cells_of_four, corners_in, lerp_corners, undefined_to_nan, CellBlocks,
+};
 use crate::sampling::{axis64, clamped_cell, Field, LANES};
 
 /// The flags of a lane's offset (as [`BrickedField::locate`] gives it) marking a cell on a
@@ -40,7 +42,7 @@ pub(crate) const MEMO_SHARE_MAX: u64 = 256 << 20;
 /// Where a field finds a chunk's brick during its render.
 enum Lookup {
     /// The level's whole copy ([`FrameBricks::Whole`]): the in-core bricked sampler.
-    Whole(Arc<Bricks>),
+    Whole(Arc<CellBlocks>),
     /// The level's bricks by chunk index ([`BrickCache::frame_table`], when the whole level
     /// fits the budget): one load per lane, no lock once a brick is in.
     Table(Vec<OnceLock<Arc<Brick>>>),
@@ -333,7 +335,7 @@ impl<'a> BrickedField<'a> {
         for g in (0..N).step_by(4) {
             let (cell, frac) = cells_of_four(p, g, self.hi, self.cell_max);
             // Every lane gathers from its own brick without a branch on its data (the far
-            // faces of a brick's last micro-bricks hold copies, read and then replaced);
+            // faces of a brick's last cell blocks hold copies, read and then replaced);
             // lanes on a chunk's far faces or in a brick not read yet are redone after.
             let mut c = [[0.0f32; 4]; 8];
             let mut redo = 0u32;

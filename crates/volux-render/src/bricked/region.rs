@@ -15,7 +15,7 @@ use crate::distributed::error::DistributedError;
 use crate::distributed::exchange::Exchange;
 use crate::distributed::kdtree::KdSplit;
 use crate::distributed::part::Part;
-use crate::distributed::pipeline::{render_pipelined, FrameStats};
+use crate::distributed::pipeline::{render_pipelined, RankTimes};
 use crate::distributed::region::{is_pipelined, render_region};
 use crate::error::RenderError;
 use crate::raycast::{Placement, RenderOptions};
@@ -65,13 +65,13 @@ pub fn render_cache_frame<E: Exchange + ?Sized>(
     opts: &RenderOptions,
     ex: &mut E,
     order: &[usize],
-) -> Result<(Option<volux_core::Image>, FrameStats), DistributedError> {
+) -> Result<(Option<volux_core::Image>, RankTimes), DistributedError> {
     if !is_pipelined(opts) {
         let t = std::time::Instant::now();
         let part = render_cache_region(cache, range, split, region, opts)?;
         let render_seconds = t.elapsed().as_secs_f64();
         let (image, composite) = part.combine(ex, order)?;
-        let stats = FrameStats {
+        let stats = RankTimes {
             render_seconds,
             composite,
         };

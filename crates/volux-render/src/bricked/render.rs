@@ -12,7 +12,7 @@ use super::field::BrickedField;
 use super::prefetch;
 use super::volume::{BrickedVolume, Lod};
 use crate::classify::ClassifyTable;
-use crate::error::RenderError;
+use crate::error::{Refusal, Remedy, RenderError};
 use crate::frame::Frame;
 use crate::integrate::Integrator;
 use crate::intervals::IntervalSource;
@@ -70,11 +70,9 @@ pub fn render_level(
     opts: &RenderOptions,
 ) -> Result<Rendered, RenderError> {
     refuse_voxel_layers(opts)?;
-    let cache = volume.cache(level).ok_or_else(|| {
-        RenderError::InvalidOptions(format!(
-            "level {level} does not exist: the volume has {} levels",
-            volume.levels()
-        ))
+    let cache = volume.cache(level).ok_or(RenderError::NoSuchLevel {
+        level,
+        levels: volume.levels(),
     })?;
     let range = volume.range();
     let failed = Arc::new(AtomicBool::new(false));
@@ -153,9 +151,14 @@ fn refuse_voxel_layers(opts: &RenderOptions) -> Result<(), RenderError> {
     } else {
         return Ok(());
     };
-    Err(RenderError::InvalidOptions(format!(
-        "bricked volumes are rendered with trilinear reconstruction and without voxel layers: {what} needs the volume in memory (load a level that fits the memory budget)"
-    )))
+    Err(Refusal::new(
+        "out-of-core rendering",
+        format!(
+            "samples bricks trilinearly and has no voxel layers: {what} needs the volume in memory"
+        ),
+        Some(Remedy::LoadLevel),
+    )
+    .into())
 }
 
 /// `opts` with `failed` as its cancel flag, so that a chunk error stops the render early (a

@@ -12,7 +12,7 @@ use super::fixtures::{grid, tf, CHUNK, DIMS};
 use super::*;
 use crate::integrate::{AdaptiveParams, Integrator, StepControl};
 use crate::isosurface::{Isosurfaces, Isovalue};
-use crate::raycast::bricks::Bricks;
+use crate::raycast::cell_blocks::CellBlocks;
 use crate::raycast::{render_field, render_grid, Placement, RenderOptions};
 use crate::sampling::Trilinear;
 use crate::shading::BlinnPhong;
@@ -93,7 +93,7 @@ fn every_integrator_equals_the_in_core_render_with_evictions_within_the_frame() 
         unreachable!()
     };
     let incore = Trilinear::new(values.as_slice(), DIMS);
-    // Three bricks of 8x5x4 f32 (each one micro-brick of 9³): every frame evicts.
+    // Three bricks of 8x5x4 f32 (each one cell block of 9³): every frame evicts.
     let brick = 9 * 9 * 9 * 4;
     let small = volume(&g, 3 * brick);
     let roomy = volume(&g, 1 << 30);
@@ -424,7 +424,7 @@ fn same_samples_as_in_core(
 fn the_levels_share_one_budget_and_the_coarse_bricks_go_first() {
     let g = grid();
     let levels = pyramid(&g, |i| (i % 97) as f32);
-    // Room for the full level's 3 x 4 x 4 bricks of one micro-brick each, not for both.
+    // Room for the full level's 3 x 4 x 4 bricks of one cell block each, not for both.
     let brick = 9 * 9 * 9 * 4;
     let budget = 48 * brick;
     let v = BrickedVolume::open(Multiscale::new("pyramid", levels).unwrap(), budget).unwrap();
@@ -434,7 +434,7 @@ fn the_levels_share_one_budget_and_the_coarse_bricks_go_first() {
     render_level(&v, 1, &o).unwrap();
     let coarse = v.cache(1).unwrap();
     let coarse_bytes = coarse.resident_bytes();
-    assert_eq!(coarse_bytes, Bricks::bytes_for(coarse.layout().dims));
+    assert_eq!(coarse_bytes, CellBlocks::bytes_for(coarse.layout().dims));
     render_level(&v, 0, &o).unwrap();
     // The full level's bricks displaced the coarse ones: the pool stayed within the budget.
     assert!(
@@ -462,7 +462,7 @@ fn a_warm_level_becomes_one_copy_in_place_of_its_bricks() {
     for _ in 0..2 {
         let warm = render_level(&v, 0, &o).unwrap();
         assert_eq!(max_diff(&warm.image, &cold.image), 0.0);
-        assert_eq!(v.resident_bytes(), Bricks::bytes_for(DIMS));
+        assert_eq!(v.resident_bytes(), CellBlocks::bytes_for(DIMS));
         assert_eq!(v.cache_stats(0).unwrap().misses, reads);
         assert!(v.cache(0).unwrap().is_resident([0, 0, 0]));
     }

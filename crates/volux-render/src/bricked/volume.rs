@@ -12,7 +12,7 @@ use volux_core::Aabb;
 
 use super::cache::{brick_bytes, BrickCache, CacheStats};
 use super::field::{MAX_BRICK_SAMPLES, MAX_CHUNKS};
-use crate::error::RenderError;
+use crate::error::{Remedy, RenderError};
 use crate::macrocell::MacrocellGrid;
 
 /// Which pyramid level a render samples.
@@ -369,10 +369,16 @@ fn coarse_histogram(ms: &Multiscale, range: [f64; 2]) -> Result<(Histogram, usiz
         .enumerate()
         .find(|(_, l)| l.layout().dims.iter().product::<usize>() <= HISTOGRAM_SAMPLES)
     else {
-        return Err(RenderError::InvalidOptions(format!(
-            "{}: its coarsest level has more than {HISTOGRAM_SAMPLES} samples; write a pyramid (volux convert --levels auto)",
-            ms.name
-        )));
+        let coarsest = ms
+            .levels()
+            .last()
+            .map_or(0, |l| l.layout().dims.iter().product::<usize>());
+        return Err(RenderError::OverLimit {
+            what: format!("{}: the coarsest level (samples)", ms.name),
+            count: coarsest as u64,
+            limit: HISTOGRAM_SAMPLES as u64,
+            remedy: Some(Remedy::WritePyramid),
+        });
     };
     let layout = level.layout();
     let mut values: Vec<f32> = Vec::with_capacity(layout.dims.iter().product());

@@ -74,7 +74,7 @@ fn integrators() -> [Integrator; 4] {
 /// The pixel (`x`, `y`)'s colour, in every path: the cached renderer (lane paths with the
 /// gradient volume) and the one-off render (ray by ray, gradients on the fly), which agree.
 fn pixels(g: &Grid, o: &RenderOptions, at: &[(usize, usize)]) -> Vec<[f32; 3]> {
-    let cached = GridRenderer::new(g).render(o).unwrap().image;
+    let cached = GridRenderer::new(g).render_with(o).unwrap().image;
     let one_off = render_grid(g, o).unwrap().image;
     at.iter()
         .map(|&(x, y)| {

@@ -81,7 +81,7 @@ fn both(
         clip_planes: planes.to_vec(),
         ..PtOptions::new(cam, tf())
     };
-    let a = PtRenderer::new(mesh).render(&pt).unwrap().image;
+    let a = PtRenderer::new(mesh).render_with(&pt).unwrap().image;
     let rc = TetRayOptions {
         width: 64,
         height: 56,
@@ -91,7 +91,7 @@ fn both(
         clip_planes: planes.to_vec(),
         ..TetRayOptions::new(cam, tf())
     };
-    let b = TetRayCaster::new(mesh).unwrap().render(&rc).unwrap();
+    let b = TetRayCaster::new(mesh).unwrap().render_with(&rc).unwrap();
     assert_eq!(b.stats.abandoned, 0);
     (a, b.image)
 }
@@ -201,10 +201,10 @@ fn cells_wholly_outside_a_plane_are_culled_without_changing_the_image() {
             clip_planes: planes.clone(),
             ..PtOptions::new(camera(&mesh, false), tf())
         };
-        let culled = PtRenderer::new(&mesh).render(&o).unwrap();
+        let culled = PtRenderer::new(&mesh).render_with(&o).unwrap();
         let all = PtRenderer::new(&mesh)
             .without_plane_culling()
-            .render(&o)
+            .render_with(&o)
             .unwrap();
         let (n, tets) = (culled.stats.culled, mesh.tets().len());
         assert!(

@@ -22,14 +22,14 @@ use super::kdtree::KdSplit;
 use super::region::{is_pipelined, reach, region_options, Near, RegionRays, SpanRule};
 use super::states::{decode, encode};
 use super::swap::CompositeStats;
-use crate::integrate::adaptive_state::RayState;
+use crate::integrate::adaptive::state::RayState;
 use crate::raycast::{with_band_caster, Placement, RenderOptions};
 use crate::sampling::Field;
 use crate::tiles::TILE;
 
 /// What one rank did in a distributed frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct FrameStats {
+pub struct RankTimes {
     /// Time spent rendering its region (summed over the bands), seconds.
     pub render_seconds: f64,
     /// Its messages and bytes, and the rest of its time (waiting, sending, compositing).
@@ -48,7 +48,7 @@ pub fn render_pipelined<F: Field, E: Exchange + ?Sized>(
     opts: &RenderOptions,
     ex: &mut E,
     order: &[usize],
-) -> Result<(Option<Image>, FrameStats), DistributedError> {
+) -> Result<(Option<Image>, RankTimes), DistributedError> {
     let opts = region_options(opts)?;
     if region >= split.len() || !is_pipelined(&opts) {
         return Err(DistributedError::Unsupported(format!(
@@ -75,7 +75,7 @@ fn run<F: Field, E: Exchange + ?Sized>(
     rays: &RegionRays<'_>,
     opts: &RenderOptions,
     (ex, order): (&mut E, &[usize]),
-) -> Result<(Option<Image>, FrameStats), DistributedError> {
+) -> Result<(Option<Image>, RankTimes), DistributedError> {
     with_band_caster(field, place, range, rays, opts, |caster| {
         let size = (opts.width, opts.height);
         pipeline(ex, order, size, |y0, states| Ok(caster.resume(y0, states)?))
@@ -96,12 +96,12 @@ pub fn pipeline<E: Exchange + ?Sized>(
     order: &[usize],
     (width, height): (usize, usize),
     mut band: impl FnMut(usize, &[RayState]) -> Result<Vec<RayState>, DistributedError>,
-) -> Result<(Option<Image>, FrameStats), DistributedError> {
+) -> Result<(Option<Image>, RankTimes), DistributedError> {
     let started = Instant::now();
     let me = ex.rank();
     let pos = check_order(ex, order)?;
     let (prev, next) = (pos.checked_sub(1).map(|i| order[i]), order.get(pos + 1));
-    let mut stats = FrameStats::default();
+    let mut stats = RankTimes::default();
     let mut failed: Option<DistributedError> = None;
     let mut pixels = Vec::new();
     for y0 in (0..height).step_by(BAND) {
@@ -203,7 +203,7 @@ fn gather<E: Exchange + ?Sized>(
     (width, height): (usize, usize),
     pixels: Vec<[f32; 4]>,
     failed: &Option<DistributedError>,
-    stats: &mut FrameStats,
+    stats: &mut RankTimes,
 ) -> Result<Option<Image>, DistributedError> {
     let pixels = if me == last && me != 0 {
         let mut msg = vec![f32::from(u8::from(failed.is_some()))];

@@ -4,7 +4,7 @@
 //! words of its bits, each `f32` as itself, each `u32` or flag as one word of its bits:
 //! bit for bit what the sender had.
 use super::error::DistributedError;
-use crate::integrate::adaptive_state::{F64Ray, LaneRay, RayState, StepState};
+use crate::integrate::adaptive::state::{F64Ray, LaneRay, RayState, StepState};
 use crate::integrate::Medium;
 
 const START: u32 = 0;

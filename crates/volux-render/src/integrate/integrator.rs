@@ -1,5 +1,6 @@
 //! [`Integrator`]: how a grid ray caster integrates each ray.
 use super::adaptive::{AdaptiveParams, StepControl};
+use crate::error::{Setting, SettingError};
 
 /// How rays are integrated; lengths are in voxel units (of the smallest grid spacing), as in
 /// the seed, and converted to world units by the traversal.
@@ -66,28 +67,32 @@ impl Integrator {
     }
 
     /// Checks steps and tolerances.
-    pub fn validate(&self) -> Result<(), String> {
-        let pos = |name: &str, v: f64| {
+    pub fn validate(&self) -> Result<(), SettingError> {
+        let pos = |setting: Setting, v: f64| {
             if v.is_finite() && v >= 1e-6 {
                 Ok(())
             } else {
-                Err(format!("{name} {v} must be >= 1e-6"))
+                Err(SettingError::new(setting, v, ">= 1e-6"))
             }
         };
         match self {
             Integrator::Riemann { step }
             | Integrator::Trapezoid { step }
             | Integrator::Simpson { step }
-            | Integrator::Preintegrated { step } => pos("step", *step),
+            | Integrator::Preintegrated { step } => pos(Setting::Step, *step),
             Integrator::AdaptiveSimpson(p) => {
-                pos("h0", p.h0)?;
-                pos("hmin", p.hmin)?;
-                pos("hmax", p.hmax)?;
+                pos(Setting::FirstStep, p.h0)?;
+                pos(Setting::MinStep, p.hmin)?;
+                pos(Setting::MaxStep, p.hmax)?;
                 if !(p.tol.is_finite() && p.tol > 0.0) {
-                    return Err(format!("tolerance {} must be > 0", p.tol));
+                    return Err(SettingError::new(Setting::Tolerance, p.tol, "> 0"));
                 }
                 if p.hmin > p.hmax {
-                    return Err(format!("hmin {} must not exceed hmax {}", p.hmin, p.hmax));
+                    return Err(SettingError::new(
+                        Setting::MinStep,
+                        p.hmin,
+                        format!("at most the largest step, {}", p.hmax),
+                    ));
                 }
                 Ok(())
             }

@@ -13,14 +13,16 @@
 //! - [`medium`]: the medium along a ray as the rules see it, and what a ray's integral holds;
 //! - [`riemann`](mod@riemann): left Riemann sum with step-corrected opacity (eq. 2.14), order 1;
 //! - [`fixed::trapezoid`], [`fixed::simpson`]: fixed-step rules, orders 2 and 4;
-//! - [`adaptive::adaptive_simpson`]: the iterative adaptive Simpson of Algorithms 3 and 4,
-//!   coupled or decoupled step control, error estimated per channel R, G, B, A, in f64;
-//! - [`adaptive_step`]: its parameters and step control (the seed's, or the error-per-step
-//!   controller), shared with the lanes;
-//! - [`adaptive_state`]: what a ray carries between two steps, to integrate it piece by
-//!   piece with the steps of the whole (a distributed render's regions);
-//! - [`adaptive_lanes::AdaptiveLanes`]: the same coupled control for four rays at once in f32
-//!   lanes, the fast path of renderers that sample several rays together;
+//! - [`adaptive`]: adaptive Simpson (seed `001` ch. 4), all in one folder:
+//!   [`adaptive::adaptive_simpson`], the iterative rule of Algorithms 3 and 4, coupled or
+//!   decoupled step control, error estimated per channel R, G, B, A, in f64;
+//!   [`adaptive::step`], its parameters and step control (the seed's, or the error-per-step
+//!   controller), shared with the lanes; [`adaptive::state`], what a ray carries between two
+//!   steps, to integrate it piece by piece with the steps of the whole (a distributed
+//!   render's regions); [`adaptive::lanes::AdaptiveLanes`], the same coupled control for four
+//!   rays at once in f32 lanes, the fast path of renderers that sample several rays together.
+//!   The ray caster's adaptive lane stream, which feeds it, is a traversal
+//!   (`raycast::adaptive_stream`);
 //! - [`segment`]: the colour of a segment along which the scalar is linear ([`SegmentRule`]:
 //!   average, ψ, exact, adaptive), the one segment integrator of the tetrahedral renderers;
 //! - [`fragment`]: a segment's colour by its rule, cut at the isosurfaces it crosses (the
@@ -29,9 +31,6 @@
 //!   fragment colours);
 //! - [`preintegrated`]: the grid's pre-integration table over (front, back) values.
 pub mod adaptive;
-pub mod adaptive_lanes;
-pub mod adaptive_state;
-pub mod adaptive_step;
 pub mod fixed;
 pub mod fragment;
 pub mod integrator;

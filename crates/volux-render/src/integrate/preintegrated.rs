@@ -23,6 +23,7 @@ use rayon::prelude::*;
 use volux_core::TransferFunction;
 
 use super::segment::SegmentIntegrator;
+use crate::error::{RenderError, Setting, SettingError};
 use crate::sampling::floor_small;
 
 /// Default table resolution (entries per axis).
@@ -54,7 +55,7 @@ impl PreintegrationTable {
     /// Builds the table for `tf` (unresolved is fine: it is resolved on `range`) on the data
     /// range `range` for segments of length `d` (world units), with
     /// [`DEFAULT_TABLE_SIZE`] entries per axis.
-    pub fn new(tf: &TransferFunction, range: [f64; 2], d: f64) -> Result<Self, String> {
+    pub fn new(tf: &TransferFunction, range: [f64; 2], d: f64) -> Result<Self, RenderError> {
         Self::with_size(tf, range, d, DEFAULT_TABLE_SIZE)
     }
 
@@ -66,19 +67,26 @@ impl PreintegrationTable {
         range: [f64; 2],
         d: f64,
         n: usize,
-    ) -> Result<Self, String> {
-        tf.validate().map_err(|e| e.to_string())?;
+    ) -> Result<Self, RenderError> {
+        tf.validate()?;
         if !(range[0].is_finite() && range[1].is_finite() && range[0] <= range[1]) {
-            return Err(format!(
-                "value range [{}, {}] must be finite and ordered",
-                range[0], range[1]
-            ));
+            return Err(SettingError::new(
+                Setting::ValueRange,
+                format!("[{}, {}]", range[0], range[1]),
+                "finite and ordered",
+            )
+            .into());
         }
         if !(d.is_finite() && d > 0.0) {
-            return Err(format!("segment length {d} must be finite and > 0"));
+            return Err(SettingError::new(Setting::SegmentLength, d, "finite and > 0").into());
         }
         if !(2..=MAX_TABLE_SIZE).contains(&n) {
-            return Err(format!("table size {n} must be in 2..={MAX_TABLE_SIZE}"));
+            return Err(SettingError::new(
+                Setting::TableSize,
+                n,
+                format!("in 2..={MAX_TABLE_SIZE}"),
+            )
+            .into());
         }
         let resolved = tf.resolved(range);
         let bp: Vec<f64> = resolved
@@ -91,7 +99,12 @@ impl PreintegrationTable {
         let hi = if hi > lo { hi } else { lo + 1.0 };
         let scale = (n - 1) as f64 / (hi - lo);
         if !scale.is_finite() || !(hi - lo).is_finite() {
-            return Err(format!("value domain [{lo}, {hi}] is too wide"));
+            return Err(SettingError::new(
+                Setting::ValueRange,
+                format!("[{lo}, {hi}] (with the TF's breakpoints)"),
+                "narrow enough to divide into table entries",
+            )
+            .into());
         }
         let seg = SegmentIntegrator::new(&resolved);
         let value = |i: usize| grid_value(lo, hi, n, i);

@@ -65,4 +65,6 @@ pub mod sort;
 
 pub use crate::frame::PtStats;
 pub use crate::scene::SortMode;
-pub use render::{PtOptions, PtRendered, PtRenderer};
+#[cfg(test)]
+pub(crate) use render::PtOptions;
+pub use render::PtRenderer;

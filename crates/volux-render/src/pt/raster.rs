@@ -22,16 +22,17 @@
 use rayon::prelude::*;
 
 use super::project::SUBPIXEL;
-use crate::error::RenderError;
+use crate::error::{Remedy, RenderError};
 use crate::tiles::{Rect, TileGrid};
 
-/// Tile edge in pixels of the projection renderer: a tile's bin of tetrahedra is read once
-/// per tile, so PT's tiles are larger than the ray casters' ([`crate::tiles::TILE`]).
-pub const TILE: usize = 64;
+/// Edge in pixels of Projected Tetrahedra's binning tiles: a tile's bin of tetrahedra is read
+/// once per tile, so PT's tiles are larger than the tile driver's ([`crate::tiles::TILE`]),
+/// and named apart from it.
+pub const BIN_TILE: usize = 64;
 
 /// The PT screen tiles of a `width x height` image.
 pub fn tiles(width: usize, height: usize) -> TileGrid {
-    TileGrid::new(width, height, TILE)
+    TileGrid::new(width, height, BIN_TILE)
 }
 
 /// The screen box of a tetrahedron's projection.
@@ -133,7 +134,7 @@ pub fn bin_by_range(
         .par_iter()
         .map(|&t| {
             ranges.get(t as usize).copied().ok_or_else(|| {
-                RenderError::InvalidOptions(format!("binning: tetrahedron {t} has no tile range"))
+                RenderError::Internal(format!("binning: tetrahedron {t} has no tile range"))
             })
         })
         .collect::<Result<_, _>>()?;
@@ -173,9 +174,12 @@ pub fn bin_by_range(
 fn check_bins(entries: u64) -> Result<(), RenderError> {
     volux_core::limits::check_alloc("PT's tile bins", entries, 4)?;
     if entries > u64::from(u32::MAX) {
-        return Err(RenderError::InvalidOptions(format!(
-            "PT's tile bins would hold {entries} entries, more than 2^32: render a smaller image"
-        )));
+        return Err(RenderError::OverLimit {
+            what: "PT's tile bins (entries)".into(),
+            count: entries,
+            limit: u64::from(u32::MAX),
+            remedy: Some(Remedy::SmallerImage),
+        });
     }
     Ok(())
 }
@@ -630,7 +634,7 @@ mod tests {
 
     #[test]
     fn tile_ranges_are_the_tile_grids_on_snapped_boxes() {
-        let tiles = TileGrid::new(200, 130, TILE);
+        let tiles = TileGrid::new(200, 130, BIN_TILE);
         let mut rnd = xorshift(0x7157_ab1e_2024_0001);
         for _ in 0..20_000 {
             // Snapped positions around and across the image, some on pixel centres.
@@ -653,7 +657,7 @@ mod tests {
 
     #[test]
     fn bins_keep_the_order_and_the_tile_ranges() {
-        let tiles = TileGrid::new(3 * TILE, 2 * TILE, TILE);
+        let tiles = TileGrid::new(3 * BIN_TILE, 2 * BIN_TILE, BIN_TILE);
         // Tetrahedron t's range, indexed by id; the order visits them out of id order.
         let ranges = [
             [0, 0, 1, 0],

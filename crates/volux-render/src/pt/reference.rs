@@ -57,7 +57,7 @@ use crate::tiles::{render_tiles, Control, TileGrid, TILE};
 
 /// What to render with [`render_mesh_reference`].
 #[derive(Clone, Debug, PartialEq)]
-pub struct ReferenceOptions {
+pub(crate) struct ReferenceOptions {
     /// Image width in pixels (> 0).
     pub width: usize,
     /// Image height in pixels (> 0).
@@ -212,7 +212,8 @@ struct Prepared {
 /// integrated exactly and composited (see the module documentation). Returns premultiplied
 /// linear RGBA. Errors on a zero image size, an image too large for the memory limit, an
 /// invalid camera or an invalid transfer function.
-pub fn render_mesh_reference(
+#[cfg(test)]
+pub(crate) fn render_mesh_reference(
     mesh: &TetMesh,
     opts: &ReferenceOptions,
 ) -> Result<Image, RenderError> {
@@ -220,26 +221,18 @@ pub fn render_mesh_reference(
 }
 
 /// [`render_mesh_reference`] with cancellation and progress.
-pub fn render_mesh_reference_with(
+pub(crate) fn render_mesh_reference_with(
     mesh: &TetMesh,
     opts: &ReferenceOptions,
     control: &Control,
 ) -> Result<Image, RenderError> {
     let (w, h) = (opts.width, opts.height);
-    if w == 0 || h == 0 {
-        return Err(RenderError::InvalidOptions(format!(
-            "image size {w} x {h} must be positive"
-        )));
-    }
-    let pixels = (w as u64)
-        .checked_mul(h as u64)
-        .ok_or_else(|| RenderError::InvalidOptions(format!("image size {w} x {h} overflows")))?;
-    volux_core::limits::check_alloc("reference image", pixels, 32)?;
+    crate::error::check_image_size(w, h)?;
+    volux_core::limits::check_alloc("reference image", (w * h) as u64, 32)?;
     opts.camera.validate()?;
     opts.tf.validate()?;
     for p in &opts.clip_planes {
-        p.check()
-            .map_err(|e| RenderError::InvalidOptions(e.to_string()))?;
+        p.check()?;
     }
     let integrator = SegmentIntegrator::new(&opts.tf.resolved(mesh.range()));
     let camera = opts.camera;
@@ -304,7 +297,7 @@ pub fn render_mesh_reference_with(
     Ok(Image::from_pixels(w, h, pixels)?)
 }
 
-/// [`render_mesh_reference`] as a [`Renderer`] ([`Method::MeshReference`]).
+/// `render_mesh_reference` as a [`Renderer`] ([`Method::MeshReference`]).
 pub struct MeshReference {
     mesh: Arc<TetMesh>,
 }
@@ -755,7 +748,7 @@ mod tests {
                 ..ok.clone()
             };
             let e = render_mesh_reference(&mesh, &o).unwrap_err();
-            assert!(matches!(e, RenderError::InvalidOptions(_)), "{e}");
+            assert!(matches!(e, RenderError::ImageSize { .. }), "{e}");
         }
         let huge = ReferenceOptions {
             width: usize::MAX,

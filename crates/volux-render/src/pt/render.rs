@@ -53,7 +53,7 @@ use super::setup::{classify_fixed, projection_tests_screen};
 use super::shade::{Batch, CellColour, CellValues, Gather};
 use super::sort;
 use crate::composite::under;
-use crate::error::RenderError;
+use crate::error::{Refusal, Remedy, RenderError};
 use crate::frame::{Frame, MethodStats, PtStats};
 use crate::integrate::fragment::FragmentShader;
 use crate::integrate::fragment::{AverageModel, ColorModel, ExactModel, PsiModel};
@@ -63,14 +63,14 @@ use crate::integrate::segment::SegmentIntegrator;
 use crate::integrate::SegmentRule;
 use crate::isosurface::Isosurfaces;
 use crate::renderer::{frame, wrong_method, Renderer};
-use crate::scene::{Method, PtSettings, Scene, SortMode, DEFAULT_EARLY_TERMINATION};
+use crate::scene::{Method, PtSettings, Scene, SortMode};
 use crate::shading::BlinnPhong;
 use crate::tiles::Rect;
 use crate::tiles::{render_tiles, Control};
 
 /// Options of a PT render.
 #[derive(Clone, Debug)]
-pub struct PtOptions {
+pub(crate) struct PtOptions {
     /// Image width.
     pub width: usize,
     /// Image height.
@@ -100,7 +100,8 @@ pub struct PtOptions {
 
 impl PtOptions {
     /// 512 x 512, centroid order, ψ colour, early termination at
-    /// [`DEFAULT_EARLY_TERMINATION`] (the defaults of [`crate::scene`]).
+    /// [`DEFAULT_EARLY_TERMINATION`](crate::scene::DEFAULT_EARLY_TERMINATION) (the defaults of [`crate::scene`]).
+    #[cfg(test)]
     pub fn new(camera: Camera, tf: TransferFunction) -> Self {
         Self {
             width: 512,
@@ -111,7 +112,7 @@ impl PtOptions {
             color: SegmentRule::Psi,
             isosurfaces: Isosurfaces::default(),
             shading: BlinnPhong::default(),
-            early_termination: Some(DEFAULT_EARLY_TERMINATION),
+            early_termination: Some(crate::scene::DEFAULT_EARLY_TERMINATION),
             count_violations: false,
             clip_planes: Vec::new(),
             control: Control::default(),
@@ -122,19 +123,17 @@ impl PtOptions {
         crate::error::check_image_size(self.width, self.height)?;
         self.camera.validate()?;
         self.tf.validate()?;
-        self.shading
-            .validate()
-            .map_err(RenderError::InvalidOptions)?;
+        self.shading.validate()?;
         if let SegmentRule::AdaptiveSimpson(_) = self.color {
-            return Err(RenderError::InvalidOptions(
-                "Projected Tetrahedra colours fragments (average, psi, exact); adaptive \
-                 Simpson integrates whole rays (tetrahedral ray casting)"
-                    .into(),
-            ));
+            return Err(Refusal::new(
+                "Projected Tetrahedra",
+                "colours fragments (average, psi, exact); adaptive Simpson integrates whole rays",
+                Some(Remedy::Method("tet-raycast")),
+            )
+            .into());
         }
         for p in &self.clip_planes {
-            p.check()
-                .map_err(|e| RenderError::InvalidOptions(e.to_string()))?;
+            p.check()?;
         }
         Ok(())
     }
@@ -234,7 +233,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
     }
 
     /// Renders one frame.
-    pub fn render(&mut self, opts: &PtOptions) -> Result<PtRendered, RenderError> {
+    pub(crate) fn render_with(&mut self, opts: &PtOptions) -> Result<PtRendered, RenderError> {
         opts.validate()?;
         let start = Instant::now();
         let mut stats = PtStats {
@@ -374,7 +373,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
         check_frame_memory(mesh)?;
         let t = Instant::now();
         let proj = ViewProjection::new(mesh, &opts.camera, opts.width, opts.height);
-        let view_dir = sort::View::from_camera(&opts.camera);
+        let view_dir = sort::SortView::from_camera(&opts.camera);
         // The per-tetrahedron pass: orientation tests and centroid depth.
         #[derive(Clone, Copy)]
         enum Fate {
@@ -462,7 +461,7 @@ impl<M: Deref<Target = TetMesh>> PtRenderer<M> {
             let adjacency = self.adjacency.as_deref().expect("built above");
             let te = Instant::now();
             let r = sort::mpvo(mesh, adjacency, &view_dir, Some(&ids))
-                .map_err(|e| RenderError::InvalidOptions(format!("visibility sort: {e}")))?;
+                .map_err(|e| RenderError::Internal(format!("visibility sort: {e}")))?;
             stats.exact_sort_s = te.elapsed().as_secs_f64();
             if opts.sort == SortMode::Centroid {
                 diagnostics += stats.exact_sort_s;
@@ -555,7 +554,7 @@ impl<M: Deref<Target = TetMesh> + Send> Renderer for PtRenderer<M> {
         };
         scene.validate()?;
         crate::renderer::no_voxel_layers("pt", scene)?;
-        let r = PtRenderer::render(self, &PtOptions::from_scene(scene, &settings, control))?;
+        let r = self.render_with(&PtOptions::from_scene(scene, &settings, control))?;
         let rebuilt = r.stats.rebuilt;
         Ok(frame(
             r.image,

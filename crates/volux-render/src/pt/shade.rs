@@ -31,7 +31,7 @@ use glam::Vec4;
 
 use super::clip::{DepthSpan, Window, ALL};
 use super::planes::{CellPlanes, FaceDraw};
-use super::raster::{Row, Triangle, TILE};
+use super::raster::{Row, Triangle, BIN_TILE};
 use crate::composite::under;
 use crate::integrate::fragment::FragmentShader;
 use crate::integrate::psi::lanes::{average_rgba_lanes, lanes, psi_rgba_lanes, Lanes, LANES};
@@ -146,7 +146,8 @@ pub struct CellValues {
 /// Capacity of a [`Batch`]: a power of two above a tile's pixels (a cell covers each at most
 /// once), a row and a lane group of padding, so that masked indices need no bounds check.
 const CAPACITY: usize = 8192;
-const _: () = assert!(TILE * TILE + TILE + LANES <= CAPACITY && CAPACITY.is_power_of_two());
+const _: () =
+    assert!(BIN_TILE * BIN_TILE + BIN_TILE + LANES <= CAPACITY && CAPACITY.is_power_of_two());
 // The lane groups are `Vec4`s where a select is needed.
 const _: () = assert!(LANES == 4);
 
@@ -170,7 +171,7 @@ impl Default for Batch {
 }
 
 impl Batch {
-    /// An empty batch (for tiles of up to [`TILE`] x [`TILE`] pixels).
+    /// An empty batch (for tiles of up to [`BIN_TILE`] x [`BIN_TILE`] pixels).
     pub fn new() -> Self {
         Self {
             len: 0,

@@ -13,7 +13,7 @@ use glam::{DVec3, Vec3};
 use super::context::{pixel, PixelOut, RayContext};
 use super::stream::{block_order, StreamShading};
 use crate::classify::{BreakpointRanks, LaneTable};
-use crate::integrate::adaptive_lanes::{AdaptiveLanes, LaneMedia, RAYS};
+use crate::integrate::adaptive::lanes::{AdaptiveLanes, LaneMedia, RAYS};
 use crate::integrate::{AdaptiveParams, Integrator};
 use crate::sampling::{Field, LANES};
 use crate::shading::Lanes3;
@@ -30,7 +30,7 @@ struct Slot {
 mod resume;
 
 // A round's points fill one call of the sampler.
-const _: () = assert!(crate::integrate::adaptive_lanes::LANES == LANES);
+const _: () = assert!(crate::integrate::adaptive::lanes::LANES == LANES);
 
 /// What the lane path needs beyond the ray context.
 pub(super) struct LanePath<'a> {

@@ -19,7 +19,7 @@
 //! every pixel is computed independently.
 
 mod adaptive_stream;
-pub(crate) mod bricks;
+pub(crate) mod cell_blocks;
 pub mod clip;
 mod context;
 mod mask_tiles;

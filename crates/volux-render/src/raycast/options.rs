@@ -9,7 +9,7 @@ use crate::sculpt::labels::LabelVolume;
 use volux_core::voi::ClipPlane;
 use volux_core::{Camera, Grid, Image, TransferFunction};
 
-use crate::error::RenderError;
+use crate::error::{Refusal, RenderError};
 use crate::frame::RenderStats;
 use crate::integrate::integrator::Integrator;
 use crate::isosurface::Isosurfaces;
@@ -124,20 +124,20 @@ impl RenderOptions {
 
     pub(super) fn validate(&self) -> Result<(), RenderError> {
         crate::error::check_image_size(self.width, self.height)?;
-        self.integrator
-            .validate()
-            .map_err(RenderError::InvalidOptions)?;
+        self.integrator.validate()?;
         if let Some(s) = &self.shading {
-            s.validate().map_err(RenderError::InvalidOptions)?;
+            s.validate()?;
         }
         if !self.isosurfaces.is_empty()
             && !self.mip
             && !matches!(self.integrator, Integrator::Riemann { .. })
         {
-            return Err(RenderError::InvalidOptions(format!(
-                "isosurfaces are drawn by the riemann integrator only, not {}",
-                self.integrator.name()
-            )));
+            return Err(Refusal::new(
+                format!("the {} integrator", self.integrator.name()),
+                "does not draw isosurfaces: the riemann integrator does",
+                None,
+            )
+            .into());
         }
         self.tf.validate()?;
         self.camera.validate()?;

@@ -6,7 +6,7 @@ use std::time::Instant;
 use volux_core::grid::Scalar;
 use volux_core::Grid;
 
-use super::bricks::{BrickedTrilinear, Bricks};
+use super::cell_blocks::{BlockedTrilinear, CellBlocks};
 use super::context::{Classification, Derived};
 use super::options::{Placement, RenderOptions, Rendered};
 use super::traverse::render_with;
@@ -24,7 +24,7 @@ use crate::tiles::Control;
 
 /// Renders a grid with the integrator of `opts` (no caching: see [`GridRenderer`]).
 pub fn render_grid(grid: &Grid, opts: &RenderOptions) -> Result<Rendered, RenderError> {
-    GridRenderer::new(grid).render(opts)
+    GridRenderer::new(grid).render_with(opts)
 }
 
 /// A grid ray caster that keeps what it derives between renders, keyed on what it was
@@ -47,7 +47,7 @@ pub struct GridRenderer<G: Deref<Target = Grid> = Arc<Grid>> {
     /// The grid's own colour, for RGB grids.
     data_colour: OnceLock<Option<Arc<DataColour>>>,
     /// The bricked samples.
-    bricks: OnceLock<Option<Bricks>>,
+    blocks: OnceLock<Option<CellBlocks>>,
     /// Bytes the derived structures may take each.
     memory_budget: u64,
     /// Whether tiles may take the lane paths; tests turn it off to compare them with the
@@ -65,7 +65,7 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
             preintegration: Mutex::new(None),
             gradients: OnceLock::new(),
             data_colour: OnceLock::new(),
-            bricks: OnceLock::new(),
+            blocks: OnceLock::new(),
             memory_budget: volux_core::limits::memory_budget(),
             lanes: true,
         }
@@ -113,9 +113,7 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
         {
             return Ok((Some(t.clone()), false));
         }
-        let table = Arc::new(
-            PreintegrationTable::new(&opts.tf, range, d).map_err(RenderError::InvalidOptions)?,
-        );
+        let table = Arc::new(PreintegrationTable::new(&opts.tf, range, d)?);
         *cache = Some(table.clone());
         Ok((Some(table), true))
     }
@@ -147,9 +145,11 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
     /// The bricked copy of the samples `s` (the grid's), built on first use (`None` if it
     /// does not fit in the memory budget: the row-major samples are read, with the same
     /// values).
-    fn bricks<T: Scalar>(&self, s: &[T]) -> Option<&Bricks> {
-        self.bricks
-            .get_or_init(|| Bricks::build(s, self.grid.dims(), brick_budget(s, self.memory_budget)))
+    fn blocks<T: Scalar>(&self, s: &[T]) -> Option<&CellBlocks> {
+        self.blocks
+            .get_or_init(|| {
+                CellBlocks::build(s, self.grid.dims(), brick_budget(s, self.memory_budget))
+            })
             .as_ref()
     }
 
@@ -164,9 +164,9 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
         derived: Derived<'_>,
     ) -> Result<Rendered, RenderError> {
         let linear = Trilinear::new(s, self.grid.dims());
-        match self.bricks(s) {
-            Some(bricks) => render_with(
-                &BrickedTrilinear { bricks, linear },
+        match self.blocks(s) {
+            Some(blocks) => render_with(
+                &BlockedTrilinear { blocks, linear },
                 place,
                 range,
                 opts,
@@ -197,14 +197,14 @@ impl<G: Deref<Target = Grid>> GridRenderer<G> {
     }
 
     /// Renders with `opts`.
-    pub fn render(&self, opts: &RenderOptions) -> Result<Rendered, RenderError> {
+    pub fn render_with(&self, opts: &RenderOptions) -> Result<Rendered, RenderError> {
         opts.validate()?;
         let g = &*self.grid;
         let cubic = matches!(
             opts.reconstruction,
             Reconstruction::CatmullRom | Reconstruction::BSpline
         );
-        let built_data = (!cubic && self.bricks.get().is_none())
+        let built_data = (!cubic && self.blocks.get().is_none())
             || (opts.empty_space_skipping && self.macrocells.get().is_none())
             || (opts.shading.is_some() && self.gradients.get().is_none());
         let cells = opts
@@ -264,7 +264,7 @@ impl<G: Deref<Target = Grid> + Send> Renderer for GridRenderer<G> {
         if scene.appearance.data_colour && !scene.appearance.mip {
             opts.data_colour = self.data_colour().cloned();
         }
-        let r = GridRenderer::render(self, &opts)?;
+        let r = self.render_with(&opts)?;
         Ok(grid_frame(r, &settings, started))
     }
 }
@@ -312,14 +312,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn bricks_of_large_narrow_grids_are_not_built() {
+    fn cell_blocks_of_large_narrow_grids_are_not_built() {
         let gib = 1u64 << 30;
         // Small grids: up to the fixed allowance, whatever their type.
         assert_eq!(brick_budget(&[0u8; 1000], 8 * gib), BRICKS_ANY_GRID);
         // A large u8 grid (its copy would be 5.7x) gets twice its bytes: too little.
         let big = vec![0u8; 300 << 20];
         assert_eq!(brick_budget(&big, 8 * gib), 600 << 20);
-        assert!(Bricks::bytes_for([1024, 1024, 300]) > 600 << 20);
+        assert!(CellBlocks::bytes_for([1024, 1024, 300]) > 600 << 20);
         // The memory budget bounds it in any case.
         assert_eq!(brick_budget(&big, 100 << 20), 100 << 20);
     }

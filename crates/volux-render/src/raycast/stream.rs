@@ -32,7 +32,7 @@ use glam::{DVec3, Vec3};
 use super::context::{first_at_or_after, pixel_hash, PixelOut, RayContext};
 use crate::classify::LaneTable;
 use crate::composite::{under64, under_if, under_partial, RayAccumulator};
-use crate::integrate::adaptive_lanes::exp_lanes;
+use crate::integrate::adaptive::lanes::exp_lanes;
 use crate::integrate::preintegrated::PreintegrationTable;
 use crate::integrate::{riemann_step, Integrator};
 use crate::intervals::IntervalSource;

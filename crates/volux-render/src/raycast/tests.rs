@@ -146,7 +146,7 @@ fn marschner_lobb_40(extinction: &str, size: (usize, usize)) -> (Grid, RenderOpt
 fn render_ray_by_ray(g: &Grid, o: &RenderOptions) -> Rendered {
     let mut r = GridRenderer::new(g);
     r.lanes = false;
-    r.render(o).unwrap()
+    r.render_with(o).unwrap()
 }
 
 /// The lane stream of the Riemann sum and of pre-integration, emission only and shaded, and
@@ -315,7 +315,7 @@ fn cached_gradients_match_on_the_fly_shading() {
     let tf = TransferFunction::from_json(r#"{"color": [[-2,0.9,0.8,0.7],[1,0.9,0.8,0.7]], "extinction": [[-2,0],[-0.05,0],[0,0.5],[1,0.5]]}"#).unwrap();
     let mut o = RenderOptions::new(Camera::fit(&g.bounds()), tf);
     (o.width, o.height, o.shading) = (40, 40, Some(BlinnPhong::default()));
-    let cached = GridRenderer::new(&g).render(&o).unwrap().image;
+    let cached = GridRenderer::new(&g).render_with(&o).unwrap().image;
     let fly = render_field(
         &Trilinear::new(&g.to_f32_vec().unwrap(), g.dims()),
         Placement::of(&g),
@@ -339,17 +339,17 @@ fn gradient_volume_over_budget_falls_back_to_on_the_fly() {
     let mut o = RenderOptions::new(Camera::fit(&g.bounds()), tf);
     (o.width, o.height, o.shading) = (40, 40, Some(BlinnPhong::default()));
     let full = GridRenderer::new(&g);
-    let with_volume = full.render(&o).unwrap().image;
+    let with_volume = full.render_with(&o).unwrap().image;
     assert!(full.gradients().is_some());
     let need = GradientVolume::build_bytes(g.dims());
     let tight = GridRenderer::new(&g).with_memory_budget(need - 1);
-    let on_the_fly = tight.render(&o).unwrap().image;
+    let on_the_fly = tight.render_with(&o).unwrap().image;
     assert!(tight.gradients().is_none() && tight.macrocells().is_some());
     let d = with_volume.compare(&on_the_fly, 0.0).unwrap().max_error;
     assert!(d < 0.01, "{d}");
     assert!(on_the_fly.coverage(0.5) > 0.05);
     let tiny = GridRenderer::new(&g).with_memory_budget(8);
-    let bare = tiny.render(&o).unwrap().image;
+    let bare = tiny.render_with(&o).unwrap().image;
     assert!(tiny.macrocells().is_none());
     assert!(on_the_fly.compare(&bare, 0.0).unwrap().max_error < 1e-6);
     let e = GradientVolume::build_within(

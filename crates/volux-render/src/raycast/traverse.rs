@@ -61,10 +61,11 @@ pub fn render_field_in<F: Field>(
     opts: &RenderOptions,
 ) -> Result<Rendered, RenderError> {
     let pre = match opts.integrator {
-        Integrator::Preintegrated { step } => Some(
-            PreintegrationTable::new(&opts.tf, range, step * place.spacing.min_element())
-                .map_err(RenderError::InvalidOptions)?,
-        ),
+        Integrator::Preintegrated { step } => Some(PreintegrationTable::new(
+            &opts.tf,
+            range,
+            step * place.spacing.min_element(),
+        )?),
         _ => None,
     };
     render_with(
@@ -117,13 +118,19 @@ pub(crate) fn render_with<F: Field>(
 }
 
 /// Refuses a mask or labels made for a grid of other dimensions.
-fn check_dims(what: &str, theirs: [usize; 3], dims: [usize; 3]) -> Result<(), RenderError> {
-    if theirs == dims {
+fn check_dims(
+    layer: &'static str,
+    layer_dims: [usize; 3],
+    grid_dims: [usize; 3],
+) -> Result<(), RenderError> {
+    if layer_dims == grid_dims {
         return Ok(());
     }
-    Err(RenderError::InvalidOptions(format!(
-        "the {what} is {theirs:?} voxels but the grid is {dims:?}: it applies to the grid it was made for"
-    )))
+    Err(RenderError::LayerMismatch {
+        layer,
+        layer_dims,
+        grid_dims,
+    })
 }
 
 /// The macrocell classes with the sculpt mask's states folded in (one pass over a byte per

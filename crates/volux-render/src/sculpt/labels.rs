@@ -3,7 +3,7 @@
 //! opacity stays the TF's, and shading lights the label colour as it lights the TF's).
 use glam::Vec3;
 
-use crate::error::RenderError;
+use crate::error::{RenderError, Setting, SettingError};
 
 /// Colours given to labels in turn (linear RGB): label `n` takes entry `(n - 1) % 6`, as
 /// `volux regions` saves them in its sculpt steps.
@@ -40,17 +40,21 @@ impl LabelVolume {
     ) -> Result<Self, RenderError> {
         let expected = volux_core::limits::count_of(&dims);
         if values.len() as u64 != expected {
-            return Err(RenderError::InvalidOptions(format!(
-                "the label volume has {} values for a {dims:?} grid",
-                values.len()
-            )));
+            return Err(volux_core::Error::SizeMismatch {
+                expected,
+                actual: values.len() as u64,
+            }
+            .into());
         }
         let mut table = vec![None; 256];
         for &(label, rgb) in colours {
             if !rgb.iter().all(|c| c.is_finite()) {
-                return Err(RenderError::InvalidOptions(format!(
-                    "label {label} has a non-finite colour {rgb:?}"
-                )));
+                return Err(SettingError::new(
+                    Setting::LabelColour,
+                    format!("{rgb:?} of label {label}"),
+                    "finite",
+                )
+                .into());
             }
             if label != 0 {
                 table[label as usize] = Some(rgb);

@@ -13,7 +13,7 @@ use volux_core::voi::clip_by_planes;
 use volux_core::{Grid, TransferFunction};
 
 use super::masked::Masked;
-use crate::error::RenderError;
+use crate::error::{RenderError, Setting, SettingError};
 use crate::integrate::Integrator;
 use crate::isosurface::Isovalue;
 use crate::raycast::clip::ray_box;
@@ -45,10 +45,13 @@ pub fn pick(
     (px, py): (f64, f64),
     threshold: f64,
 ) -> Result<Option<SurfacePoint>, RenderError> {
-    if !(threshold > 0.0 && threshold < 1.0 && px.is_finite() && py.is_finite()) {
-        return Err(RenderError::InvalidOptions(format!(
-            "picking needs a finite pixel and an opacity threshold in (0, 1), got ({px}, {py}) and {threshold}"
-        )));
+    if !(px.is_finite() && py.is_finite()) {
+        return Err(
+            SettingError::new(Setting::PickPixel, format!("({px}, {py})"), "finite").into(),
+        );
+    }
+    if !(threshold > 0.0 && threshold < 1.0) {
+        return Err(SettingError::new(Setting::PickThreshold, threshold, "in (0, 1)").into());
     }
     scene.validate()?;
     let (w, h) = (scene.view.width, scene.view.height);

@@ -14,7 +14,7 @@ use volux_core::{Camera, Grid, Projection};
 
 use super::labels::LabelVolume;
 use super::pick::{pick, SurfacePoint, DEFAULT_PICK_OPACITY};
-use crate::error::RenderError;
+use crate::error::{RenderError, Setting, SettingError};
 use crate::scene::Scene;
 
 /// One step of sculpting, as saved in a session.
@@ -120,12 +120,10 @@ impl Sculpt {
     pub fn replay(grid: &Grid, steps: &[SculptStep]) -> Result<Self, RenderError> {
         let mut s = Self::new(grid)?;
         for (n, step) in steps.iter().enumerate() {
-            s.apply(step.clone()).map_err(|e| {
-                RenderError::InvalidOptions(format!(
-                    "sculpt step {} of {}: {e}",
-                    n + 1,
-                    steps.len()
-                ))
+            s.apply(step.clone()).map_err(|e| RenderError::SculptStep {
+                step: n + 1,
+                steps: steps.len(),
+                source: Box::new(e),
             })?;
         }
         Ok(s)
@@ -135,11 +133,11 @@ impl Sculpt {
     /// must be the grid's size.
     pub fn with_mask(mut self, mask: SculptMask) -> Result<Self, RenderError> {
         if mask.dims() != self.frame.dims {
-            return Err(RenderError::InvalidOptions(format!(
-                "the mask is {:?} voxels but the grid is {:?}",
-                mask.dims(),
-                self.frame.dims
-            )));
+            return Err(RenderError::LayerMismatch {
+                layer: "sculpt mask",
+                layer_dims: mask.dims(),
+                grid_dims: self.frame.dims,
+            });
         }
         self.mask = Arc::new(mask);
         Ok(self)
@@ -155,7 +153,13 @@ impl Sculpt {
     }
 
     fn run(&mut self, step: &SculptStep) -> Result<Undo, RenderError> {
-        let bad = |m: String| Err(RenderError::InvalidOptions(m));
+        let no_plane = |index: usize, action: &'static str, planes: usize| {
+            Err(RenderError::NoSuchPlane {
+                index,
+                action,
+                planes,
+            })
+        };
         let planes_before = self.planes.clone();
         match step {
             SculptStep::AddPlane { plane } => {
@@ -166,12 +170,12 @@ impl Sculpt {
                 plane.check()?;
                 match self.planes.get_mut(*index) {
                     Some(p) => *p = *plane,
-                    None => return bad(format!("there is no plane {index} to move")),
+                    None => return no_plane(*index, "move", planes_before.len()),
                 }
             }
             SculptStep::RemovePlane { index } => {
                 if *index >= self.planes.len() {
-                    return bad(format!("there is no plane {index} to remove"));
+                    return no_plane(*index, "remove", self.planes.len());
                 }
                 self.planes.remove(*index);
             }
@@ -191,10 +195,10 @@ impl Sculpt {
             }
             SculptStep::Measure { point, .. } | SculptStep::Label { point, .. } => {
                 if !point.is_finite() {
-                    return bad(format!("a picked point must be finite, got {point}"));
+                    return Err(SettingError::new(Setting::PickedPoint, point, "finite").into());
                 }
                 if matches!(step, SculptStep::Label { label: 0, .. }) {
-                    return bad("labels run from 1 to 255".into());
+                    return Err(SettingError::new(Setting::Label, 0, "from 1 to 255").into());
                 }
                 return Ok(Undo::Nothing);
             }

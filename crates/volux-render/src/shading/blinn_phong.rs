@@ -1,4 +1,5 @@
 //! The two-sided Blinn-Phong lighting model and its light.
+use crate::error::{Setting, SettingError};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -71,21 +72,25 @@ impl BlinnPhong {
 
     /// Checks that the coefficients are finite and non-negative and the light direction is a
     /// finite non-zero vector.
-    pub fn validate(&self) -> Result<(), String> {
-        for (name, v) in [
-            ("ambient", self.ambient),
-            ("diffuse", self.diffuse),
-            ("specular", self.specular),
-            ("shininess", self.shininess),
-            ("min_gradient", self.min_gradient),
+    pub fn validate(&self) -> Result<(), SettingError> {
+        for (setting, v) in [
+            (Setting::Ambient, self.ambient),
+            (Setting::Diffuse, self.diffuse),
+            (Setting::Specular, self.specular),
+            (Setting::Shininess, self.shininess),
+            (Setting::MinGradient, self.min_gradient),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("shading {name} {v} must be finite and >= 0"));
+                return Err(SettingError::new(setting, v, "finite and >= 0"));
             }
         }
         if let Light::Direction(d) = self.light {
             if !(d.is_finite() && d.length_squared() > 0.0) {
-                return Err(format!("light direction {d} must be finite and non-zero"));
+                return Err(SettingError::new(
+                    Setting::LightDirection,
+                    d,
+                    "finite and non-zero",
+                ));
             }
         }
         Ok(())

@@ -3,7 +3,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::error::RenderError;
+use crate::error::{RenderError, Setting, SettingError};
 use crate::sampling::Field;
 
 /// Clamps `p` into the grid box `[0, dims - 1]` per axis (NaN becomes 0; never panics).
@@ -155,14 +155,20 @@ impl GradientVolume {
     ) -> Result<Self, RenderError> {
         let dims = field.dims();
         if dims.contains(&0) {
-            return Err(RenderError::InvalidOptions(format!(
-                "gradient volume of dims {dims:?}: every dimension must be > 0"
-            )));
+            return Err(SettingError::new(
+                Setting::Dimensions,
+                format!("{dims:?}"),
+                "positive on every axis for a gradient volume",
+            )
+            .into());
         }
         if !(spacing.is_finite() && spacing.min_element() > 0.0) {
-            return Err(RenderError::InvalidOptions(format!(
-                "gradient volume spacing {spacing} must be finite and > 0"
-            )));
+            return Err(SettingError::new(
+                Setting::Spacing,
+                spacing,
+                "finite and > 0 for a gradient volume",
+            )
+            .into());
         }
         let count = volux_core::limits::count_of(&dims);
         volux_core::limits::check_alloc_within(

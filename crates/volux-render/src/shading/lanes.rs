@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use super::blinn_phong::{BlinnPhong, Light};
 use super::gradient::GradientVolume;
-use crate::integrate::adaptive_lanes::exp_lanes;
+use crate::integrate::adaptive::lanes::exp_lanes;
 use crate::sampling::{clamped_cell, FLOOR_SMALL_LIMIT, LANES};
 
 /// Lane-wise vectors: `[axis][lane]`.

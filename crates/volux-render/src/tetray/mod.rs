@@ -25,7 +25,7 @@
 //!    tile driver ([`crate::tiles`]); each pixel depends only
 //!    on its own ray, so the image is deterministic.
 //!
-//! The result equals the brute-force reference [`render_mesh_reference`] in exact colour
+//! The result equals the brute-force reference [`MeshReference`](crate::pt::reference::MeshReference) in exact colour
 //! mode: the crossing parameters are bit-identical to the reference's, and in the tests
 //! (`tests.rs`: `smooth_tets(3000)` from five cameras including orthographic and inside the
 //! mesh, `torus_tets(24)` with re-entries, a mesh with gaps, an axis-aligned lattice whose
@@ -41,7 +41,7 @@
 //! hierarchy).
 //!
 //! **Empty-space skipping** (`skip.rs`, per-segment colours only,
-//! [`TetRayOptions::skip_empty`], on by default): per TF and set of isovalues, the cells whose
+//! `skip_empty`, on by default): per TF and set of isovalues, the cells whose
 //! vertex value range has zero extinction (exactly, for the exact integrator's linear pieces
 //! and the ψ/average lookup table) and holds no isovalue colour as transparent black, so
 //! they are left out: the walk (`Walker::trace_visible` in `walk`)
@@ -82,7 +82,6 @@
 //! PT with exact order and colour and this caster agree to `3e-5` on average per channel.
 //! **MIP** shows the TF colour of the largest segment end point, opaque.
 //!
-//! [`render_mesh_reference`]: crate::pt::reference::render_mesh_reference
 mod bvh;
 mod first;
 mod geom;
@@ -94,7 +93,8 @@ mod tables;
 pub mod walk;
 
 pub use crate::frame::TetRayStats;
-pub use options::TetRayOptions;
+#[cfg(test)]
+pub(crate) use options::TetRayOptions;
 pub use render::{TetRayCaster, TetRayRendered, TracedRay};
 pub use walk::{WalkOutcome, WalkSegment};
 

@@ -3,16 +3,16 @@ use volux_core::camera::Camera;
 use volux_core::transfer::TransferFunction;
 use volux_core::voi::ClipPlane;
 
-use crate::error::RenderError;
+use crate::error::{RenderError, Setting, SettingError};
 use crate::integrate::segment::SegmentRule;
 use crate::isosurface::Isosurfaces;
-use crate::scene::{Scene, DEFAULT_EARLY_TERMINATION};
+use crate::scene::{check_early_termination, Scene};
 use crate::shading::BlinnPhong;
 use crate::tiles::Control;
 
 /// Options of a ray-cast frame.
 #[derive(Clone, Debug)]
-pub struct TetRayOptions {
+pub(crate) struct TetRayOptions {
     /// Image width (1 to 32768).
     pub width: usize,
     /// Image height (1 to 32768).
@@ -49,7 +49,8 @@ pub struct TetRayOptions {
 
 impl TetRayOptions {
     /// 512 x 512, exact colour, no isosurfaces, default lighting, early termination at
-    /// [`DEFAULT_EARLY_TERMINATION`] (the engine's default colour is ψ: [`crate::scene`]).
+    /// [`DEFAULT_EARLY_TERMINATION`](crate::scene::DEFAULT_EARLY_TERMINATION) (the engine's default colour is ψ: [`crate::scene`]).
+    #[cfg(test)]
     pub fn new(camera: Camera, tf: TransferFunction) -> Self {
         Self {
             width: 512,
@@ -60,7 +61,7 @@ impl TetRayOptions {
             isosurfaces: Isosurfaces::default(),
             shading: BlinnPhong::default(),
             mip: false,
-            early_termination: Some(DEFAULT_EARLY_TERMINATION),
+            early_termination: Some(crate::scene::DEFAULT_EARLY_TERMINATION),
             skip_empty: true,
             clip_planes: Vec::new(),
             control: Control::default(),
@@ -69,26 +70,28 @@ impl TetRayOptions {
 
     pub(super) fn validate(&self) -> Result<(), RenderError> {
         crate::error::check_image_size(self.width, self.height)?;
-        if let Some(e) = self.early_termination {
-            if !(e > 0.0 && e.is_finite()) {
-                return Err(RenderError::InvalidOptions(format!(
-                    "early termination {e} must be a positive opacity"
-                )));
-            }
-        }
+        check_early_termination(self.early_termination)?;
         if let SegmentRule::AdaptiveSimpson(p) = &self.color {
-            let ok = |v: f64| v.is_finite() && v > 0.0;
-            if !(ok(p.tol) && ok(p.h0) && ok(p.hmin) && ok(p.hmax) && p.hmin <= p.hmax) {
-                return Err(RenderError::InvalidOptions(format!(
-                    "adaptive tolerance {} and steps h0 {}, hmin {}, hmax {} must be positive \
-                     and finite, hmin <= hmax",
-                    p.tol, p.h0, p.hmin, p.hmax
-                )));
+            for (setting, v) in [
+                (Setting::Tolerance, p.tol),
+                (Setting::FirstStep, p.h0),
+                (Setting::MinStep, p.hmin),
+                (Setting::MaxStep, p.hmax),
+            ] {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(SettingError::new(setting, v, "positive and finite").into());
+                }
+            }
+            if p.hmin > p.hmax {
+                return Err(SettingError::new(
+                    Setting::MinStep,
+                    p.hmin,
+                    format!("at most the largest step, {}", p.hmax),
+                )
+                .into());
             }
         }
-        self.shading
-            .validate()
-            .map_err(RenderError::InvalidOptions)?;
+        self.shading.validate()?;
         self.camera.validate()?;
         self.tf.validate()?;
         Ok(())

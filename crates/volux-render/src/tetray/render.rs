@@ -323,7 +323,7 @@ impl<M: Deref<Target = TetMesh>> TetRayCaster<M> {
     }
 
     /// Renders one frame: one ray per pixel centre ([`Camera::ray`]), premultiplied RGBA.
-    pub fn render(&self, opts: &TetRayOptions) -> Result<TetRayRendered, RenderError> {
+    pub(crate) fn render_with(&self, opts: &TetRayOptions) -> Result<TetRayRendered, RenderError> {
         opts.validate()?;
         opts.control.check()?;
         let start_time = Instant::now();
@@ -463,7 +463,7 @@ impl<M: Deref<Target = TetMesh> + Send + Sync> Renderer for TetRayCaster<M> {
         crate::renderer::no_voxel_layers("tet-raycast", scene)?;
         let unit = self.mesh.bounds().diagonal() / MESH_UNITS_PER_DIAGONAL;
         let opts = TetRayOptions::from_scene(scene, rule, unit, control);
-        let r = TetRayCaster::render(self, &opts)?;
+        let r = self.render_with(&opts)?;
         let estimates = matches!(rule, SegmentRule::AdaptiveSimpson(_)) && !opts.mip;
         let rebuilt = r.stats.rebuilt;
         Ok(frame(

@@ -8,7 +8,7 @@ use volux_core::tetrahedralize::grid_to_tets;
 use volux_core::{synth, Camera, CameraSpec, Grid, Projection, TetMesh, TransferFunction};
 
 use super::*;
-use crate::error::RenderError;
+use crate::error::{RenderError, Setting, SettingError};
 use crate::integrate::adaptive::{AdaptiveParams, StepControl};
 use crate::integrate::SegmentRule;
 use crate::isosurface::{Isosurfaces, Isovalue};
@@ -42,7 +42,7 @@ fn check_against_reference(
     label: &str,
 ) -> TetRayStats {
     let opts = options(camera, n, n);
-    let got = caster.render(&opts).unwrap();
+    let got = caster.render_with(&opts).unwrap();
     let want = render_mesh_reference(
         mesh,
         &ReferenceOptions {
@@ -278,7 +278,7 @@ fn rays_through_lattice_vertices_and_edges_are_walked_exactly() {
             color: SegmentRule::Exact,
             ..options(camera, n, n)
         };
-        let img = caster.render(&opts).unwrap();
+        let img = caster.render_with(&opts).unwrap();
         assert_eq!(img.stats.abandoned, 0);
         let reference = render_mesh_reference(
             &mesh,
@@ -363,9 +363,9 @@ fn psi_colour_is_close_to_exact() {
     let cam = orbit("perspective", 35.0, 20.0, 1.0)
         .resolve(&mesh.bounds())
         .unwrap();
-    let exact = caster.render(&options(cam, 40, 40)).unwrap();
+    let exact = caster.render_with(&options(cam, 40, 40)).unwrap();
     let psi = caster
-        .render(&TetRayOptions {
+        .render_with(&TetRayOptions {
             color: SegmentRule::Psi,
             ..options(cam, 40, 40)
         })
@@ -397,9 +397,9 @@ fn early_termination_stops_rays_within_the_threshold() {
         r#"{"space": "normalized", "color": [[0, 1, 1, 1]], "extinction": [[0, 30], [1, 30]]}"#,
     )
     .unwrap();
-    let full = caster.render(&opts).unwrap();
+    let full = caster.render_with(&opts).unwrap();
     opts.early_termination = Some(0.95);
-    let early = caster.render(&opts).unwrap();
+    let early = caster.render_with(&opts).unwrap();
     assert!(
         early.stats.segments < full.stats.segments / 2,
         "{:?}",
@@ -418,30 +418,30 @@ fn renders_are_deterministic_and_options_are_checked() {
         .resolve(&mesh.bounds())
         .unwrap();
     let opts = options(cam, 37, 29);
-    let a = caster.render(&opts).unwrap();
-    let b = caster.render(&opts).unwrap();
+    let a = caster.render_with(&opts).unwrap();
+    let b = caster.render_with(&opts).unwrap();
     assert_eq!(a.image, b.image);
     assert_eq!(a.image.width(), 37);
     assert!(a.image.coverage(1e-3) > 0.1);
     for (w, h) in [(0, 8), (8, 0), (40000, 8)] {
         let e = caster
-            .render(&TetRayOptions {
+            .render_with(&TetRayOptions {
                 width: w,
                 height: h,
                 ..opts.clone()
             })
             .unwrap_err();
-        assert!(matches!(e, RenderError::InvalidOptions(_)), "{e}");
+        assert!(matches!(e, RenderError::ImageSize { .. }), "{e}");
     }
     let mut bad = opts.clone();
     bad.camera.eye.x = f64::NAN;
-    assert!(caster.render(&bad).is_err());
+    assert!(caster.render_with(&bad).is_err());
     let mut bad = opts.clone();
     bad.early_termination = Some(f32::NAN);
-    assert!(caster.render(&bad).is_err());
+    assert!(caster.render_with(&bad).is_err());
     let cancel = Arc::new(AtomicBool::new(true));
     let e = caster
-        .render(&TetRayOptions {
+        .render_with(&TetRayOptions {
             control: Control::with_cancel(cancel),
             ..opts.clone()
         })
@@ -482,13 +482,13 @@ fn adaptive_simpson_matches_the_exact_colour_within_the_tolerance() {
             .resolve(&mesh.bounds())
             .unwrap();
         let n = 64;
-        let exact = caster.render(&options(cam, n, n)).unwrap();
+        let exact = caster.render_with(&options(cam, n, n)).unwrap();
         assert!(exact.error_map.iter().all(|&e| e == 0.0));
         assert_eq!(exact.stats.rays_over_tolerance, 0);
         assert!(exact.image.coverage(1e-3) > 0.1, "{name}");
         for control in [StepControl::Coupled, StepControl::Decoupled] {
             let got = caster
-                .render(&TetRayOptions {
+                .render_with(&TetRayOptions {
                     color: adaptive(&mesh, tol, control),
                     ..options(cam, n, n)
                 })
@@ -529,11 +529,11 @@ fn adaptive_simpson_converges_and_respects_early_termination() {
     let cam = orbit("orthographic", -60.0, 45.0, 1.3)
         .resolve(&mesh.bounds())
         .unwrap();
-    let exact = caster.render(&options(cam, 32, 32)).unwrap();
+    let exact = caster.render_with(&options(cam, 32, 32)).unwrap();
     let mut last = f64::INFINITY;
     for tol in [1e-2, 1e-4] {
         let r = caster
-            .render(&TetRayOptions {
+            .render_with(&TetRayOptions {
                 color: adaptive(&mesh, tol, StepControl::Coupled),
                 ..options(cam, 32, 32)
             })
@@ -557,9 +557,9 @@ fn adaptive_simpson_converges_and_respects_early_termination() {
         r#"{"space": "normalized", "color": [[0, 1, 1, 1]], "extinction": [[0, 30], [1, 30]]}"#,
     )
     .unwrap();
-    let full = caster.render(&opts).unwrap();
+    let full = caster.render_with(&opts).unwrap();
     opts.early_termination = Some(0.95);
-    let early = caster.render(&opts).unwrap();
+    let early = caster.render_with(&opts).unwrap();
     assert!(early.stats.samples < full.stats.samples / 2);
     let max = full.image.compare(&early.image, 0.0).unwrap().max_error;
     assert!(max <= 0.05 + 2e-3, "{max}");
@@ -574,8 +574,11 @@ fn adaptive_simpson_converges_and_respects_early_termination() {
         early_termination: None,
     });
     assert!(matches!(
-        caster.render(&bad),
-        Err(RenderError::InvalidOptions(_))
+        caster.render_with(&bad),
+        Err(RenderError::Setting(SettingError {
+            setting: Setting::Tolerance,
+            ..
+        }))
     ));
 }
 
@@ -626,7 +629,7 @@ fn opaque_isosurface_shows_its_lit_colour() {
         o.tf = zero.clone();
         o.color = color;
         o.isosurfaces = iso.clone();
-        let out = caster.render(&o).unwrap();
+        let out = caster.render_with(&o).unwrap();
         for p in out.image.pixels() {
             assert!((p[3] - 1.0).abs() < 1e-6, "{color:?}: alpha {}", p[3]);
             for c in 0..3 {
@@ -671,21 +674,21 @@ fn isosurfaces_agree_with_projected_tetrahedra() {
         let mut o = options(cam, n, n);
         o.tf = light.clone();
         o.isosurfaces = iso.clone();
-        let ray = caster.render(&o).unwrap();
+        let ray = caster.render_with(&o).unwrap();
         let mut po = PtOptions::new(cam, light.clone());
         (po.width, po.height) = (n, n);
         po.sort = SortMode::Exact;
         po.color = SegmentRule::Exact;
         po.early_termination = None;
         po.isosurfaces = iso.clone();
-        let pt = PtRenderer::new(&mesh).render(&po).unwrap();
+        let pt = PtRenderer::new(&mesh).render_with(&po).unwrap();
         let ImageDiff {
             mean_error: mean,
             max_error: max,
             ..
         } = ray.image.compare(&pt.image, 0.0).unwrap();
         let plain = caster
-            .render(&TetRayOptions {
+            .render_with(&TetRayOptions {
                 isosurfaces: Isosurfaces::default(),
                 ..o.clone()
             })
@@ -696,7 +699,7 @@ fn isosurfaces_agree_with_projected_tetrahedra() {
         assert!(mean < 1.0 / 255.0, "camera {i}: mean {mean}, max {max}");
         // The adaptive rule draws the same surfaces.
         o.color = adaptive(&mesh, 1e-3, StepControl::Coupled);
-        let ad = caster.render(&o).unwrap();
+        let ad = caster.render_with(&o).unwrap();
         let ImageDiff {
             fraction_over: over,
             mean_error: mean,
@@ -728,7 +731,7 @@ fn mip_shows_the_colour_of_the_largest_scalar() {
             // Ignored by MIP.
             o.color = SegmentRule::Psi;
             o.early_termination = Some(0.5);
-            let got = caster.render(&o).unwrap();
+            let got = caster.render_with(&o).unwrap();
             let tf = o.tf.resolved(mesh.range());
             let mut hits = 0;
             for y in 0..n {
@@ -784,7 +787,7 @@ fn timing_512_smooth_200k() {
         let mut best = f64::INFINITY;
         let mut last = None;
         for _ in 0..3 {
-            let r = caster.render(&opts).unwrap();
+            let r = caster.render_with(&opts).unwrap();
             best = best.min(r.stats.seconds);
             last = Some(r.stats);
         }
@@ -882,9 +885,9 @@ fn check_skipping(
     opts: &TetRayOptions,
     label: &str,
 ) -> TetRayStats {
-    let skip = caster.render(opts).unwrap();
+    let skip = caster.render_with(opts).unwrap();
     let full = caster
-        .render(&TetRayOptions {
+        .render_with(&TetRayOptions {
             skip_empty: false,
             ..opts.clone()
         })
@@ -978,7 +981,7 @@ fn empty_space_skipping_matches_the_reference() {
             tf: skip_tf(name),
             ..options(camera, 48, 48)
         };
-        let got = caster.render(&opts).unwrap();
+        let got = caster.render_with(&opts).unwrap();
         assert!(got.stats.visible_cells > 0, "{name}: skipping is on");
         let want = render_mesh_reference(
             &mesh,
@@ -1012,12 +1015,12 @@ fn empty_space_skipping_does_not_depend_on_the_thread_count() {
         .num_threads(1)
         .build()
         .unwrap()
-        .install(|| caster.render(&opts).unwrap());
+        .install(|| caster.render_with(&opts).unwrap());
     let many = rayon::ThreadPoolBuilder::new()
         .num_threads(3)
         .build()
         .unwrap()
-        .install(|| caster.render(&opts).unwrap());
+        .install(|| caster.render_with(&opts).unwrap());
     assert!(one.stats.visible_cells > 0);
     assert_eq!(one.image, many.image);
     assert_eq!(one.stats.segments, many.stats.segments);

@@ -35,7 +35,7 @@ fn by_pieces(cuts: &[f64], p: &AdaptiveParams) -> (RayIntegral, usize) {
     bounds.push(2.0);
     for w in bounds.windows(2) {
         let stop = w[1];
-        if state.is_some_and(|s: super::super::adaptive_state::F64Ray| s.t >= stop) {
+        if state.is_some_and(|s: super::super::adaptive::state::F64Ray| s.t >= stop) {
             jumped += 1;
             continue;
         }

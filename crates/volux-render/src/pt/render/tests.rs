@@ -131,7 +131,7 @@ fn single_tets_of_every_class_match_the_exact_ray_integral() {
         let mesh = one_tet(p, s);
         let o = opts(top_view(), tf(), 48);
         let mut r = PtRenderer::new(&mesh);
-        let out = r.render(&o).unwrap();
+        let out = r.render_with(&o).unwrap();
         assert_eq!(out.stats.tets_drawn, 1, "{name}");
         let refi = reference(&mesh, &o);
         let ImageDiff {
@@ -170,7 +170,7 @@ fn degenerate_tet_is_discarded() {
     )
     .unwrap();
     let out = PtRenderer::new(&mesh)
-        .render(&opts(top_view(), tf(), 32))
+        .render_with(&opts(top_view(), tf(), 32))
         .unwrap();
     assert_eq!(out.stats.degenerate, 1);
     assert_eq!(out.stats.tets_drawn, 1, "only the off-screen tet");
@@ -186,7 +186,7 @@ fn convex_mesh_with_exact_order_and_colour_matches_reference() {
         (200.0, -30.0, false),
     ] {
         let o = opts(camera(&mesh, az, el, ortho), tf(), 64);
-        let out = PtRenderer::new(&mesh).render(&o).unwrap();
+        let out = PtRenderer::new(&mesh).render_with(&o).unwrap();
         assert_eq!(out.stats.exact_strategy, "mpvo");
         let ImageDiff {
             mean_error: mean,
@@ -203,7 +203,7 @@ fn convex_mesh_with_exact_order_and_colour_matches_reference() {
 fn non_convex_torus_with_exact_order_matches_reference() {
     let mesh = synth::torus_tets(24).unwrap();
     let o = opts(camera(&mesh, 20.0, 35.0, false), tf(), 64);
-    let out = PtRenderer::new(&mesh).render(&o).unwrap();
+    let out = PtRenderer::new(&mesh).render_with(&o).unwrap();
     assert_eq!(out.stats.exact_strategy, "per-pixel");
     let ImageDiff {
         mean_error: mean,
@@ -221,7 +221,7 @@ fn centroid_order_is_close_on_a_convex_mesh_and_reports_violations() {
     let mut o = opts(camera(&mesh, 30.0, 20.0, true), tf(), 64);
     o.sort = SortMode::Centroid;
     o.count_violations = true;
-    let out = PtRenderer::new(&mesh).render(&o).unwrap();
+    let out = PtRenderer::new(&mesh).render_with(&o).unwrap();
     assert!(out.stats.sort_violations.is_some());
     let mean = out
         .image
@@ -235,11 +235,11 @@ fn centroid_order_is_close_on_a_convex_mesh_and_reports_violations() {
 fn psi_and_average_modes_approach_exact() {
     let mesh = synth::smooth_tets(3000).unwrap();
     let mut o = opts(camera(&mesh, 30.0, 20.0, false), tf(), 64);
-    let exact = PtRenderer::new(&mesh).render(&o).unwrap().image;
+    let exact = PtRenderer::new(&mesh).render_with(&o).unwrap().image;
     o.color = SegmentRule::Psi;
-    let psi = PtRenderer::new(&mesh).render(&o).unwrap().image;
+    let psi = PtRenderer::new(&mesh).render_with(&o).unwrap().image;
     o.color = SegmentRule::Average;
-    let avg = PtRenderer::new(&mesh).render(&o).unwrap().image;
+    let avg = PtRenderer::new(&mesh).render_with(&o).unwrap().image;
     let mp = psi.compare(&exact, 0.0).unwrap().mean_error;
     let ma = avg.compare(&exact, 0.0).unwrap().mean_error;
     eprintln!("psi mean {mp:.2e}, average mean {ma:.2e}");
@@ -262,12 +262,12 @@ fn thread_count_does_not_change_the_image() {
     let mut o = opts(camera(&mesh, 30.0, 20.0, false), tf(), 80);
     o.color = SegmentRule::Psi;
     o.sort = SortMode::Centroid;
-    let many = PtRenderer::new(&mesh).render(&o).unwrap().image;
+    let many = PtRenderer::new(&mesh).render_with(&o).unwrap().image;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap();
-    let one = pool.install(|| PtRenderer::new(&mesh).render(&o).unwrap().image);
+    let one = pool.install(|| PtRenderer::new(&mesh).render_with(&o).unwrap().image);
     assert_eq!(many.pixels(), one.pixels());
 }
 
@@ -283,7 +283,7 @@ fn constant_medium_box_has_no_cracks_or_double_blending() {
     )
     .unwrap();
     let o = opts(camera(&mesh, 33.0, 27.0, false), tf, 96);
-    let out = PtRenderer::new(&mesh).render(&o).unwrap();
+    let out = PtRenderer::new(&mesh).render_with(&o).unwrap();
     let d = out.image.compare(&reference(&mesh, &o), 1e-3).unwrap();
     let (mean, max) = (d.mean_error, d.max_error);
     assert!(mean < 1e-4, "mean {mean}");
@@ -315,7 +315,7 @@ fn opaque_isosurface_shows_its_lit_colour() {
         rgba: [0.8, 0.4, 0.2, 1.0],
     }])
     .unwrap();
-    let out = PtRenderer::new(&mesh).render(&o).unwrap();
+    let out = PtRenderer::new(&mesh).render_with(&o).unwrap();
     let sh = BlinnPhong::default();
     let expect = [0.8, 0.4, 0.2].map(|c| c * (sh.ambient + sh.diffuse) + sh.specular);
     for p in out.image.pixels() {
@@ -342,7 +342,7 @@ fn discarded_tets_do_not_change_the_image_and_recolouring_reuses_the_view() {
     .unwrap();
     let o = opts(camera(&mesh, 30.0, 20.0, false), half.clone(), 64);
     let mut r = PtRenderer::new(&mesh);
-    let first = r.render(&o).unwrap();
+    let first = r.render_with(&o).unwrap();
     assert!(first.stats.tets_kept < first.stats.tets);
     let mean = first
         .image
@@ -353,9 +353,9 @@ fn discarded_tets_do_not_change_the_image_and_recolouring_reuses_the_view() {
     // Same zero set, new colours: no new per-tetrahedron pass.
     let mut o2 = o.clone();
     o2.tf = half.with_opacity_scale(2.0);
-    let second = r.render(&o2).unwrap();
+    let second = r.render_with(&o2).unwrap();
     assert_eq!(second.stats.project_s, 0.0, "view data reused");
-    let fresh = PtRenderer::new(&mesh).render(&o2).unwrap();
+    let fresh = PtRenderer::new(&mesh).render_with(&o2).unwrap();
     assert_eq!(second.image.pixels(), fresh.image.pixels());
 }
 
@@ -365,13 +365,13 @@ fn cancellation_and_bad_options() {
     let mut o = opts(camera(&mesh, 0.0, 0.0, false), tf(), 32);
     o.control.cancel = Some(Arc::new(AtomicBool::new(true)));
     assert!(matches!(
-        PtRenderer::new(&mesh).render(&o),
+        PtRenderer::new(&mesh).render_with(&o),
         Err(RenderError::Cancelled)
     ));
     o.control.cancel = None;
     o.width = 0;
     assert!(matches!(
-        PtRenderer::new(&mesh).render(&o),
-        Err(RenderError::InvalidOptions(_))
+        PtRenderer::new(&mesh).render_with(&o),
+        Err(RenderError::ImageSize { .. })
     ));
 }

@@ -48,7 +48,7 @@ pub use mpvo::{
     Precedence,
 };
 pub use radix::{centroid_keys, centroid_order, depth_key};
-pub use view::{SortError, View};
+pub use view::{SortError, SortView};
 
 #[cfg(test)]
 mod tests;

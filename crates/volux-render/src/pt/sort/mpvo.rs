@@ -9,7 +9,7 @@ use volux_core::mesh::{FACES, NO_NEIGHBOR};
 use volux_core::TetMesh;
 
 use super::radix::{centroid_keys, centroid_order};
-use super::view::{SortError, View};
+use super::view::{SortError, SortView};
 
 /// Relative tolerance below which the eye counts as lying in a face plane (see
 /// [`face_precedence`]).
@@ -53,7 +53,12 @@ impl Precedence {
 /// the eye is taken to lie in the plane and the pair is [`Precedence::Free`]: every ray
 /// through the face then grazes it and both orders composite the same image. Degenerate faces
 /// (`n = 0`) are free too.
-pub fn face_precedence(positions: &[Vec3], tet: &[u32; 4], face: usize, view: &View) -> Precedence {
+pub fn face_precedence(
+    positions: &[Vec3],
+    tet: &[u32; 4],
+    face: usize,
+    view: &SortView,
+) -> Precedence {
     let mut v = FACES[face].map(|s| tet[s]);
     let mut odd = false;
     if v[0] > v[1] {
@@ -110,7 +115,11 @@ impl<'a> FaceOrder<'a> {
     /// The constraints of `mesh` under `view`, `adjacency` as [`TetMesh::face_adjacency`]
     /// returns it. Errors when `adjacency` has the wrong length, names a tet out of range, or
     /// is not symmetric (the first offending tet in id order is reported).
-    pub fn new(mesh: &TetMesh, adjacency: &'a [[u32; 4]], view: &View) -> Result<Self, SortError> {
+    pub fn new(
+        mesh: &TetMesh,
+        adjacency: &'a [[u32; 4]],
+        view: &SortView,
+    ) -> Result<Self, SortError> {
         let tets = mesh.tets();
         let n = tets.len();
         if adjacency.len() != n {
@@ -253,7 +262,7 @@ pub struct MpvoResult {
 pub fn mpvo_order(
     mesh: &TetMesh,
     adjacency: &[[u32; 4]],
-    view: &View,
+    view: &SortView,
     kept: Option<&[u32]>,
 ) -> Result<Vec<u32>, SortError> {
     mpvo(mesh, adjacency, view, kept).map(|r| r.order)
@@ -265,7 +274,7 @@ pub fn mpvo_order(
 pub fn mpvo(
     mesh: &TetMesh,
     adjacency: &[[u32; 4]],
-    view: &View,
+    view: &SortView,
     kept: Option<&[u32]>,
 ) -> Result<MpvoResult, SortError> {
     let (faces, depths) = rayon::join(
@@ -409,7 +418,12 @@ pub fn mpvo_with(
 ///
 /// If `adjacency` is not a valid face adjacency of `mesh` (as [`TetMesh::face_adjacency`]
 /// returns it; see [`FaceOrder::new`] for the checks) or `order` names a tet out of range.
-pub fn count_violations(order: &[u32], adjacency: &[[u32; 4]], mesh: &TetMesh, view: &View) -> u64 {
+pub fn count_violations(
+    order: &[u32],
+    adjacency: &[[u32; 4]],
+    mesh: &TetMesh,
+    view: &SortView,
+) -> u64 {
     match FaceOrder::new(mesh, adjacency, view) {
         Ok(faces) => faces.count_violations(order),
         Err(e) => panic!("count_violations: {e}"),

@@ -2,7 +2,7 @@
 use rayon::prelude::*;
 use volux_core::TetMesh;
 
-use super::view::View;
+use super::view::SortView;
 
 /// Below this many ids a stable comparison sort is faster than three radix passes.
 const SMALL: usize = 256;
@@ -29,10 +29,10 @@ pub fn depth_key(depth: f32) -> u32 {
 
 /// The centroid depth of every tet, indexed by tet id: the distance from the eye to the
 /// centroid for a perspective view, the depth along the view direction for an orthographic one
-/// ([`View::depth`]; seed `000` §4.1 and §4.2 compute it in the first pass as the centroid's
+/// ([`SortView::depth`]; seed `000` §4.1 and §4.2 compute it in the first pass as the centroid's
 /// `z`, see the module documentation for why distance is used under perspective). Computed in
 /// `f64`, stored as `f32` (the sort key).
-pub fn centroid_keys(mesh: &TetMesh, view: &View) -> Vec<f32> {
+pub fn centroid_keys(mesh: &TetMesh, view: &SortView) -> Vec<f32> {
     let pos = mesh.positions();
     mesh.tets()
         .par_iter()

@@ -105,16 +105,16 @@ fn is_permutation_of(order: &[u32], ids: impl IntoIterator<Item = u32>) -> bool 
 
 /// Views of the unit cube: close and far perspective, inside, oblique and axis-aligned
 /// parallel views (the last makes many face planes contain the view direction).
-fn cube_views() -> Vec<View> {
+fn cube_views() -> Vec<SortView> {
     let c = DVec3::splat(0.5);
-    let persp = |eye: DVec3| View::perspective(eye, c - eye);
+    let persp = |eye: DVec3| SortView::perspective(eye, c - eye);
     vec![
         persp(DVec3::new(0.5, -0.4, 0.7)),
         persp(DVec3::new(1.3, 1.2, -0.2)),
         persp(DVec3::new(-8.0, 5.0, 3.0)),
         persp(DVec3::new(0.37, 0.52, 0.41)),
-        View::orthographic(DVec3::new(3.0, 2.0, 1.0), DVec3::new(-1.0, -0.7, -0.3)),
-        View::orthographic(DVec3::new(0.5, -2.0, 0.5), DVec3::Y),
+        SortView::orthographic(DVec3::new(3.0, 2.0, 1.0), DVec3::new(-1.0, -0.7, -0.3)),
+        SortView::orthographic(DVec3::new(0.5, -2.0, 0.5), DVec3::Y),
     ]
 }
 
@@ -199,9 +199,9 @@ fn both_cells_of_a_face_see_opposite_relations() {
         let eye = DVec3::new(rng.unit(), rng.unit(), rng.unit()) * 3.0 - 1.0;
         let fwd = DVec3::new(rng.unit(), rng.unit(), rng.unit()) - 0.5;
         let view = if i % 2 == 0 {
-            View::perspective(eye, fwd)
+            SortView::perspective(eye, fwd)
         } else {
-            View::orthographic(eye, fwd)
+            SortView::orthographic(eye, fwd)
         };
         for (t, nb) in adj.iter().enumerate() {
             for (f, &u) in nb.iter().enumerate() {
@@ -241,7 +241,10 @@ fn centroid_order_fails_where_mpvo_does_not() {
     let fwd = DVec3::new(1.0, 0.0, -1.0);
     // The eye is above the shared face (on the thin tet's side), rays go down and right:
     // the thin tet is in front, but its centroid is 15 units away and the small one's ~1.
-    for view in [View::perspective(eye, fwd), View::orthographic(eye, fwd)] {
+    for view in [
+        SortView::perspective(eye, fwd),
+        SortView::orthographic(eye, fwd),
+    ] {
         let faces = FaceOrder::new(&mesh, &adj, &view).unwrap();
         assert_eq!(faces.constraints(), 1);
         assert_eq!(faces.in_degree(1), 1);
@@ -255,7 +258,7 @@ fn centroid_order_fails_where_mpvo_does_not() {
         assert_eq!(faces.count_violations(&r.order), 0);
     }
     // Seen from below, the small tet is in front and the centroid order is right.
-    let below = View::perspective(DVec3::new(0.2, 0.2, -2.0), DVec3::Z);
+    let below = SortView::perspective(DVec3::new(0.2, 0.2, -2.0), DVec3::Z);
     assert_eq!(mpvo_order(&mesh, &adj, &below, None).unwrap(), vec![1, 0]);
 }
 
@@ -264,9 +267,9 @@ fn eye_in_a_face_plane_leaves_the_pair_free() {
     let mesh = thin_and_small();
     let adj = mesh.face_adjacency();
     for view in [
-        View::perspective(DVec3::new(0.4, 0.3, 0.0), DVec3::X),
-        View::perspective(DVec3::new(-5.0, 7.0, 0.0), DVec3::X),
-        View::orthographic(DVec3::new(0.0, 0.0, 5.0), DVec3::new(1.0, 2.0, 0.0)),
+        SortView::perspective(DVec3::new(0.4, 0.3, 0.0), DVec3::X),
+        SortView::perspective(DVec3::new(-5.0, 7.0, 0.0), DVec3::X),
+        SortView::orthographic(DVec3::new(0.0, 0.0, 5.0), DVec3::new(1.0, 2.0, 0.0)),
     ] {
         let faces = FaceOrder::new(&mesh, &adj, &view).unwrap();
         assert_eq!(faces.constraints(), 0, "{view:?}");
@@ -293,7 +296,7 @@ fn cycles_are_broken_at_the_nearest_cell() {
         .collect();
     let tets: Vec<[u32; 4]> = (0..3u32).map(|i| [0, 1, 2, 3].map(|v| 4 * i + v)).collect();
     let mesh = TetMesh::new(p, vec![0.0; 12], tets).unwrap();
-    let view = View::perspective(DVec3::new(4.3, -5.0, 0.4), DVec3::Y);
+    let view = SortView::perspective(DVec3::new(4.3, -5.0, 0.4), DVec3::Y);
     let prec = |t: usize, f: usize| face_precedence(mesh.positions(), &mesh.tets()[t], f, &view);
     let face_with = |t: usize, want: Precedence, not: Option<usize>| {
         (0..4)
@@ -331,7 +334,7 @@ fn cycles_are_broken_at_the_nearest_cell() {
 fn bad_inputs_are_errors() {
     let mesh = thin_and_small();
     let adj = mesh.face_adjacency();
-    let view = View::perspective(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z);
+    let view = SortView::perspective(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z);
     assert!(matches!(
         mpvo(&mesh, &adj[..1], &view, None),
         Err(SortError::LengthMismatch { .. })
@@ -381,14 +384,14 @@ fn view_from_camera() {
         max: DVec3::ONE,
     };
     let cam = volux_core::Camera::fit(&bounds);
-    let v = View::from_camera(&cam);
+    let v = SortView::from_camera(&cam);
     assert!(v.perspective && v.eye == cam.eye);
     assert!((v.forward - DVec3::Y).length() < 1e-12);
     let ortho = volux_core::Camera {
         projection: volux_core::Projection::Orthographic { height: 2.0 },
         ..cam
     };
-    let v = View::from_camera(&ortho);
+    let v = SortView::from_camera(&ortho);
     assert!(!v.perspective);
     assert!((v.depth(cam.eye + DVec3::new(3.0, 2.0, 5.0)) - 2.0).abs() < 1e-12);
 }
@@ -498,7 +501,7 @@ fn sort_timings() {
     eprintln!("{n} tets");
     for view in [
         cube_views()[0],
-        View::perspective(DVec3::new(0.5, -1.5, 0.5), DVec3::Y),
+        SortView::perspective(DVec3::new(0.5, -1.5, 0.5), DVec3::Y),
         cube_views()[4],
     ] {
         for _ in 0..2 {

@@ -5,18 +5,18 @@ use volux_core::camera::{Camera, Projection};
 /// The viewing geometry the visibility order depends on: where the eye is and, for parallel
 /// projection, the direction of the rays.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct View {
+pub struct SortView {
     /// Eye position (perspective centre of projection; for orthographic views only used to
-    /// measure depth along [`View::forward`]).
+    /// measure depth along [`SortView::forward`]).
     pub eye: DVec3,
     /// Unit view direction (from the eye into the scene).
     pub forward: DVec3,
-    /// `true` for a perspective view (rays from [`View::eye`]), `false` for parallel rays
-    /// along [`View::forward`].
+    /// `true` for a perspective view (rays from [`SortView::eye`]), `false` for parallel rays
+    /// along [`SortView::forward`].
     pub perspective: bool,
 }
 
-impl View {
+impl SortView {
     /// The view of a camera: its eye, its forward axis and its projection kind.
     pub fn from_camera(camera: &Camera) -> Self {
         let (_, _, forward) = camera.basis();

@@ -4,8 +4,8 @@
 //! (`001_...txt` ch. 4, Algorithm 3). A distributed render's region hands the states on
 //! in visibility order (seed `003`'s blocks, made exact).
 use super::{Flight, LanePath, Slot};
-use crate::integrate::adaptive_lanes::RAYS;
-use crate::integrate::adaptive_state::RayState;
+use crate::integrate::adaptive::lanes::RAYS;
+use crate::integrate::adaptive::state::RayState;
 use crate::intervals::IntervalSource;
 use crate::raycast::context::{pixel, RayContext};
 use crate::raycast::stream::block_order;

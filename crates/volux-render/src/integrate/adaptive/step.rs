@@ -1,10 +1,10 @@
 //! The step control of adaptive Simpson (`001_...txt` ch. 4, Algorithm 3): the parameters, a
 //! step's five samples (`Probe`), and the bookkeeping of the step size (`StepSize`): the
 //! seed's halving and doubling, or the error-per-step controller ([`standard_factor`]). The
-//! rules and the integration loops are in [`super::adaptive`]; the f32 lanes
-//! ([`super::adaptive_lanes`]) follow the same decisions.
-use super::adaptive_state::StepState;
-use super::medium::{Medium, RayMedium};
+//! rules and the integration loops are in [`adaptive`](super); the f32 lanes
+//! ([`lanes`](super::lanes)) follow the same decisions.
+use super::state::StepState;
+use crate::integrate::medium::{Medium, RayMedium};
 
 /// How the steps of the inner and outer integrals are controlled (`001_...txt` sec. 4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -21,11 +21,15 @@
 //!   integral then crosses that interval with its own step, which persists from interval to
 //!   interval, evaluating the inner integral inside by plain Simpson (any step shorter than
 //!   an accepted one is accepted too, as the seed argues).
-use super::adaptive_state::{F64Ray, StepState};
-pub use super::adaptive_step::{
+pub mod lanes;
+pub mod state;
+pub mod step;
+
+use self::state::{F64Ray, StepState};
+pub use self::step::{
     standard_factor, standard_growth, AdaptiveParams, StepControl, PEAK_NEAR_HMIN,
 };
-use super::adaptive_step::{Probe, StepSize};
+use self::step::{Probe, StepSize};
 use super::medium::{Medium, RayIntegral, RayMedium};
 
 /// The rules evaluated over one five-point step.

@@ -1,7 +1,7 @@
 //! Coupled adaptive Simpson (`001_...txt` Algorithm 3) for [`RAYS`] rays at once, in f32
 //! lanes: the fast path of traversals that can sample several rays together.
 //!
-//! The step control is the one of [`super::adaptive`]: five points per step, the error
+//! The step control is the one of [`adaptive`](super): five points per step, the error
 //! estimate `(S2 - S1) / 15` per channel R, G, B, A, the tolerance scaled with the step, a
 //! failed step halved, the step doubled after two consecutive successes, `hmin`/`hmax`, steps
 //! refined where the transfer function hides a peak between two samples. What differs is the
@@ -20,10 +20,10 @@
 //! f32 rounding of a step's sums is about 1e-7 of the step's integral, far below the error
 //! allowed per step for tolerances of [`AdaptiveLanes::MIN_TOL`] and above; the f64 integrator
 //! serves smaller tolerances and the reference.
-use super::adaptive::{
+use super::{
     standard_factor, standard_growth, AdaptiveParams, StepControl, PEAK_NEAR_HMIN, SAFETY,
 };
-use super::medium::RayIntegral;
+use crate::integrate::medium::RayIntegral;
 
 /// Rays integrated together.
 pub const RAYS: usize = 4;

@@ -7,10 +7,10 @@
 //! it from region to region in visibility order (seed `003`'s blocks, made exact).
 //!
 //! [`F64Ray`] is the state of the f64 integrator
-//! ([`adaptive_simpson_resume`](super::adaptive::adaptive_simpson_resume)), [`LaneRay`]
-//! that of one slot of the f32 lanes ([`AdaptiveLanes`](super::adaptive_lanes::AdaptiveLanes));
+//! ([`adaptive_simpson_resume`](super::adaptive_simpson_resume)), [`LaneRay`]
+//! that of one slot of the f32 lanes ([`AdaptiveLanes`](super::lanes::AdaptiveLanes));
 //! [`RayState`] is a pixel's ray, whichever integrator the ray caster gives it.
-use super::medium::Medium;
+use crate::integrate::medium::Medium;
 
 /// The step control of one integral between two steps (`StepSize` of the f64 integrator).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -1,13 +1,14 @@
-//! A bricked copy of a grid for the lane streams' trilinear samples: the volume cut into
-//! bricks of 8³ cells, each stored with its far faces (9³ samples, the next brick's first
-//! layer repeated), bricks and their samples x fastest.
+//! A blocked copy of a grid for the lane streams' trilinear samples: the volume cut into
+//! cell blocks of 8³ cells (called blocks, not bricks: a brick is a chunk of an out-of-core
+//! volume, [`crate::bricked`], or of the GPU's brick pool), each stored with its far faces
+//! (9³ samples, the next block's first layer repeated), blocks and their samples x fastest.
 //!
-//! Every cell's eight corners then lie in one brick at fixed offsets: a sample costs one
-//! brick address and eight loads at constant displacements, within a few kilobytes (one or
+//! Every cell's eight corners then lie in one block at fixed offsets: a sample costs one
+//! block address and eight loads at constant displacements, within a few kilobytes (one or
 //! two pages) instead of four rows up to a slice apart, so the rays of a lane block share
 //! pages and cache lines. On Marschner-Lobb 256³ (64 MB of f32, more than the last-level
 //! cache), perf put about 40 % of the lane stream's samples on the instructions just after
-//! the row-major grid's corner loads; bricked, that frame's CPU time fell 1.2x (Riemann 0.5,
+//! the row-major grid's corner loads; blocked, that frame's CPU time fell 1.2x (Riemann 0.5,
 //! 512x512), while the heads, whose samples fit the cache, stayed within noise. The values and
 //! the arithmetic are those of [`Trilinear`] (the copy holds each sample as f32, which every
 //! scalar type converts to exactly, so the loads need no conversion): every sample is
@@ -20,17 +21,17 @@ use volux_core::grid::Scalar;
 
 use crate::sampling::{clamped_cell, Field, Trilinear, LANES};
 
-/// Cells per brick along each axis (a power of two).
+/// Cells per block along each axis (a power of two).
 pub(crate) const CELLS: usize = 8;
-/// Samples per brick along each axis: the cells and their far faces.
+/// Samples per block along each axis: the cells and their far faces.
 pub(crate) const SIDE: usize = CELLS + 1;
 
-/// Samples per axis of the grids that are bricked (a power of two): the length of the
+/// Samples per axis of the grids that are blocked (a power of two): the length of the
 /// offset tables.
 const AXIS_MAX: usize = 4096;
-/// Samples per brick.
-pub(crate) const BRICK: usize = SIDE * SIDE * SIDE;
-/// Offsets of a cell's eight corners from its first sample in a brick, x fastest.
+/// Samples per block.
+pub(crate) const BLOCK: usize = SIDE * SIDE * SIDE;
+/// Offsets of a cell's eight corners from its first sample in a block, x fastest.
 pub(crate) const CORNERS: [usize; 8] = [
     0,
     1,
@@ -44,13 +45,13 @@ pub(crate) const CORNERS: [usize; 8] = [
 /// Samples from a cell's first corner to its last, inclusive.
 pub(crate) const REACH: usize = CORNERS[7] + 1;
 
-/// The bricked samples of a grid (see the module docs).
-pub(crate) struct Bricks {
-    /// The bricks one after the other, each [`BRICK`] samples `[z][y][x]`.
+/// The blocked samples of a grid (see the module docs).
+pub(crate) struct CellBlocks {
+    /// The blocks one after the other, each [`BLOCK`] samples `[z][y][x]`.
     samples: Vec<f32>,
     dims: [usize; 3],
     /// Per axis, the offset that the cell index adds to its first sample (the sum over the
-    /// axes is the offset): `(c / 8) stride + (c % 8) side^a`, where `stride` is the bricks'
+    /// axes is the offset): `(c / 8) stride + (c % 8) side^a`, where `stride` is the blocks'
     /// offset along the axis; fixed-size, so masked indices need no bounds check.
     offsets: [Box<[i32; AXIS_MAX]>; 3],
     /// Largest coordinate and largest cell index per axis, as [`clamped_cell`] takes them.
@@ -60,18 +61,18 @@ pub(crate) struct Bricks {
     spare: [f32; REACH],
 }
 
-impl Bricks {
-    /// Bytes the bricked copy of a grid with `dims` samples takes.
+impl CellBlocks {
+    /// Bytes the blocked copy of a grid with `dims` samples takes.
     pub(crate) fn bytes_for(dims: [usize; 3]) -> u64 {
         let n: u64 = Self::counts_for(dims).iter().map(|&c| c as u64).product();
-        n.saturating_mul((BRICK * std::mem::size_of::<f32>()) as u64)
+        n.saturating_mul((BLOCK * std::mem::size_of::<f32>()) as u64)
     }
 
     fn counts_for(dims: [usize; 3]) -> [usize; 3] {
         dims.map(|n| n.saturating_sub(1).div_ceil(CELLS).max(1))
     }
 
-    /// The bricked copy of `values` laid out x fastest with `dims` samples per axis; `None`
+    /// The blocked copy of `values` laid out x fastest with `dims` samples per axis; `None`
     /// unless `values` holds exactly that many samples (at least one), each side has at most
     /// [`AXIS_MAX`], the copy's offsets fit in `i32` and it takes at most `budget` bytes.
     pub(crate) fn build<T: Scalar>(values: &[T], dims: [usize; 3], budget: u64) -> Option<Self> {
@@ -85,7 +86,7 @@ impl Bricks {
         })
     }
 
-    /// The bricked copy of the grid of `dims` samples whose sample (`x`, `y`, `z`) is
+    /// The blocked copy of the grid of `dims` samples whose sample (`x`, `y`, `z`) is
     /// `value(x, y, z)` (called from several threads); `None` under the conditions of
     /// [`Bricks::build`].
     pub(crate) fn build_from(
@@ -104,15 +105,15 @@ impl Bricks {
         let [nx, ny, nz] = dims;
         let mut samples = vec![0.0f32; len as usize];
         samples
-            .par_chunks_mut(BRICK)
+            .par_chunks_mut(BLOCK)
             .enumerate()
-            .for_each(|(b, brick)| {
+            .for_each(|(b, block)| {
                 let (bi, bj, bk) = (
                     b % counts[0],
                     b / counts[0] % counts[1],
                     b / counts[0] / counts[1],
                 );
-                for (r, row) in brick.chunks_mut(SIDE).enumerate() {
+                for (r, row) in block.chunks_mut(SIDE).enumerate() {
                     let (v, w) = (r % SIDE, r / SIDE);
                     let z = (CELLS * bk + w).min(nz - 1);
                     let y = (CELLS * bj + v).min(ny - 1);
@@ -122,7 +123,7 @@ impl Bricks {
                     }
                 }
             });
-        let strides = [1, counts[0], counts[0] * counts[1]].map(|c| c * BRICK);
+        let strides = [1, counts[0], counts[0] * counts[1]].map(|c| c * BLOCK);
         let offsets = std::array::from_fn(|a| {
             let step = [1, SIDE, SIDE * SIDE][a];
             Box::new(std::array::from_fn(|c| {
@@ -214,12 +215,12 @@ pub(crate) fn cells_of_four<const N: usize>(
     (cell, frac)
 }
 
-/// The eight corners, x fastest, of the cell whose samples start `window` (a brick's samples
+/// The eight corners, x fastest, of the cell whose samples start `window` (a block's samples
 /// from the cell's first corner on).
 #[inline(always)]
 pub(crate) fn corners_in(window: &[f32; REACH]) -> [f32; 8] {
     // Written out: where this is not inlined into the lane stream, `CORNERS.map` went through
-    // an outlined `try_map` per cell (a third of a bricked level's frame).
+    // an outlined `try_map` per cell (a third of a blocked level's frame).
     [
         window[CORNERS[0]],
         window[CORNERS[1]],
@@ -248,10 +249,10 @@ pub(crate) fn lerp_corners<const N: usize>(c: &[[f32; N]; 8], f: &[[f32; N]; 3])
     lerp(c0, c1, f[2])
 }
 
-/// Trilinear sampling through the bricked copy, with the row-major sampler for the f64
+/// Trilinear sampling through the blocked copy, with the row-major sampler for the f64
 /// reference path.
-pub(crate) struct BrickedTrilinear<'a, T> {
-    pub(crate) bricks: &'a Bricks,
+pub(crate) struct BlockedTrilinear<'a, T> {
+    pub(crate) blocks: &'a CellBlocks,
     pub(crate) linear: Trilinear<'a, T>,
 }
 
@@ -266,27 +267,27 @@ pub(crate) fn undefined_to_nan<const N: usize>(mut r: [f32; N]) -> [f32; N] {
     r
 }
 
-impl<T: Scalar> Field for BrickedTrilinear<'_, T> {
+impl<T: Scalar> Field for BlockedTrilinear<'_, T> {
     fn dims(&self) -> [usize; 3] {
-        self.bricks.dims
+        self.blocks.dims
     }
 
     #[inline(always)]
     fn sample(&self, p: Vec3) -> Option<f32> {
         let r = self
-            .bricks
+            .blocks
             .sample_raw_lanes(&[[p.x; 4], [p.y; 4], [p.z; 4]])[0];
         r.is_finite().then_some(r)
     }
 
     #[inline(always)]
     fn sample_lanes(&self, p: &[[f32; LANES]; 3]) -> [f32; LANES] {
-        undefined_to_nan(self.bricks.sample_raw_lanes(p))
+        undefined_to_nan(self.blocks.sample_raw_lanes(p))
     }
 
     #[inline(always)]
     fn sample4(&self, p: &[[f32; 4]; 3]) -> [f32; 4] {
-        undefined_to_nan(self.bricks.sample_raw_lanes(p))
+        undefined_to_nan(self.blocks.sample_raw_lanes(p))
     }
 
     fn sample64(&self, p: DVec3) -> Option<f64> {
@@ -298,7 +299,7 @@ impl<T: Scalar> Field for BrickedTrilinear<'_, T> {
 mod tests {
     use super::*;
 
-    /// Points inside, on the faces, outside, NaN and on brick boundaries.
+    /// Points inside, on the faces, outside, NaN and on block boundaries.
     fn points(dims: [usize; 3]) -> Vec<Vec3> {
         let mut out = Vec::new();
         let mut s = 0x9e37_79b9u32;
@@ -321,11 +322,11 @@ mod tests {
 
     fn check<T: Scalar>(values: &[T], dims: [usize; 3]) {
         let linear = Trilinear::new(values, dims);
-        let Some(bricks) = Bricks::build(values, dims, u64::MAX) else {
-            panic!("no bricks for {dims:?}");
+        let Some(blocks) = CellBlocks::build(values, dims, u64::MAX) else {
+            panic!("no blocks for {dims:?}");
         };
-        let field = BrickedTrilinear {
-            bricks: &bricks,
+        let field = BlockedTrilinear {
+            blocks: &blocks,
             linear,
         };
         let pts = points(dims);
@@ -364,11 +365,11 @@ mod tests {
     #[test]
     fn bricks_respect_the_budget_and_the_slice_length() {
         let v = vec![1.0f32; 27];
-        let bytes = Bricks::bytes_for([3, 3, 3]);
+        let bytes = CellBlocks::bytes_for([3, 3, 3]);
         assert_eq!(bytes, 729 * 4);
-        assert!(Bricks::build(&v, [3, 3, 3], bytes).is_some());
-        assert!(Bricks::build(&v, [3, 3, 3], bytes - 1).is_none());
-        assert!(Bricks::build(&v[..26], [3, 3, 3], u64::MAX).is_none());
-        assert!(Bricks::build::<f32>(&[], [0, 0, 0], u64::MAX).is_none());
+        assert!(CellBlocks::build(&v, [3, 3, 3], bytes).is_some());
+        assert!(CellBlocks::build(&v, [3, 3, 3], bytes - 1).is_none());
+        assert!(CellBlocks::build(&v[..26], [3, 3, 3], u64::MAX).is_none());
+        assert!(CellBlocks::build::<f32>(&[], [0, 0, 0], u64::MAX).is_none());
     }
 }

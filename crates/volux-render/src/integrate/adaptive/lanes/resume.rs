@@ -3,7 +3,7 @@
 //! piece of a ray and hands the state on (`001_...txt` ch. 4, Algorithm 3, with its step,
 //! streak of successes, lookahead and transmittance carried across).
 use super::{AdaptiveLanes, Phase};
-use crate::integrate::adaptive_state::LaneRay;
+use crate::integrate::adaptive::state::LaneRay;
 
 impl AdaptiveLanes {
     /// The state of the ray in slot `r`, paused ([`AdaptiveLanes::is_paused`]): its next
