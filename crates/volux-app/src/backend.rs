@@ -159,7 +159,7 @@ impl RendererFactory {
             Ok(()) => placed(true),
             Err(why) => Placement {
                 on_gpu: false,
-                cpu_because: Some(why.to_string()),
+                cpu_because: Some(reason_only(&why)),
             },
         })
     }
@@ -194,6 +194,16 @@ impl RendererFactory {
     pub fn adapters(&self) -> Result<Vec<String>, AppError> {
         let gpu = self.gpu.as_ref().ok_or(AppError::GpuNotBuilt)?;
         Ok(gpu.adapters())
+    }
+}
+
+/// Why the GPU does not draw a scene, without the way out the engine offers (the CPU
+/// engine, which `auto` takes anyway).
+fn reason_only(why: &RenderError) -> String {
+    match why {
+        RenderError::Refused(r) => format!("{} {}", r.by, r.refuses),
+        RenderError::Backend { reason, .. } => reason.clone(),
+        other => other.to_string(),
     }
 }
 
@@ -276,7 +286,14 @@ mod tests {
             self.asked
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             if auto && self.software && !scene.method.gpu_only() {
-                return Err(RenderError::backend("a software rasterizer"));
+                // As the GPU refuses a scene: with the CPU engine as the way out, which
+                // `auto`'s reason leaves out (it takes it).
+                return Err(volux_render::Refusal::new(
+                    "the fake adapter",
+                    "is a software rasterizer",
+                    Some(volux_render::Remedy::CpuBackend),
+                )
+                .into());
             }
             Ok(())
         }
@@ -317,7 +334,7 @@ mod tests {
         assert!(!software.on_gpu);
         assert_eq!(
             software.cpu_because.as_deref(),
-            Some("a software rasterizer")
+            Some("the fake adapter is a software rasterizer")
         );
         let mut slicing = scene.clone();
         slicing.method = Method::Slicing(Default::default());
