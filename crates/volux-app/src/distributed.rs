@@ -185,7 +185,11 @@ fn agree<C: Collective, T>(
     let mine = result
         .as_ref()
         .err()
-        .map(|e| format!("{rank}\n{e}"))
+        .map(|e| match e {
+            // Already this rank's error: its reason, not "rank N: " twice.
+            AppError::Distributed { reason, .. } => format!("{rank}\n{reason}"),
+            other => format!("{rank}\n{other}"),
+        })
         .unwrap_or_default();
     let first = world
         .gather_bytes(0, mine.as_bytes())

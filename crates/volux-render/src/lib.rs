@@ -33,6 +33,8 @@
 //!   shows), and a camera fitted to a box.
 //! - [`backend_kit`]: the engine's parts a rendering backend (the GPU's) reuses, listed in
 //!   one place: ray set-up, tables, lattices.
+//! - [`device`]: the interface of a rendering device besides the CPU engine (the GPU
+//!   backend), injected by a front end that was built with one.
 //!
 //! ## Shared stages
 //!
