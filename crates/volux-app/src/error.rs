@@ -50,6 +50,53 @@ pub enum AppError {
         /// Why.
         reason: String,
     },
+    /// A file that cannot be read.
+    #[error(transparent)]
+    Read(volux_io::ReadError),
+    /// A reader option given for a file of a format it does not apply to.
+    #[error("{} applies to {} files; this one is {}", option.word(), option.owners(), format.name())]
+    MisplacedOption {
+        /// The option.
+        option: crate::reader_option::ReaderOption,
+        /// The file's format.
+        format: volux_io::Format,
+    },
+    /// A level of detail asked for a file that is not a store (read whole).
+    #[error("the level of detail {} applies to OME-Zarr stores, rendered out of core level by level; {} is {}, read whole", crate::words::level_word(*lod), path.display(), format.map_or("not a store".to_string(), |f| format!("a {} file", f.name())))]
+    LodOnFile {
+        /// The level of detail asked for.
+        lod: volux_render::bricked::Lod,
+        /// The file.
+        path: std::path::PathBuf,
+        /// Its format, when it has one Volux reads.
+        format: Option<volux_io::Format>,
+    },
+    /// A transfer-function file that cannot be read.
+    #[error("{}: {reason}", path.display())]
+    TfFile {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// A layer weight of a layered transfer function that is not finite and >= 0.
+    #[error("the weight {weight} of the layer {layer} must be >= 0")]
+    LayerWeight {
+        /// The layer (preset or file).
+        layer: String,
+        /// The weight.
+        weight: f64,
+    },
+    /// A grid integrator asked for where only the mesh rules apply, or the reverse.
+    #[error("the integrator {integrator} applies to tetrahedral meshes (ray casting)")]
+    MeshOnlyIntegrator {
+        /// The integrator's name.
+        integrator: String,
+    },
+    /// Colouring RGB voxels by the transfer function asked for a volume of one value per
+    /// voxel.
+    #[error("colouring by the transfer function applies to RGB volumes, and this volume has one value per voxel")]
+    NotRgb,
     /// The engine's error.
     #[error(transparent)]
     Render(#[from] RenderError),

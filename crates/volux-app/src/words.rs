@@ -144,6 +144,14 @@ pub fn level(text: &str) -> Result<Lod, WordError> {
         })
 }
 
+/// The word of a level ([`level`] reads it back): `auto` or its number.
+pub fn level_word(lod: Lod) -> String {
+    match lod {
+        Lod::Auto => "auto".to_string(),
+        Lod::Level(n) => n.to_string(),
+    }
+}
+
 /// An image size `WxH` (or `WXH`), each side from 1 to [`MAX_IMAGE_SIDE`].
 pub fn image_size(text: &str) -> Result<(usize, usize), WordError> {
     let bad = || WordError::NotAnImageSize {

@@ -51,13 +51,46 @@ impl Vocabulary for Flags {
     }
 }
 
+/// The application layer's error in the command line's words: a reader option as its flag,
+/// the engine's errors phrased with [`Flags`].
+fn app_error(e: &AppError) -> String {
+    match e {
+        AppError::Render(r) => r.phrase(&Flags),
+        AppError::MisplacedOption { option, format } => format!(
+            "--{} applies to {} files; this one is {}",
+            option.word(),
+            option.owners(),
+            format.name()
+        ),
+        AppError::LodOnFile { lod, path, format } => {
+            format!(
+            "--lod {} applies to OME-Zarr stores, rendered out of core level by level; {} is {}, \
+             read whole",
+            volux_app::words::level_word(*lod),
+            path.display(),
+            format.map_or("not a store".to_string(), |f| format!("a {} file", f.name()))
+        )
+        }
+        AppError::LayerWeight { layer, weight } => {
+            format!("--tf '{layer}:{weight}': the weight {weight} must be >= 0")
+        }
+        AppError::MeshOnlyIntegrator { integrator } => {
+            format!("--integrator {integrator} applies to tetrahedral meshes (--method raycast)")
+        }
+        AppError::NotRgb => "--tf-colour does not apply: it colours RGB volumes by the transfer \
+                             function, and this volume has one value per voxel"
+            .to_string(),
+        other => other.to_string(),
+    }
+}
+
 /// The error `e` as one line in the command line's words: the engine's errors phrased with
 /// [`Flags`], and a memory budget exceeded anywhere in its chain pointed at `--memory-budget`.
 pub fn phrase(e: &(dyn Error + 'static)) -> String {
     let mut text = if let Some(r) = e.downcast_ref::<RenderError>() {
         r.phrase(&Flags)
-    } else if let Some(AppError::Render(r)) = e.downcast_ref::<AppError>() {
-        r.phrase(&Flags)
+    } else if let Some(a) = e.downcast_ref::<AppError>() {
+        app_error(a)
     } else if let Some(s) = e.downcast_ref::<SettingError>() {
         RenderError::from(s.clone()).phrase(&Flags)
     } else if let Some(r) = e.downcast_ref::<Refusal>() {

@@ -5,15 +5,17 @@
 use std::path::Path;
 
 use glam::DVec3;
+use volux_app::compose::{
+    self, Framing, MethodChoice, MethodRequest, SceneRequest, TfLayer, TfSource,
+};
 use volux_core::image::PngOptions;
-use volux_core::{transfer_import, Camera, CameraSpec, NamedView, TransferFunction};
+use volux_core::{CameraSpec, NamedView, TransferFunction};
 use volux_io::Dataset;
-use volux_render::framing::{fit_to_box, visible_bounds_of};
 use volux_render::integrate::{AdaptiveParams, Integrator, SegmentRule, StepControl};
 use volux_render::isosurface::{parse_iso, Isosurfaces};
 use volux_render::pt::SortMode;
 use volux_render::sampling::Reconstruction;
-use volux_render::scene::{GridRaycast, Method, PtSettings, Scene, SlicingSettings, Volume};
+use volux_render::scene::{GridRaycast, PtSettings, Scene, Volume};
 use volux_render::shading::{BlinnPhong, Light};
 
 use crate::cli::{
@@ -61,31 +63,27 @@ pub fn parse_clip_plane(s: &str) -> Result<ClipPlane, CmdError> {
 
 /// A preset name or a file; presets are fitted to `volume` and scaled to its unit length.
 pub fn transfer_function(spec: &str, volume: &Volume) -> Result<TransferFunction, CmdError> {
-    if is_tf_file(spec) {
-        return tf_file(spec);
-    }
-    Ok(volume.preset_tf(spec)?)
+    layered_tf(&[spec.to_string()], volume)
 }
 
-/// Whether `--tf SPEC` names a file rather than a preset.
+/// Whether `--tf SPEC` names a file rather than a preset ([`TfSource::named`]).
 pub fn is_tf_file(spec: &str) -> bool {
-    let lower = spec.to_ascii_lowercase();
-    lower.ends_with(".json") || lower.ends_with(".vp") || Path::new(spec).is_file()
+    matches!(TfSource::named(spec), TfSource::File(_))
 }
 
-/// A transfer-function file: Volux JSON, a ParaView preset or a Slicer `.vp`
-/// ([`transfer_import::import`] tells them apart); what an imported file sets that Volux
-/// does not apply is printed as warnings.
+/// A transfer-function file: Volux JSON, a ParaView preset or a Slicer `.vp`; what an
+/// imported file sets that Volux does not apply is printed as warnings.
 pub fn tf_file(spec: &str) -> Result<TransferFunction, CmdError> {
-    let imported =
-        transfer_import::import_file(Path::new(spec)).map_err(|e| format!("{spec}: {e}"))?;
-    for note in &imported.notes {
-        eprintln!(
-            "volux: warning: {}",
-            crate::messages::sanitize(&format!("{spec}: {note}"))
-        );
+    let (tf, notes) = compose::read_tf_file(Path::new(spec))?;
+    warn_notes(&notes);
+    Ok(tf)
+}
+
+/// Notes printed as warnings.
+fn warn_notes(notes: &[String]) {
+    for note in notes {
+        eprintln!("volux: warning: {}", crate::messages::sanitize(note));
     }
-    Ok(imported.tf)
 }
 
 /// `NAME` or `NAME:WEIGHT` (a weight multiplies the layer's extinction).
@@ -102,23 +100,27 @@ fn layer_spec(spec: &str) -> Result<(&str, f64), CmdError> {
     }
 }
 
-/// The `--tf` options: one preset or file, or several layered (`NAME[:WEIGHT]` each).
+/// The `--tf` options as layers: one preset or file, or several layered (`NAME[:WEIGHT]`
+/// each).
+fn tf_layers(specs: &[String]) -> Result<Vec<TfLayer>, CmdError> {
+    specs
+        .iter()
+        .map(|spec| {
+            let (name, weight) = layer_spec(spec)?;
+            Ok(TfLayer {
+                source: TfSource::named(name),
+                weight,
+            })
+        })
+        .collect()
+}
+
+/// The `--tf` options' transfer function ([`compose::transfer_function`]); imported files'
+/// notes are printed as warnings.
 pub fn layered_tf(specs: &[String], volume: &Volume) -> Result<TransferFunction, CmdError> {
-    match specs {
-        [] => transfer_function("auto", volume),
-        [one] if layer_spec(one)?.1 == 1.0 => transfer_function(layer_spec(one)?.0, volume),
-        _ => {
-            let range = volume.range();
-            let layers = specs
-                .iter()
-                .map(|spec| {
-                    let (name, weight) = layer_spec(spec)?;
-                    Ok((transfer_function(name, volume)?.resolved(range), weight))
-                })
-                .collect::<Result<Vec<_>, CmdError>>()?;
-            Ok(TransferFunction::layered(&layers)?)
-        }
-    }
+    let (tf, notes) = compose::transfer_function(&tf_layers(specs)?, volume)?;
+    warn_notes(&notes);
+    Ok(tf)
 }
 
 /// The lighting options (`--ambient`, `--diffuse`, `--specular`, `--shininess`, `--light`).
@@ -232,14 +234,9 @@ pub fn tet_ray_rule(args: &RenderArgs) -> SegmentRule {
     }
 }
 
-/// Grid ray casting as the command line sets it (errors for the mesh-only integrators).
-fn grid_raycast(args: &RenderArgs) -> Result<GridRaycast, CmdError> {
-    let integrator = integrator(args).ok_or_else(|| {
-        format!(
-            "--integrator {} applies to tetrahedral meshes (--method raycast)",
-            args.integrator.name()
-        )
-    })?;
+/// Grid ray casting as the command line sets it, or the mesh-only integrator's name.
+fn grid_raycast(args: &RenderArgs) -> Result<GridRaycast, String> {
+    let integrator = integrator(args).ok_or_else(|| args.integrator.name())?;
     Ok(GridRaycast {
         integrator,
         reconstruction: args.reconstruction.into(),
@@ -283,28 +280,26 @@ pub fn volume(data: Dataset, args: &RenderArgs) -> Result<Volume, CmdError> {
     Ok(volume)
 }
 
-/// The method for `volume` as the command line asks for it.
-pub fn method(args: &RenderArgs, volume: &Volume) -> Result<Method, CmdError> {
-    let pt = || {
-        Method::ProjectedTetrahedra(PtSettings {
+/// The method request of the command line.
+fn method_request(args: &RenderArgs) -> MethodRequest {
+    MethodRequest {
+        choice: match args.method {
+            MethodArg::Auto => MethodChoice::Auto,
+            MethodArg::Pt => MethodChoice::Pt,
+            MethodArg::Raycast => MethodChoice::Raycast,
+            MethodArg::Resample => MethodChoice::Resample,
+            MethodArg::Slicing => MethodChoice::Slicing,
+        },
+        pt: PtSettings {
             sort: args.sort.into(),
             color: args.color.into(),
             count_violations: args.stats && args.sort_violations,
-        })
-    };
-    let mesh = matches!(volume, Volume::Mesh(_));
-    Ok(match args.method {
-        MethodArg::Auto | MethodArg::Pt if mesh => pt(),
-        // The library says why PT does not draw a grid (split it with --as-tets).
-        MethodArg::Pt => pt().resolve(volume).map(|_| pt())?,
-        MethodArg::Raycast if mesh => Method::TetRaycast(tet_ray_rule(args)),
-        MethodArg::Resample if mesh => Method::Resample {
-            samples: args.resample,
-            raycast: grid_raycast(args)?,
         },
-        MethodArg::Slicing => Method::Slicing(SlicingSettings { step: args.step }),
-        _ => Method::GridRaycast(grid_raycast(args)?),
-    })
+        grid: grid_raycast(args),
+        mesh_rule: tet_ray_rule(args),
+        resample: args.resample,
+        slicing_step: args.step,
+    }
 }
 
 /// The camera of the command line: `--camera FILE`, or the orbit options (`--view`,
@@ -420,43 +415,50 @@ impl RenderPlan {
         })
     }
 
+    /// The scene request of the command line (the camera as parsed, the rest from `args`).
+    fn request(&self, args: &RenderArgs) -> Result<SceneRequest, CmdError> {
+        Ok(SceneRequest {
+            size: self.size,
+            camera: self.camera.clone(),
+            camera_is_explicit: args.view_args.camera.is_some(),
+            framing: match args.view_args.frame {
+                FrameArg::All => Framing::All,
+                FrameArg::Visible => Framing::Visible,
+            },
+            zoom: args.view_args.zoom,
+            tf: tf_layers(&args.view_args.tf)?,
+            method: method_request(args),
+            opacity_scale: args.view_args.opacity_scale,
+            lighting: self.lighting,
+            shade: args.shade,
+            isosurfaces: self.isosurfaces.clone(),
+            mip: args.mip,
+            tf_colour: args.tf_colour,
+            early_termination: !args.no_early_termination,
+            clip_planes: args
+                .view_args
+                .clip_planes
+                .iter()
+                .map(|s| parse_clip_plane(s))
+                .collect::<Result<_, _>>()?,
+            mask: None,
+            labels: None,
+        })
+    }
+
     /// The scene of `volume`: its transfer function, camera and method, every option
-    /// checked against the method (`loaded_grid`: the file held a grid).
+    /// checked against the method (`loaded_grid`: the file held a grid), composed by
+    /// [`compose`] with the mask and labels files read in between.
     pub fn scene(
         &self,
         args: &RenderArgs,
         volume: &Volume,
         loaded_grid: bool,
     ) -> Result<Scene, CmdError> {
-        let rgb = matches!(volume, Volume::Grid(g) if g.color().is_some());
-        if args.tf_colour && !rgb {
-            return Err(
-                "--tf-colour does not apply: it colours RGB volumes by the transfer \
-                        function, and this volume has one value per voxel"
-                    .into(),
-            );
-        }
-        let tf = layered_tf(&args.view_args.tf, volume)?;
-        let method = method(args, volume)?;
-        let placeholder = self.camera.resolve(&volume.bounds())?;
-        let mut scene = Scene::new(placeholder, self.size.0, self.size.1, tf);
-        scene.method = method;
-        let a = &mut scene.appearance;
-        a.opacity_scale = args.view_args.opacity_scale;
-        a.lighting = self.lighting;
-        a.shade_volume = args.shade;
-        a.isosurfaces = self.isosurfaces.clone();
-        a.mip = args.mip;
-        a.data_colour = !args.tf_colour;
-        if args.no_early_termination {
-            scene.early_termination = None;
-        }
-        scene.clip_planes = args
-            .view_args
-            .clip_planes
-            .iter()
-            .map(|s| parse_clip_plane(s))
-            .collect::<Result<_, _>>()?;
+        let request = self.request(args)?;
+        let begun = compose::begin_scene(&request, volume)?;
+        warn_notes(&begun.notes);
+        let mut scene = begun.scene;
         if let (Some(mask), Some(file)) = (&args.view_args.mask, &args.file) {
             // Before the camera: `--frame visible` frames what the mask leaves.
             crate::mask_file::add_mask(mask, volume, file, &mut scene)?;
@@ -464,38 +466,8 @@ impl RenderPlan {
         if let (Some(labels), Some(file)) = (&args.labels, &args.file) {
             crate::label_file::add_labels(labels, volume, file, &mut scene)?;
         }
-        let resolved = scene.method.resolve(volume)?;
-        crate::applicable::check_method(args, &resolved, loaded_grid)?;
-        resolved.check_appearance(&scene.appearance)?;
-        scene.view.camera = self.camera_for(args, volume, &scene)?;
-        scene.validate()?;
-        Ok(scene)
-    }
-
-    /// The camera: a camera file as written (missing fields fit the framed box); the orbit
-    /// options fitted to the framed box's projection, then zoomed.
-    fn camera_for(
-        &self,
-        args: &RenderArgs,
-        volume: &Volume,
-        scene: &Scene,
-    ) -> Result<Camera, CmdError> {
-        let bounds = match args.view_args.frame {
-            FrameArg::All => volume.bounds(),
-            FrameArg::Visible => {
-                visible_bounds_of(volume, scene).unwrap_or_else(|_| volume.bounds())
-            }
-        };
-        if args.view_args.camera.is_some() {
-            return Ok(self.camera.resolve(&bounds)?);
-        }
-        let unzoomed = CameraSpec {
-            zoom: None,
-            ..self.camera.clone()
-        };
-        let camera = unzoomed.resolve(&bounds)?;
-        let aspect = self.size.0 as f64 / self.size.1 as f64;
-        Ok(fit_to_box(&camera, &bounds, aspect, args.view_args.zoom))
+        crate::applicable::check_method(args, &scene.method.resolve(volume)?, loaded_grid)?;
+        Ok(compose::frame_scene(&request, volume, scene)?)
     }
 }
 

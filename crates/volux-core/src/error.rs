@@ -29,6 +29,14 @@ pub enum Error {
         /// Values present.
         actual: u64,
     },
+    /// Shared memory ([`crate::samples::Buffer::shared`]) not aligned for its scalar type.
+    #[error("memory at {address:#x} is not aligned to {alignment} bytes for its values")]
+    Unaligned {
+        /// The first byte's address.
+        address: usize,
+        /// The alignment the values need.
+        alignment: usize,
+    },
     /// A grid (a mask, labels) that does not lie on another grid's lattice.
     #[error("{what} {other}, the volume's {grid}")]
     GeometryMismatch {

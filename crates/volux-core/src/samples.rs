@@ -80,6 +80,15 @@ impl Scalar for f32 {
     }
 }
 
+/// Bytes owned by someone else that a [`Buffer`] may read in place: a numpy array shared by
+/// the Python bindings, say. The owner keeps the bytes alive and unmoved for as long as it
+/// lives; they may change in place between renders (a user's `array[...] = v`), never while
+/// one reads them.
+pub trait SharedBytes: Send + Sync + std::fmt::Debug {
+    /// The bytes, aligned for the buffer's scalar type.
+    fn bytes(&self) -> &[u8];
+}
+
 #[derive(Clone, Debug)]
 enum Storage<T> {
     Owned(Arc<Vec<T>>),
@@ -88,6 +97,7 @@ enum Storage<T> {
         offset: usize,
         len: usize,
     },
+    Shared(Arc<dyn SharedBytes>),
 }
 
 /// A read-only slice of scalars, owned or memory-mapped; cheap to clone.
@@ -102,6 +112,28 @@ impl<T: Scalar> Buffer<T> {
         Self {
             storage: Storage::Owned(Arc::new(values)),
         }
+    }
+
+    /// Reads `owner`'s bytes in place, without a copy. Errors when their length is not a whole
+    /// number of values or they are not aligned for `T`.
+    pub fn shared(owner: Arc<dyn SharedBytes>) -> Result<Self> {
+        let bytes = owner.bytes();
+        let size = std::mem::size_of::<T>();
+        if !bytes.len().is_multiple_of(size) {
+            return Err(Error::SizeMismatch {
+                expected: (bytes.len() / size + 1) as u64,
+                actual: (bytes.len() / size) as u64,
+            });
+        }
+        if bytemuck::try_cast_slice::<u8, T>(bytes).is_err() {
+            return Err(Error::Unaligned {
+                address: bytes.as_ptr() as usize,
+                alignment: std::mem::align_of::<T>(),
+            });
+        }
+        Ok(Self {
+            storage: Storage::Shared(owner),
+        })
     }
 
     /// Memory-maps `count` little-endian values of `T` starting at byte `offset` of `path`.
@@ -151,7 +183,14 @@ impl<T: Scalar> Buffer<T> {
                 let bytes = &map[*offset..*offset + *len * std::mem::size_of::<T>()];
                 bytemuck::cast_slice(bytes)
             }
+            // Checked by `shared`: a whole number of aligned values.
+            Storage::Shared(owner) => bytemuck::cast_slice(owner.bytes()),
         }
+    }
+
+    /// Whether the values are read in place from someone else's memory ([`Buffer::shared`]).
+    pub fn is_shared(&self) -> bool {
+        matches!(self.storage, Storage::Shared(_))
     }
 
     /// Whether the values are memory-mapped from a file.

@@ -12,7 +12,7 @@ use volux_render::scene::{Scene, Volume};
 use volux_render::sculpt::{pick, polyline_length, DEFAULT_PICK_OPACITY};
 
 use super::common::CmdError;
-use super::workbench::{self, Workbench};
+use super::workbench;
 use crate::cli::{MeasureArgs, RenderArgs};
 
 /// Runs `volux measure`.
@@ -25,12 +25,12 @@ pub fn run(args: &MeasureArgs, given: &[String], show: bool) -> Result<(), CmdEr
         .iter()
         .map(|s| workbench::pixel("point", s))
         .collect::<Result<Vec<_>, _>>()?;
-    let bench = Workbench::open(&args.view, given, show)?;
+    let bench = workbench::open(&args.view, given, show)?;
     let mut points = Vec::with_capacity(pixels.len());
     for (pixel, typed) in pixels.iter().zip(&args.points) {
         let what = format!("--point {typed}");
         workbench::in_image(&what, *pixel, bench.size())?;
-        points.push(bench.pick(*pixel, &what)?.world);
+        points.push(workbench::pick(&bench, *pixel, &what)?.world);
     }
     let length = polyline_length(&points);
     let unit = bench.grid.unit();

@@ -10,7 +10,7 @@
 use volux_render::sculpt::SculptStep;
 
 use super::common::CmdError;
-use super::workbench::{self, Workbench};
+use super::workbench;
 use crate::cli::RegionsArgs;
 
 /// Runs `volux regions`.
@@ -24,11 +24,11 @@ pub fn run(args: &RegionsArgs, given: &[String], show: bool) -> Result<(), CmdEr
         .iter()
         .map(|s| seed(s))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut bench = Workbench::open(&args.view, given, show)?;
+    let mut bench = workbench::open(&args.view, given, show)?;
     for ((pixel, label), typed) in seeds.iter().zip(&args.seeds) {
         let what = format!("--seed {typed}");
         workbench::in_image(&what, *pixel, bench.size())?;
-        let point = bench.pick(*pixel, &what)?.world;
+        let point = workbench::pick(&bench, *pixel, &what)?.world;
         // The colour `render --labels` gives the label too.
         let colour = volux_render::sculpt::labels::LABEL_PALETTE
             [usize::from(label - 1) % volux_render::sculpt::labels::LABEL_PALETTE.len()];
@@ -41,7 +41,7 @@ pub fn run(args: &RegionsArgs, given: &[String], show: bool) -> Result<(), CmdEr
     }
     let labels = bench.sculpt.labels(&bench.grid, &bench.scene)?;
     let counts = count(&labels);
-    bench.write_u8(labels, &args.output)?;
+    workbench::write_u8_like(&bench.grid, labels, &args.output)?;
     for (label, n) in counts.iter().enumerate().skip(1).filter(|(_, n)| **n > 0) {
         outln!("label {label}: {n} voxels")?;
     }

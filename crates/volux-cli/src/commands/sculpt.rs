@@ -4,7 +4,6 @@
 use std::time::Instant;
 
 use volux_app::session::Session;
-use volux_render::sculpt::SculptStep;
 
 use super::common::CmdError;
 use super::workbench::{self, Workbench};
@@ -29,7 +28,7 @@ pub fn run(args: &SculptArgs, given: &[String], show: bool) -> Result<(), CmdErr
         );
     }
     let tools = tools(args)?;
-    let mut bench = Workbench::open(&args.view, given, show)?;
+    let mut bench = workbench::open(&args.view, given, show)?;
     for (tool, what) in &tools {
         for pixel in tool_pixels(tool) {
             workbench::in_image(what, pixel, bench.size())?;
@@ -39,7 +38,7 @@ pub fn run(args: &SculptArgs, given: &[String], show: bool) -> Result<(), CmdErr
         apply(&mut bench, tool, what)?;
     }
     let mask = bench.sculpt.mask().clone();
-    bench.write_u8(mask.to_values(), &args.output)?;
+    workbench::write_u8_like(&bench.grid, mask.to_values(), &args.output)?;
     eprintln!(
         "wrote {} ({} of {} voxels removed)",
         args.output.display(),
@@ -114,28 +113,14 @@ fn stroke(s: &str) -> Result<Tool, CmdError> {
 
 /// Applies one tool and prints what it removed.
 fn apply(bench: &mut Workbench, tool: &Tool, what: &str) -> Result<(), CmdError> {
-    let before = bench.sculpt.mask().removed_count();
     let t = Instant::now();
-    match tool {
-        Tool::Erase { points, radius } => {
-            let (w, h) = bench.size();
-            bench.sculpt.apply(SculptStep::Erase {
-                camera: bench.scene.view.camera,
-                size: [w, h],
-                points: points.clone(),
-                radius_px: *radius,
-            })?;
-        }
-        Tool::Dig { pixel, radius } => {
-            let (grid, scene) = (bench.grid.clone(), bench.scene.clone());
-            bench
-                .sculpt
-                .dig(&grid, &scene, *pixel, *radius)?
-                .ok_or_else(|| workbench::no_surface(what, *pixel))?;
-        }
-    }
+    let removed = match tool {
+        Tool::Erase { points, radius } => bench.erase(points.clone(), *radius)?,
+        Tool::Dig { pixel, radius } => bench
+            .dig(*pixel, *radius)?
+            .ok_or_else(|| workbench::no_surface(what, *pixel))?,
+    };
     let ms = t.elapsed().as_secs_f64() * 1e3;
-    let removed = bench.sculpt.mask().removed_count() - before;
     eprintln!("{what}: {removed} voxels removed, {ms:.1} ms");
     Ok(())
 }

@@ -8,74 +8,41 @@ use std::sync::Arc;
 use volux_app::session::DatasetRef;
 use volux_core::{Buffer, Grid, Samples};
 use volux_io::Dataset;
-use volux_render::scene::{Scene, Volume};
-use volux_render::sculpt::{Sculpt, SculptStep, SurfacePoint};
+use volux_render::scene::Volume;
+use volux_render::sculpt::SurfacePoint;
 
 use super::common::CmdError;
 use crate::cli::ToolViewArgs;
 use crate::settings::RenderPlan;
 
-/// A grid in the view of the command line, with its sculpt state.
-pub struct Workbench {
-    /// The grid.
-    pub grid: Arc<Grid>,
-    /// The scene `volux render` would draw with the same options (no mask, no planes: the
-    /// sculpt state holds them).
-    pub scene: Scene,
-    /// The clip planes of the command line and the starting mask.
-    pub sculpt: Sculpt,
+/// A grid in the view of the command line, with its sculpt state
+/// ([`volux_app::tools::Workbench`]).
+pub use volux_app::tools::Workbench;
+
+/// Opens the grid of `view` in the view of the command line (`given`: the options typed,
+/// for the scene's defaults): the scene as `volux render` builds it, its clip planes and mask
+/// starting the sculpt state.
+pub fn open(view: &ToolViewArgs, given: &[String], show: bool) -> Result<Workbench, CmdError> {
+    let args = view.render_args(given);
+    let plan = RenderPlan::new(&args)?;
+    let (data, _) = super::common::load(&view.file, &view.load, show)?;
+    let Dataset::Grid(grid) = data else {
+        return Err(format!(
+            "{}: sculpting, measuring and labelling apply to grids; this is a tetrahedral \
+             mesh",
+            view.file.display()
+        )
+        .into());
+    };
+    let grid = Arc::new(grid);
+    let volume = Volume::Grid(grid.clone());
+    let scene = plan.scene(&args, &volume, true)?;
+    Ok(Workbench::new(grid, scene)?)
 }
 
-impl Workbench {
-    /// Loads the grid of `view` and sets up its view and sculpt state (`given`: the options
-    /// typed, checked as `volux render` checks them).
-    pub fn open(view: &ToolViewArgs, given: &[String], show: bool) -> Result<Self, CmdError> {
-        let args = view.render_args(given);
-        let plan = RenderPlan::new(&args)?;
-        let (data, _) = super::common::load(&view.file, &view.load, show)?;
-        let Dataset::Grid(grid) = data else {
-            return Err(format!(
-                "{}: sculpting, measuring and labelling apply to grids; this is a tetrahedral \
-                 mesh",
-                view.file.display()
-            )
-            .into());
-        };
-        let grid = Arc::new(grid);
-        let volume = Volume::Grid(grid.clone());
-        let mut scene = plan.scene(&args, &volume, true)?;
-        let mut sculpt = Sculpt::new(&grid)?;
-        for plane in std::mem::take(&mut scene.clip_planes) {
-            sculpt.apply(SculptStep::AddPlane { plane })?;
-        }
-        // The scene read `--mask` (and framed what it leaves); the sculpt state owns it.
-        if let Some(mask) = scene.mask.take() {
-            sculpt = sculpt.with_mask(Arc::unwrap_or_clone(mask))?;
-        }
-        Ok(Self {
-            grid,
-            scene,
-            sculpt,
-        })
-    }
-
-    /// The image size, pixels.
-    pub fn size(&self) -> (usize, usize) {
-        (self.scene.view.width, self.scene.view.height)
-    }
-
-    /// The visible surface under `pixel` (named `what` in the error when there is none).
-    pub fn pick(&self, pixel: [f64; 2], what: &str) -> Result<SurfacePoint, CmdError> {
-        self.sculpt
-            .pick(&self.grid, &self.scene, pixel)?
-            .ok_or_else(|| no_surface(what, pixel))
-    }
-
-    /// Writes `values` (one byte per voxel, x fastest) as an NRRD `u8` volume with the
-    /// grid's spacing, origin and direction (atomically: no partial file).
-    pub fn write_u8(&self, values: Vec<u8>, path: &Path) -> Result<(), CmdError> {
-        write_u8_like(&self.grid, values, path)
-    }
+/// The visible surface under `pixel` (`what` names it in the error when there is none).
+pub fn pick(bench: &Workbench, pixel: [f64; 2], what: &str) -> Result<SurfacePoint, CmdError> {
+    bench.pick(pixel)?.ok_or_else(|| no_surface(what, pixel))
 }
 
 /// The error of a pixel whose ray shows no surface.
