@@ -93,7 +93,7 @@ pub fn out_of_core_lod(
 }
 
 /// Opens `dataset`: a store out of core ([`out_of_core_lod`]), anything else read whole
-/// ([`volux_io::load`]) with its reader options checked against its format, a grid split
+/// ([`volux_io::load()`]) with its reader options checked against its format, a grid split
 /// into tetrahedra when `dataset.as_tets` (refused before reading when the mesh would be
 /// too large).
 pub fn open_volume(dataset: &DatasetRef, request: &OpenRequest) -> Result<OpenedVolume, AppError> {

@@ -2,8 +2,9 @@
 //! applies to ([`crate::open::check_reader_options`] refuses the others).
 use volux_io::Format;
 
-/// A reader option of a [`DatasetRef`], for the errors that name one (each front end names
-/// it its own way: `--q-variable` on the command line, `q_variable=` in Python).
+/// A reader option of a [`crate::session::DatasetRef`], for the errors that name one (each
+/// front end names it its own way: `--q-variable` on the command line, `q_variable=` in
+/// Python).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum ReaderOption {

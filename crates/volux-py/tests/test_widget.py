@@ -48,6 +48,11 @@ def test_the_scene_is_attributes():
     assert "SettingError" in w.status
     w.update(step=0.5)
     assert w.status.startswith("frame")
+    # A named view frames the volume afresh, whatever the mouse did.
+    w._handle_msg(w, {"type": "drag", "mode": "orbit", "dx": 25, "dy": 5, "phase": "end"})
+    w.update(view="left")
+    fresh = VolumeWidget(volux.Volume(ball(24)), volux.Scene(size=(48, 48), tf="ct-skin", view="left"))
+    assert w.png == fresh.png
 
 
 def test_camera_moves_are_rotations():

@@ -25,6 +25,8 @@ __all__ = ["show", "VolumeWidget", "in_notebook"]
 ORBIT_DEG_PER_PX = 0.5
 #: Zoom factor per 100 units of wheel.
 WHEEL_FACTOR = 1.15
+#: The scene's keywords that place the camera by orbit (a camera dict replaces them).
+VIEW_KEYWORDS = {"view", "azimuth", "elevation", "up", "zoom", "orthographic", "frame"}
 
 
 def in_notebook():
@@ -176,7 +178,11 @@ def _widget_class():
             self.update(camera=camera)
 
         def update(self, **kwargs):
-            """Changes the scene's ``kwargs`` and redraws."""
+            """Changes the scene's ``kwargs`` and redraws. A new view (``view``,
+            ``azimuth``, ``elevation``, ``up``, ``zoom``, ``orthographic``, ``frame``) without
+            a ``camera`` frames the volume afresh, leaving the camera the mouse moved."""
+            if "camera" not in kwargs and set(kwargs) & VIEW_KEYWORDS:
+                kwargs["camera"] = None
             self._scene = self._scene.replace(**kwargs)
             self.redraw()
 
