@@ -64,49 +64,33 @@ pub fn share(array: &Bound<'_, PyUntypedArray>) -> PyResult<Option<(Samples, Arc
     if !array.is_c_contiguous() {
         return Ok(None);
     }
-    fn typed<T: Element + volux_core::samples::Scalar>(
-        array: &Bound<'_, PyUntypedArray>,
-    ) -> Option<(usize, usize)> {
-        let a = array.cast::<PyArrayDyn<T>>().ok()?;
-        let len = a.len() * std::mem::size_of::<T>();
-        Some((a.data() as usize, len))
+    if let Some(shared) = share_as::<u8>(array, Samples::U8)? {
+        return Ok(Some(shared));
     }
-    let owner = |(address, len): (usize, usize)| {
-        Arc::new(NumpyBytes {
-            array: array.clone().unbind(),
-            address,
-            len,
-        })
+    if let Some(shared) = share_as::<u16>(array, Samples::U16)? {
+        return Ok(Some(shared));
+    }
+    if let Some(shared) = share_as::<i16>(array, Samples::I16)? {
+        return Ok(Some(shared));
+    }
+    share_as::<f32>(array, Samples::F32)
+}
+
+/// The samples of `array` read in place as `T` (wrapped by `wrap`), when its dtype is `T`.
+fn share_as<T: Element + volux_core::samples::Scalar>(
+    array: &Bound<'_, PyUntypedArray>,
+    wrap: fn(Buffer<T>) -> Samples,
+) -> PyResult<Option<(Samples, Arc<NumpyBytes>)>> {
+    let Ok(typed) = array.cast::<PyArrayDyn<T>>() else {
+        return Ok(None);
     };
-    let shared = |o: &Arc<NumpyBytes>| -> Arc<dyn SharedBytes> { o.clone() };
-    let err = |e: volux_core::Error| pyo3::exceptions::PyValueError::new_err(e.to_string());
-    if let Some(p) = typed::<u8>(array) {
-        let o = owner(p);
-        return Ok(Some((
-            Samples::U8(Buffer::shared(shared(&o)).map_err(err)?),
-            o,
-        )));
-    }
-    if let Some(p) = typed::<u16>(array) {
-        let o = owner(p);
-        return Ok(Some((
-            Samples::U16(Buffer::shared(shared(&o)).map_err(err)?),
-            o,
-        )));
-    }
-    if let Some(p) = typed::<i16>(array) {
-        let o = owner(p);
-        return Ok(Some((
-            Samples::I16(Buffer::shared(shared(&o)).map_err(err)?),
-            o,
-        )));
-    }
-    if let Some(p) = typed::<f32>(array) {
-        let o = owner(p);
-        return Ok(Some((
-            Samples::F32(Buffer::shared(shared(&o)).map_err(err)?),
-            o,
-        )));
-    }
-    Ok(None)
+    let owner = Arc::new(NumpyBytes {
+        array: array.clone().unbind(),
+        address: typed.data() as usize,
+        len: typed.len() * std::mem::size_of::<T>(),
+    });
+    let bytes: Arc<dyn SharedBytes> = owner.clone();
+    let buffer = Buffer::shared(bytes)
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    Ok(Some((wrap(buffer), owner)))
 }
